@@ -1,0 +1,33 @@
+# bosfuse_library(NAME [DEPS ...])
+#   Builds bosfuse::NAME from the folder's *.cc files (tests excluded) and,
+#   when the folder has *_test.cc files, a test binary NAME_test registered
+#   with ctest. Tests sit next to the concept they test (foo.h, foo.cc,
+#   foo_test.cc); new files are picked up at the next configure.
+function(bosfuse_library name)
+  cmake_parse_arguments(ARG "" "" "DEPS;TEST_DEPS" ${ARGN})
+  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cc)
+  file(GLOB tests CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*_test.cc)
+  if(tests)
+    list(REMOVE_ITEM sources ${tests})
+  endif()
+  add_library(bosfuse_${name} STATIC ${sources})
+  add_library(bosfuse::${name} ALIAS bosfuse_${name})
+  target_include_directories(bosfuse_${name} PUBLIC ${PROJECT_SOURCE_DIR})
+  target_link_libraries(bosfuse_${name} PUBLIC ${ARG_DEPS})
+  if(tests)
+    bosfuse_test(${name}_test SOURCES ${tests} DEPS bosfuse::${name} ${ARG_TEST_DEPS})
+  endif()
+endfunction()
+
+# bosfuse_test(NAME SOURCES ... DEPS ...): one gtest binary, its tests
+# discovered individually so ctest reports each.
+function(bosfuse_test name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gmock GTest::gtest_main)
+  target_compile_definitions(${name} PRIVATE
+    BOSFUSE_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    BOSFUSE_BINARY_DIR="${PROJECT_BINARY_DIR}")
+  include(GoogleTest)
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300)
+endfunction()
