@@ -1,0 +1,105 @@
+#pragma once
+// Database is a thin owner of one SQLite connection, in the style of
+// SQLiteCpp: the sqlite3* handle lives in a unique_ptr with a deleter,
+// statements are prepared once and rebound, and a Transaction rolls back in
+// its destructor unless committed. Use it inside storage/ only; the rest of
+// bosfuse talks to a RunStore. Errors become StorageError carrying SQLite's
+// message and the statement that failed; destructors never throw.
+
+#include <sqlite3.h>
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace bosfuse::storage {
+
+class StorageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct SqliteCloser {
+  void operator()(sqlite3* db) const noexcept { sqlite3_close_v2(db); }
+};
+struct StatementFinalizer {
+  void operator()(sqlite3_stmt* stmt) const noexcept { sqlite3_finalize(stmt); }
+};
+
+class Statement;
+
+class Database {
+ public:
+  enum class Mode { kReadOnly, kReadWrite, kCreate };
+
+  // Opens (or creates) the file, turns on WAL, foreign keys and a busy
+  // timeout so a reader and the writer of a live run do not fail on locks.
+  Database(const std::string& path, Mode mode);
+
+  void execute(std::string_view sql);
+  Statement prepare(std::string_view sql);
+  std::int64_t last_insert_rowid() const;
+  sqlite3* handle() const { return db_.get(); }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::unique_ptr<sqlite3, SqliteCloser> db_;
+};
+
+// A prepared statement. bind() indices start at 1 as in SQLite; step()
+// returns true while rows are available and resets nothing by itself.
+class Statement {
+ public:
+  Statement(sqlite3* db, std::string_view sql);
+
+  Statement& bind(int index, std::int64_t value);
+  Statement& bind(int index, int value) { return bind(index, static_cast<std::int64_t>(value)); }
+  Statement& bind(int index, double value);
+  Statement& bind(int index, std::string_view value);
+  Statement& bind(int index, std::nullopt_t);
+  template <typename T>
+  Statement& bind(int index, const std::optional<T>& value) {
+    return value ? bind(index, *value) : bind(index, std::nullopt);
+  }
+
+  bool step();          // true: a row is ready; false: done
+  void run();           // step() for statements that return no rows, then reset()
+  void reset();         // ready to run again; bindings are kept
+
+  bool is_null(int column) const;
+  std::int64_t column_int64(int column) const;
+  double column_double(int column) const;
+  std::string column_text(int column) const;
+  std::optional<double> column_optional_double(int column) const;
+  std::optional<std::int64_t> column_optional_int64(int column) const;
+  std::optional<std::string> column_optional_text(int column) const;
+
+ private:
+  void check(int rc, const char* what) const;
+
+  sqlite3* db_;
+  std::unique_ptr<sqlite3_stmt, StatementFinalizer> stmt_;
+};
+
+// BEGIN IMMEDIATE on construction; ROLLBACK in the destructor unless commit()
+// was called, so an exception between the two loses nothing already committed
+// and leaves no half-written batch behind.
+class Transaction {
+ public:
+  explicit Transaction(Database& db);
+  ~Transaction();
+  Transaction(const Transaction&) = delete;
+  Transaction& operator=(const Transaction&) = delete;
+
+  void commit();
+
+ private:
+  Database& db_;
+  bool committed_ = false;
+};
+
+}  // namespace bosfuse::storage

@@ -1,0 +1,84 @@
+#pragma once
+// A RunStore is one experiment run on disk: a folder holding `run.sqlite`
+// (schema in docs/SCHEMA.md) and, beside it, the run's frames as image files
+// referenced by relative path. It is the only way the rest of bosfuse reads
+// or writes a run. Writes of samples go in batches, each batch one
+// transaction, so a crash loses at most the batch in flight and never
+// corrupts what was committed. A RunStore is one SQLite connection: use it
+// from one thread (the logger's writer thread owns the writing one; readers
+// open their own).
+
+#include "storage/database.h"
+#include "storage/records.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace bosfuse::storage {
+
+struct TimeRange {
+  std::int64_t from_ns = INT64_MIN;  // inclusive
+  std::int64_t to_ns = INT64_MAX;    // inclusive
+};
+
+struct ChannelSummary {
+  ChannelInfo channel;
+  std::string device_name;
+  std::int64_t sample_count = 0;
+  std::int64_t ok_count = 0;
+  std::optional<std::int64_t> first_ns;
+  std::optional<std::int64_t> last_ns;
+  std::optional<double> min_value;
+  std::optional<double> max_value;
+};
+
+class RunStore {
+ public:
+  static constexpr const char* kDatabaseFileName = "run.sqlite";
+
+  enum class CreateMode {
+    kNew,     // refuse a folder that already holds a run
+    kAppend,  // continue the run already in the folder (or start one)
+  };
+
+  // Creates the run folder if needed and starts (or, with kAppend, resumes) a
+  // run, whose status becomes `running`.
+  static RunStore create(const std::filesystem::path& run_dir, const RunInfo& info, CreateMode mode);
+  // Opens an existing run; throws StorageError if the folder holds none.
+  static RunStore open(const std::filesystem::path& run_dir, bool writable = false);
+  static bool holds_run(const std::filesystem::path& run_dir);
+
+  const std::filesystem::path& dir() const { return dir_; }
+  RunInfo run() const;
+
+  // Upserts by name, so an appended run keeps its device and channel ids.
+  std::int64_t add_device(const DeviceInfo& device);
+  std::int64_t add_channel(const ChannelInfo& channel);
+
+  void write_samples(std::span<const Sample> samples);  // one transaction
+  void write_events(std::span<const Event> events);     // one transaction
+  std::int64_t add_frame(const FrameRecord& frame);
+  void finish(RunStatus status, std::int64_t ended_ns);
+
+  std::vector<DeviceInfo> devices() const;
+  std::vector<ChannelInfo> channels() const;
+  std::vector<Sample> read_samples(std::int64_t channel_id, TimeRange range = {}) const;
+  std::vector<Event> events(TimeRange range = {}) const;
+  std::vector<FrameRecord> frames(TimeRange range = {}) const;
+  std::vector<ChannelSummary> channel_summaries() const;
+
+ private:
+  RunStore(std::filesystem::path dir, Database::Mode mode);
+  std::int64_t insert_run(const RunInfo& info);
+
+  std::filesystem::path dir_;
+  mutable Database db_;
+  std::int64_t run_id_ = 0;
+  std::optional<Statement> insert_sample_;
+};
+
+}  // namespace bosfuse::storage

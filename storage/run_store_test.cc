@@ -1,0 +1,168 @@
+#include "storage/run_store.h"
+
+#include "storage/run_writer.h"
+#include "tests/support/temp_dir.h"
+
+#include <gtest/gtest.h>
+
+namespace bosfuse::storage {
+namespace {
+
+RunInfo test_run() {
+  RunInfo info;
+  info.name = "cooling-test";
+  info.started_ns = 1'700'000'000'000'000'000;
+  info.config_toml = "[run]\nname = \"cooling-test\"\n";
+  return info;
+}
+
+struct Fixture {
+  testing::TempDir dir;
+  RunStore store = RunStore::create(dir.path() / "run", test_run(), RunStore::CreateMode::kNew);
+  std::int64_t device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", "127.0.0.1:502"});
+  std::int64_t channel = store.add_channel({0, device, "tc0", "thermocouple", "degC", "K", 120.5, 80.0});
+};
+
+TEST(RunStore, CreatesARunAndReadsItBack) {
+  Fixture f;
+  const RunInfo run = f.store.run();
+  EXPECT_EQ(run.name, "cooling-test");
+  EXPECT_EQ(run.status, RunStatus::kRunning);
+  EXPECT_EQ(run.config_toml, test_run().config_toml);
+  ASSERT_EQ(f.store.channels().size(), 1u);
+  EXPECT_EQ(f.store.channels()[0].tc_type, "K");
+  EXPECT_DOUBLE_EQ(*f.store.channels()[0].image_x_px, 120.5);
+  f.store.finish(RunStatus::kComplete, run.started_ns + 5);
+  EXPECT_EQ(f.store.run().status, RunStatus::kComplete);
+  EXPECT_EQ(f.store.run().ended_ns, run.started_ns + 5);
+}
+
+TEST(RunStore, BatchedInsertAndRangeRead) {
+  Fixture f;
+  std::vector<Sample> samples;
+  for (int i = 0; i < 10'000; ++i) {
+    samples.push_back({f.channel, 1'000 + i * 10, std::nullopt, 20.0 + i * 0.001, std::nullopt, SampleStatus::kOk});
+  }
+  f.store.write_samples(samples);
+  const auto all = f.store.read_samples(f.channel);
+  ASSERT_EQ(all.size(), samples.size());
+  EXPECT_DOUBLE_EQ(*all.back().value, *samples.back().value);
+  const auto part = f.store.read_samples(f.channel, {1'000 + 100 * 10, 1'000 + 199 * 10});
+  ASSERT_EQ(part.size(), 100u);
+  EXPECT_EQ(part.front().t_ns, 2'000);
+  EXPECT_EQ(part.back().t_ns, 2'990);
+}
+
+TEST(RunStore, NonOkSamplesStoreNoValue) {
+  Fixture f;
+  const std::vector<Sample> samples = {
+      {f.channel, 1, std::nullopt, 999.0, 65535.0, SampleStatus::kOpenCircuit},
+      {f.channel, 2, std::nullopt, std::nullopt, std::nullopt, SampleStatus::kTimeout},
+      {f.channel, 3, 77, 25.0, 1200.0, SampleStatus::kOk}};
+  f.store.write_samples(samples);
+  const auto read = f.store.read_samples(f.channel);
+  ASSERT_EQ(read.size(), 3u);
+  EXPECT_EQ(read[0].status, SampleStatus::kOpenCircuit);
+  EXPECT_FALSE(read[0].value.has_value()) << "a burnt-out thermocouple was stored as a temperature";
+  EXPECT_EQ(read[0].raw, 65535.0);
+  EXPECT_EQ(read[1].status, SampleStatus::kTimeout);
+  EXPECT_EQ(read[2].device_t_ns, 77);
+  EXPECT_EQ(read[2].value, 25.0);
+}
+
+TEST(RunStore, FolderHoldingARunIsRefusedUnlessAppending) {
+  testing::TempDir dir;
+  {
+    auto store = RunStore::create(dir / "run", test_run(), RunStore::CreateMode::kNew);
+    const auto device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", ""});
+    const auto channel = store.add_channel({0, device, "tc0", "thermocouple", "degC", "K", {}, {}});
+    const Sample s{channel, 10, {}, 30.0, {}, SampleStatus::kOk};
+    store.write_samples({&s, 1});
+    store.finish(RunStatus::kComplete, 20);
+  }
+  EXPECT_THROW(RunStore::create(dir / "run", test_run(), RunStore::CreateMode::kNew), StorageError);
+  auto appended = RunStore::create(dir / "run", test_run(), RunStore::CreateMode::kAppend);
+  EXPECT_EQ(appended.run().status, RunStatus::kRunning);
+  const auto device = appended.add_device({0, "adam", "modbus-tcp", "adam-6018", ""});
+  const auto channel = appended.add_channel({0, device, "tc0", "thermocouple", "degC", "K", {}, {}});
+  EXPECT_EQ(appended.channels().size(), 1u) << "appending duplicated the channel";
+  EXPECT_EQ(appended.read_samples(channel).size(), 1u) << "appending lost committed samples";
+}
+
+TEST(RunStore, OpeningAFolderWithoutARunSaysSo) {
+  testing::TempDir dir;
+  try {
+    RunStore::open(dir.path());
+    FAIL();
+  } catch (const StorageError& e) {
+    EXPECT_NE(std::string(e.what()).find("holds no bosfuse run"), std::string::npos);
+  }
+}
+
+TEST(RunStore, FramesAndEventsRoundTrip) {
+  Fixture f;
+  f.store.add_frame({0, std::nullopt, 500, 499, "frames/000001.png", 640, 480, 16, true});
+  f.store.add_frame({0, std::nullopt, 400, std::nullopt, "frames/000000.png", 640, 480, 16, false});
+  const auto frames = f.store.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].t_ns, 400);
+  EXPECT_TRUE(frames[1].is_reference);
+  EXPECT_EQ(frames[1].bit_depth, 16);
+  const std::vector<Event> events = {{0, f.device, 10, "disconnect", "timed out"}, {0, std::nullopt, 5, "started", ""}};
+  f.store.write_events(events);
+  const auto read = f.store.events();
+  ASSERT_EQ(read.size(), 2u);
+  EXPECT_EQ(read[0].kind, "started");
+  EXPECT_EQ(read[1].device_id, f.device);
+}
+
+TEST(Transaction, RollsBackUnlessCommitted) {
+  Fixture f;
+  Database db((f.dir.path() / "run" / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
+  {
+    Transaction t(db);
+    db.execute("INSERT INTO events (run_id, t_ns, kind, message) VALUES (1, 1, 'error', 'never committed')");
+  }
+  EXPECT_TRUE(f.store.events().empty());
+}
+
+TEST(RunWriter, CommitsEverythingPushedFromManyThreads) {
+  Fixture f;
+  const auto second = f.store.add_channel({0, f.device, "tc1", "thermocouple", "degC", "K", {}, {}});
+  constexpr int kPerThread = 20'000;
+  {
+    RunWriter writer(f.store, {std::chrono::milliseconds(20), 5'000});
+    auto produce = [&](std::int64_t channel) {
+      for (int i = 0; i < kPerThread; ++i) writer.push(Sample{channel, i, {}, double(i), {}, SampleStatus::kOk});
+    };
+    std::thread a(produce, f.channel), b(produce, second);
+    a.join();
+    b.join();
+    writer.push(Event{0, {}, 1, "stopped", "end of test"});
+    writer.flush();
+    EXPECT_EQ(writer.stats().samples_committed, 2 * kPerThread);
+    EXPECT_EQ(writer.stats().failed_commits, 0);
+  }
+  for (auto channel : {f.channel, second}) {
+    const auto samples = f.store.read_samples(channel);
+    ASSERT_EQ(samples.size(), std::size_t(kPerThread));
+    for (int i = 0; i < kPerThread; ++i) ASSERT_EQ(samples[i].value, double(i));
+  }
+  EXPECT_EQ(f.store.events().size(), 1u);
+}
+
+TEST(RunWriter, AFailedCommitKeepsTheBatchAndRetries) {
+  Fixture f;
+  RunWriter writer(f.store, {std::chrono::milliseconds(10), 1'000});
+  // A sample for a channel that does not exist violates the foreign key:
+  // its batch must fail without losing the good samples queued with it.
+  writer.push(Sample{f.channel, 1, {}, 1.0, {}, SampleStatus::kOk});
+  writer.push(Sample{9999, 2, {}, 2.0, {}, SampleStatus::kOk});
+  writer.flush();
+  EXPECT_GE(writer.stats().failed_commits, 1);
+  EXPECT_NE(writer.stats().last_error.find("FOREIGN KEY"), std::string::npos) << writer.stats().last_error;
+  EXPECT_TRUE(f.store.read_samples(f.channel).empty());
+}
+
+}  // namespace
+}  // namespace bosfuse::storage

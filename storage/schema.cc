@@ -1,0 +1,127 @@
+#include "storage/schema.h"
+
+#include "storage/records.h"
+
+#include <array>
+#include <chrono>
+#include <string>
+
+namespace bosfuse::storage {
+namespace {
+
+constexpr std::string_view kSchemaV1 = R"sql(
+CREATE TABLE runs (
+  id          INTEGER PRIMARY KEY,
+  name        TEXT    NOT NULL,
+  started_ns  INTEGER NOT NULL,
+  ended_ns    INTEGER,
+  config_toml TEXT    NOT NULL,
+  status      TEXT    NOT NULL CHECK (status IN ('running', 'complete', 'interrupted'))
+);
+CREATE TABLE devices (
+  id      INTEGER PRIMARY KEY,
+  run_id  INTEGER NOT NULL REFERENCES runs(id),
+  name    TEXT    NOT NULL,
+  kind    TEXT    NOT NULL,
+  profile TEXT    NOT NULL DEFAULT '',
+  address TEXT    NOT NULL DEFAULT '',
+  UNIQUE (run_id, name)
+);
+CREATE TABLE channels (
+  id         INTEGER PRIMARY KEY,
+  device_id  INTEGER NOT NULL REFERENCES devices(id),
+  name       TEXT    NOT NULL,
+  kind       TEXT    NOT NULL,
+  unit       TEXT    NOT NULL,
+  tc_type    TEXT,
+  image_x_px REAL,
+  image_y_px REAL,
+  UNIQUE (device_id, name)
+);
+CREATE TABLE sample_status (
+  code INTEGER PRIMARY KEY,
+  name TEXT NOT NULL UNIQUE
+);
+INSERT INTO sample_status (code, name) VALUES
+  (0, 'ok'), (1, 'open-circuit'), (2, 'out-of-range'), (3, 'timeout'),
+  (4, 'bad-reply'), (5, 'invalid-value'), (6, 'disabled');
+CREATE TABLE samples (
+  channel_id  INTEGER NOT NULL REFERENCES channels(id),
+  t_ns        INTEGER NOT NULL,
+  device_t_ns INTEGER,
+  value       REAL,
+  raw         REAL,
+  status      INTEGER NOT NULL REFERENCES sample_status(code),
+  CHECK ((status = 0) = (value IS NOT NULL))
+);
+CREATE INDEX samples_by_channel_time ON samples (channel_id, t_ns);
+CREATE TABLE frames (
+  id           INTEGER PRIMARY KEY,
+  device_id    INTEGER REFERENCES devices(id),
+  t_ns         INTEGER NOT NULL,
+  device_t_ns  INTEGER,
+  path         TEXT    NOT NULL UNIQUE,
+  width_px     INTEGER NOT NULL,
+  height_px    INTEGER NOT NULL,
+  bit_depth    INTEGER NOT NULL,
+  is_reference INTEGER NOT NULL DEFAULT 0 CHECK (is_reference IN (0, 1))
+);
+CREATE INDEX frames_by_time ON frames (t_ns);
+CREATE TABLE events (
+  id        INTEGER PRIMARY KEY,
+  run_id    INTEGER NOT NULL REFERENCES runs(id),
+  device_id INTEGER REFERENCES devices(id),
+  t_ns      INTEGER NOT NULL,
+  kind      TEXT    NOT NULL,
+  message   TEXT    NOT NULL
+);
+CREATE INDEX events_by_time ON events (t_ns);
+)sql";
+
+constexpr std::array<Migration, 1> kMigrations = {{{1, kSchemaV1}}};
+static_assert(kMigrations.back().version == kSchemaVersion);
+static_assert(kSampleStatusCount == 7, "update the sample_status rows of the schema");
+
+bool has_version_table(Database& db) {
+  auto stmt = db.prepare("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'schema_version'");
+  return stmt.step();
+}
+
+std::int64_t now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace
+
+std::span<const Migration> schema_migrations() { return kMigrations; }
+
+int schema_version(Database& db) {
+  if (!has_version_table(db)) return 0;
+  auto stmt = db.prepare("SELECT COALESCE(MAX(version), 0) FROM schema_version");
+  stmt.step();
+  return static_cast<int>(stmt.column_int64(0));
+}
+
+int migrate(Database& db, std::span<const Migration> migrations) {
+  const int start = schema_version(db);
+  const int newest = migrations.empty() ? 0 : migrations.back().version;
+  if (start > newest) {
+    throw StorageError("run store '" + db.path() + "' has schema version " + std::to_string(start) +
+                       ", newer than this bosfuse understands (" + std::to_string(newest) + ")");
+  }
+  for (const Migration& migration : migrations) {
+    if (migration.version <= start) continue;
+    Transaction transaction(db);
+    db.execute("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER PRIMARY KEY, applied_ns INTEGER NOT NULL)");
+    db.execute(migration.sql);
+    db.prepare("INSERT INTO schema_version (version, applied_ns) VALUES (?, ?)")
+        .bind(1, migration.version)
+        .bind(2, now_ns())
+        .run();
+    transaction.commit();
+  }
+  return start;
+}
+
+}  // namespace bosfuse::storage

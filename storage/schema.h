@@ -1,0 +1,32 @@
+#pragma once
+// The run store's schema and its forward migrations. A run store records
+// its schema version in `schema_version`; opening a store applies, in order
+// and each in its own transaction, every migration newer than that version.
+// A store written by a newer bosfuse is refused rather than misread. The
+// schema is documented for users in docs/SCHEMA.md.
+
+#include "storage/database.h"
+
+#include <span>
+#include <string_view>
+
+namespace bosfuse::storage {
+
+struct Migration {
+  int version;          // the schema version this migration produces
+  std::string_view sql; // statements run in one transaction
+};
+
+// The migrations of this bosfuse build, oldest first.
+std::span<const Migration> schema_migrations();
+
+inline constexpr int kSchemaVersion = 1;
+
+// 0 for a file with no schema yet.
+int schema_version(Database& db);
+
+// Brings the database to the newest version in `migrations` (default: this
+// build's). Returns the version it started from.
+int migrate(Database& db, std::span<const Migration> migrations = schema_migrations());
+
+}  // namespace bosfuse::storage

@@ -1,0 +1,93 @@
+#include "storage/schema.h"
+
+#include "storage/records.h"
+#include "tests/support/temp_dir.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <fstream>
+
+namespace bosfuse::storage {
+namespace {
+
+std::vector<std::string> table_names(Database& db) {
+  auto stmt = db.prepare("SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY name");
+  std::vector<std::string> names;
+  while (stmt.step()) names.push_back(stmt.column_text(0));
+  return names;
+}
+
+TEST(Schema, EmptyFileIsMigratedToTheCurrentVersion) {
+  testing::TempDir dir;
+  const auto path = (dir / "empty.sqlite").string();
+  std::ofstream(path).close();  // a zero-byte file, as left by a crashed create
+  Database db(path, Database::Mode::kReadWrite);
+  EXPECT_EQ(schema_version(db), 0);
+  EXPECT_EQ(migrate(db), 0);
+  EXPECT_EQ(schema_version(db), kSchemaVersion);
+  EXPECT_EQ(table_names(db), (std::vector<std::string>{"channels", "devices", "events", "frames", "runs",
+                                                       "sample_status", "samples", "schema_version"}));
+}
+
+TEST(Schema, MigratingTwiceChangesNothing) {
+  testing::TempDir dir;
+  Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
+  migrate(db);
+  EXPECT_EQ(migrate(db), kSchemaVersion);
+  auto stmt = db.prepare("SELECT COUNT(*) FROM schema_version");
+  stmt.step();
+  EXPECT_EQ(stmt.column_int64(0), 1);
+}
+
+TEST(Schema, SampleStatusNamesMatchTheEnum) {
+  testing::TempDir dir;
+  Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
+  migrate(db);
+  auto stmt = db.prepare("SELECT code, name FROM sample_status ORDER BY code");
+  int count = 0;
+  while (stmt.step()) {
+    EXPECT_EQ(stmt.column_text(1), to_string(static_cast<SampleStatus>(stmt.column_int64(0))));
+    ++count;
+  }
+  EXPECT_EQ(count, kSampleStatusCount);
+}
+
+TEST(Schema, ForwardMigrationAppliesOnlyNewerSteps) {
+  testing::TempDir dir;
+  Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
+  migrate(db);
+  const std::array<Migration, 2> future = {{schema_migrations()[0],
+                                            {2, "ALTER TABLE runs ADD COLUMN operator TEXT NOT NULL DEFAULT ''"}}};
+  EXPECT_EQ(migrate(db, future), 1);
+  EXPECT_EQ(schema_version(db), 2);
+  EXPECT_NO_THROW(db.execute("SELECT operator FROM runs"));
+}
+
+TEST(Schema, NewerStoreIsRefused) {
+  testing::TempDir dir;
+  Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
+  migrate(db);
+  db.execute("INSERT INTO schema_version (version, applied_ns) VALUES (99, 0)");
+  try {
+    migrate(db);
+    FAIL() << "a store from a newer bosfuse was accepted";
+  } catch (const StorageError& e) {
+    EXPECT_NE(std::string(e.what()).find("99"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Schema, FailedMigrationLeavesTheStoreAsItWas) {
+  testing::TempDir dir;
+  Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
+  migrate(db);
+  const std::array<Migration, 2> broken = {{schema_migrations()[0],
+                                            {2, "CREATE TABLE extra (x); THIS IS NOT SQL"}}};
+  EXPECT_THROW(migrate(db, broken), StorageError);
+  EXPECT_EQ(schema_version(db), 1);
+  auto stmt = db.prepare("SELECT 1 FROM sqlite_master WHERE name = 'extra'");
+  EXPECT_FALSE(stmt.step()) << "a failed migration left a table behind";
+}
+
+}  // namespace
+}  // namespace bosfuse::storage
