@@ -92,6 +92,7 @@ void RunWriter::run() {
       break;
     }
   }
+  stats_.uncommitted_at_stop = static_cast<std::int64_t>(pending_samples_.size() + pending_events_.size());
   writer_done_ = true;
   committed_.notify_all();
 }

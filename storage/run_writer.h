@@ -35,6 +35,7 @@ class RunWriter {
     std::int64_t events_committed = 0;
     std::int64_t batches_committed = 0;
     std::int64_t failed_commits = 0;
+    std::int64_t uncommitted_at_stop = 0;  // samples + events the store refused to the end
     std::string last_error;
   };
 

@@ -1,0 +1,191 @@
+#include "acquisition/device_poller.h"
+
+#include "acquisition/clock.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <stdexcept>
+
+namespace bosfuse::acquisition {
+namespace {
+
+std::string seconds_text(std::int64_t ns) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3f s", static_cast<double>(ns) * 1e-9);
+  return text;
+}
+
+}  // namespace
+
+std::string DevicePoller::Options::Validate() const {
+  if (period <= std::chrono::nanoseconds::zero()) return "poll period must be positive";
+  if (backoff_initial.count() <= 0 || backoff_max < backoff_initial) {
+    return "backoff must be positive and its maximum at least its start";
+  }
+  return {};
+}
+
+DevicePoller::DevicePoller(std::unique_ptr<ThermocoupleSource> source, std::int64_t device_id,
+                           std::vector<std::int64_t> channel_ids, storage::RunWriter& writer, Options options)
+    : source_(std::move(source)),
+      name_(source_->device_info().name),
+      device_id_(device_id),
+      channel_ids_(std::move(channel_ids)),
+      writer_(writer),
+      options_(options) {
+  if (const std::string problem = options_.Validate(); !problem.empty()) {
+    throw std::invalid_argument("device " + name_ + ": " + problem);
+  }
+  if (channel_ids_.size() != source_->channel_infos().size()) {
+    throw std::invalid_argument("device " + name_ + ": channel ids do not match its channels");
+  }
+}
+
+DevicePoller::~DevicePoller() { stop(); }
+
+void DevicePoller::start() {
+  schedule_origin_ = std::chrono::steady_clock::now();
+  thread_ = std::thread([this] { run(); });
+}
+
+void DevicePoller::stop() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+DevicePoller::Stats DevicePoller::stats() const {
+  std::lock_guard lock(mutex_);
+  return stats_;
+}
+
+bool DevicePoller::wait_until(SteadyTime deadline) {
+  std::unique_lock lock(mutex_);
+  return !wake_.wait_until(lock, deadline, [&] { return stopping_; });
+}
+
+DevicePoller::SteadyTime DevicePoller::next_tick_after(SteadyTime now) const {
+  const auto elapsed = now - schedule_origin_;
+  const std::int64_t tick = elapsed / options_.period + 1;
+  return schedule_origin_ + tick * options_.period;
+}
+
+void DevicePoller::record_event(const std::string& kind, const std::string& message) {
+  writer_.push(storage::Event{0, device_id_, utc_now_ns(), kind, message});
+  if (kind == "disconnect" || kind == "error") {
+    spdlog::warn("{}: {}", name_, message);
+  } else {
+    spdlog::info("{}: {}", name_, message);
+  }
+}
+
+bool DevicePoller::ensure_connected() {
+  {
+    std::lock_guard lock(mutex_);
+    if (stats_.connected) return true;
+  }
+  try {
+    source_->connect();
+  } catch (const DeviceError& e) {
+    const bool first_failure = backoff_.count() == 0;
+    {
+      std::lock_guard lock(mutex_);
+      ++stats_.connect_failures;
+    }
+    if (first_failure) {
+      record_event("error", std::string(e.what()) + "; retrying");
+      if (!ever_connected_) disconnected_since_ns_ = utc_now_ns();
+    }
+    backoff_ = first_failure ? options_.backoff_initial : std::min(backoff_ * 2, options_.backoff_max);
+    return false;
+  }
+  backoff_ = std::chrono::milliseconds(0);
+  const bool is_reconnect = disconnected_since_ns_ != 0;
+  {
+    std::lock_guard lock(mutex_);
+    stats_.connected = true;
+    if (is_reconnect && ever_connected_) ++stats_.reconnects;
+  }
+  if (is_reconnect) {
+    const std::int64_t gap_ns = utc_now_ns() - disconnected_since_ns_;
+    record_event(ever_connected_ ? "reconnect" : "connect",
+                 (ever_connected_ ? "reconnected after " : "connected after ") + seconds_text(gap_ns));
+  } else {
+    record_event("connect", "connected to " + source_->device_info().address);
+  }
+  ever_connected_ = true;
+  disconnected_since_ns_ = 0;
+  return true;
+}
+
+std::string DevicePoller::poll_once() {
+  const std::int64_t request_ns = utc_now_ns();
+  std::vector<ChannelReading> readings;
+  std::string failure;
+  try {
+    readings = source_->read();
+  } catch (const DeviceError& e) {
+    failure = e.what();
+  }
+  const std::int64_t reply_ns = utc_now_ns();
+  const std::int64_t t_ns = request_ns + (reply_ns - request_ns) / 2;
+  if (failure.empty() && readings.size() != channel_ids_.size()) {
+    failure = "device returned " + std::to_string(readings.size()) + " readings for " +
+              std::to_string(channel_ids_.size()) + " channels";
+  }
+  std::vector<storage::Sample> samples(channel_ids_.size());
+  for (std::size_t i = 0; i < channel_ids_.size(); ++i) {
+    samples[i].channel_id = channel_ids_[i];
+    samples[i].t_ns = t_ns;
+    if (failure.empty()) {
+      samples[i].value = readings[i].value;
+      samples[i].raw = readings[i].raw;
+      samples[i].status = readings[i].status;
+    } else {
+      samples[i].status = storage::SampleStatus::kTimeout;
+    }
+  }
+  writer_.push(samples);
+  std::lock_guard lock(mutex_);
+  if (failure.empty()) {
+    ++stats_.polls_ok;
+  } else {
+    ++stats_.polls_failed;
+    stats_.connected = false;
+    disconnected_since_ns_ = t_ns;
+  }
+  return failure;
+}
+
+void DevicePoller::count_missed_ticks(SteadyTime deadline, SteadyTime next) {
+  const bool deadline_on_schedule = (deadline - schedule_origin_) % options_.period == std::chrono::nanoseconds(0);
+  const std::int64_t skipped = (next - deadline) / options_.period - 1;
+  if (!deadline_on_schedule || skipped <= 0) return;
+  std::lock_guard lock(mutex_);
+  stats_.missed_ticks += skipped;
+}
+
+void DevicePoller::run() {
+  SteadyTime deadline = schedule_origin_;
+  while (wait_until(deadline)) {
+    if (!ensure_connected()) {
+      deadline = std::chrono::steady_clock::now() + backoff_;
+      continue;
+    }
+    if (const std::string failure = poll_once(); !failure.empty()) {
+      source_->disconnect();  // the next attempt starts from a fresh connection
+      record_event("disconnect", failure);
+    }
+    const SteadyTime next = next_tick_after(std::chrono::steady_clock::now());
+    count_missed_ticks(deadline, next);
+    deadline = next;
+  }
+  source_->disconnect();
+}
+
+}  // namespace bosfuse::acquisition

@@ -1,0 +1,38 @@
+#pragma once
+// ExperimentConfig is what an experiment TOML file describes (documented in
+// docs/CONFIG.md, example in examples/): the run's name and the devices to
+// log, each with its transport, profile, poll period and channels, and where
+// each thermocouple sits in the camera image. Parsing checks everything a
+// user can get wrong and names the key and line; the verbatim text is kept
+// so a run stores exactly the configuration it was recorded with.
+
+#include "acquisition/modbus_device.h"
+#include "acquisition/toml_reader.h"
+
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace bosfuse::acquisition {
+
+struct ModbusDeviceConfig {
+  std::string name;
+  std::string profile;
+  ModbusEndpoint endpoint;
+  std::chrono::nanoseconds poll_period = std::chrono::seconds(1);
+  std::chrono::milliseconds timeout{500};
+  std::vector<ModbusChannel> channels;
+};
+
+struct ExperimentConfig {
+  std::string run_name;
+  std::string description;
+  std::vector<ModbusDeviceConfig> modbus_devices;
+  std::string source_text;  // the file as written
+};
+
+ExperimentConfig parse_experiment(std::string_view text, const std::string& source_name);
+ExperimentConfig load_experiment(const std::filesystem::path& path);  // throws ConfigError
+
+}  // namespace bosfuse::acquisition

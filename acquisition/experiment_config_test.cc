@@ -1,0 +1,130 @@
+#include "acquisition/experiment_config.h"
+
+#include <gtest/gtest.h>
+
+namespace bosfuse::acquisition {
+namespace {
+
+std::string error_of(const std::string& text) {
+  try {
+    parse_experiment(text, "exp.toml");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+constexpr const char* kTwoDevices = R"(
+[run]
+name = "cool"
+
+[[devices]]
+name = "adam"
+profile = "adam-6018"
+host = "127.0.0.1"
+port = 1502
+poll_period_s = 0.25
+
+  [[devices.channels]]
+  name = "tc0"
+  input = 0
+  position_px = [10.5, 20.0]
+
+  [[devices.channels]]
+  name = "tc1"
+  input = 1
+  tc_type = "J"
+
+[[devices]]
+name = "m7018"
+profile = "icpdas-m7018"
+serial_port = "/dev/ttyUSB0"
+baud = 19200
+unit_id = 3
+
+  [[devices.channels]]
+  name = "cj"
+  input = "cold-junction"
+)";
+
+TEST(ExperimentConfig, ReadsDevicesChannelsAndDefaults) {
+  const ExperimentConfig config = parse_experiment(kTwoDevices, "exp.toml");
+  EXPECT_EQ(config.run_name, "cool");
+  ASSERT_EQ(config.modbus_devices.size(), 2u);
+  const ModbusDeviceConfig& adam = config.modbus_devices[0];
+  EXPECT_EQ(adam.endpoint.transport, ModbusTransport::kTcp);
+  EXPECT_EQ(adam.endpoint.port, 1502);
+  EXPECT_EQ(adam.poll_period, std::chrono::milliseconds(250));
+  ASSERT_EQ(adam.channels.size(), 2u);
+  EXPECT_EQ(adam.channels[0].tc_type, "K");
+  EXPECT_EQ(adam.channels[0].image_x_px, 10.5);
+  EXPECT_EQ(adam.channels[1].tc_type, "J");
+  EXPECT_DOUBLE_EQ(adam.channels[1].linear->value_high, 760.0);
+  const ModbusDeviceConfig& m7018 = config.modbus_devices[1];
+  EXPECT_EQ(m7018.endpoint.transport, ModbusTransport::kRtu) << "the profile's usual transport";
+  EXPECT_EQ(m7018.endpoint.baud, 19200);
+  EXPECT_EQ(m7018.channels[0].kind, "cold-junction");
+  EXPECT_EQ(config.source_text, kTwoDevices);
+}
+
+TEST(ExperimentConfig, ExamplesParse) {
+  for (const char* name : {"cylinder-cooling.toml", "generic-modbus.toml"}) {
+    const auto config = load_experiment(std::string(BOSFUSE_SOURCE_DIR) + "/examples/" + name);
+    EXPECT_FALSE(config.modbus_devices.empty()) << name;
+  }
+}
+
+TEST(ExperimentConfig, GenericChannelSpellsOutItsRegisters) {
+  const auto config = load_experiment(std::string(BOSFUSE_SOURCE_DIR) + "/examples/generic-modbus.toml");
+  const ModbusChannel& c = config.modbus_devices[0].channels[0];
+  EXPECT_EQ(c.function, RegisterKind::kInput);
+  EXPECT_EQ(c.type, DataType::kFloat32);
+  EXPECT_EQ(c.order, WordOrder::kCDAB);
+  EXPECT_EQ(c.open_circuit_codes, std::vector<double>{9999.0});
+  EXPECT_EQ(c.valid_max, 600.0);
+  const ModbusChannel& v = config.modbus_devices[0].channels[1];
+  EXPECT_EQ(v.unit, "V");
+  EXPECT_DOUBLE_EQ(v.to_value(4095), 10.0);
+}
+
+TEST(ExperimentConfig, SyntaxErrorNamesTheLine) {
+  EXPECT_EQ(error_of("[run]\nname = \"x\"\nbroken = \n").substr(0, 11), "exp.toml:3:");
+}
+
+TEST(ExperimentConfig, BadValuesNameTheKeyAndLine) {
+  const std::string device = "[[devices]]\nname = \"a\"\nprofile = \"adam-6018\"\nhost = \"h\"\n";
+  const std::string channel = "[[devices.channels]]\nname = \"t\"\ninput = 0\n";
+  EXPECT_EQ(error_of(device + "port = 70000\n" + channel),
+            "exp.toml:5: devices[0].port: must be between 1 and 65535");
+  EXPECT_EQ(error_of(device + "port = \"502\"\n" + channel), "exp.toml:5: devices[0].port: expected an integer");
+  EXPECT_EQ(error_of(device + "pol_period_s = 1\n" + channel),
+            "exp.toml:5: devices[0].pol_period_s: unknown key (a typo?)");
+  EXPECT_EQ(error_of(device + "[[devices.channels]]\nname = \"t\"\ninput = 9\n"),
+            "exp.toml:7: devices[0].channels[0].input: profile adam-6018 has inputs 0..7, not 9");
+  EXPECT_EQ(error_of(device + "[[devices.channels]]\nname = \"t\"\ninput = 0\nposition_px = [1]\n"),
+            "exp.toml:8: devices[0].channels[0].position_px: expected [x, y] in image pixels");
+  EXPECT_EQ(error_of(device), "exp.toml:1: devices[0]: a device needs at least one [[devices.channels]] entry");
+  EXPECT_EQ(error_of("[[devices]]\nname = \"a\"\nprofile = \"adam-7000\"\n").substr(0, 32),
+            "exp.toml:3: devices[0].profile: ");
+}
+
+TEST(ExperimentConfig, GenericChannelsNeedTheirRegisters) {
+  const std::string text =
+      "[[devices]]\nname = \"g\"\nprofile = \"generic\"\ntransport = \"tcp\"\nhost = \"h\"\n"
+      "[[devices.channels]]\nname = \"x\"\naddress = 4\n";
+  EXPECT_EQ(error_of(text), "exp.toml:6: devices[0].channels[0]: missing required key 'register'");
+}
+
+TEST(ExperimentConfig, DuplicateNamesAreRefused) {
+  const std::string device = "[[devices]]\nname = \"a\"\nprofile = \"adam-6018\"\nhost = \"h\"\n";
+  const std::string channel = "[[devices.channels]]\nname = \"t\"\ninput = 0\n";
+  EXPECT_NE(error_of(device + channel + channel).find("duplicate channel name"), std::string::npos);
+  EXPECT_NE(error_of(device + channel + device + channel).find("duplicate device name"), std::string::npos);
+}
+
+TEST(ExperimentConfig, MissingFileIsReported) {
+  EXPECT_THROW(load_experiment("/nonexistent/exp.toml"), ConfigError);
+}
+
+}  // namespace
+}  // namespace bosfuse::acquisition

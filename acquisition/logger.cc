@@ -1,0 +1,91 @@
+#include "acquisition/logger.h"
+
+#include "acquisition/clock.h"
+
+#include <spdlog/spdlog.h>
+
+#include <sstream>
+#include <thread>
+
+namespace bosfuse::acquisition {
+namespace {
+
+constexpr auto kStopCheckInterval = std::chrono::milliseconds(20);
+
+void wait_for_end(const std::atomic<bool>& stop_requested, std::optional<std::chrono::nanoseconds> duration) {
+  const auto start = std::chrono::steady_clock::now();
+  while (!stop_requested.load()) {
+    if (duration && std::chrono::steady_clock::now() - start >= *duration) return;
+    std::this_thread::sleep_for(kStopCheckInterval);
+  }
+}
+
+}  // namespace
+
+std::string Logger::Summary::BriefReport() const {
+  std::ostringstream out;
+  out << "logged " << writer.samples_committed << " samples and " << writer.events_committed << " events in "
+      << elapsed_s << " s";
+  for (const DeviceSummary& d : devices) {
+    out << "\n  " << d.name << ": " << d.stats.polls_ok << " polls ok, " << d.stats.polls_failed << " failed, "
+        << d.stats.reconnects << " reconnects";
+    if (d.stats.connect_failures > 0) out << ", " << d.stats.connect_failures << " failed connection attempts";
+    if (d.stats.missed_ticks > 0) out << ", " << d.stats.missed_ticks << " polls skipped (device too slow)";
+  }
+  if (writer.uncommitted_at_stop > 0) {
+    out << "\n  ERROR: " << writer.uncommitted_at_stop << " records could not be committed: " << writer.last_error;
+  } else if (writer.failed_commits > 0) {
+    out << "\n  " << writer.failed_commits << " commits had to be retried; last error: " << writer.last_error;
+  }
+  return out.str();
+}
+
+Logger::Logger(storage::RunStore& store, Options options) : store_(store), options_(std::move(options)) {}
+
+void Logger::add_source(std::unique_ptr<ThermocoupleSource> source, std::chrono::nanoseconds period) {
+  sources_.push_back({std::move(source), period});
+}
+
+void Logger::add_devices(const ExperimentConfig& config) {
+  for (const ModbusDeviceConfig& d : config.modbus_devices) {
+    add_source(std::make_unique<ModbusDevice>(d.name, d.profile, d.endpoint, d.channels, d.timeout), d.poll_period);
+  }
+}
+
+Logger::Summary Logger::run(const std::atomic<bool>& stop_requested) {
+  const auto started = std::chrono::steady_clock::now();
+  Summary summary;
+  storage::RunWriter writer(store_, options_.writer);
+  std::vector<std::unique_ptr<DevicePoller>> pollers;
+  for (PendingSource& pending : sources_) {
+    const std::int64_t device_id = store_.add_device(pending.source->device_info());
+    std::vector<std::int64_t> channel_ids;
+    for (storage::ChannelInfo channel : pending.source->channel_infos()) {
+      channel.device_id = device_id;
+      channel_ids.push_back(store_.add_channel(channel));
+    }
+    const DevicePoller::Options poll_options{pending.period, options_.backoff_initial, options_.backoff_max};
+    pollers.push_back(
+        std::make_unique<DevicePoller>(std::move(pending.source), device_id, channel_ids, writer, poll_options));
+  }
+  sources_.clear();
+  writer.push(storage::Event{0, std::nullopt, utc_now_ns(), "started", std::to_string(pollers.size()) + " devices"});
+  for (auto& poller : pollers) poller->start();
+
+  wait_for_end(stop_requested, options_.duration);
+
+  for (auto& poller : pollers) {
+    poller->stop();
+    summary.devices.push_back({poller->name(), poller->stats()});
+  }
+  writer.push(storage::Event{0, std::nullopt, utc_now_ns(), "stopped",
+                             stop_requested.load() ? "stop requested" : "duration reached"});
+  writer.stop();
+  summary.writer = writer.stats();
+  const bool everything_committed = summary.writer.uncommitted_at_stop == 0;
+  store_.finish(everything_committed ? storage::RunStatus::kComplete : storage::RunStatus::kInterrupted, utc_now_ns());
+  summary.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  return summary;
+}
+
+}  // namespace bosfuse::acquisition

@@ -1,0 +1,64 @@
+#pragma once
+// The Logger records a run: it registers every device and channel in the
+// run store, polls each device on its own thread (DevicePoller) and commits
+// everything through one RunWriter. It runs until a duration has passed or a
+// stop is requested (Ctrl-C), then stops the devices, commits what was read
+// and marks the run complete. If the store itself fails the run is marked
+// interrupted, with everything committed before the failure kept.
+
+#include "acquisition/device_poller.h"
+#include "acquisition/experiment_config.h"
+#include "storage/run_store.h"
+#include "storage/run_writer.h"
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace bosfuse::acquisition {
+
+class Logger {
+ public:
+  struct Options {
+    std::optional<std::chrono::nanoseconds> duration;  // none: until stopped
+    storage::RunWriter::Options writer;
+    std::chrono::milliseconds backoff_initial{250};
+    std::chrono::milliseconds backoff_max{10'000};
+  };
+
+  struct DeviceSummary {
+    std::string name;
+    DevicePoller::Stats stats;
+  };
+
+  struct Summary {
+    std::vector<DeviceSummary> devices;
+    storage::RunWriter::Stats writer;
+    double elapsed_s = 0;
+    std::string BriefReport() const;
+  };
+
+  Logger(storage::RunStore& store, Options options);
+
+  // Adds a device polled every `period`. Call before run().
+  void add_source(std::unique_ptr<ThermocoupleSource> source, std::chrono::nanoseconds period);
+  // Adds every device of an experiment file.
+  void add_devices(const ExperimentConfig& config);
+
+  Summary run(const std::atomic<bool>& stop_requested);
+
+ private:
+  struct PendingSource {
+    std::unique_ptr<ThermocoupleSource> source;
+    std::chrono::nanoseconds period;
+  };
+
+  storage::RunStore& store_;
+  Options options_;
+  std::vector<PendingSource> sources_;
+};
+
+}  // namespace bosfuse::acquisition

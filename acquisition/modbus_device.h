@@ -1,0 +1,79 @@
+#pragma once
+// ModbusDevice reads a thermocouple module over Modbus TCP or RTU with
+// libmodbus. It groups its channels into as few register reads as possible
+// (contiguous blocks of one function code, at most 125 registers each) and
+// decodes each channel with its ModbusChannel map. The modbus_t handle lives
+// in a unique_ptr, closed and freed on every path.
+
+#include "acquisition/modbus_profile.h"
+#include "acquisition/thermocouple_source.h"
+
+#include <modbus/modbus.h>
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace bosfuse::acquisition {
+
+struct ModbusEndpoint {
+  ModbusTransport transport = ModbusTransport::kTcp;
+  std::string host = "127.0.0.1";  // TCP
+  int port = 502;                  // TCP
+  std::string serial_port;         // RTU, e.g. /dev/ttyUSB0
+  int baud = 9600;                 // RTU
+  char parity = 'N';               // RTU: N, E or O
+  int data_bits = 8;               // RTU
+  int stop_bits = 1;               // RTU
+  int unit_id = 1;
+
+  std::string describe() const;  // 127.0.0.1:502 or /dev/ttyUSB0@9600
+};
+
+struct ModbusFree {
+  void operator()(modbus_t* ctx) const noexcept {
+    modbus_close(ctx);
+    modbus_free(ctx);
+  }
+};
+using ModbusHandle = std::unique_ptr<modbus_t, ModbusFree>;
+
+// A libmodbus context for `endpoint` (not yet connected); throws DeviceError.
+ModbusHandle make_modbus_context(const ModbusEndpoint& endpoint);
+
+struct RegisterBlock {
+  RegisterKind function = RegisterKind::kHolding;
+  int address = 0;
+  int count = 0;
+};
+
+// The reads that cover `channels`: sorted, merged across gaps of at most
+// `max_gap` registers, each at most 125 registers (the Modbus limit).
+std::vector<RegisterBlock> plan_register_blocks(const std::vector<ModbusChannel>& channels, int max_gap = 8);
+
+class ModbusDevice : public ThermocoupleSource {
+ public:
+  ModbusDevice(std::string name, std::string profile, ModbusEndpoint endpoint, std::vector<ModbusChannel> channels,
+               std::chrono::milliseconds timeout);
+
+  storage::DeviceInfo device_info() const override;
+  std::vector<storage::ChannelInfo> channel_infos() const override;
+  void connect() override;
+  void disconnect() override;
+  std::vector<ChannelReading> read() override;
+
+ private:
+  std::vector<std::uint16_t> read_block(const RegisterBlock& block);
+
+  std::string name_;
+  std::string profile_;
+  ModbusEndpoint endpoint_;
+  std::vector<ModbusChannel> channels_;
+  std::chrono::milliseconds timeout_;
+  std::vector<RegisterBlock> blocks_;
+  ModbusHandle ctx_;
+};
+
+}  // namespace bosfuse::acquisition

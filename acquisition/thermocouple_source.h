@@ -1,0 +1,39 @@
+#pragma once
+// A ThermocoupleSource is one device that yields readings for a fixed list
+// of channels: a Modbus module, a USB-HID thermometer, a raw USB logger, or a
+// virtual or replayed one. The DevicePoller drives it on a schedule and owns
+// timing, retries and events; a source only knows its protocol. Sources are
+// used from one thread at a time.
+
+#include "acquisition/modbus_channel.h"
+#include "storage/records.h"
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace bosfuse::acquisition {
+
+// A transport failure: no answer, connection lost, device gone. The poller
+// records it, marks the poll's samples as timed out and reconnects.
+class DeviceError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class ThermocoupleSource {
+ public:
+  virtual ~ThermocoupleSource() = default;
+
+  virtual storage::DeviceInfo device_info() const = 0;
+  virtual std::vector<storage::ChannelInfo> channel_infos() const = 0;
+
+  virtual void connect() = 0;     // throws DeviceError
+  virtual void disconnect() = 0;  // never throws
+  // One reading per channel, in channel_infos() order. Throws DeviceError
+  // when the device cannot be read at all; a channel-level problem (burnout,
+  // bad value) is a reading status instead.
+  virtual std::vector<ChannelReading> read() = 0;
+};
+
+}  // namespace bosfuse::acquisition

@@ -1,0 +1,62 @@
+#pragma once
+// TomlReader reads one TOML table of an experiment file with errors a user
+// can act on: every message names the file, the line and the full key
+// (`experiment.toml:14: devices[1].port: expected an integer`). Keys the
+// table does not know are errors too, since a typo in a lab configuration
+// silently falling back to a default is worse than refusing to start.
+
+#include <toml++/toml.h>
+
+#include <cstdint>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace bosfuse::acquisition {
+
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class TomlReader {
+ public:
+  // `key_path` is the table's own path, e.g. "devices[1]".
+  TomlReader(const toml::table& table, std::string key_path, std::string source_name);
+
+  bool has(std::string_view key) const;
+  std::string string(std::string_view key) const;
+  std::optional<std::string> optional_string(std::string_view key) const;
+  std::int64_t integer(std::string_view key) const;
+  std::optional<std::int64_t> optional_integer(std::string_view key) const;
+  double number(std::string_view key) const;  // integer or float
+  std::optional<double> optional_number(std::string_view key) const;
+  std::optional<bool> optional_bool(std::string_view key) const;
+  std::vector<double> numbers(std::string_view key) const;  // an array of numbers; empty if absent
+  std::vector<TomlReader> tables(std::string_view key) const;  // an array of tables; empty if absent
+  std::optional<TomlReader> table(std::string_view key) const;
+  const toml::node* node(std::string_view key) const;
+
+  // An error about `key` (or the table itself when empty) at its line.
+  [[noreturn]] void fail(std::string_view key, const std::string& message) const;
+  // Fails on the first key that was never asked for.
+  void reject_unknown_keys() const;
+
+  std::string key_path(std::string_view key) const;
+
+ private:
+  const toml::node& require(std::string_view key) const;
+
+  const toml::table* table_;
+  std::string key_path_;
+  std::string source_name_;
+  mutable std::set<std::string, std::less<>> used_;
+};
+
+// Parses `text`; a syntax error becomes a ConfigError naming the line.
+toml::table parse_toml(std::string_view text, const std::string& source_name);
+
+}  // namespace bosfuse::acquisition
