@@ -235,3 +235,40 @@ void ModbusSimServer::set_silent(bool silent) {
 }
 
 }  // namespace bosfuse::sim
+
+namespace bosfuse::sim {
+
+std::vector<acquisition::ModbusChannel> module_channels(std::string_view profile, int inputs,
+                                                        const std::string& tc_type) {
+  const acquisition::ModbusProfile* p = acquisition::find_modbus_profile(profile);
+  if (!p || p->input_count == 0) {
+    throw std::invalid_argument("no simulated module for profile '" + std::string(profile) + "'");
+  }
+  std::vector<acquisition::ModbusChannel> channels;
+  for (int i = 0; i < inputs; ++i) {
+    channels.push_back(acquisition::profile_input_channel(profile, i, tc_type));
+    channels.back().name = "tc" + std::to_string(i);
+  }
+  if (p->has_cold_junction) {
+    channels.push_back(acquisition::profile_cold_junction_channel(profile));
+    channels.back().name = "cold-junction";
+  }
+  return channels;
+}
+
+ModbusSimServer::TemperatureFunction cooling_temperatures(const CoolingSignal& signal,
+                                                          const std::vector<acquisition::ModbusChannel>& channels) {
+  if (const std::string problem = signal.Validate(); !problem.empty()) {
+    throw std::invalid_argument("cooling signal: " + problem);
+  }
+  std::vector<bool> is_cold_junction;
+  for (const auto& c : channels) is_cold_junction.push_back(c.kind == "cold-junction");
+  return [signal, is_cold_junction](int channel, double t_s, std::uint64_t draw) {
+    if (is_cold_junction.at(static_cast<std::size_t>(channel))) {
+      return signal.ambient_c + signal.noise_c * hashed_normal(signal.seed, 1000u + channel, draw);
+    }
+    return signal.sample_c(t_s, channel, draw);
+  };
+}
+
+}  // namespace bosfuse::sim

@@ -87,3 +87,19 @@ class ModbusSimServer {
 };
 
 }  // namespace bosfuse::sim
+
+#include "sim/cooling_signal.h"
+
+namespace bosfuse::sim {
+
+// The channels a real module of `profile` exposes for its first `inputs`
+// thermocouple inputs, plus its cold junction when it has one.
+std::vector<acquisition::ModbusChannel> module_channels(std::string_view profile, int inputs,
+                                                        const std::string& tc_type);
+
+// Thermocouple channels follow `signal` (each with its own noise stream);
+// a cold-junction channel reads the ambient temperature with the same noise.
+ModbusSimServer::TemperatureFunction cooling_temperatures(const CoolingSignal& signal,
+                                                          const std::vector<acquisition::ModbusChannel>& channels);
+
+}  // namespace bosfuse::sim

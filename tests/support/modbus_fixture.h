@@ -1,0 +1,107 @@
+#pragma once
+// Helpers shared by the Modbus integration tests: a simulated module on
+// loopback, an experiment file for it, and a logger run of bounded length.
+
+#include "acquisition/clock.h"
+#include "acquisition/experiment_config.h"
+#include "acquisition/logger.h"
+#include "sim/modbus_server.h"
+#include "storage/run_store.h"
+
+#include <atomic>
+#include <chrono>
+#include <map>
+#include <string>
+
+namespace bosfuse::testing {
+
+using namespace std::chrono_literals;
+using acquisition::ModbusEndpoint;
+using acquisition::ModbusTransport;
+
+inline storage::RunInfo run_info(const std::string& config_text) {
+  return {0, "test-run", acquisition::utc_now_ns(), std::nullopt, config_text, storage::RunStatus::kRunning};
+}
+
+inline sim::ModbusSimServer::Options module_options(const std::string& profile, int inputs, ModbusEndpoint endpoint) {
+  sim::ModbusSimServer::Options options;
+  options.endpoint = std::move(endpoint);
+  options.channels = sim::module_channels(profile, inputs, "K");
+  options.temperature_c = sim::cooling_temperatures(sim::CoolingSignal{22.0, 85.0, 0.2, 0.3, 7}, options.channels);
+  return options;
+}
+
+inline ModbusEndpoint loopback_tcp(int port = 0) {
+  ModbusEndpoint endpoint;
+  endpoint.host = "127.0.0.1";
+  endpoint.port = port;
+  return endpoint;
+}
+
+inline acquisition::Logger::Summary log_for(storage::RunStore& store, const acquisition::ExperimentConfig& config,
+                                     std::chrono::milliseconds duration) {
+  acquisition::Logger::Options options;
+  options.duration = duration;
+  options.writer.flush_interval = 50ms;
+  options.backoff_initial = 50ms;
+  options.backoff_max = 200ms;
+  acquisition::Logger logger(store, options);
+  logger.add_devices(config);
+  std::atomic<bool> stop{false};
+  return logger.run(stop);
+}
+
+inline std::string tcp_device_toml(const std::string& name, int port, int inputs, double period_s) {
+  std::string text = "[[devices]]\nname = \"" + name + "\"\nprofile = \"adam-6018\"\nhost = \"127.0.0.1\"\nport = " +
+                     std::to_string(port) + "\npoll_period_s = " + std::to_string(period_s) +
+                     "\ntimeout_s = 0.5\n";
+  for (int i = 0; i < inputs; ++i) {
+    text += "[[devices.channels]]\nname = \"tc" + std::to_string(i) + "\"\ninput = " + std::to_string(i) + "\n";
+  }
+  return text;
+}
+
+inline std::map<std::string, std::vector<storage::Sample>> samples_by_channel(const storage::RunStore& store) {
+  std::map<std::string, std::vector<storage::Sample>> out;
+  for (const auto& channel : store.channels()) out[channel.name] = store.read_samples(channel.id);
+  return out;
+}
+
+
+}  // namespace bosfuse::testing
+
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+namespace bosfuse::testing {
+
+// A loopback TCP port nothing listens on (free when this returns).
+inline int unused_loopback_port() {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
+  socklen_t length = sizeof addr;
+  getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &length);
+  close(fd);
+  return ntohs(addr.sin_port);
+}
+
+inline std::vector<std::string> event_kinds(const storage::RunStore& store, std::int64_t device_id) {
+  std::vector<std::string> kinds;
+  for (const auto& e : store.events()) {
+    if (e.device_id == device_id) kinds.push_back(e.kind);
+  }
+  return kinds;
+}
+
+inline std::int64_t device_id(const storage::RunStore& store, const std::string& name) {
+  for (const auto& d : store.devices()) {
+    if (d.name == name) return d.id;
+  }
+  return -1;
+}
+
+}  // namespace bosfuse::testing
