@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <string>
 
 namespace bosfuse::acquisition {
 
@@ -12,5 +13,12 @@ inline std::int64_t utc_now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
+
+// ISO-8601 UTC with `fraction_digits` decimals of a second (0..9), e.g.
+// 2026-11-23T09:13:48.289123Z.
+std::string format_iso8601_utc(std::int64_t t_ns, int fraction_digits = 6);
+
+// A compact UTC stamp usable in file names: 20261123T091348Z.
+std::string format_compact_utc(std::int64_t t_ns);
 
 }  // namespace bosfuse::acquisition

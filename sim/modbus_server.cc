@@ -271,4 +271,13 @@ ModbusSimServer::TemperatureFunction cooling_temperatures(const CoolingSignal& s
   };
 }
 
+ModbusSimServer::Options module_server_options(const SimulatedModule& module, acquisition::ModbusEndpoint endpoint) {
+  ModbusSimServer::Options options;
+  options.endpoint = std::move(endpoint);
+  options.channels = module_channels(module.profile, module.inputs, module.tc_type);
+  options.temperature_c = cooling_temperatures(module.signal, options.channels);
+  options.update_period = module.update_period;
+  return options;
+}
+
 }  // namespace bosfuse::sim

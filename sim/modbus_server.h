@@ -97,9 +97,21 @@ namespace bosfuse::sim {
 std::vector<acquisition::ModbusChannel> module_channels(std::string_view profile, int inputs,
                                                         const std::string& tc_type);
 
+// What a simulated module is: its profile, how many thermocouple inputs it
+// has, and the cooling curve they read.
+struct SimulatedModule {
+  std::string profile = "adam-6018";
+  int inputs = 4;
+  std::string tc_type = "K";
+  CoolingSignal signal;
+  std::chrono::nanoseconds update_period{0};
+};
+
 // Thermocouple channels follow `signal` (each with its own noise stream);
 // a cold-junction channel reads the ambient temperature with the same noise.
 ModbusSimServer::TemperatureFunction cooling_temperatures(const CoolingSignal& signal,
                                                           const std::vector<acquisition::ModbusChannel>& channels);
+
+ModbusSimServer::Options module_server_options(const SimulatedModule& module, acquisition::ModbusEndpoint endpoint);
 
 }  // namespace bosfuse::sim

@@ -22,6 +22,11 @@ RunInfo read_run(Statement& stmt) {
   return run;
 }
 
+Sample read_sample(const Statement& stmt) {
+  return {stmt.column_int64(0),           stmt.column_int64(1),           stmt.column_optional_int64(2),
+          stmt.column_optional_double(3), stmt.column_optional_double(4), static_cast<SampleStatus>(stmt.column_int64(5))};
+}
+
 void bind_range(Statement& stmt, int first_index, TimeRange range) {
   stmt.bind(first_index, range.from_ns).bind(first_index + 1, range.to_ns);
 }
@@ -201,12 +206,16 @@ std::vector<Sample> RunStore::read_samples(std::int64_t channel_id, TimeRange ra
   stmt.bind(1, channel_id);
   bind_range(stmt, 2, range);
   std::vector<Sample> out;
-  while (stmt.step()) {
-    out.push_back({stmt.column_int64(0), stmt.column_int64(1), stmt.column_optional_int64(2),
-                   stmt.column_optional_double(3), stmt.column_optional_double(4),
-                   static_cast<SampleStatus>(stmt.column_int64(5))});
-  }
+  while (stmt.step()) out.push_back(read_sample(stmt));
   return out;
+}
+
+void RunStore::for_each_sample(const std::function<void(const Sample&)>& visit, TimeRange range) const {
+  auto stmt = db_.prepare(
+      "SELECT channel_id, t_ns, device_t_ns, value, raw, status FROM samples "
+      "WHERE t_ns BETWEEN ? AND ? ORDER BY t_ns, channel_id, rowid");
+  bind_range(stmt, 1, range);
+  while (stmt.step()) visit(read_sample(stmt));
 }
 
 std::vector<Event> RunStore::events(TimeRange range) const {

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -67,6 +68,9 @@ class RunStore {
   std::vector<DeviceInfo> devices() const;
   std::vector<ChannelInfo> channels() const;
   std::vector<Sample> read_samples(std::int64_t channel_id, TimeRange range = {}) const;
+  // Every sample of the run in time order (ties by channel), streamed so
+  // an export of a long run needs no memory for it.
+  void for_each_sample(const std::function<void(const Sample&)>& visit, TimeRange range = {}) const;
   std::vector<Event> events(TimeRange range = {}) const;
   std::vector<FrameRecord> frames(TimeRange range = {}) const;
   std::vector<ChannelSummary> channel_summaries() const;

@@ -166,3 +166,22 @@ TEST(RunWriter, AFailedCommitKeepsTheBatchAndRetries) {
 
 }  // namespace
 }  // namespace bosfuse::storage
+
+namespace bosfuse::storage {
+namespace {
+
+TEST(RunStore, ForEachSampleStreamsInTimeOrderAcrossChannels) {
+  Fixture f;
+  const auto other = f.store.add_channel({0, f.device, "tc1", "thermocouple", "degC", "K", {}, {}});
+  const std::vector<Sample> samples = {{other, 30, {}, 3.0, {}, SampleStatus::kOk},
+                                       {f.channel, 10, {}, 1.0, {}, SampleStatus::kOk},
+                                       {other, 10, {}, 2.0, {}, SampleStatus::kOk},
+                                       {f.channel, 40, {}, 4.0, {}, SampleStatus::kOk}};
+  f.store.write_samples(samples);
+  std::vector<double> order;
+  f.store.for_each_sample([&](const Sample& s) { order.push_back(*s.value); }, {0, 35});
+  EXPECT_EQ(order, (std::vector<double>{1.0, 2.0, 3.0}));
+}
+
+}  // namespace
+}  // namespace bosfuse::storage

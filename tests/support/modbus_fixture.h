@@ -24,11 +24,8 @@ inline storage::RunInfo run_info(const std::string& config_text) {
 }
 
 inline sim::ModbusSimServer::Options module_options(const std::string& profile, int inputs, ModbusEndpoint endpoint) {
-  sim::ModbusSimServer::Options options;
-  options.endpoint = std::move(endpoint);
-  options.channels = sim::module_channels(profile, inputs, "K");
-  options.temperature_c = sim::cooling_temperatures(sim::CoolingSignal{22.0, 85.0, 0.2, 0.3, 7}, options.channels);
-  return options;
+  return sim::module_server_options({profile, inputs, "K", sim::CoolingSignal{22.0, 85.0, 0.2, 0.3, 7}, {}},
+                                    std::move(endpoint));
 }
 
 inline ModbusEndpoint loopback_tcp(int port = 0) {

@@ -1,0 +1,56 @@
+// bosfuse acquire: log the devices of an experiment file into a run folder.
+
+#include "acquisition/clock.h"
+#include "acquisition/experiment_config.h"
+#include "acquisition/logger.h"
+#include "app/command.h"
+#include "app/run_control.h"
+#include "storage/run_store.h"
+
+#include <spdlog/spdlog.h>
+
+#include <iostream>
+
+namespace bosfuse::app {
+namespace {
+
+struct AcquireArgs {
+  std::string experiment;
+  std::string out;
+  std::string duration;
+  bool append = false;
+};
+
+void acquire(const AcquireArgs& args) {
+  const auto config = acquisition::load_experiment(args.experiment);
+  if (config.modbus_devices.empty()) throw std::runtime_error(args.experiment + ": no [[devices]] to log");
+  acquisition::Logger::Options options;
+  if (!args.duration.empty()) options.duration = parse_duration(args.duration);
+  const storage::RunInfo info{0, config.run_name.empty() ? std::string("run") : config.run_name,
+                              acquisition::utc_now_ns(), std::nullopt, config.source_text,
+                              storage::RunStatus::kRunning};
+  auto store = storage::RunStore::create(
+      args.out, info, args.append ? storage::RunStore::CreateMode::kAppend : storage::RunStore::CreateMode::kNew);
+  acquisition::Logger logger(store, options);
+  logger.add_devices(config);
+  spdlog::info("logging {} devices into {} ({})", config.modbus_devices.size(), args.out,
+               args.duration.empty() ? "until Ctrl-C" : "for " + args.duration);
+  const auto summary = logger.run(stop_requested_by_signal());
+  std::cout << summary.BriefReport() << "\nrun store: " << (store.dir() / storage::RunStore::kDatabaseFileName).string()
+            << "\n";
+}
+
+void add_acquire(CLI::App& root) {
+  auto args = std::make_shared<AcquireArgs>();
+  CLI::App* cmd = root.add_subcommand("acquire", "Log the devices of an experiment file into a run folder");
+  cmd->add_option("experiment", args->experiment, "Experiment TOML file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--out,-o", args->out, "Run folder to create")->required();
+  cmd->add_option("--duration", args->duration, "Stop after this long (30s, 10m, 2h); default: until Ctrl-C");
+  cmd->add_flag("--append", args->append, "Continue the run already in the folder instead of refusing it");
+  cmd->callback([args] { acquire(*args); });
+}
+
+BOSFUSE_COMMAND(add_acquire);
+
+}  // namespace
+}  // namespace bosfuse::app

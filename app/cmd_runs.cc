@@ -1,0 +1,74 @@
+// bosfuse runs: what a run folder holds.
+
+#include "acquisition/clock.h"
+#include "app/command.h"
+#include "storage/run_store.h"
+
+#include <fmt/format.h>
+
+#include <iostream>
+#include <map>
+
+namespace bosfuse::app {
+namespace {
+
+std::string time_or_dash(const std::optional<std::int64_t>& t_ns) {
+  return t_ns ? acquisition::format_iso8601_utc(*t_ns, 3) : "-";
+}
+
+std::string value_or_dash(const std::optional<double>& v) { return v ? fmt::format("{:.2f}", *v) : "-"; }
+
+void print_run(const storage::RunStore& store) {
+  const storage::RunInfo run = store.run();
+  std::cout << fmt::format("run       {}\nfolder    {}\nstatus    {}\nstarted   {}\nended     {}\n", run.name,
+                           store.dir().string(), storage::to_string(run.status),
+                           acquisition::format_iso8601_utc(run.started_ns, 3), time_or_dash(run.ended_ns));
+  if (run.ended_ns) {
+    std::cout << fmt::format("duration  {:.1f} s\n", static_cast<double>(*run.ended_ns - run.started_ns) * 1e-9);
+  }
+}
+
+void print_channels(const storage::RunStore& store) {
+  std::cout << fmt::format("\n{:<12} {:<16} {:<13} {:<5} {:>9} {:>9} {:>9} {:>9}  {:<24} {}\n", "device", "channel",
+                           "kind", "unit", "samples", "ok", "min", "max", "first", "last");
+  for (const auto& s : store.channel_summaries()) {
+    std::cout << fmt::format("{:<12} {:<16} {:<13} {:<5} {:>9} {:>9} {:>9} {:>9}  {:<24} {}\n", s.device_name,
+                             s.channel.name, s.channel.kind, s.channel.unit, s.sample_count, s.ok_count,
+                             value_or_dash(s.min_value), value_or_dash(s.max_value), time_or_dash(s.first_ns),
+                             time_or_dash(s.last_ns));
+  }
+}
+
+void print_events(const storage::RunStore& store) {
+  const auto events = store.events();
+  std::map<std::string, int> counts;
+  for (const auto& e : events) ++counts[e.kind];
+  std::cout << "\nevents   ";
+  for (const auto& [kind, n] : counts) std::cout << " " << kind << " " << n;
+  std::cout << "\n";
+  std::map<std::int64_t, std::string> device_names;
+  for (const auto& d : store.devices()) device_names[d.id] = d.name;
+  for (const auto& e : events) {
+    if (e.kind == "started" || e.kind == "stopped" || e.kind == "connect") continue;
+    std::cout << fmt::format("  {}  {:<10} {:<12} {}\n", acquisition::format_iso8601_utc(e.t_ns, 3), e.kind,
+                             e.device_id ? device_names[*e.device_id] : "", e.message);
+  }
+  std::cout << fmt::format("frames    {}\n", store.frames().size());
+}
+
+void add_runs(CLI::App& root) {
+  auto dir = std::make_shared<std::string>();
+  CLI::App* cmd = root.add_subcommand("runs", "Summarise a run: channels, sample counts, time span, events");
+  cmd->add_option("run", *dir, "Run folder")->required();
+  cmd->callback([dir] {
+    const auto store = storage::RunStore::open(*dir);
+    print_run(store);
+    print_channels(store);
+    print_events(store);
+  });
+}
+
+BOSFUSE_COMMAND(add_runs);
+
+}  // namespace
+}  // namespace bosfuse::app

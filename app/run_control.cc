@@ -1,0 +1,49 @@
+#include "app/run_control.h"
+
+#include <csignal>
+#include <cmath>
+#include <stdexcept>
+
+namespace bosfuse::app {
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void request_stop(int) { g_stop.store(true); }
+
+}  // namespace
+
+std::atomic<bool>& stop_requested_by_signal() {
+  static const bool installed = [] {
+    struct sigaction action {};
+    action.sa_handler = request_stop;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, nullptr);
+    sigaction(SIGTERM, &action, nullptr);
+    return true;
+  }();
+  (void)installed;
+  return g_stop;
+}
+
+std::chrono::nanoseconds parse_duration(const std::string& text) {
+  std::size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  const std::string unit = text.substr(used);
+  double seconds_per_unit = 0;
+  if (unit.empty() || unit == "s") seconds_per_unit = 1;
+  if (unit == "ms") seconds_per_unit = 1e-3;
+  if (unit == "m" || unit == "min") seconds_per_unit = 60;
+  if (unit == "h") seconds_per_unit = 3600;
+  if (used == 0 || seconds_per_unit == 0 || !std::isfinite(value) || value <= 0) {
+    throw std::invalid_argument("cannot read duration '" + text + "' (examples: 30s, 10m, 1.5h, 250ms)");
+  }
+  return std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(value * seconds_per_unit * 1e9)));
+}
+
+}  // namespace bosfuse::app
