@@ -50,6 +50,7 @@ class BackgroundProcess {
     }
   }
   ~BackgroundProcess() {
+    if (pid_ <= 0) return;
     kill(pid_, SIGTERM);
     for (int i = 0; i < 100; ++i) {  // up to 1 s, then force
       if (waitpid(pid_, nullptr, WNOHANG) == pid_) return;
@@ -61,7 +62,22 @@ class BackgroundProcess {
   BackgroundProcess(const BackgroundProcess&) = delete;
   BackgroundProcess& operator=(const BackgroundProcess&) = delete;
 
-  bool running() const { return waitpid(pid_, nullptr, WNOHANG) == 0; }
+  void send_signal(int signal) { kill(pid_, signal); }
+
+  // The exit code once the process ends within `limit`; -1 if it is still
+  // running then or was killed by a signal.
+  int wait_exit(std::chrono::milliseconds limit) {
+    const auto deadline = std::chrono::steady_clock::now() + limit;
+    while (std::chrono::steady_clock::now() < deadline) {
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return -1;
+  }
 
  private:
   pid_t pid_ = -1;
