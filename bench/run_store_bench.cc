@@ -1,0 +1,105 @@
+// Throughput of the run store and of Modbus polling over loopback.
+//   build/bench/run_store_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+// Figures and what they mean: docs/BENCHMARKS.md.
+
+#include "acquisition/modbus_device.h"
+#include "sim/modbus_server.h"
+#include "storage/run_store.h"
+#include "storage/run_writer.h"
+
+#include <benchmark/benchmark.h>
+
+#include <filesystem>
+#include <random>
+
+namespace bosfuse {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ScratchRun {
+  ScratchRun() : dir(fs::temp_directory_path() / ("bosfuse-bench-" + std::to_string(std::random_device{}()))) {
+    store.emplace(storage::RunStore::create(dir, {0, "bench", 0, {}, "", storage::RunStatus::kRunning},
+                                            storage::RunStore::CreateMode::kNew));
+    const auto device = store->add_device({0, "bench", "modbus-tcp", "adam-6018", ""});
+    for (int i = 0; i < 8; ++i) {
+      channels.push_back(store->add_channel({0, device, "tc" + std::to_string(i), "thermocouple", "degC", "K", {}, {}}));
+    }
+  }
+  ~ScratchRun() {
+    store.reset();
+    fs::remove_all(dir);
+  }
+  // 8 channels polled together, as a module delivers them.
+  std::vector<storage::Sample> batch(std::int64_t first_poll, std::int64_t polls) const {
+    std::vector<storage::Sample> samples;
+    samples.reserve(static_cast<std::size_t>(polls) * channels.size());
+    for (std::int64_t p = first_poll; p < first_poll + polls; ++p) {
+      for (auto channel : channels) {
+        samples.push_back({channel, 1'700'000'000'000'000'000 + p * 100'000'000, {}, 20.0 + 1e-3 * double(p % 1000),
+                           double(p % 65535), storage::SampleStatus::kOk});
+      }
+    }
+    return samples;
+  }
+
+  fs::path dir;
+  std::optional<storage::RunStore> store;
+  std::vector<std::int64_t> channels;
+};
+
+// Samples per second committed with one transaction per batch.
+void BM_WriteSamplesBatched(benchmark::State& state) {
+  ScratchRun run;
+  const std::int64_t polls = state.range(0) / 8;
+  std::int64_t next = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    const auto samples = run.batch(next, polls);
+    next += polls;
+    state.ResumeTiming();
+    run.store->write_samples(samples);
+  }
+  state.SetItemsProcessed(state.iterations() * polls * 8);
+}
+BENCHMARK(BM_WriteSamplesBatched)->Arg(1'000)->Arg(10'000)->Arg(100'000)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// Through the RunWriter, as the logger writes: push, then flush.
+void BM_RunWriterPushAndCommit(benchmark::State& state) {
+  ScratchRun run;
+  storage::RunWriter writer(*run.store);
+  const std::int64_t polls = state.range(0) / 8;
+  std::int64_t next = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    const auto samples = run.batch(next, polls);
+    next += polls;
+    state.ResumeTiming();
+    writer.push(samples);
+    writer.flush();
+  }
+  state.SetItemsProcessed(state.iterations() * polls * 8);
+}
+BENCHMARK(BM_RunWriterPushAndCommit)->Arg(100'000)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// Polls per second of one 8-channel ADAM-6018 over loopback TCP.
+void BM_ModbusTcpPoll(benchmark::State& state) {
+  acquisition::ModbusEndpoint endpoint;
+  endpoint.port = 0;
+  sim::SimulatedModule module;
+  module.inputs = 8;
+  sim::ModbusSimServer server(sim::module_server_options(module, endpoint));
+  server.start();
+  endpoint.port = server.port();
+  acquisition::ModbusDevice device("bench", "adam-6018", endpoint, sim::module_channels("adam-6018", 8, "K"),
+                                   std::chrono::milliseconds(500));
+  device.connect();
+  for (auto _ : state) benchmark::DoNotOptimize(device.read());
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_ModbusTcpPoll)->UseRealTime()->MinTime(2.0);
+
+}  // namespace
+}  // namespace bosfuse
+
+BENCHMARK_MAIN();
