@@ -33,12 +33,13 @@ DevicePoller::DevicePoller(std::unique_ptr<ThermocoupleSource> source, std::int6
       name_(source_->device_info().name),
       device_id_(device_id),
       channel_ids_(std::move(channel_ids)),
+      channels_(source_->channel_infos()),
       writer_(writer),
       options_(options) {
   if (const std::string problem = options_.Validate(); !problem.empty()) {
     throw std::invalid_argument("device " + name_ + ": " + problem);
   }
-  if (channel_ids_.size() != source_->channel_infos().size()) {
+  if (channel_ids_.size() != channels_.size()) {
     throw std::invalid_argument("device " + name_ + ": channel ids do not match its channels");
   }
 }
@@ -152,6 +153,7 @@ std::string DevicePoller::poll_once() {
   }
   writer_.push(samples);
   std::lock_guard lock(mutex_);
+  stats_.last_samples = std::move(samples);
   if (failure.empty()) {
     ++stats_.polls_ok;
   } else {

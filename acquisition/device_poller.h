@@ -39,6 +39,7 @@ class DevicePoller {
     std::int64_t reconnects = 0;
     std::int64_t missed_ticks = 0;  // polls skipped because a poll overran
     bool connected = false;
+    std::vector<storage::Sample> last_samples;  // the latest poll, one per channel
   };
 
   // `channel_ids` are the run store ids of source->channel_infos(), in order.
@@ -52,6 +53,7 @@ class DevicePoller {
   void stop();
   Stats stats() const;
   const std::string& name() const { return name_; }
+  const std::vector<storage::ChannelInfo>& channels() const { return channels_; }
 
  private:
   using SteadyTime = std::chrono::steady_clock::time_point;
@@ -68,6 +70,7 @@ class DevicePoller {
   std::string name_;
   std::int64_t device_id_;
   std::vector<std::int64_t> channel_ids_;
+  std::vector<storage::ChannelInfo> channels_;
   storage::RunWriter& writer_;
   Options options_;
 

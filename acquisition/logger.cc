@@ -12,14 +12,6 @@ namespace {
 
 constexpr auto kStopCheckInterval = std::chrono::milliseconds(20);
 
-void wait_for_end(const std::atomic<bool>& stop_requested, std::optional<std::chrono::nanoseconds> duration) {
-  const auto start = std::chrono::steady_clock::now();
-  while (!stop_requested.load()) {
-    if (duration && std::chrono::steady_clock::now() - start >= *duration) return;
-    std::this_thread::sleep_for(kStopCheckInterval);
-  }
-}
-
 }  // namespace
 
 std::string Logger::Summary::BriefReport() const {
@@ -38,6 +30,42 @@ std::string Logger::Summary::BriefReport() const {
     out << "\n  " << writer.failed_commits << " commits had to be retried; last error: " << writer.last_error;
   }
   return out.str();
+}
+
+std::string Logger::latest_readings(const std::vector<std::unique_ptr<DevicePoller>>& pollers) {
+  std::ostringstream out;
+  out.precision(2);
+  out << std::fixed;
+  for (std::size_t d = 0; d < pollers.size(); ++d) {
+    const auto stats = pollers[d]->stats();
+    out << (d ? " | " : "") << pollers[d]->name() << ":";
+    if (!stats.connected) out << " (disconnected)";
+    for (std::size_t c = 0; c < stats.last_samples.size(); ++c) {
+      const auto& sample = stats.last_samples[c];
+      out << " " << pollers[d]->channels()[c].name << " ";
+      if (sample.value) {
+        out << *sample.value;
+      } else {
+        out << storage::to_string(sample.status);
+      }
+    }
+  }
+  return out.str();
+}
+
+void Logger::wait_for_end(const std::atomic<bool>& stop_requested,
+                          const std::vector<std::unique_ptr<DevicePoller>>& pollers) const {
+  const auto start = std::chrono::steady_clock::now();
+  auto next_progress = start + options_.progress_interval;
+  while (!stop_requested.load()) {
+    const auto now = std::chrono::steady_clock::now();
+    if (options_.duration && now - start >= *options_.duration) return;
+    if (options_.on_progress && now >= next_progress) {
+      options_.on_progress(latest_readings(pollers));
+      next_progress += options_.progress_interval;
+    }
+    std::this_thread::sleep_for(kStopCheckInterval);
+  }
 }
 
 Logger::Logger(storage::RunStore& store, Options options) : store_(store), options_(std::move(options)) {}
@@ -72,7 +100,7 @@ Logger::Summary Logger::run(const std::atomic<bool>& stop_requested) {
   writer.push(storage::Event{0, std::nullopt, utc_now_ns(), "started", std::to_string(pollers.size()) + " devices"});
   for (auto& poller : pollers) poller->start();
 
-  wait_for_end(stop_requested, options_.duration);
+  wait_for_end(stop_requested, pollers);
 
   for (auto& poller : pollers) {
     poller->stop();

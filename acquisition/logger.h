@@ -13,6 +13,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -27,6 +28,10 @@ class Logger {
     storage::RunWriter::Options writer;
     std::chrono::milliseconds backoff_initial{250};
     std::chrono::milliseconds backoff_max{10'000};
+    // Called every progress_interval with a one-line account of the latest
+    // readings, so a user watching the run sees it is alive.
+    std::function<void(const std::string&)> on_progress;
+    std::chrono::milliseconds progress_interval{5'000};
   };
 
   struct DeviceSummary {
@@ -50,11 +55,17 @@ class Logger {
 
   Summary run(const std::atomic<bool>& stop_requested);
 
+  // "adam: tc0 78.21 tc1 open-circuit | m7018: (disconnected)"
+  static std::string latest_readings(const std::vector<std::unique_ptr<DevicePoller>>& pollers);
+
  private:
   struct PendingSource {
     std::unique_ptr<ThermocoupleSource> source;
     std::chrono::nanoseconds period;
   };
+
+  void wait_for_end(const std::atomic<bool>& stop_requested,
+                    const std::vector<std::unique_ptr<DevicePoller>>& pollers) const;
 
   storage::RunStore& store_;
   Options options_;

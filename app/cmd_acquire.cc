@@ -26,6 +26,7 @@ void acquire(const AcquireArgs& args) {
   if (config.modbus_devices.empty()) throw std::runtime_error(args.experiment + ": no [[devices]] to log");
   acquisition::Logger::Options options;
   if (!args.duration.empty()) options.duration = parse_duration(args.duration);
+  options.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
   const storage::RunInfo info{0, config.run_name.empty() ? std::string("run") : config.run_name,
                               acquisition::utc_now_ns(), std::nullopt, config.source_text,
                               storage::RunStatus::kRunning};

@@ -108,7 +108,11 @@ TEST(ModbusFaults, BurnoutAndOutOfRangeAreStoredWithTheirStatus) {
   const std::string toml = tcp_device_toml("adam", server.port(), 3, 0.05) + "valid_range = [0.0, 50.0]\n";
   const auto config = acquisition::parse_experiment(toml, "faults.toml");
   auto store = storage::RunStore::create(dir / "run", run_info(toml), storage::RunStore::CreateMode::kNew);
-  log_for(store, config, 500ms);
+  std::vector<std::string> progress;
+  log_for(store, config, 500ms, [&](const std::string& line) { progress.push_back(line); });
+  ASSERT_FALSE(progress.empty());
+  EXPECT_EQ(progress.back().substr(0, 11), "adam: tc0 8") << progress.back();
+  EXPECT_NE(progress.back().find("tc1 open-circuit tc2 out-of-range"), std::string::npos) << progress.back();
   const auto samples = samples_by_channel(store);
   for (const auto& s : samples.at("tc1")) {
     EXPECT_EQ(s.status, SampleStatus::kOpenCircuit);

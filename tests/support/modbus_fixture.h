@@ -36,12 +36,15 @@ inline ModbusEndpoint loopback_tcp(int port = 0) {
 }
 
 inline acquisition::Logger::Summary log_for(storage::RunStore& store, const acquisition::ExperimentConfig& config,
-                                     std::chrono::milliseconds duration) {
+                                     std::chrono::milliseconds duration,
+                                     std::function<void(const std::string&)> on_progress = {}) {
   acquisition::Logger::Options options;
   options.duration = duration;
   options.writer.flush_interval = 50ms;
   options.backoff_initial = 50ms;
   options.backoff_max = 200ms;
+  options.on_progress = std::move(on_progress);
+  options.progress_interval = 200ms;
   acquisition::Logger logger(store, options);
   logger.add_devices(config);
   std::atomic<bool> stop{false};
