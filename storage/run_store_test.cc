@@ -156,12 +156,15 @@ TEST(RunWriter, AFailedCommitKeepsTheBatchAndRetries) {
   RunWriter writer(f.store, {std::chrono::milliseconds(10), 1'000});
   // A sample for a channel that does not exist violates the foreign key:
   // its batch must fail without losing the good samples queued with it.
-  writer.push(Sample{f.channel, 1, {}, 1.0, {}, SampleStatus::kOk});
-  writer.push(Sample{9999, 2, {}, 2.0, {}, SampleStatus::kOk});
+  const std::vector<Sample> batch = {{f.channel, 1, {}, 1.0, {}, SampleStatus::kOk},
+                                     {9999, 2, {}, 2.0, {}, SampleStatus::kOk}};
+  writer.push(batch);  // one push: the two can only be committed together
   writer.flush();
   EXPECT_GE(writer.stats().failed_commits, 1);
   EXPECT_NE(writer.stats().last_error.find("FOREIGN KEY"), std::string::npos) << writer.stats().last_error;
-  EXPECT_TRUE(f.store.read_samples(f.channel).empty());
+  EXPECT_TRUE(f.store.read_samples(f.channel).empty()) << "a batch is committed whole or not at all";
+  writer.flush();
+  EXPECT_GE(writer.stats().failed_commits, 2) << "the batch was not kept for another try";
 }
 
 }  // namespace
