@@ -81,6 +81,19 @@ void Logger::add_devices(const ExperimentConfig& config) {
 }
 
 Logger::Summary Logger::run(const std::atomic<bool>& stop_requested) {
+  try {
+    return run_devices(stop_requested);
+  } catch (...) {
+    // Whatever was committed stays; the run says it did not end normally.
+    try {
+      store_.finish(storage::RunStatus::kInterrupted, utc_now_ns());
+    } catch (...) {
+    }
+    throw;
+  }
+}
+
+Logger::Summary Logger::run_devices(const std::atomic<bool>& stop_requested) {
   const auto started = std::chrono::steady_clock::now();
   Summary summary;
   storage::RunWriter writer(store_, options_.writer);

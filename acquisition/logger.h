@@ -64,6 +64,7 @@ class Logger {
     std::chrono::nanoseconds period;
   };
 
+  Summary run_devices(const std::atomic<bool>& stop_requested);
   void wait_for_end(const std::atomic<bool>& stop_requested,
                     const std::vector<std::unique_ptr<DevicePoller>>& pollers) const;
 

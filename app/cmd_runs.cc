@@ -20,8 +20,11 @@ std::string value_or_dash(const std::optional<double>& v) { return v ? fmt::form
 
 void print_run(const storage::RunStore& store) {
   const storage::RunInfo run = store.run();
+  const std::string status = run.status == storage::RunStatus::kRunning
+                                 ? "running (or its logger was killed before it could close the run)"
+                                 : std::string(storage::to_string(run.status));
   std::cout << fmt::format("run       {}\nfolder    {}\nstatus    {}\nstarted   {}\nended     {}\n", run.name,
-                           store.dir().string(), storage::to_string(run.status),
+                           store.dir().string(), status,
                            acquisition::format_iso8601_utc(run.started_ns, 3), time_or_dash(run.ended_ns));
   if (run.ended_ns) {
     std::cout << fmt::format("duration  {:.1f} s\n", static_cast<double>(*run.ended_ns - run.started_ns) * 1e-9);

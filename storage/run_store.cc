@@ -54,8 +54,13 @@ RunStore RunStore::create(const fs::path& run_dir, const RunInfo& info, CreateMo
   RunStore store(run_dir, Database::Mode::kCreate);
   migrate(store.db_);
   if (existing) {
-    store.run_id_ = store.run().id;
+    const RunInfo previous = store.run();
+    store.run_id_ = previous.id;
     store.db_.prepare("UPDATE runs SET status = 'running', ended_ns = NULL WHERE id = ?").bind(1, store.run_id_).run();
+    const std::string how = previous.status == RunStatus::kRunning ? "the previous session ended without closing the run"
+                                                                    : "after a " + std::string(to_string(previous.status)) + " session";
+    const Event appended{0, std::nullopt, info.started_ns, "appended", "logging resumed in this run, " + how};
+    store.write_events({&appended, 1});
   } else {
     store.run_id_ = store.insert_run(info);
   }

@@ -87,6 +87,8 @@ TEST(RunStore, FolderHoldingARunIsRefusedUnlessAppending) {
   const auto channel = appended.add_channel({0, device, "tc0", "thermocouple", "degC", "K", {}, {}});
   EXPECT_EQ(appended.channels().size(), 1u) << "appending duplicated the channel";
   EXPECT_EQ(appended.read_samples(channel).size(), 1u) << "appending lost committed samples";
+  ASSERT_EQ(appended.events().size(), 1u);
+  EXPECT_EQ(appended.events()[0].kind, "appended");
 }
 
 TEST(RunStore, OpeningAFolderWithoutARunSaysSo) {
