@@ -1,12 +1,12 @@
 #include "acquisition/device_poller.h"
 
-#include "acquisition/clock.h"
-
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <stdexcept>
+
+#include "acquisition/clock.h"
 
 namespace bosfuse::acquisition {
 namespace {

@@ -8,9 +8,6 @@
 // length of the gap. One dead device never stalls the others: each has its
 // own thread, and the shared writer never blocks on a device.
 
-#include "acquisition/thermocouple_source.h"
-#include "storage/run_writer.h"
-
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -20,6 +17,9 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "acquisition/thermocouple_source.h"
+#include "storage/run_writer.h"
 
 namespace bosfuse::acquisition {
 

@@ -3,12 +3,12 @@
 
 #include "acquisition/device_poller.h"
 
-#include "tests/support/temp_dir.h"
-
 #include <gtest/gtest.h>
 
 #include <atomic>
 #include <thread>
+
+#include "tests/support/temp_dir.h"
 
 namespace bosfuse::acquisition {
 namespace {

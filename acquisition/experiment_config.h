@@ -6,13 +6,13 @@
 // user can get wrong and names the key and line; the verbatim text is kept
 // so a run stores exactly the configuration it was recorded with.
 
-#include "acquisition/modbus_device.h"
-#include "acquisition/toml_reader.h"
-
 #include <chrono>
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include "acquisition/modbus_device.h"
+#include "acquisition/toml_reader.h"
 
 namespace bosfuse::acquisition {
 

@@ -94,8 +94,7 @@ TEST(ExperimentConfig, SyntaxErrorNamesTheLine) {
 TEST(ExperimentConfig, BadValuesNameTheKeyAndLine) {
   const std::string device = "[[devices]]\nname = \"a\"\nprofile = \"adam-6018\"\nhost = \"h\"\n";
   const std::string channel = "[[devices.channels]]\nname = \"t\"\ninput = 0\n";
-  EXPECT_EQ(error_of(device + "port = 70000\n" + channel),
-            "exp.toml:5: devices[0].port: must be between 1 and 65535");
+  EXPECT_EQ(error_of(device + "port = 70000\n" + channel), "exp.toml:5: devices[0].port: must be between 1 and 65535");
   EXPECT_EQ(error_of(device + "port = \"502\"\n" + channel), "exp.toml:5: devices[0].port: expected an integer");
   EXPECT_EQ(error_of(device + "pol_period_s = 1\n" + channel),
             "exp.toml:5: devices[0].pol_period_s: unknown key (a typo?)");
@@ -122,9 +121,7 @@ TEST(ExperimentConfig, DuplicateNamesAreRefused) {
   EXPECT_NE(error_of(device + channel + device + channel).find("duplicate device name"), std::string::npos);
 }
 
-TEST(ExperimentConfig, MissingFileIsReported) {
-  EXPECT_THROW(load_experiment("/nonexistent/exp.toml"), ConfigError);
-}
+TEST(ExperimentConfig, MissingFileIsReported) { EXPECT_THROW(load_experiment("/nonexistent/exp.toml"), ConfigError); }
 
 }  // namespace
 }  // namespace bosfuse::acquisition

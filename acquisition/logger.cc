@@ -1,11 +1,11 @@
 #include "acquisition/logger.h"
 
-#include "acquisition/clock.h"
-
 #include <spdlog/spdlog.h>
 
 #include <sstream>
 #include <thread>
+
+#include "acquisition/clock.h"
 
 namespace bosfuse::acquisition {
 namespace {

@@ -6,11 +6,6 @@
 // and marks the run complete. If the store itself fails the run is marked
 // interrupted, with everything committed before the failure kept.
 
-#include "acquisition/device_poller.h"
-#include "acquisition/experiment_config.h"
-#include "storage/run_store.h"
-#include "storage/run_writer.h"
-
 #include <atomic>
 #include <chrono>
 #include <functional>
@@ -18,6 +13,11 @@
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "acquisition/device_poller.h"
+#include "acquisition/experiment_config.h"
+#include "storage/run_store.h"
+#include "storage/run_writer.h"
 
 namespace bosfuse::acquisition {
 

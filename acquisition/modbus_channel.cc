@@ -36,8 +36,8 @@ double ModbusChannel::to_value(double raw) const {
 
 double ModbusChannel::to_raw(double value) const {
   if (linear) {
-    return linear->raw_low +
-           (value - linear->value_low) * (linear->raw_high - linear->raw_low) / (linear->value_high - linear->value_low);
+    return linear->raw_low + (value - linear->value_low) * (linear->raw_high - linear->raw_low) /
+                                 (linear->value_high - linear->value_low);
   }
   return (value - offset) / scale;
 }

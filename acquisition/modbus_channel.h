@@ -8,14 +8,14 @@
 // the inverse, used by the simulator so it serves exactly what the reader
 // decodes.
 
-#include "acquisition/register_codec.h"
-#include "storage/records.h"
-
 #include <cstdint>
 #include <optional>
 #include <span>
 #include <string>
 #include <vector>
+
+#include "acquisition/register_codec.h"
+#include "storage/records.h"
 
 namespace bosfuse::acquisition {
 

@@ -26,8 +26,8 @@ std::string ModbusEndpoint::describe() const {
 ModbusHandle make_modbus_context(const ModbusEndpoint& endpoint) {
   modbus_t* raw = endpoint.transport == ModbusTransport::kTcp
                       ? modbus_new_tcp(endpoint.host.c_str(), endpoint.port)
-                      : modbus_new_rtu(endpoint.serial_port.c_str(), endpoint.baud, endpoint.parity,
-                                       endpoint.data_bits, endpoint.stop_bits);
+                      : modbus_new_rtu(endpoint.serial_port.c_str(), endpoint.baud, endpoint.parity, endpoint.data_bits,
+                                       endpoint.stop_bits);
   if (!raw) throw DeviceError(modbus_error("cannot create Modbus context for " + endpoint.describe()));
   ModbusHandle ctx(raw);
   if (modbus_set_slave(raw, endpoint.unit_id) != 0) {

@@ -5,9 +5,6 @@
 // decodes each channel with its ModbusChannel map. The modbus_t handle lives
 // in a unique_ptr, closed and freed on every path.
 
-#include "acquisition/modbus_profile.h"
-#include "acquisition/thermocouple_source.h"
-
 #include <modbus/modbus.h>
 
 #include <chrono>
@@ -15,6 +12,9 @@
 #include <memory>
 #include <string>
 #include <vector>
+
+#include "acquisition/modbus_profile.h"
+#include "acquisition/thermocouple_source.h"
 
 namespace bosfuse::acquisition {
 

@@ -14,12 +14,12 @@
 // Check a real module's manual (and its configured data format) before
 // relying on a profile.
 
-#include "acquisition/modbus_channel.h"
-
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "acquisition/modbus_channel.h"
 
 namespace bosfuse::acquisition {
 

@@ -1,8 +1,8 @@
 #include "acquisition/modbus_profile.h"
 
-#include "acquisition/modbus_device.h"
-
 #include <gtest/gtest.h>
+
+#include "acquisition/modbus_device.h"
 
 namespace bosfuse::acquisition {
 namespace {

@@ -84,23 +84,32 @@ double decode_registers(std::span<const std::uint16_t> registers, DataType type,
                                 std::to_string(registers.size()));
   }
   switch (type) {
-    case DataType::kUint16: return normalise_word(registers[0], order);
-    case DataType::kInt16: return static_cast<std::int16_t>(normalise_word(registers[0], order));
-    case DataType::kUint32: return decode_u32(registers, order);
-    case DataType::kInt32: return static_cast<std::int32_t>(decode_u32(registers, order));
-    case DataType::kFloat32: return std::bit_cast<float>(decode_u32(registers, order));
+    case DataType::kUint16:
+      return normalise_word(registers[0], order);
+    case DataType::kInt16:
+      return static_cast<std::int16_t>(normalise_word(registers[0], order));
+    case DataType::kUint32:
+      return decode_u32(registers, order);
+    case DataType::kInt32:
+      return static_cast<std::int32_t>(decode_u32(registers, order));
+    case DataType::kFloat32:
+      return std::bit_cast<float>(decode_u32(registers, order));
   }
   throw std::invalid_argument("decode_registers: unknown data type");
 }
 
 std::vector<std::uint16_t> encode_registers(double value, DataType type, WordOrder order) {
   switch (type) {
-    case DataType::kUint16: return {normalise_word(saturate<std::uint16_t>(value), order)};
+    case DataType::kUint16:
+      return {normalise_word(saturate<std::uint16_t>(value), order)};
     case DataType::kInt16:
       return {normalise_word(static_cast<std::uint16_t>(saturate<std::int16_t>(value)), order)};
-    case DataType::kUint32: return encode_u32(saturate<std::uint32_t>(value), order);
-    case DataType::kInt32: return encode_u32(static_cast<std::uint32_t>(saturate<std::int32_t>(value)), order);
-    case DataType::kFloat32: return encode_u32(std::bit_cast<std::uint32_t>(static_cast<float>(value)), order);
+    case DataType::kUint32:
+      return encode_u32(saturate<std::uint32_t>(value), order);
+    case DataType::kInt32:
+      return encode_u32(static_cast<std::uint32_t>(saturate<std::int32_t>(value)), order);
+    case DataType::kFloat32:
+      return encode_u32(std::bit_cast<std::uint32_t>(static_cast<float>(value)), order);
   }
   throw std::invalid_argument("encode_registers: unknown data type");
 }

@@ -5,12 +5,12 @@
 // timing, retries and events; a source only knows its protocol. Sources are
 // used from one thread at a time.
 
-#include "acquisition/modbus_channel.h"
-#include "storage/records.h"
-
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "acquisition/modbus_channel.h"
+#include "storage/records.h"
 
 namespace bosfuse::acquisition {
 

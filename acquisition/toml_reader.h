@@ -35,7 +35,7 @@ class TomlReader {
   double number(std::string_view key) const;  // integer or float
   std::optional<double> optional_number(std::string_view key) const;
   std::optional<bool> optional_bool(std::string_view key) const;
-  std::vector<double> numbers(std::string_view key) const;  // an array of numbers; empty if absent
+  std::vector<double> numbers(std::string_view key) const;     // an array of numbers; empty if absent
   std::vector<TomlReader> tables(std::string_view key) const;  // an array of tables; empty if absent
   std::optional<TomlReader> table(std::string_view key) const;
   const toml::node* node(std::string_view key) const;

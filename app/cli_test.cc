@@ -1,14 +1,14 @@
 // The command line as a user runs it: the bosfuse executable against a
 // simulated module on loopback.
 
+#include <gtest/gtest.h>
+
+#include <fstream>
+
 #include "sim/modbus_server.h"
 #include "storage/run_store.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
-
-#include <gtest/gtest.h>
-
-#include <fstream>
 
 namespace bosfuse {
 namespace {
@@ -30,7 +30,9 @@ class Cli : public ::testing::Test {
 
   static std::string experiment_text(int port) {
     return "[run]\nname = \"cli\"\n\n[[devices]]\nname = \"adam\"\nprofile = \"adam-6018\"\nhost = \"127.0.0.1\"\n"
-           "port = " + std::to_string(port) + "\npoll_period_s = 0.1\n\n"
+           "port = " +
+           std::to_string(port) +
+           "\npoll_period_s = 0.1\n\n"
            "[[devices.channels]]\nname = \"tc0\"\ninput = 0\n\n[[devices.channels]]\nname = \"tc1\"\ninput = 1\n";
   }
   static void write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
@@ -86,12 +88,12 @@ TEST_F(Cli, CtrlCEndsTheRunCleanlyWithEverythingCommitted) {
 }
 
 TEST_F(Cli, MalformedExperimentNamesTheKeyAndLine) {
-  write(experiment_, "[run]\nname = \"x\"\n\n[[devices]]\nname = \"adam\"\nprofile = \"adam-6018\"\nhost = \"h\"\n"
-                     "port = \"502\"\n");
+  write(experiment_,
+        "[run]\nname = \"x\"\n\n[[devices]]\nname = \"adam\"\nprofile = \"adam-6018\"\nhost = \"h\"\n"
+        "port = \"502\"\n");
   const auto result = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 1s");
   EXPECT_NE(result.exit_code, 0);
-  EXPECT_NE(result.output.find("exp.toml:8: devices[0].port: expected an integer"), std::string::npos)
-      << result.output;
+  EXPECT_NE(result.output.find("exp.toml:8: devices[0].port: expected an integer"), std::string::npos) << result.output;
   EXPECT_FALSE(storage::RunStore::holds_run(run_dir())) << "a bad configuration must not start a run";
 }
 

@@ -1,15 +1,15 @@
 // bosfuse acquire: log the devices of an experiment file into a run folder.
 
+#include <spdlog/spdlog.h>
+
+#include <iostream>
+
 #include "acquisition/clock.h"
 #include "acquisition/experiment_config.h"
 #include "acquisition/logger.h"
 #include "app/command.h"
 #include "app/run_control.h"
 #include "storage/run_store.h"
-
-#include <spdlog/spdlog.h>
-
-#include <iostream>
 
 namespace bosfuse::app {
 namespace {
@@ -27,8 +27,11 @@ void acquire(const AcquireArgs& args) {
   acquisition::Logger::Options options;
   if (!args.duration.empty()) options.duration = parse_duration(args.duration);
   options.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
-  const storage::RunInfo info{0, config.run_name.empty() ? std::string("run") : config.run_name,
-                              acquisition::utc_now_ns(), std::nullopt, config.source_text,
+  const storage::RunInfo info{0,
+                              config.run_name.empty() ? std::string("run") : config.run_name,
+                              acquisition::utc_now_ns(),
+                              std::nullopt,
+                              config.source_text,
                               storage::RunStatus::kRunning};
   auto store = storage::RunStore::create(
       args.out, info, args.append ? storage::RunStore::CreateMode::kAppend : storage::RunStore::CreateMode::kNew);

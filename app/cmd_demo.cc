@@ -2,6 +2,11 @@
 // thermocouple module serves a cooling curve on loopback and the logger
 // records it through the real Modbus path into a new run folder.
 
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <iostream>
+
 #include "acquisition/clock.h"
 #include "acquisition/experiment_config.h"
 #include "acquisition/logger.h"
@@ -9,11 +14,6 @@
 #include "app/run_control.h"
 #include "sim/modbus_server.h"
 #include "storage/run_store.h"
-
-#include <fmt/format.h>
-
-#include <filesystem>
-#include <iostream>
 
 namespace bosfuse::app {
 namespace {
@@ -51,17 +51,17 @@ void run_demo(const DemoArgs& args) {
 
   const std::string toml = demo_experiment(server.port(), module.inputs, args.poll_period_s);
   const auto config = acquisition::parse_experiment(toml, "demo.toml");
-  auto store = storage::RunStore::create(
-      run_dir, {0, "demo", started_ns, std::nullopt, toml, storage::RunStatus::kRunning},
-      storage::RunStore::CreateMode::kNew);
+  auto store =
+      storage::RunStore::create(run_dir, {0, "demo", started_ns, std::nullopt, toml, storage::RunStatus::kRunning},
+                                storage::RunStore::CreateMode::kNew);
   acquisition::Logger::Options options;
   options.duration = parse_duration(args.duration);
   acquisition::Logger logger(store, options);
   logger.add_devices(config);
-  std::cout << fmt::format("demo: simulated ADAM-6018 on 127.0.0.1:{} cooling from {} to {} degC (k = {} 1/s); "
-                           "logging for {}\n",
-                           server.port(), module.signal.initial_c, module.signal.ambient_c, module.signal.k_per_s,
-                           args.duration);
+  std::cout << fmt::format(
+      "demo: simulated ADAM-6018 on 127.0.0.1:{} cooling from {} to {} degC (k = {} 1/s); "
+      "logging for {}\n",
+      server.port(), module.signal.initial_c, module.signal.ambient_c, module.signal.k_per_s, args.duration);
   const auto summary = logger.run(stop_requested_by_signal());
   std::cout << summary.BriefReport() << "\n\n"
             << "data:    " << (run_dir / storage::RunStore::kDatabaseFileName).string() << "\n"

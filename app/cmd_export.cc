@@ -1,14 +1,14 @@
 // bosfuse export: a run's samples as CSV, one column per channel.
 
-#include "acquisition/clock.h"
-#include "app/command.h"
-#include "storage/run_store.h"
-
 #include <fmt/format.h>
 
 #include <fstream>
 #include <iostream>
 #include <map>
+
+#include "acquisition/clock.h"
+#include "app/command.h"
+#include "storage/run_store.h"
 
 namespace bosfuse::app {
 namespace {
@@ -62,7 +62,8 @@ struct ExportArgs {
 
 void add_export(CLI::App& root) {
   auto args = std::make_shared<ExportArgs>();
-  CLI::App* cmd = root.add_subcommand("export", "Export a run's samples (CSV: one column per channel, ISO-8601 UTC time)");
+  CLI::App* cmd =
+      root.add_subcommand("export", "Export a run's samples (CSV: one column per channel, ISO-8601 UTC time)");
   cmd->add_option("run", args->run, "Run folder")->required();
   cmd->add_flag("--csv", args->csv, "CSV output (the only format so far)")->required();
   cmd->add_option("--output,-o", args->output, "File to write (default: standard output)");

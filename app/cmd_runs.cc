@@ -1,13 +1,13 @@
 // bosfuse runs: what a run folder holds.
 
-#include "acquisition/clock.h"
-#include "app/command.h"
-#include "storage/run_store.h"
-
 #include <fmt/format.h>
 
 #include <iostream>
 #include <map>
+
+#include "acquisition/clock.h"
+#include "app/command.h"
+#include "storage/run_store.h"
 
 namespace bosfuse::app {
 namespace {
@@ -24,8 +24,8 @@ void print_run(const storage::RunStore& store) {
                                  ? "running (or its logger was killed before it could close the run)"
                                  : std::string(storage::to_string(run.status));
   std::cout << fmt::format("run       {}\nfolder    {}\nstatus    {}\nstarted   {}\nended     {}\n", run.name,
-                           store.dir().string(), status,
-                           acquisition::format_iso8601_utc(run.started_ns, 3), time_or_dash(run.ended_ns));
+                           store.dir().string(), status, acquisition::format_iso8601_utc(run.started_ns, 3),
+                           time_or_dash(run.ended_ns));
   if (run.ended_ns) {
     std::cout << fmt::format("duration  {:.1f} s\n", static_cast<double>(*run.ended_ns - run.started_ns) * 1e-9);
   }

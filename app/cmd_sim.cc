@@ -1,13 +1,13 @@
 // bosfuse sim modbus: a simulated thermocouple module anyone can log from.
 
-#include "app/command.h"
-#include "app/run_control.h"
-#include "sim/modbus_server.h"
-
 #include <spdlog/spdlog.h>
 
 #include <iostream>
 #include <thread>
+
+#include "app/command.h"
+#include "app/run_control.h"
+#include "sim/modbus_server.h"
 
 namespace bosfuse::app {
 namespace {
@@ -40,11 +40,11 @@ acquisition::ModbusEndpoint endpoint_of(const SimModbusArgs& args) {
 }
 
 void serve(SimModbusArgs args) {
-  args.module.update_period =
-      std::chrono::nanoseconds(static_cast<std::int64_t>(args.update_period_s * 1e9));
+  args.module.update_period = std::chrono::nanoseconds(static_cast<std::int64_t>(args.update_period_s * 1e9));
   sim::ModbusSimServer server(sim::module_server_options(args.module, endpoint_of(args)));
   server.start();
-  const std::string where = args.transport == "rtu" ? args.serial_port : args.host + ":" + std::to_string(server.port());
+  const std::string where =
+      args.transport == "rtu" ? args.serial_port : args.host + ":" + std::to_string(server.port());
   std::cout << "simulated " << args.module.profile << " (unit " << args.unit_id << ") with " << args.module.inputs
             << " type " << args.module.tc_type << " inputs serving on " << where << "; Ctrl-C to stop" << std::endl;
   const auto& stop = stop_requested_by_signal();
@@ -69,15 +69,21 @@ void add_sim(CLI::App& root) {
       ->check(CLI::Range(1, 8))
       ->capture_default_str();
   cmd->add_option("--tc-type", args->module.tc_type, "Thermocouple type of the inputs")->capture_default_str();
-  cmd->add_option("--transport", args->transport, "tcp or rtu")->check(CLI::IsMember({"tcp", "rtu"}))->capture_default_str();
+  cmd->add_option("--transport", args->transport, "tcp or rtu")
+      ->check(CLI::IsMember({"tcp", "rtu"}))
+      ->capture_default_str();
   cmd->add_option("--host", args->host, "Address to listen on (TCP)")->capture_default_str();
-  cmd->add_option("--port", args->port, "TCP port (0: any free port)")->check(CLI::Range(0, 65535))->capture_default_str();
+  cmd->add_option("--port", args->port, "TCP port (0: any free port)")
+      ->check(CLI::Range(0, 65535))
+      ->capture_default_str();
   cmd->add_option("--serial", args->serial_port, "Serial device (RTU), e.g. one end of a socat pty pair");
   cmd->add_option("--baud", args->baud, "Baud rate (RTU)")->capture_default_str();
   cmd->add_option("--unit-id", args->unit_id, "Modbus unit id")->check(CLI::Range(0, 247))->capture_default_str();
   cmd->add_option("--ambient", args->module.signal.ambient_c, "Ambient temperature, degC")->capture_default_str();
   cmd->add_option("--initial", args->module.signal.initial_c, "Temperature at start, degC")->capture_default_str();
-  cmd->add_option("--k", args->module.signal.k_per_s, "Cooling rate k, 1/s")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--k", args->module.signal.k_per_s, "Cooling rate k, 1/s")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--noise", args->module.signal.noise_c, "Noise standard deviation, degC")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

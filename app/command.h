@@ -6,7 +6,6 @@
 // prints the message and exits non-zero.
 
 #include <CLI/CLI.hpp>
-
 #include <functional>
 #include <vector>
 
@@ -24,6 +23,5 @@ struct CommandRegistrar {
 
 #define BOSFUSE_COMMAND_CONCAT2(a, b) a##b
 #define BOSFUSE_COMMAND_CONCAT(a, b) BOSFUSE_COMMAND_CONCAT2(a, b)
-#define BOSFUSE_COMMAND(adder)                                                   \
-  static const ::bosfuse::app::CommandRegistrar BOSFUSE_COMMAND_CONCAT( \
-      bosfuse_command_registrar_, __LINE__){adder}
+#define BOSFUSE_COMMAND(adder) \
+  static const ::bosfuse::app::CommandRegistrar BOSFUSE_COMMAND_CONCAT(bosfuse_command_registrar_, __LINE__) { adder }

@@ -1,9 +1,9 @@
-#include "app/command.h"
-
 #include <spdlog/spdlog.h>
 
 #include <cstdlib>
 #include <exception>
+
+#include "app/command.h"
 
 namespace bosfuse::app {
 

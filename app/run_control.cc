@@ -1,7 +1,7 @@
 #include "app/run_control.h"
 
-#include <csignal>
 #include <cmath>
+#include <csignal>
 #include <stdexcept>
 
 namespace bosfuse::app {

@@ -2,15 +2,15 @@
 //   build/bench/run_store_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // Figures and what they mean: docs/BENCHMARKS.md.
 
-#include "acquisition/modbus_device.h"
-#include "sim/modbus_server.h"
-#include "storage/run_store.h"
-#include "storage/run_writer.h"
-
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
 #include <random>
+
+#include "acquisition/modbus_device.h"
+#include "sim/modbus_server.h"
+#include "storage/run_store.h"
+#include "storage/run_writer.h"
 
 namespace bosfuse {
 namespace {
@@ -23,7 +23,8 @@ struct ScratchRun {
                                             storage::RunStore::CreateMode::kNew));
     const auto device = store->add_device({0, "bench", "modbus-tcp", "adam-6018", ""});
     for (int i = 0; i < 8; ++i) {
-      channels.push_back(store->add_channel({0, device, "tc" + std::to_string(i), "thermocouple", "degC", "K", {}, {}}));
+      channels.push_back(
+          store->add_channel({0, device, "tc" + std::to_string(i), "thermocouple", "degC", "K", {}, {}}));
     }
   }
   ~ScratchRun() {
@@ -36,8 +37,12 @@ struct ScratchRun {
     samples.reserve(static_cast<std::size_t>(polls) * channels.size());
     for (std::int64_t p = first_poll; p < first_poll + polls; ++p) {
       for (auto channel : channels) {
-        samples.push_back({channel, 1'700'000'000'000'000'000 + p * 100'000'000, {}, 20.0 + 1e-3 * double(p % 1000),
-                           double(p % 65535), storage::SampleStatus::kOk});
+        samples.push_back({channel,
+                           1'700'000'000'000'000'000 + p * 100'000'000,
+                           {},
+                           20.0 + 1e-3 * double(p % 1000),
+                           double(p % 65535),
+                           storage::SampleStatus::kOk});
       }
     }
     return samples;

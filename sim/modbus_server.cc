@@ -1,20 +1,19 @@
 #include "sim/modbus_server.h"
 
-#include "acquisition/clock.h"
-
 #include <arpa/inet.h>
 #include <netinet/in.h>
+#include <spdlog/spdlog.h>
 #include <sys/select.h>
 #include <sys/socket.h>
 #include <unistd.h>
-
-#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <set>
 #include <stdexcept>
+
+#include "acquisition/clock.h"
 
 namespace bosfuse::sim {
 namespace {

@@ -8,8 +8,6 @@
 // delay, or silence (a device that stops answering). It keeps a log of every
 // value it served so tests can check that each one reached the run store.
 
-#include "acquisition/modbus_device.h"
-
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -19,6 +17,8 @@
 #include <optional>
 #include <thread>
 #include <vector>
+
+#include "acquisition/modbus_device.h"
 
 namespace bosfuse::sim {
 

@@ -11,9 +11,12 @@ namespace {
 
 int open_flags(Database::Mode mode) {
   switch (mode) {
-    case Database::Mode::kReadOnly: return SQLITE_OPEN_READONLY;
-    case Database::Mode::kReadWrite: return SQLITE_OPEN_READWRITE;
-    case Database::Mode::kCreate: return SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
+    case Database::Mode::kReadOnly:
+      return SQLITE_OPEN_READONLY;
+    case Database::Mode::kReadWrite:
+      return SQLITE_OPEN_READWRITE;
+    case Database::Mode::kCreate:
+      return SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
   }
   return SQLITE_OPEN_READONLY;
 }
@@ -22,7 +25,9 @@ int open_flags(Database::Mode mode) {
 
 Database::Database(const std::string& path, Mode mode) : path_(path) {
   sqlite3* raw = nullptr;
-  const int rc = sqlite3_open_v2(path.c_str(), &raw, open_flags(mode) | SQLITE_OPEN_NOMUTEX, nullptr);
+  // Serialized mode: a connection shared by mistake between threads is slower,
+  // never corrupted.
+  const int rc = sqlite3_open_v2(path.c_str(), &raw, open_flags(mode) | SQLITE_OPEN_FULLMUTEX, nullptr);
   db_.reset(raw);  // owned even on failure: sqlite3_open_v2 may allocate a handle
   if (rc != SQLITE_OK) fail(raw, "cannot open run store '" + path + "'");
   sqlite3_extended_result_codes(raw, 1);
@@ -52,8 +57,8 @@ std::int64_t Database::last_insert_rowid() const { return sqlite3_last_insert_ro
 
 Statement::Statement(sqlite3* db, std::string_view sql) : db_(db) {
   sqlite3_stmt* raw = nullptr;
-  if (sqlite3_prepare_v3(db, sql.data(), static_cast<int>(sql.size()), SQLITE_PREPARE_PERSISTENT, &raw,
-                         nullptr) != SQLITE_OK) {
+  if (sqlite3_prepare_v3(db, sql.data(), static_cast<int>(sql.size()), SQLITE_PREPARE_PERSISTENT, &raw, nullptr) !=
+      SQLITE_OK) {
     fail(db, "cannot prepare SQL (" + std::string(sql.substr(0, 80)) + ")");
   }
   stmt_.reset(raw);
@@ -72,8 +77,7 @@ Statement& Statement::bind(int index, double value) {
   return *this;
 }
 Statement& Statement::bind(int index, std::string_view value) {
-  check(sqlite3_bind_text(stmt_.get(), index, value.data(), static_cast<int>(value.size()), SQLITE_TRANSIENT),
-        "bind");
+  check(sqlite3_bind_text(stmt_.get(), index, value.data(), static_cast<int>(value.size()), SQLITE_TRANSIENT), "bind");
   return *this;
 }
 Statement& Statement::bind(int index, std::nullopt_t) {

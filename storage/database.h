@@ -58,6 +58,9 @@ class Statement {
 
   Statement& bind(int index, std::int64_t value);
   Statement& bind(int index, int value) { return bind(index, static_cast<std::int64_t>(value)); }
+  Statement& bind(int index, bool value) { return bind(index, value ? 1 : 0); }
+  Statement& bind(int index, const std::string& value) { return bind(index, std::string_view(value)); }
+  Statement& bind(int index, const char* value) { return bind(index, std::string_view(value)); }
   Statement& bind(int index, double value);
   Statement& bind(int index, std::string_view value);
   Statement& bind(int index, std::nullopt_t);
@@ -66,9 +69,17 @@ class Statement {
     return value ? bind(index, *value) : bind(index, std::nullopt);
   }
 
-  bool step();          // true: a row is ready; false: done
-  void run();           // step() for statements that return no rows, then reset()
-  void reset();         // ready to run again; bindings are kept
+  // Binds the arguments to parameters 1, 2, ... in order.
+  template <typename... Args>
+  Statement& bind_all(const Args&... args) {
+    int index = 0;
+    (bind(++index, args), ...);
+    return *this;
+  }
+
+  bool step();   // true: a row is ready; false: done
+  void run();    // step() for statements that return no rows, then reset()
+  void reset();  // ready to run again; bindings are kept
 
   bool is_null(int column) const;
   std::int64_t column_int64(int column) const;

@@ -1,8 +1,8 @@
 #include "storage/run_store.h"
 
-#include "storage/schema.h"
-
 #include <system_error>
+
+#include "storage/schema.h"
 
 namespace bosfuse::storage {
 namespace {
@@ -23,8 +23,9 @@ RunInfo read_run(Statement& stmt) {
 }
 
 Sample read_sample(const Statement& stmt) {
-  return {stmt.column_int64(0),           stmt.column_int64(1),           stmt.column_optional_int64(2),
-          stmt.column_optional_double(3), stmt.column_optional_double(4), static_cast<SampleStatus>(stmt.column_int64(5))};
+  return {stmt.column_int64(0),           stmt.column_int64(1),
+          stmt.column_optional_int64(2),  stmt.column_optional_double(3),
+          stmt.column_optional_double(4), static_cast<SampleStatus>(stmt.column_int64(5))};
 }
 
 void bind_range(Statement& stmt, int first_index, TimeRange range) {
@@ -47,8 +48,7 @@ bool RunStore::holds_run(const fs::path& run_dir) {
 RunStore RunStore::create(const fs::path& run_dir, const RunInfo& info, CreateMode mode) {
   const bool existing = holds_run(run_dir);
   if (existing && mode == CreateMode::kNew) {
-    throw StorageError("'" + run_dir.string() +
-                       "' already holds a run; choose another folder or ask to append to it");
+    throw StorageError("'" + run_dir.string() + "' already holds a run; choose another folder or ask to append to it");
   }
   fs::create_directories(run_dir);
   RunStore store(run_dir, Database::Mode::kCreate);
@@ -57,8 +57,9 @@ RunStore RunStore::create(const fs::path& run_dir, const RunInfo& info, CreateMo
     const RunInfo previous = store.run();
     store.run_id_ = previous.id;
     store.db_.prepare("UPDATE runs SET status = 'running', ended_ns = NULL WHERE id = ?").bind(1, store.run_id_).run();
-    const std::string how = previous.status == RunStatus::kRunning ? "the previous session ended without closing the run"
-                                                                    : "after a " + std::string(to_string(previous.status)) + " session";
+    const std::string how = previous.status == RunStatus::kRunning
+                                ? "the previous session ended without closing the run"
+                                : "after a " + std::string(to_string(previous.status)) + " session";
     const Event appended{0, std::nullopt, info.started_ns, "appended", "logging resumed in this run, " + how};
     store.write_events({&appended, 1});
   } else {
@@ -77,9 +78,7 @@ RunStore RunStore::open(const fs::path& run_dir, bool writable) {
 
 std::int64_t RunStore::insert_run(const RunInfo& info) {
   db_.prepare("INSERT INTO runs (name, started_ns, config_toml, status) VALUES (?, ?, ?, 'running')")
-      .bind(1, info.name)
-      .bind(2, info.started_ns)
-      .bind(3, info.config_toml)
+      .bind_all(info.name, info.started_ns, info.config_toml)
       .run();
   return db_.last_insert_rowid();
 }
@@ -95,11 +94,7 @@ std::int64_t RunStore::add_device(const DeviceInfo& device) {
          "INSERT INTO devices (run_id, name, kind, profile, address) VALUES (?, ?, ?, ?, ?) "
          "ON CONFLICT (run_id, name) DO UPDATE SET kind = excluded.kind, profile = excluded.profile, "
          "address = excluded.address")
-      .bind(1, run_id_)
-      .bind(2, device.name)
-      .bind(3, device.kind)
-      .bind(4, device.profile)
-      .bind(5, device.address)
+      .bind_all(run_id_, device.name, device.kind, device.profile, device.address)
       .run();
   auto stmt = db_.prepare("SELECT id FROM devices WHERE run_id = ? AND name = ?");
   stmt.bind(1, run_id_).bind(2, device.name).step();
@@ -112,13 +107,8 @@ std::int64_t RunStore::add_channel(const ChannelInfo& channel) {
          "VALUES (?, ?, ?, ?, ?, ?, ?) ON CONFLICT (device_id, name) DO UPDATE SET kind = excluded.kind, "
          "unit = excluded.unit, tc_type = excluded.tc_type, image_x_px = excluded.image_x_px, "
          "image_y_px = excluded.image_y_px")
-      .bind(1, channel.device_id)
-      .bind(2, channel.name)
-      .bind(3, channel.kind)
-      .bind(4, channel.unit)
-      .bind(5, channel.tc_type)
-      .bind(6, channel.image_x_px)
-      .bind(7, channel.image_y_px)
+      .bind_all(channel.device_id, channel.name, channel.kind, channel.unit, channel.tc_type, channel.image_x_px,
+                channel.image_y_px)
       .run();
   auto stmt = db_.prepare("SELECT id FROM channels WHERE device_id = ? AND name = ?");
   stmt.bind(1, channel.device_id).bind(2, channel.name).step();
@@ -128,17 +118,13 @@ std::int64_t RunStore::add_channel(const ChannelInfo& channel) {
 void RunStore::write_samples(std::span<const Sample> samples) {
   if (samples.empty()) return;
   if (!insert_sample_) {
-    insert_sample_.emplace(
-        db_.prepare("INSERT INTO samples (channel_id, t_ns, device_t_ns, value, raw, status) VALUES (?, ?, ?, ?, ?, ?)"));
+    insert_sample_.emplace(db_.prepare(
+        "INSERT INTO samples (channel_id, t_ns, device_t_ns, value, raw, status) VALUES (?, ?, ?, ?, ?, ?)"));
   }
   Transaction transaction(db_);
   for (const Sample& s : samples) {
-    insert_sample_->bind(1, s.channel_id)
-        .bind(2, s.t_ns)
-        .bind(3, s.device_t_ns)
-        .bind(4, s.status == SampleStatus::kOk ? s.value : std::nullopt)
-        .bind(5, s.raw)
-        .bind(6, static_cast<int>(s.status));
+    insert_sample_->bind_all(s.channel_id, s.t_ns, s.device_t_ns,
+                             s.status == SampleStatus::kOk ? s.value : std::nullopt, s.raw, static_cast<int>(s.status));
     insert_sample_->run();
   }
   transaction.commit();
@@ -149,7 +135,7 @@ void RunStore::write_events(std::span<const Event> events) {
   auto stmt = db_.prepare("INSERT INTO events (run_id, device_id, t_ns, kind, message) VALUES (?, ?, ?, ?, ?)");
   Transaction transaction(db_);
   for (const Event& e : events) {
-    stmt.bind(1, run_id_).bind(2, e.device_id).bind(3, e.t_ns).bind(4, e.kind).bind(5, e.message);
+    stmt.bind_all(run_id_, e.device_id, e.t_ns, e.kind, e.message);
     stmt.run();
   }
   transaction.commit();
@@ -159,23 +145,15 @@ std::int64_t RunStore::add_frame(const FrameRecord& frame) {
   db_.prepare(
          "INSERT INTO frames (device_id, t_ns, device_t_ns, path, width_px, height_px, bit_depth, is_reference) "
          "VALUES (?, ?, ?, ?, ?, ?, ?, ?)")
-      .bind(1, frame.device_id)
-      .bind(2, frame.t_ns)
-      .bind(3, frame.device_t_ns)
-      .bind(4, frame.path)
-      .bind(5, frame.width_px)
-      .bind(6, frame.height_px)
-      .bind(7, frame.bit_depth)
-      .bind(8, frame.is_reference ? 1 : 0)
+      .bind_all(frame.device_id, frame.t_ns, frame.device_t_ns, frame.path, frame.width_px, frame.height_px,
+                frame.bit_depth, frame.is_reference ? 1 : 0)
       .run();
   return db_.last_insert_rowid();
 }
 
 void RunStore::finish(RunStatus status, std::int64_t ended_ns) {
   db_.prepare("UPDATE runs SET status = ?, ended_ns = ? WHERE id = ?")
-      .bind(1, to_string(status))
-      .bind(2, ended_ns)
-      .bind(3, run_id_)
+      .bind_all(to_string(status), ended_ns, run_id_)
       .run();
 }
 
@@ -184,8 +162,8 @@ std::vector<DeviceInfo> RunStore::devices() const {
   stmt.bind(1, run_id_);
   std::vector<DeviceInfo> out;
   while (stmt.step()) {
-    out.push_back({stmt.column_int64(0), stmt.column_text(1), stmt.column_text(2), stmt.column_text(3),
-                   stmt.column_text(4)});
+    out.push_back(
+        {stmt.column_int64(0), stmt.column_text(1), stmt.column_text(2), stmt.column_text(3), stmt.column_text(4)});
   }
   return out;
 }

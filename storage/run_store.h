@@ -8,9 +8,6 @@
 // from one thread (the logger's writer thread owns the writing one; readers
 // open their own).
 
-#include "storage/database.h"
-#include "storage/records.h"
-
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -18,6 +15,9 @@
 #include <span>
 #include <string>
 #include <vector>
+
+#include "storage/database.h"
+#include "storage/records.h"
 
 namespace bosfuse::storage {
 

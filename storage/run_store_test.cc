@@ -1,9 +1,9 @@
 #include "storage/run_store.h"
 
+#include <gtest/gtest.h>
+
 #include "storage/run_writer.h"
 #include "tests/support/temp_dir.h"
-
-#include <gtest/gtest.h>
 
 namespace bosfuse::storage {
 namespace {
@@ -55,10 +55,9 @@ TEST(RunStore, BatchedInsertAndRangeRead) {
 
 TEST(RunStore, NonOkSamplesStoreNoValue) {
   Fixture f;
-  const std::vector<Sample> samples = {
-      {f.channel, 1, std::nullopt, 999.0, 65535.0, SampleStatus::kOpenCircuit},
-      {f.channel, 2, std::nullopt, std::nullopt, std::nullopt, SampleStatus::kTimeout},
-      {f.channel, 3, 77, 25.0, 1200.0, SampleStatus::kOk}};
+  const std::vector<Sample> samples = {{f.channel, 1, std::nullopt, 999.0, 65535.0, SampleStatus::kOpenCircuit},
+                                       {f.channel, 2, std::nullopt, std::nullopt, std::nullopt, SampleStatus::kTimeout},
+                                       {f.channel, 3, 77, 25.0, 1200.0, SampleStatus::kOk}};
   f.store.write_samples(samples);
   const auto read = f.store.read_samples(f.channel);
   ASSERT_EQ(read.size(), 3u);
@@ -164,7 +163,9 @@ TEST(RunWriter, AFailedCommitKeepsTheBatchAndRetries) {
   writer.flush();
   EXPECT_GE(writer.stats().failed_commits, 1);
   EXPECT_NE(writer.stats().last_error.find("FOREIGN KEY"), std::string::npos) << writer.stats().last_error;
-  EXPECT_TRUE(f.store.read_samples(f.channel).empty()) << "a batch is committed whole or not at all";
+  // Read through a connection of its own: the writer owns f.store.
+  const auto reader = RunStore::open(f.dir.path() / "run");
+  EXPECT_TRUE(reader.read_samples(f.channel).empty()) << "a batch is committed whole or not at all";
   writer.flush();
   EXPECT_GE(writer.stats().failed_commits, 2) << "the batch was not kept for another try";
 }

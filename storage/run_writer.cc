@@ -49,9 +49,8 @@ void RunWriter::flush() {
   const std::uint64_t target = pushed_generation_;
   wake_writer_.notify_one();
   const std::int64_t failures_before = stats_.failed_commits;
-  committed_.wait(lock, [&] {
-    return committed_generation_ >= target || stats_.failed_commits > failures_before || writer_done_;
-  });
+  committed_.wait(
+      lock, [&] { return committed_generation_ >= target || stats_.failed_commits > failures_before || writer_done_; });
 }
 
 void RunWriter::stop() {

@@ -8,9 +8,6 @@
 // committed (disk full, say) it stays queued and is retried, so nothing a
 // device delivered is dropped while the writer lives.
 
-#include "storage/records.h"
-#include "storage/run_store.h"
-
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -19,6 +16,9 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "storage/records.h"
+#include "storage/run_store.h"
 
 namespace bosfuse::storage {
 

@@ -1,10 +1,10 @@
 #include "storage/schema.h"
 
-#include "storage/records.h"
-
 #include <array>
 #include <chrono>
 #include <string>
+
+#include "storage/records.h"
 
 namespace bosfuse::storage {
 namespace {

@@ -5,16 +5,16 @@
 // A store written by a newer bosfuse is refused rather than misread. The
 // schema is documented for users in docs/SCHEMA.md.
 
-#include "storage/database.h"
-
 #include <span>
 #include <string_view>
+
+#include "storage/database.h"
 
 namespace bosfuse::storage {
 
 struct Migration {
-  int version;          // the schema version this migration produces
-  std::string_view sql; // statements run in one transaction
+  int version;           // the schema version this migration produces
+  std::string_view sql;  // statements run in one transaction
 };
 
 // The migrations of this bosfuse build, oldest first.

@@ -1,12 +1,12 @@
 #include "storage/schema.h"
 
-#include "storage/records.h"
-#include "tests/support/temp_dir.h"
-
 #include <gtest/gtest.h>
 
 #include <array>
 #include <fstream>
+
+#include "storage/records.h"
+#include "tests/support/temp_dir.h"
 
 namespace bosfuse::storage {
 namespace {
@@ -57,8 +57,8 @@ TEST(Schema, ForwardMigrationAppliesOnlyNewerSteps) {
   testing::TempDir dir;
   Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
   migrate(db);
-  const std::array<Migration, 2> future = {{schema_migrations()[0],
-                                            {2, "ALTER TABLE runs ADD COLUMN operator TEXT NOT NULL DEFAULT ''"}}};
+  const std::array<Migration, 2> future = {
+      {schema_migrations()[0], {2, "ALTER TABLE runs ADD COLUMN operator TEXT NOT NULL DEFAULT ''"}}};
   EXPECT_EQ(migrate(db, future), 1);
   EXPECT_EQ(schema_version(db), 2);
   EXPECT_NO_THROW(db.execute("SELECT operator FROM runs"));
@@ -81,8 +81,7 @@ TEST(Schema, FailedMigrationLeavesTheStoreAsItWas) {
   testing::TempDir dir;
   Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
   migrate(db);
-  const std::array<Migration, 2> broken = {{schema_migrations()[0],
-                                            {2, "CREATE TABLE extra (x); THIS IS NOT SQL"}}};
+  const std::array<Migration, 2> broken = {{schema_migrations()[0], {2, "CREATE TABLE extra (x); THIS IS NOT SQL"}}};
   EXPECT_THROW(migrate(db, broken), StorageError);
   EXPECT_EQ(schema_version(db), 1);
   auto stmt = db.prepare("SELECT 1 FROM sqlite_master WHERE name = 'extra'");

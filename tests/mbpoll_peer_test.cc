@@ -2,13 +2,13 @@
 // package) reads the simulated module and must see the very registers the
 // logger decoded and recorded.
 
-#include "tests/support/modbus_fixture.h"
-#include "tests/support/subprocess.h"
-#include "tests/support/temp_dir.h"
-
 #include <gtest/gtest.h>
 
 #include <regex>
+
+#include "tests/support/modbus_fixture.h"
+#include "tests/support/subprocess.h"
+#include "tests/support/temp_dir.h"
 
 namespace bosfuse {
 namespace {
@@ -38,8 +38,8 @@ TEST(MbpollPeer, IndependentClientSeesWhatTheLoggerRecorded) {
   auto store = storage::RunStore::create(dir / "run", run_info(toml), storage::RunStore::CreateMode::kNew);
   log_for(store, config, 500ms);
 
-  const auto result = run_command("mbpoll -m tcp -a 1 -t 4 -0 -r 0 -c " + std::to_string(kInputs) +
-                                  " -1 -o 2 -p " + std::to_string(server.port()) + " 127.0.0.1");
+  const auto result = run_command("mbpoll -m tcp -a 1 -t 4 -0 -r 0 -c " + std::to_string(kInputs) + " -1 -o 2 -p " +
+                                  std::to_string(server.port()) + " 127.0.0.1");
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const auto registers = parse_mbpoll(result.output);
   ASSERT_EQ(registers.size(), std::size_t(kInputs)) << result.output;

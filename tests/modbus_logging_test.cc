@@ -3,6 +3,12 @@
 // pseudo-terminal pair, and every value served must land in the run store,
 // in order, with increasing timestamps.
 
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <filesystem>
+#include <map>
+
 #include "acquisition/clock.h"
 #include "acquisition/experiment_config.h"
 #include "acquisition/logger.h"
@@ -11,12 +17,6 @@
 #include "tests/support/modbus_fixture.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
-
-#include <gtest/gtest.h>
-
-#include <atomic>
-#include <filesystem>
-#include <map>
 
 namespace bosfuse {
 namespace {
@@ -77,8 +77,8 @@ TEST(ModbusLogging, EveryValueServedOverRtuThroughAPseudoTerminalLandsInOrder) {
   const std::string server_end = (dir / "module").string();
   const std::string logger_end = (dir / "logger").string();
   testing::BackgroundProcess socat({"socat", "pty,raw,echo=0,link=" + server_end, "pty,raw,echo=0,link=" + logger_end});
-  ASSERT_TRUE(testing::wait_for(
-      [&] { return std::filesystem::exists(server_end) && std::filesystem::exists(logger_end); }, 5s))
+  ASSERT_TRUE(
+      testing::wait_for([&] { return std::filesystem::exists(server_end) && std::filesystem::exists(logger_end); }, 5s))
       << "socat did not create the pseudo-terminal pair";
 
   ModbusEndpoint endpoint;

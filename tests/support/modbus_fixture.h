@@ -2,16 +2,16 @@
 // Helpers shared by the Modbus integration tests: a simulated module on
 // loopback, an experiment file for it, and a logger run of bounded length.
 
+#include <atomic>
+#include <chrono>
+#include <map>
+#include <string>
+
 #include "acquisition/clock.h"
 #include "acquisition/experiment_config.h"
 #include "acquisition/logger.h"
 #include "sim/modbus_server.h"
 #include "storage/run_store.h"
-
-#include <atomic>
-#include <chrono>
-#include <map>
-#include <string>
 
 namespace bosfuse::testing {
 
@@ -36,8 +36,8 @@ inline ModbusEndpoint loopback_tcp(int port = 0) {
 }
 
 inline acquisition::Logger::Summary log_for(storage::RunStore& store, const acquisition::ExperimentConfig& config,
-                                     std::chrono::milliseconds duration,
-                                     std::function<void(const std::string&)> on_progress = {}) {
+                                            std::chrono::milliseconds duration,
+                                            std::function<void(const std::string&)> on_progress = {}) {
   acquisition::Logger::Options options;
   options.duration = duration;
   options.writer.flush_interval = 50ms;
@@ -52,9 +52,9 @@ inline acquisition::Logger::Summary log_for(storage::RunStore& store, const acqu
 }
 
 inline std::string tcp_device_toml(const std::string& name, int port, int inputs, double period_s) {
-  std::string text = "[[devices]]\nname = \"" + name + "\"\nprofile = \"adam-6018\"\nhost = \"127.0.0.1\"\nport = " +
-                     std::to_string(port) + "\npoll_period_s = " + std::to_string(period_s) +
-                     "\ntimeout_s = 0.5\n";
+  std::string text = "[[devices]]\nname = \"" + name +
+                     "\"\nprofile = \"adam-6018\"\nhost = \"127.0.0.1\"\nport = " + std::to_string(port) +
+                     "\npoll_period_s = " + std::to_string(period_s) + "\ntimeout_s = 0.5\n";
   for (int i = 0; i < inputs; ++i) {
     text += "[[devices.channels]]\nname = \"tc" + std::to_string(i) + "\"\ninput = " + std::to_string(i) + "\n";
   }
@@ -66,7 +66,6 @@ inline std::map<std::string, std::vector<storage::Sample>> samples_by_channel(co
   for (const auto& channel : store.channels()) out[channel.name] = store.read_samples(channel.id);
   return out;
 }
-
 
 }  // namespace bosfuse::testing
 
