@@ -102,7 +102,11 @@ double invert_reference_function(ThermocoupleType type, double emf_mv, Temperatu
   for (int step = 0; step < kMaxNewtonSteps; ++step) {
     const double residual_mv = reference_emf_mv(type, t) - emf_mv;
     if (residual_mv == 0.0) break;
-    (residual_mv < 0.0 ? low_c : high_c) = t;
+    if (residual_mv < 0.0) {
+      low_c = t;
+    } else {
+      high_c = t;
+    }
     double next = t - residual_mv / reference_seebeck_mv_per_c(type, t);
     if (!(next > low_c && next < high_c)) next = 0.5 * (low_c + high_c);
     const bool converged = std::abs(next - t) < kNewtonToleranceC;

@@ -7,7 +7,7 @@
 // measured EMF and the cold-junction temperature and does the compensation
 // in voltage, which is the only correct way (EMFs add; temperatures do not).
 //
-// Every function returns a status with its value: an input outside a type's
+// Every conversion returns a status with its value: an input outside a type's
 // range is kOutOfRange and a NaN or infinite input is kInvalidValue, and in
 // both cases there is no value. Temperatures are °C, EMFs millivolts.
 //
