@@ -10,24 +10,6 @@ namespace {
 
 using std::chrono::duration_cast;
 
-std::chrono::nanoseconds seconds_to_ns(double seconds) {
-  return std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(seconds * 1e9)));
-}
-
-double positive_seconds(const TomlReader& r, std::string_view key, double fallback, double minimum) {
-  const double value = r.optional_number(key).value_or(fallback);
-  if (value < minimum) r.fail(key, "must be at least " + std::to_string(minimum) + " s");
-  return value;
-}
-
-int integer_in(const TomlReader& r, std::string_view key, int fallback, int low, int high) {
-  const std::int64_t value = r.optional_integer(key).value_or(fallback);
-  if (value < low || value > high) {
-    r.fail(key, "must be between " + std::to_string(low) + " and " + std::to_string(high));
-  }
-  return static_cast<int>(value);
-}
-
 ModbusTransport read_transport(const TomlReader& r, const ModbusProfile& profile) {
   const auto text = r.optional_string("transport");
   if (!text) {
@@ -42,28 +24,47 @@ ModbusTransport read_transport(const TomlReader& r, const ModbusProfile& profile
 ModbusEndpoint read_endpoint(const TomlReader& r, const ModbusProfile& profile) {
   ModbusEndpoint e;
   e.transport = read_transport(r, profile);
-  e.unit_id = integer_in(r, "unit_id", 1, 0, 247);
+  e.unit_id = r.integer_in("unit_id", 1, 0, 247);
   if (e.transport == ModbusTransport::kTcp) {
     e.host = r.string("host");
-    e.port = integer_in(r, "port", 502, 1, 65535);
+    e.port = r.integer_in("port", 502, 1, 65535);
   } else {
     e.serial_port = r.string("serial_port");
-    e.baud = integer_in(r, "baud", 9600, 300, 4'000'000);
+    e.baud = r.integer_in("baud", 9600, 300, 4'000'000);
     const std::string parity = r.optional_string("parity").value_or("N");
     if (parity != "N" && parity != "E" && parity != "O") r.fail("parity", "expected \"N\", \"E\" or \"O\"");
     e.parity = parity[0];
-    e.data_bits = integer_in(r, "data_bits", 8, 5, 8);
-    e.stop_bits = integer_in(r, "stop_bits", 1, 1, 2);
+    e.data_bits = r.integer_in("data_bits", 8, 5, 8);
+    e.stop_bits = r.integer_in("stop_bits", 1, 1, 2);
   }
   return e;
 }
 
-void read_placement(const TomlReader& r, ModbusChannel& channel) {
-  const std::vector<double> position = r.numbers("position_px");
-  if (position.empty()) return;
-  if (position.size() != 2) r.fail("position_px", "expected [x, y] in image pixels");
-  channel.image_x_px = position[0];
-  channel.image_y_px = position[1];
+// What a channel measures and where it is in the image: the keys every
+// kind of channel shares.
+template <typename Channel>
+void read_channel_identity(const TomlReader& r, Channel& c) {
+  c.name = r.string("name");
+  if (auto kind = r.optional_string("kind")) c.kind = *kind;
+  if (auto unit = r.optional_string("unit")) c.unit = *unit;
+  if (const auto position = r.optional_pair("position_px", "[x, y] in image pixels")) {
+    c.image_x_px = position->first;
+    c.image_y_px = position->second;
+  }
+}
+
+template <typename Channel>
+void read_validity(const TomlReader& r, Channel& c) {
+  if (r.has("open_circuit_codes")) c.open_circuit_codes = r.numbers("open_circuit_codes");
+  if (const auto valid = r.optional_pair("valid_range", "[min, max]")) {
+    c.valid_min = valid->first;
+    c.valid_max = valid->second;
+  }
+}
+
+void read_schedule(const TomlReader& r, std::chrono::nanoseconds& poll_period, std::chrono::milliseconds& timeout) {
+  poll_period = r.seconds("poll_period_s", 1.0, 0.001);
+  timeout = std::chrono::duration_cast<std::chrono::milliseconds>(r.seconds("timeout_s", 0.5, 0.001));
 }
 
 // Register fields, required for a generic channel, optional overrides
@@ -74,7 +75,7 @@ void read_register_map(const TomlReader& r, ModbusChannel& c, bool generic) {
     if (kind != "holding" && kind != "input") r.fail("register", "expected \"holding\" or \"input\"");
     c.function = kind == "holding" ? RegisterKind::kHolding : RegisterKind::kInput;
   }
-  if (generic || r.has("address")) c.address = integer_in(r, "address", 0, 0, 65535);
+  if (generic || r.has("address")) c.address = r.integer_in("address", 0, 0, 65535);
   if (const auto type = r.optional_string("type")) {
     const auto parsed = parse_data_type(*type);
     if (!parsed) r.fail("type", "expected int16, uint16, int32, uint32 or float32");
@@ -95,14 +96,8 @@ void read_register_map(const TomlReader& r, ModbusChannel& c, bool generic) {
     c.linear = LinearMapping{raw[0], raw[1], value[0], value[1]};
     linear->reject_unknown_keys();
   }
-  if (r.has("open_circuit_codes")) c.open_circuit_codes = r.numbers("open_circuit_codes");
   if (r.has("out_of_range_codes")) c.out_of_range_codes = r.numbers("out_of_range_codes");
-  const std::vector<double> valid = r.numbers("valid_range");
-  if (!valid.empty()) {
-    if (valid.size() != 2) r.fail("valid_range", "expected [min, max]");
-    c.valid_min = valid[0];
-    c.valid_max = valid[1];
-  }
+  read_validity(r, c);
 }
 
 ModbusChannel profile_channel(const TomlReader& r, const ModbusProfile& profile) {
@@ -123,11 +118,8 @@ ModbusChannel profile_channel(const TomlReader& r, const ModbusProfile& profile)
 ModbusChannel read_channel(const TomlReader& r, const ModbusProfile& profile) {
   const bool generic = profile.input_count == 0;
   ModbusChannel c = generic ? ModbusChannel{} : profile_channel(r, profile);
-  c.name = r.string("name");
-  if (auto kind = r.optional_string("kind")) c.kind = *kind;
-  if (auto unit = r.optional_string("unit")) c.unit = *unit;
+  read_channel_identity(r, c);
   if (generic) c.tc_type = r.optional_string("tc_type");
-  read_placement(r, c);
   read_register_map(r, c, generic);
   if (const std::string problem = c.Validate(); !problem.empty()) r.fail("", problem);
   r.reject_unknown_keys();
@@ -141,8 +133,7 @@ ModbusDeviceConfig read_modbus_device(const TomlReader& r) {
   const ModbusProfile* profile = find_modbus_profile(d.profile);
   if (!profile) r.fail("profile", "unknown profile \"" + d.profile + "\" (adam-6018, icpdas-m7018 or generic)");
   d.endpoint = read_endpoint(r, *profile);
-  d.poll_period = seconds_to_ns(positive_seconds(r, "poll_period_s", 1.0, 0.001));
-  d.timeout = duration_cast<std::chrono::milliseconds>(seconds_to_ns(positive_seconds(r, "timeout_s", 0.5, 0.001)));
+  read_schedule(r, d.poll_period, d.timeout);
   std::set<std::string> names;
   for (const TomlReader& channel : r.tables("channels")) {
     d.channels.push_back(read_channel(channel, *profile));
@@ -155,10 +146,123 @@ ModbusDeviceConfig read_modbus_device(const TomlReader& r) {
   return d;
 }
 
-void read_device(const TomlReader& r, ExperimentConfig& config) {
+HidChannel mcc_channel(const TomlReader& r, HidProtocol& protocol) {
+  const toml::node* input = r.node("input");
+  if (!input) r.fail("", "missing required key 'input' (0-7, \"cold-junction-0\" or \"cold-junction-1\")");
+  for (int cj = 0; cj < 2; ++cj) {
+    if (input->value<std::string>() == "cold-junction-" + std::to_string(cj))
+      return mcc_usb_tc_channel(kMccColdJunction0 + cj);
+  }
+  const auto number = input->value<std::int64_t>();
+  if (!input->is_integer() || *number < 0 || *number > 7) {
+    r.fail("input", "expected 0-7, \"cold-junction-0\" or \"cold-junction-1\"");
+  }
+  const int channel_input = static_cast<int>(*number);
+  HidChannel c = mcc_usb_tc_channel(channel_input);
+  c.tc_type = r.optional_string("tc_type").value_or("K");
+  const auto code = mcc_tc_type_code(*c.tc_type);
+  if (!code) r.fail("tc_type", "the USB-TC takes types J, K, T, E, R, S, B or N");
+  protocol.setup_requests.push_back(mcc_set_tc_type_request(channel_input, *code));
+  return c;
+}
+
+HidChannel generic_hid_channel(const TomlReader& r) {
+  HidChannel c;
+  c.request = r.bytes("request");
+  if (c.request.empty()) r.fail("", "missing required key 'request' (the report to send, report id first)");
+  if (const auto id = r.optional_integer("reply_report_id")) {
+    if (*id < 0 || *id > 255) r.fail("reply_report_id", "expected 0-255");
+    c.reply_report_id = static_cast<std::uint8_t>(*id);
+  }
+  c.value_offset = r.integer_in("value_offset", 0, 0, 63);
+  if (const auto type = r.optional_string("type")) {
+    const auto parsed = parse_hid_value_type(*type);
+    if (!parsed) r.fail("type", "expected int16, uint16, int32, uint32 or float32");
+    c.type = *parsed;
+  }
+  const std::string order = r.optional_string("byte_order").value_or("little");
+  if (order != "little" && order != "big") r.fail("byte_order", "expected \"little\" or \"big\"");
+  c.big_endian = order == "big";
+  if (auto v = r.optional_number("scale")) c.scale = *v;
+  if (auto v = r.optional_number("offset")) c.offset = *v;
+  c.tc_type = r.optional_string("tc_type");
+  return c;
+}
+
+HidChannel read_hid_channel(const TomlReader& r, const std::string& profile, HidProtocol& protocol) {
+  HidChannel c;
+  if (profile == "mcc-usb-tc") {
+    c = mcc_channel(r, protocol);
+  } else if (profile == "temper") {
+    c = temper_channel(r.optional_number("divisor").value_or(256.0));
+  } else {
+    c = generic_hid_channel(r);
+  }
+  read_channel_identity(r, c);
+  read_validity(r, c);
+  if (const std::string problem = c.Validate(); !problem.empty()) r.fail("", problem);
+  r.reject_unknown_keys();
+  return c;
+}
+
+std::uint16_t usb_id(const TomlReader& r, std::string_view key) {
+  r.integer(key);  // a missing or mistyped id is an error, not a default
+  return static_cast<std::uint16_t>(r.integer_in(key, 0, 0, 0xFFFF));
+}
+
+HidMatch read_hid_match(const TomlReader& r, const std::string& profile) {
+  HidMatch m;
+  if (profile == "mcc-usb-tc") {
+    m = {kMccVendorId, kMccUsbTcProductId, std::nullopt, std::nullopt};
+  } else if (profile == "temper") {
+    m = {kTemperVendorId, kTemperProductId, kTemperInterface, std::nullopt};
+  }
+  // A generic device has no ids of its own; integer_in() reports a missing key.
+  const bool ids_required = profile == "generic-hid";
+  if (ids_required || r.has("vendor_id")) m.vendor_id = usb_id(r, "vendor_id");
+  if (ids_required || r.has("product_id")) m.product_id = usb_id(r, "product_id");
+  if (r.has("interface")) m.interface_number = r.integer_in("interface", 0, 0, 255);
+  m.serial = r.optional_string("serial");
+  return m;
+}
+
+HidDeviceConfig read_hid_device(const TomlReader& r) {
+  HidDeviceConfig d;
+  d.name = r.string("name");
+  d.profile = r.string("profile");
+  if (d.profile != "mcc-usb-tc" && d.profile != "temper" && d.profile != "generic-hid") {
+    r.fail("profile", "unknown HID profile \"" + d.profile + "\" (mcc-usb-tc, temper or generic-hid)");
+  }
+  d.match = read_hid_match(r, d.profile);
+  read_schedule(r, d.poll_period, d.timeout);
+  if (d.profile == "mcc-usb-tc") {
+    d.protocol.burnout_request = mcc_burnout_request();
+    d.protocol.burnout_reply_report_id = d.protocol.burnout_request->front();
+  }
+  for (auto& request : r.byte_arrays("setup_requests")) d.protocol.setup_requests.push_back(std::move(request));
+  std::set<std::string> names;
+  for (const TomlReader& channel : r.tables("channels")) {
+    d.protocol.channels.push_back(read_hid_channel(channel, d.profile, d.protocol));
+    if (!names.insert(d.protocol.channels.back().name).second) {
+      channel.fail("name", "duplicate channel name \"" + d.protocol.channels.back().name + "\"");
+    }
+  }
+  if (d.protocol.channels.empty()) r.fail("", "a device needs at least one [[devices.channels]] entry");
+  r.reject_unknown_keys();
+  return d;
+}
+
+std::string read_device(const TomlReader& r, ExperimentConfig& config) {
   const std::string kind = r.optional_string("kind").value_or("modbus");
-  if (kind != "modbus") r.fail("kind", "unknown device kind \"" + kind + "\" (supported: modbus)");
-  config.modbus_devices.push_back(read_modbus_device(r));
+  if (kind == "modbus") {
+    config.modbus_devices.push_back(read_modbus_device(r));
+    return config.modbus_devices.back().name;
+  }
+  if (kind == "hid") {
+    config.hid_devices.push_back(read_hid_device(r));
+    return config.hid_devices.back().name;
+  }
+  r.fail("kind", "unknown device kind \"" + kind + "\" (modbus or hid)");
 }
 
 }  // namespace
@@ -175,10 +279,8 @@ ExperimentConfig parse_experiment(std::string_view text, const std::string& sour
   }
   std::set<std::string> names;
   for (const TomlReader& device : reader.tables("devices")) {
-    read_device(device, config);
-    if (!names.insert(config.modbus_devices.back().name).second) {
-      device.fail("name", "duplicate device name \"" + config.modbus_devices.back().name + "\"");
-    }
+    const std::string name = read_device(device, config);
+    if (!names.insert(name).second) device.fail("name", "duplicate device name \"" + name + "\"");
   }
   reader.reject_unknown_keys();
   return config;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "acquisition/hid_device.h"
 #include "acquisition/modbus_device.h"
 #include "acquisition/toml_reader.h"
 
@@ -25,11 +26,23 @@ struct ModbusDeviceConfig {
   std::vector<ModbusChannel> channels;
 };
 
+struct HidDeviceConfig {
+  std::string name;
+  std::string profile;  // mcc-usb-tc, temper or generic-hid
+  HidMatch match;
+  HidProtocol protocol;
+  std::chrono::nanoseconds poll_period = std::chrono::seconds(1);
+  std::chrono::milliseconds timeout{500};
+};
+
 struct ExperimentConfig {
   std::string run_name;
   std::string description;
   std::vector<ModbusDeviceConfig> modbus_devices;
+  std::vector<HidDeviceConfig> hid_devices;
   std::string source_text;  // the file as written
+
+  std::size_t device_count() const { return modbus_devices.size() + hid_devices.size(); }
 };
 
 ExperimentConfig parse_experiment(std::string_view text, const std::string& source_name);

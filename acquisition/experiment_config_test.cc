@@ -68,10 +68,38 @@ TEST(ExperimentConfig, ReadsDevicesChannelsAndDefaults) {
 }
 
 TEST(ExperimentConfig, ExamplesParse) {
-  for (const char* name : {"cylinder-cooling.toml", "generic-modbus.toml"}) {
+  for (const char* name : {"cylinder-cooling.toml", "generic-modbus.toml", "usb-thermometers.toml"}) {
     const auto config = load_experiment(std::string(BOSFUSE_SOURCE_DIR) + "/examples/" + name);
-    EXPECT_FALSE(config.modbus_devices.empty()) << name;
+    EXPECT_GT(config.device_count(), 0u) << name;
   }
+}
+
+TEST(ExperimentConfig, UsbTcChannelsSetTheirTypesAndReadBurnout) {
+  const auto config = load_experiment(std::string(BOSFUSE_SOURCE_DIR) + "/examples/usb-thermometers.toml");
+  ASSERT_EQ(config.hid_devices.size(), 2u);
+  const HidDeviceConfig& tc = config.hid_devices[0];
+  EXPECT_EQ(tc.match.vendor_id, kMccVendorId);
+  EXPECT_EQ(tc.protocol.setup_requests,
+            (std::vector<std::vector<std::uint8_t>>{{0x49, 0, 0x10, 1}, {0x49, 0, 0x11, 1}}));  // inputs 0, 1: K
+  EXPECT_EQ(tc.protocol.channels[2].request, (std::vector<std::uint8_t>{0x18, 0x80, 0}));
+  EXPECT_TRUE(tc.protocol.burnout_request.has_value());
+  const HidDeviceConfig& room = config.hid_devices[1];
+  EXPECT_EQ(room.match.interface_number, kTemperInterface);
+  EXPECT_DOUBLE_EQ(room.protocol.channels[0].scale, 1.0 / 256);
+}
+
+TEST(ExperimentConfig, HidMistakesNameTheKeyAndLine) {
+  const std::string usb_tc = "[[devices]]\nname = \"u\"\nkind = \"hid\"\nprofile = \"mcc-usb-tc\"\n";
+  EXPECT_EQ(error_of(usb_tc + "[[devices.channels]]\nname = \"t\"\ninput = 8\n"),
+            "exp.toml:7: devices[0].channels[0].input: expected 0-7, \"cold-junction-0\" or \"cold-junction-1\"");
+  EXPECT_EQ(error_of(usb_tc + "[[devices.channels]]\nname = \"t\"\ninput = 0\ntc_type = \"C\"\n"),
+            "exp.toml:8: devices[0].channels[0].tc_type: the USB-TC takes types J, K, T, E, R, S, B or N");
+  const std::string generic = "[[devices]]\nname = \"g\"\nkind = \"hid\"\nprofile = \"generic-hid\"\n";
+  EXPECT_EQ(error_of(generic + "vendor_id = 1\nproduct_id = 2\n[[devices.channels]]\nname = \"t\"\n"
+                               "request = [1, 300]\n"),
+            "exp.toml:9: devices[0].channels[0].request: expected integers 0-255 (bytes)");
+  EXPECT_EQ(error_of(generic + "[[devices.channels]]\nname = \"t\"\nrequest = [1]\n"),
+            "exp.toml:1: devices[0]: missing required key 'vendor_id'");
 }
 
 TEST(ExperimentConfig, GenericChannelSpellsOutItsRegisters) {

@@ -78,6 +78,9 @@ void Logger::add_devices(const ExperimentConfig& config) {
   for (const ModbusDeviceConfig& d : config.modbus_devices) {
     add_source(std::make_unique<ModbusDevice>(d.name, d.profile, d.endpoint, d.channels, d.timeout), d.poll_period);
   }
+  for (const HidDeviceConfig& d : config.hid_devices) {
+    add_source(std::make_unique<HidDevice>(d.name, d.profile, d.match, d.protocol, d.timeout), d.poll_period);
+  }
 }
 
 Logger::Summary Logger::run(const std::atomic<bool>& stop_requested) {

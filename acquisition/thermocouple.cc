@@ -1,19 +1,19 @@
 #include "acquisition/thermocouple.h"
 
-#include "acquisition/thermocouple_coefficients.h"
-
 #include <algorithm>
 #include <array>
 #include <cctype>
 #include <cmath>
 #include <span>
 
+#include "acquisition/thermocouple_coefficients.h"
+
 namespace bosfuse::acquisition {
 namespace {
 
-using storage::SampleStatus;
 using its90::ForwardPolynomial;
 using its90::InversePolynomial;
+using storage::SampleStatus;
 
 constexpr std::array<std::string_view, 8> kTypeNames = {"B", "E", "J", "K", "N", "R", "S", "T"};
 

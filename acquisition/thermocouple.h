@@ -23,10 +23,10 @@
 // is not monotonic, and below 250 °C it is too small to be useful.
 // nist_inverse_temperature_c() exposes the bare NIST polynomial.
 
-#include "storage/records.h"
-
 #include <optional>
 #include <string_view>
+
+#include "storage/records.h"
 
 namespace bosfuse::acquisition {
 
@@ -75,7 +75,6 @@ TemperatureResult nist_inverse_temperature_c(ThermocoupleType type, double emf_m
 // terminals at the instrument) is at cold_junction_c and which produces
 // measured_emf_mv there: E = measured_emf_mv + E(cold_junction_c), inverted.
 // A cold junction outside the type's range is kOutOfRange like any input.
-TemperatureResult compensated_temperature_c(ThermocoupleType type, double measured_emf_mv,
-                                            double cold_junction_c);
+TemperatureResult compensated_temperature_c(ThermocoupleType type, double measured_emf_mv, double cold_junction_c);
 
 }  // namespace bosfuse::acquisition

@@ -7,10 +7,10 @@
 // 60 (srdata.nist.gov/its90, allcoeff.tab). Most callers want thermocouple.h;
 // this is here so tests and diagnostics can reach the published pieces.
 
-#include "acquisition/thermocouple.h"
-
 #include <optional>
 #include <span>
+
+#include "acquisition/thermocouple.h"
 
 namespace bosfuse::acquisition::its90 {
 

@@ -1,7 +1,5 @@
 #include "acquisition/thermocouple.h"
 
-#include "acquisition/thermocouple_coefficients.h"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,6 +7,8 @@
 #include <limits>
 #include <string>
 #include <vector>
+
+#include "acquisition/thermocouple_coefficients.h"
 
 namespace bosfuse::acquisition {
 namespace {
@@ -55,35 +55,72 @@ struct TableEntry {
 
 const TableEntry kNistTableEntries[] = {
     // Type B table
-    {Type::kB, 100.0, 0.033},   {Type::kB, 250.0, 0.291},    {Type::kB, 500.0, 1.242},
-    {Type::kB, 700.0, 2.431},   {Type::kB, 1000.0, 4.834},   {Type::kB, 1500.0, 10.099},
+    {Type::kB, 100.0, 0.033},
+    {Type::kB, 250.0, 0.291},
+    {Type::kB, 500.0, 1.242},
+    {Type::kB, 700.0, 2.431},
+    {Type::kB, 1000.0, 4.834},
+    {Type::kB, 1500.0, 10.099},
     {Type::kB, 1820.0, 13.820},
     // Type E table
-    {Type::kE, -270.0, -9.835}, {Type::kE, -200.0, -8.825},  {Type::kE, -100.0, -5.237},
-    {Type::kE, 100.0, 6.319},   {Type::kE, 1000.0, 76.373},
+    {Type::kE, -270.0, -9.835},
+    {Type::kE, -200.0, -8.825},
+    {Type::kE, -100.0, -5.237},
+    {Type::kE, 100.0, 6.319},
+    {Type::kE, 1000.0, 76.373},
     // Type J table
-    {Type::kJ, -210.0, -8.095}, {Type::kJ, -100.0, -4.633},  {Type::kJ, 100.0, 5.269},
-    {Type::kJ, 500.0, 27.393},  {Type::kJ, 760.0, 42.919},   {Type::kJ, 1000.0, 57.953},
+    {Type::kJ, -210.0, -8.095},
+    {Type::kJ, -100.0, -4.633},
+    {Type::kJ, 100.0, 5.269},
+    {Type::kJ, 500.0, 27.393},
+    {Type::kJ, 760.0, 42.919},
+    {Type::kJ, 1000.0, 57.953},
     {Type::kJ, 1200.0, 69.553},
     // Type K table
-    {Type::kK, -270.0, -6.458}, {Type::kK, -200.0, -5.891},  {Type::kK, -100.0, -3.554},
-    {Type::kK, 0.0, 0.000},     {Type::kK, 25.0, 1.000},     {Type::kK, 100.0, 4.096},
-    {Type::kK, 200.0, 8.138},   {Type::kK, 300.0, 12.209},   {Type::kK, 400.0, 16.397},
-    {Type::kK, 500.0, 20.644},  {Type::kK, 600.0, 24.905},   {Type::kK, 800.0, 33.275},
-    {Type::kK, 1000.0, 41.276}, {Type::kK, 1200.0, 48.838},  {Type::kK, 1372.0, 54.886},
+    {Type::kK, -270.0, -6.458},
+    {Type::kK, -200.0, -5.891},
+    {Type::kK, -100.0, -3.554},
+    {Type::kK, 0.0, 0.000},
+    {Type::kK, 25.0, 1.000},
+    {Type::kK, 100.0, 4.096},
+    {Type::kK, 200.0, 8.138},
+    {Type::kK, 300.0, 12.209},
+    {Type::kK, 400.0, 16.397},
+    {Type::kK, 500.0, 20.644},
+    {Type::kK, 600.0, 24.905},
+    {Type::kK, 800.0, 33.275},
+    {Type::kK, 1000.0, 41.276},
+    {Type::kK, 1200.0, 48.838},
+    {Type::kK, 1372.0, 54.886},
     // Type N table
-    {Type::kN, -270.0, -4.345}, {Type::kN, -200.0, -3.990},  {Type::kN, 100.0, 2.774},
-    {Type::kN, 600.0, 20.613},  {Type::kN, 1000.0, 36.256},  {Type::kN, 1300.0, 47.513},
+    {Type::kN, -270.0, -4.345},
+    {Type::kN, -200.0, -3.990},
+    {Type::kN, 100.0, 2.774},
+    {Type::kN, 600.0, 20.613},
+    {Type::kN, 1000.0, 36.256},
+    {Type::kN, 1300.0, 47.513},
     // Type R table
-    {Type::kR, -50.0, -0.226},  {Type::kR, 100.0, 0.647},    {Type::kR, 250.0, 1.923},
-    {Type::kR, 1000.0, 10.506}, {Type::kR, 1200.0, 13.228},  {Type::kR, 1500.0, 17.451},
+    {Type::kR, -50.0, -0.226},
+    {Type::kR, 100.0, 0.647},
+    {Type::kR, 250.0, 1.923},
+    {Type::kR, 1000.0, 10.506},
+    {Type::kR, 1200.0, 13.228},
+    {Type::kR, 1500.0, 17.451},
     {Type::kR, 1768.0, 21.101},
     // Type S table
-    {Type::kS, -50.0, -0.236},  {Type::kS, 100.0, 0.646},    {Type::kS, 250.0, 1.874},
-    {Type::kS, 1000.0, 9.587},  {Type::kS, 1200.0, 11.951},  {Type::kS, 1500.0, 15.582},
+    {Type::kS, -50.0, -0.236},
+    {Type::kS, 100.0, 0.646},
+    {Type::kS, 250.0, 1.874},
+    {Type::kS, 1000.0, 9.587},
+    {Type::kS, 1200.0, 11.951},
+    {Type::kS, 1500.0, 15.582},
     // Type T table
-    {Type::kT, -270.0, -6.258}, {Type::kT, -200.0, -5.603},  {Type::kT, -100.0, -3.379},
-    {Type::kT, 100.0, 4.279},   {Type::kT, 200.0, 9.288},    {Type::kT, 400.0, 20.872},
+    {Type::kT, -270.0, -6.258},
+    {Type::kT, -200.0, -5.603},
+    {Type::kT, -100.0, -3.379},
+    {Type::kT, 100.0, 4.279},
+    {Type::kT, 200.0, 9.288},
+    {Type::kT, 400.0, 20.872},
 };
 
 TEST(ThermocoupleNistTable, ReferenceFunctionsReproducePrintedEntries) {

@@ -86,6 +86,59 @@ std::optional<bool> TomlReader::optional_bool(std::string_view key) const {
   return *n.value<bool>();
 }
 
+int TomlReader::integer_in(std::string_view key, int fallback, int low, int high) const {
+  const std::int64_t value = optional_integer(key).value_or(fallback);
+  if (value < low || value > high) {
+    fail(key, "must be between " + std::to_string(low) + " and " + std::to_string(high));
+  }
+  return static_cast<int>(value);
+}
+
+std::chrono::nanoseconds TomlReader::seconds(std::string_view key, double fallback_s, double minimum_s) const {
+  const double value = optional_number(key).value_or(fallback_s);
+  if (value < minimum_s) {
+    std::ostringstream text;
+    text << "must be at least " << minimum_s << " s";
+    fail(key, text.str());
+  }
+  return std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(value * 1e9)));
+}
+
+std::optional<std::pair<double, double>> TomlReader::optional_pair(std::string_view key,
+                                                                   const std::string& meaning) const {
+  const std::vector<double> values = numbers(key);
+  if (values.empty() && !has(key)) return std::nullopt;
+  if (values.size() != 2) fail(key, "expected " + meaning);
+  return std::pair(values[0], values[1]);
+}
+
+std::vector<std::uint8_t> TomlReader::bytes(std::string_view key) const {
+  const toml::node* n = node(key);
+  return n ? bytes_of(*n, key) : std::vector<std::uint8_t>{};
+}
+
+std::vector<std::vector<std::uint8_t>> TomlReader::byte_arrays(std::string_view key) const {
+  const toml::node* n = node(key);
+  if (!n) return {};
+  const toml::array* array = n->as_array();
+  if (!array) fail(key, "expected an array of byte arrays, e.g. [[0x49, 0, 0x10, 1]]");
+  std::vector<std::vector<std::uint8_t>> out;
+  for (const toml::node& element : *array) out.push_back(bytes_of(element, key));
+  return out;
+}
+
+std::vector<std::uint8_t> TomlReader::bytes_of(const toml::node& n, std::string_view key) const {
+  const toml::array* array = n.as_array();
+  if (!array) fail(key, "expected an array of bytes, e.g. [0x18, 0x00]");
+  std::vector<std::uint8_t> out;
+  for (const toml::node& element : *array) {
+    const auto value = element.value<std::int64_t>();
+    if (!element.is_integer() || *value < 0 || *value > 255) fail(key, "expected integers 0-255 (bytes)");
+    out.push_back(static_cast<std::uint8_t>(*value));
+  }
+  return out;
+}
+
 std::vector<double> TomlReader::numbers(std::string_view key) const {
   const toml::node* n = node(key);
   if (!n) return {};

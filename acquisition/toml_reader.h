@@ -7,12 +7,14 @@
 
 #include <toml++/toml.h>
 
+#include <chrono>
 #include <cstdint>
 #include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace bosfuse::acquisition {
@@ -35,6 +37,16 @@ class TomlReader {
   double number(std::string_view key) const;  // integer or float
   std::optional<double> optional_number(std::string_view key) const;
   std::optional<bool> optional_bool(std::string_view key) const;
+  // An integer within [low, high], `fallback` when absent.
+  int integer_in(std::string_view key, int fallback, int low, int high) const;
+  // A duration in seconds of at least `minimum_s`, `fallback_s` when absent.
+  std::chrono::nanoseconds seconds(std::string_view key, double fallback_s, double minimum_s) const;
+  // An optional [x, y] pair, e.g. a position in image pixels.
+  std::optional<std::pair<double, double>> optional_pair(std::string_view key, const std::string& meaning) const;
+  // An array of integers 0-255, e.g. the bytes of a report; empty if absent.
+  std::vector<std::uint8_t> bytes(std::string_view key) const;
+  // An array of such arrays, e.g. several reports; empty if absent.
+  std::vector<std::vector<std::uint8_t>> byte_arrays(std::string_view key) const;
   std::vector<double> numbers(std::string_view key) const;     // an array of numbers; empty if absent
   std::vector<TomlReader> tables(std::string_view key) const;  // an array of tables; empty if absent
   std::optional<TomlReader> table(std::string_view key) const;
@@ -49,6 +61,7 @@ class TomlReader {
 
  private:
   const toml::node& require(std::string_view key) const;
+  std::vector<std::uint8_t> bytes_of(const toml::node& node, std::string_view key) const;
 
   const toml::table* table_;
   std::string key_path_;

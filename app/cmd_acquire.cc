@@ -23,7 +23,7 @@ struct AcquireArgs {
 
 void acquire(const AcquireArgs& args) {
   const auto config = acquisition::load_experiment(args.experiment);
-  if (config.modbus_devices.empty()) throw std::runtime_error(args.experiment + ": no [[devices]] to log");
+  if (config.device_count() == 0) throw std::runtime_error(args.experiment + ": no [[devices]] to log");
   acquisition::Logger::Options options;
   if (!args.duration.empty()) options.duration = parse_duration(args.duration);
   options.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
@@ -37,7 +37,7 @@ void acquire(const AcquireArgs& args) {
       args.out, info, args.append ? storage::RunStore::CreateMode::kAppend : storage::RunStore::CreateMode::kNew);
   acquisition::Logger logger(store, options);
   logger.add_devices(config);
-  spdlog::info("logging {} devices into {} ({})", config.modbus_devices.size(), args.out,
+  spdlog::info("logging {} devices into {} ({})", config.device_count(), args.out,
                args.duration.empty() ? "until Ctrl-C" : "for " + args.duration);
   const auto summary = logger.run(stop_requested_by_signal());
   std::cout << summary.BriefReport() << "\nrun store: " << (store.dir() / storage::RunStore::kDatabaseFileName).string()
