@@ -175,6 +175,7 @@ void DevicePoller::count_missed_ticks(SteadyTime deadline, SteadyTime next) {
 void DevicePoller::run() {
   SteadyTime deadline = schedule_origin_;
   while (wait_until(deadline)) {
+    for (const std::string& notice : source_->take_notices()) record_event("hotplug", notice);
     if (!ensure_connected()) {
       deadline = std::chrono::steady_clock::now() + backoff_;
       continue;

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <mutex>
 #include <thread>
 
 #include "tests/support/temp_dir.h"
@@ -39,6 +40,12 @@ class ScriptedSource : public ThermocoupleSource {
     }
   }
   void disconnect() override {}
+  std::vector<std::string> take_notices() override {
+    std::lock_guard lock(notices_mutex);
+    return std::exchange(notices, {});
+  }
+  std::mutex notices_mutex;
+  std::vector<std::string> notices;
   std::vector<ChannelReading> read() override {
     const int index = reads++;
     std::this_thread::sleep_for(read_time);
@@ -135,6 +142,18 @@ TEST(DevicePoller, InvalidOptionsAreRefused) {
                std::invalid_argument);
   EXPECT_THROW(DevicePoller(std::make_unique<ScriptedSource>(), h.device, {1}, writer, {20ms, 20ms, 80ms}),
                std::invalid_argument);
+}
+
+TEST(DevicePoller, SourceNoticesBecomeHotplugEvents) {
+  Harness h;
+  auto source = std::make_unique<ScriptedSource>();
+  source->notices = {"unplugged from bus 1 device 7", "plugged in at bus 1 device 8"};
+  h.run(std::move(source), {20ms, 250ms, 10s}, 200ms);
+  std::vector<std::string> messages;
+  for (const auto& e : h.store.events()) {
+    if (e.kind == "hotplug") messages.push_back(e.message);
+  }
+  EXPECT_EQ(messages, (std::vector<std::string>{"unplugged from bus 1 device 7", "plugged in at bus 1 device 8"}));
 }
 
 }  // namespace

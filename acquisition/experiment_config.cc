@@ -40,6 +40,14 @@ ModbusEndpoint read_endpoint(const TomlReader& r, const ModbusProfile& profile) 
   return e;
 }
 
+template <typename Channel>
+void read_position(const TomlReader& r, Channel& c) {
+  if (const auto position = r.optional_pair("position_px", "[x, y] in image pixels")) {
+    c.image_x_px = position->first;
+    c.image_y_px = position->second;
+  }
+}
+
 // What a channel measures and where it is in the image: the keys every
 // kind of channel shares.
 template <typename Channel>
@@ -47,10 +55,7 @@ void read_channel_identity(const TomlReader& r, Channel& c) {
   c.name = r.string("name");
   if (auto kind = r.optional_string("kind")) c.kind = *kind;
   if (auto unit = r.optional_string("unit")) c.unit = *unit;
-  if (const auto position = r.optional_pair("position_px", "[x, y] in image pixels")) {
-    c.image_x_px = position->first;
-    c.image_y_px = position->second;
-  }
+  read_position(r, c);
 }
 
 template <typename Channel>
@@ -252,6 +257,40 @@ HidDeviceConfig read_hid_device(const TomlReader& r) {
   return d;
 }
 
+UsbTc32Channel read_usb_tc32_channel(const TomlReader& r) {
+  UsbTc32Channel c;
+  c.name = r.string("name");
+  r.integer("input");  // required: integer_in() alone would default it
+  c.input = r.integer_in("input", 0, 0, 63);
+  c.cold_junction = r.optional_string("kind").value_or("thermocouple") == "cold-junction";
+  const std::string type = r.optional_string("tc_type").value_or("K");
+  if (type.size() != 1 || !tc32_type_code(type[0]))
+    r.fail("tc_type", "the USB-TC-32 takes types J, K, T, E, R, S, B or N");
+  c.tc_type = type[0];
+  read_position(r, c);
+  r.reject_unknown_keys();
+  return c;
+}
+
+UsbDeviceConfig read_usb_device(const TomlReader& r) {
+  UsbDeviceConfig d;
+  d.name = r.string("name");
+  d.profile = r.string("profile");
+  if (d.profile != "usb-tc-32") r.fail("profile", "unknown USB profile \"" + d.profile + "\" (usb-tc-32)");
+  d.serial = r.optional_string("serial");
+  read_schedule(r, d.poll_period, d.timeout);
+  std::set<std::string> names;
+  for (const TomlReader& channel : r.tables("channels")) {
+    d.channels.push_back(read_usb_tc32_channel(channel));
+    if (!names.insert(d.channels.back().name).second) {
+      channel.fail("name", "duplicate channel name \"" + d.channels.back().name + "\"");
+    }
+  }
+  if (d.channels.empty()) r.fail("", "a device needs at least one [[devices.channels]] entry");
+  r.reject_unknown_keys();
+  return d;
+}
+
 std::string read_device(const TomlReader& r, ExperimentConfig& config) {
   const std::string kind = r.optional_string("kind").value_or("modbus");
   if (kind == "modbus") {
@@ -262,7 +301,11 @@ std::string read_device(const TomlReader& r, ExperimentConfig& config) {
     config.hid_devices.push_back(read_hid_device(r));
     return config.hid_devices.back().name;
   }
-  r.fail("kind", "unknown device kind \"" + kind + "\" (modbus or hid)");
+  if (kind == "usb") {
+    config.usb_devices.push_back(read_usb_device(r));
+    return config.usb_devices.back().name;
+  }
+  r.fail("kind", "unknown device kind \"" + kind + "\" (modbus, hid or usb)");
 }
 
 }  // namespace

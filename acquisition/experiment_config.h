@@ -8,12 +8,14 @@
 
 #include <chrono>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "acquisition/hid_device.h"
 #include "acquisition/modbus_device.h"
 #include "acquisition/toml_reader.h"
+#include "acquisition/usb_tc32_device.h"
 
 namespace bosfuse::acquisition {
 
@@ -35,14 +37,24 @@ struct HidDeviceConfig {
   std::chrono::milliseconds timeout{500};
 };
 
+struct UsbDeviceConfig {
+  std::string name;
+  std::string profile;  // usb-tc-32
+  std::optional<std::string> serial;
+  std::vector<UsbTc32Channel> channels;
+  std::chrono::nanoseconds poll_period = std::chrono::seconds(1);
+  std::chrono::milliseconds timeout{500};
+};
+
 struct ExperimentConfig {
   std::string run_name;
   std::string description;
   std::vector<ModbusDeviceConfig> modbus_devices;
   std::vector<HidDeviceConfig> hid_devices;
+  std::vector<UsbDeviceConfig> usb_devices;
   std::string source_text;  // the file as written
 
-  std::size_t device_count() const { return modbus_devices.size() + hid_devices.size(); }
+  std::size_t device_count() const { return modbus_devices.size() + hid_devices.size() + usb_devices.size(); }
 };
 
 ExperimentConfig parse_experiment(std::string_view text, const std::string& source_name);

@@ -88,6 +88,21 @@ TEST(ExperimentConfig, UsbTcChannelsSetTheirTypesAndReadBurnout) {
   EXPECT_DOUBLE_EQ(room.protocol.channels[0].scale, 1.0 / 256);
 }
 
+TEST(ExperimentConfig, UsbTc32ChannelsAndMistakes) {
+  const std::string device = "[[devices]]\nname = \"tc32\"\nkind = \"usb\"\nprofile = \"usb-tc-32\"\n";
+  const auto config =
+      parse_experiment(device + "[[devices.channels]]\nname = \"a\"\ninput = 40\ntc_type = \"T\"\n" +
+                           "[[devices.channels]]\nname = \"cj\"\ninput = 40\nkind = \"cold-junction\"\n",
+                       "exp.toml");
+  ASSERT_EQ(config.usb_devices.size(), 1u);
+  EXPECT_EQ(config.usb_devices[0].channels[0].tc_type, 'T');
+  EXPECT_TRUE(config.usb_devices[0].channels[1].cold_junction);
+  EXPECT_EQ(error_of(device + "[[devices.channels]]\nname = \"a\"\ninput = 64\n"),
+            "exp.toml:7: devices[0].channels[0].input: must be between 0 and 63");
+  EXPECT_EQ(error_of(device + "[[devices.channels]]\nname = \"a\"\n"),
+            "exp.toml:5: devices[0].channels[0]: missing required key 'input'");
+}
+
 TEST(ExperimentConfig, HidMistakesNameTheKeyAndLine) {
   const std::string usb_tc = "[[devices]]\nname = \"u\"\nkind = \"hid\"\nprofile = \"mcc-usb-tc\"\n";
   EXPECT_EQ(error_of(usb_tc + "[[devices.channels]]\nname = \"t\"\ninput = 8\n"),

@@ -81,6 +81,9 @@ void Logger::add_devices(const ExperimentConfig& config) {
   for (const HidDeviceConfig& d : config.hid_devices) {
     add_source(std::make_unique<HidDevice>(d.name, d.profile, d.match, d.protocol, d.timeout), d.poll_period);
   }
+  for (const UsbDeviceConfig& d : config.usb_devices) {
+    add_source(std::make_unique<UsbTc32Device>(d.name, d.serial, d.channels, d.timeout), d.poll_period);
+  }
 }
 
 Logger::Summary Logger::run(const std::atomic<bool>& stop_requested) {

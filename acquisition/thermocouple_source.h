@@ -34,6 +34,11 @@ class ThermocoupleSource {
   // when the device cannot be read at all; a channel-level problem (burnout,
   // bad value) is a reading status instead.
   virtual std::vector<ChannelReading> read() = 0;
+
+  // What the device noticed on its own since the last call, such as a USB
+  // unplug or replug; the poller records each as a "hotplug" event.
+  // Thread-safe: a source may gather notices on a thread of its own.
+  virtual std::vector<std::string> take_notices() { return {}; }
 };
 
 }  // namespace bosfuse::acquisition

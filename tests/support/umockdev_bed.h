@@ -100,6 +100,31 @@ class UmockdevBed {
     return usb;
   }
 
+  // Adds a raw USB device (usbdevfs node /dev/bus/usb/001/NNN) from its
+  // device and configuration descriptors, announcing it with an "add"
+  // uevent as the kernel does; returns its sysfs path.
+  std::string add_usb(std::uint16_t vendor_id, std::uint16_t product_id, int device_number, int usb_port) {
+    const std::string path = "/sys/devices/pci0000:00/0000:00:14.0/usb1/1-" + std::to_string(usb_port);
+    char node[32];
+    std::snprintf(node, sizeof node, "bus/usb/001/%03d", device_number);
+    const std::string description =
+        "P: " + strip_sys(path) + "\nN: " + node + "\nE: DEVNAME=/dev/" + node +
+        "\nE: DEVTYPE=usb_device\nE: SUBSYSTEM=usb\nE: BUSNUM=001\nE: DEVNUM=" + std::string(node).substr(12) +
+        "\nA: busnum=1\nA: devnum=" + std::to_string(device_number) + "\nA: idVendor=" + hex(vendor_id, 4) +
+        "\nA: idProduct=" + hex(product_id, 4) +
+        "\nA: bConfigurationValue=1\nA: speed=480\nH: descriptors=" + usb_descriptors_hex(vendor_id, product_id) + "\n";
+    GError* error = nullptr;
+    if (!umockdev_testbed_add_from_string(bed_, description.c_str(), &error)) fail("add device", error);
+    umockdev_testbed_uevent(bed_, path.c_str(), "add");
+    return path;
+  }
+
+  // Unplugs a raw USB device, announcing it with a "remove" uevent.
+  void unplug_usb(const std::string& sysfs_path) {
+    umockdev_testbed_uevent(bed_, sysfs_path.c_str(), "remove");
+    umockdev_testbed_remove_device(bed_, sysfs_path.c_str());
+  }
+
   // Replays `steps` on /dev/hidrawN; when the script ends the device hangs up.
   void script(int hidraw_index, const std::vector<ScriptStep>& steps) {
     std::string text;
@@ -126,6 +151,49 @@ class UmockdevBed {
   static constexpr const char* kVendorReportDescriptorHex =
       "0600FF0901A1010901150026FF00750895088102"
       "09019102C0";
+
+  // A device descriptor and one configuration with one vendor interface.
+  static std::string usb_descriptors_hex(unsigned vendor_id, unsigned product_id) {
+    const std::vector<unsigned> bytes = {18,
+                                         1,
+                                         0x00,
+                                         0x02,
+                                         0xFF,
+                                         0,
+                                         0,
+                                         64,
+                                         vendor_id & 0xFFu,
+                                         vendor_id >> 8u,
+                                         product_id & 0xFFu,
+                                         product_id >> 8u,
+                                         0x00,
+                                         0x01,
+                                         1,
+                                         2,
+                                         3,
+                                         1,
+                                         9,
+                                         2,
+                                         18,
+                                         0,
+                                         1,
+                                         1,
+                                         0,
+                                         0x80,
+                                         50,  // configuration
+                                         9,
+                                         4,
+                                         0,
+                                         0,
+                                         0,
+                                         0xFF,
+                                         0,
+                                         0,
+                                         0};  // interface 0, vendor class
+    std::string text;
+    for (unsigned b : bytes) text += hex(b, 2);
+    return text;
+  }
 
   static std::string hex(unsigned value, int digits) {
     char text[16];
