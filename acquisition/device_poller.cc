@@ -9,22 +9,9 @@
 #include "acquisition/clock.h"
 
 namespace bosfuse::acquisition {
-namespace {
-
-std::string seconds_text(std::int64_t ns) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3f s", static_cast<double>(ns) * 1e-9);
-  return text;
-}
-
-}  // namespace
-
 std::string DevicePoller::Options::Validate() const {
   if (period <= std::chrono::nanoseconds::zero()) return "poll period must be positive";
-  if (backoff_initial.count() <= 0 || backoff_max < backoff_initial) {
-    return "backoff must be positive and its maximum at least its start";
-  }
-  return {};
+  return ConnectionKeeper::Backoff{backoff_initial, backoff_max}.Validate();
 }
 
 DevicePoller::DevicePoller(std::unique_ptr<ThermocoupleSource> source, std::int64_t device_id,
@@ -35,7 +22,9 @@ DevicePoller::DevicePoller(std::unique_ptr<ThermocoupleSource> source, std::int6
       channel_ids_(std::move(channel_ids)),
       channels_(source_->channel_infos()),
       writer_(writer),
-      options_(options) {
+      options_(options),
+      connection_({options.backoff_initial, options.backoff_max},
+                  [this](const std::string& kind, const std::string& message) { record_event(kind, message); }) {
   if (const std::string problem = options_.Validate(); !problem.empty()) {
     throw std::invalid_argument("device " + name_ + ": " + problem);
   }
@@ -90,37 +79,14 @@ bool DevicePoller::ensure_connected() {
     std::lock_guard lock(mutex_);
     if (stats_.connected) return true;
   }
-  try {
-    source_->connect();
-  } catch (const DeviceError& e) {
-    const bool first_failure = backoff_.count() == 0;
-    {
-      std::lock_guard lock(mutex_);
-      ++stats_.connect_failures;
-    }
-    if (first_failure) {
-      record_event("error", std::string(e.what()) + "; retrying");
-      if (!ever_connected_) disconnected_since_ns_ = utc_now_ns();
-    }
-    backoff_ = first_failure ? options_.backoff_initial : std::min(backoff_ * 2, options_.backoff_max);
+  const auto outcome = connection_.connect([this] { source_->connect(); }, source_->device_info().address);
+  std::lock_guard lock(mutex_);
+  if (outcome == ConnectionKeeper::Outcome::kFailed) {
+    ++stats_.connect_failures;
     return false;
   }
-  backoff_ = std::chrono::milliseconds(0);
-  const bool is_reconnect = disconnected_since_ns_ != 0;
-  {
-    std::lock_guard lock(mutex_);
-    stats_.connected = true;
-    if (is_reconnect && ever_connected_) ++stats_.reconnects;
-  }
-  if (is_reconnect) {
-    const std::int64_t gap_ns = utc_now_ns() - disconnected_since_ns_;
-    record_event(ever_connected_ ? "reconnect" : "connect",
-                 (ever_connected_ ? "reconnected after " : "connected after ") + seconds_text(gap_ns));
-  } else {
-    record_event("connect", "connected to " + source_->device_info().address);
-  }
-  ever_connected_ = true;
-  disconnected_since_ns_ = 0;
+  stats_.connected = true;
+  if (outcome == ConnectionKeeper::Outcome::kReconnected) ++stats_.reconnects;
   return true;
 }
 
@@ -159,7 +125,7 @@ std::string DevicePoller::poll_once() {
   } else {
     ++stats_.polls_failed;
     stats_.connected = false;
-    disconnected_since_ns_ = t_ns;
+    connection_.lost(t_ns);
   }
   return failure;
 }
@@ -177,7 +143,7 @@ void DevicePoller::run() {
   while (wait_until(deadline)) {
     for (const std::string& notice : source_->take_notices()) record_event("hotplug", notice);
     if (!ensure_connected()) {
-      deadline = std::chrono::steady_clock::now() + backoff_;
+      deadline = std::chrono::steady_clock::now() + connection_.backoff();
       continue;
     }
     if (const std::string failure = poll_once(); !failure.empty()) {

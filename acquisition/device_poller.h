@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "acquisition/connection_keeper.h"
 #include "acquisition/thermocouple_source.h"
 #include "storage/run_writer.h"
 
@@ -76,9 +77,7 @@ class DevicePoller {
 
   SteadyTime schedule_origin_;
   std::int64_t tick_ = 0;
-  std::chrono::milliseconds backoff_{0};
-  std::int64_t disconnected_since_ns_ = 0;
-  bool ever_connected_ = false;
+  ConnectionKeeper connection_;
 
   mutable std::mutex mutex_;
   std::condition_variable wake_;

@@ -141,14 +141,32 @@ void RunStore::write_events(std::span<const Event> events) {
   transaction.commit();
 }
 
+namespace {
+
+constexpr const char* kInsertFrame =
+    "INSERT INTO frames (device_id, t_ns, device_t_ns, path, width_px, height_px, bit_depth, is_reference) "
+    "VALUES (?, ?, ?, ?, ?, ?, ?, ?)";
+
+void insert_frame(Statement& stmt, const FrameRecord& frame) {
+  stmt.bind_all(frame.device_id, frame.t_ns, frame.device_t_ns, frame.path, frame.width_px, frame.height_px,
+                frame.bit_depth, frame.is_reference ? 1 : 0);
+  stmt.run();
+}
+
+}  // namespace
+
 std::int64_t RunStore::add_frame(const FrameRecord& frame) {
-  db_.prepare(
-         "INSERT INTO frames (device_id, t_ns, device_t_ns, path, width_px, height_px, bit_depth, is_reference) "
-         "VALUES (?, ?, ?, ?, ?, ?, ?, ?)")
-      .bind_all(frame.device_id, frame.t_ns, frame.device_t_ns, frame.path, frame.width_px, frame.height_px,
-                frame.bit_depth, frame.is_reference ? 1 : 0)
-      .run();
+  auto stmt = db_.prepare(kInsertFrame);
+  insert_frame(stmt, frame);
   return db_.last_insert_rowid();
+}
+
+void RunStore::write_frames(std::span<const FrameRecord> frames) {
+  if (frames.empty()) return;
+  auto stmt = db_.prepare(kInsertFrame);
+  Transaction transaction(db_);
+  for (const FrameRecord& frame : frames) insert_frame(stmt, frame);
+  transaction.commit();
 }
 
 void RunStore::finish(RunStatus status, std::int64_t ended_ns) {

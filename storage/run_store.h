@@ -63,6 +63,7 @@ class RunStore {
   void write_samples(std::span<const Sample> samples);  // one transaction
   void write_events(std::span<const Event> events);     // one transaction
   std::int64_t add_frame(const FrameRecord& frame);
+  void write_frames(std::span<const FrameRecord> frames);  // one transaction
   void finish(RunStatus status, std::int64_t ended_ns);
 
   std::vector<DeviceInfo> devices() const;

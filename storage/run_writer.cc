@@ -44,6 +44,12 @@ void RunWriter::push(const Event& event) {
   ++pushed_generation_;
 }
 
+void RunWriter::push(const FrameRecord& frame) {
+  std::lock_guard lock(mutex_);
+  pending_frames_.push_back(frame);
+  ++pushed_generation_;
+}
+
 void RunWriter::flush() {
   std::unique_lock lock(mutex_);
   const std::uint64_t target = pushed_generation_;
@@ -91,26 +97,45 @@ void RunWriter::run() {
       break;
     }
   }
-  stats_.uncommitted_at_stop = static_cast<std::int64_t>(pending_samples_.size() + pending_events_.size());
+  stats_.uncommitted_at_stop =
+      static_cast<std::int64_t>(pending_samples_.size() + pending_events_.size() + pending_frames_.size());
   writer_done_ = true;
   committed_.notify_all();
 }
 
-// Takes what is pending, commits it without holding the lock, and puts it
-// back at the front of the queue if the commit fails.
+namespace {
+
+// Puts `taken` back in front of what was pushed meanwhile.
+template <typename T>
+void requeue(std::vector<T>& taken, std::vector<T>& pending) {
+  taken.insert(taken.end(), pending.begin(), pending.end());
+  pending.swap(taken);
+}
+
+}  // namespace
+
+// Takes what is pending, commits it without holding the lock, and puts back
+// at the front of the queue whatever a failed commit left unwritten. Each
+// kind is its own transaction, cleared once committed so a later failure
+// never writes it twice.
 bool RunWriter::commit_pending(std::unique_lock<std::mutex>& lock) {
   if (committed_generation_ == pushed_generation_) return true;
   std::vector<Sample> samples;
   std::vector<Event> events;
+  std::vector<FrameRecord> frames;
   samples.swap(pending_samples_);
   events.swap(pending_events_);
+  frames.swap(pending_frames_);
   const std::uint64_t generation = pushed_generation_;
   const auto event_count = static_cast<std::int64_t>(events.size());
+  const auto frame_count = static_cast<std::int64_t>(frames.size());
   lock.unlock();
   std::string error;
   try {
     store_.write_events(events);
-    events.clear();  // committed: a later sample failure must not write them twice
+    events.clear();
+    store_.write_frames(frames);
+    frames.clear();
     store_.write_samples(samples);
   } catch (const std::exception& e) {
     error = e.what();
@@ -119,15 +144,15 @@ bool RunWriter::commit_pending(std::unique_lock<std::mutex>& lock) {
   if (!error.empty()) {
     ++stats_.failed_commits;
     stats_.last_error = error;
-    samples.insert(samples.end(), pending_samples_.begin(), pending_samples_.end());
-    pending_samples_.swap(samples);
-    events.insert(events.end(), pending_events_.begin(), pending_events_.end());
-    pending_events_.swap(events);
+    requeue(samples, pending_samples_);
+    requeue(events, pending_events_);
+    requeue(frames, pending_frames_);
     committed_.notify_all();
     return false;
   }
   stats_.samples_committed += static_cast<std::int64_t>(samples.size());
   stats_.events_committed += event_count;
+  stats_.frames_committed += frame_count;
   ++stats_.batches_committed;
   committed_generation_ = generation;
   committed_.notify_all();

@@ -33,9 +33,10 @@ class RunWriter {
   struct Stats {
     std::int64_t samples_committed = 0;
     std::int64_t events_committed = 0;
+    std::int64_t frames_committed = 0;
     std::int64_t batches_committed = 0;
     std::int64_t failed_commits = 0;
-    std::int64_t uncommitted_at_stop = 0;  // samples + events the store refused to the end
+    std::int64_t uncommitted_at_stop = 0;  // samples + events + frames the store refused to the end
     std::string last_error;
   };
 
@@ -49,6 +50,7 @@ class RunWriter {
   void push(const Sample& sample);
   void push(std::span<const Sample> samples);
   void push(const Event& event);
+  void push(const FrameRecord& frame);  // the image file must already be in place
 
   // Blocks until everything pushed before the call is committed (or a commit
   // failed; see stats()).
@@ -68,6 +70,7 @@ class RunWriter {
   std::condition_variable committed_;
   std::vector<Sample> pending_samples_;
   std::vector<Event> pending_events_;
+  std::vector<FrameRecord> pending_frames_;
   std::uint64_t pushed_generation_ = 0;
   std::uint64_t committed_generation_ = 0;
   bool stopping_ = false;

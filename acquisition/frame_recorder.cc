@@ -1,0 +1,165 @@
+#include "acquisition/frame_recorder.h"
+
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
+
+#include "acquisition/clock.h"
+
+namespace bosfuse::acquisition {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr auto kFolderWait = std::chrono::milliseconds(200);  // how often a waiting recorder checks for stop
+
+bool valid_folder_name(const std::string& name) {
+  if (name.empty()) return false;
+  for (unsigned char c : name) {
+    if (!std::isalnum(c) && c != '-' && c != '_') return false;
+  }
+  return true;
+}
+
+std::string frame_file_name(std::int64_t index) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%06lld.png", static_cast<long long>(index));
+  return text;
+}
+
+}  // namespace
+
+std::string FrameRecorder::Options::Validate() const {
+  if (interval < std::chrono::nanoseconds::zero()) return "frame interval must not be negative";
+  if (reference_frames < 0) return "reference_frames must not be negative";
+  return backoff.Validate();
+}
+
+FrameRecorder::FrameRecorder(std::unique_ptr<FrameSource> source, std::string name, std::int64_t device_id,
+                             fs::path run_dir, storage::RunWriter& writer, Options options)
+    : source_(std::move(source)),
+      name_(std::move(name)),
+      device_id_(device_id),
+      run_dir_(std::move(run_dir)),
+      frame_dir_(fs::path("frames") / name_),
+      writer_(writer),
+      options_(std::move(options)),
+      connection_(options_.backoff,
+                  [this](const std::string& kind, const std::string& message) { record_event(kind, message); }) {
+  if (!valid_folder_name(name_))
+    throw std::invalid_argument("camera name '" + name_ + "': use letters, digits, - and _");
+  if (const std::string problem = options_.Validate(); !problem.empty()) {
+    throw std::invalid_argument("camera " + name_ + ": " + problem);
+  }
+  fs::create_directories(run_dir_ / frame_dir_);
+}
+
+FrameRecorder::~FrameRecorder() { stop(); }
+
+void FrameRecorder::start() {
+  thread_ = std::thread([this] { run(); });
+}
+
+void FrameRecorder::stop() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+FrameRecorder::Stats FrameRecorder::stats() const {
+  std::lock_guard lock(mutex_);
+  return stats_;
+}
+
+bool FrameRecorder::wait_until(SteadyTime deadline) {
+  std::unique_lock lock(mutex_);
+  return !wake_.wait_until(lock, deadline, [&] { return stopping_; });
+}
+
+void FrameRecorder::record_event(const std::string& kind, const std::string& message) {
+  writer_.push(storage::Event{0, device_id_, utc_now_ns(), kind, message});
+  if (kind == "disconnect" || kind == "error") {
+    spdlog::warn("{}: {}", name_, message);
+  } else {
+    spdlog::info("{}: {}", name_, message);
+  }
+}
+
+bool FrameRecorder::ensure_connected() {
+  if (stats().connected) return true;
+  const auto outcome = connection_.connect([this] { source_->open(); }, source_->describe());
+  std::lock_guard lock(mutex_);
+  stats_.connected = outcome != ConnectionKeeper::Outcome::kFailed;
+  return stats_.connected;
+}
+
+bool FrameRecorder::is_reference_now() const {
+  std::error_code ignored;
+  return stats().frames < options_.reference_frames ||
+         (!options_.reference_flag.empty() && fs::exists(options_.reference_flag, ignored));
+}
+
+void FrameRecorder::store(const CapturedFrame& frame) {
+  const bool reference = is_reference_now();
+  const fs::path relative = frame_dir_ / frame_file_name(stats().frames);
+  const fs::path partial = run_dir_ / (relative.string() + ".partial.png");
+  try {
+    if (!cv::imwrite(partial.string(), frame.image)) throw std::runtime_error("the PNG encoder refused it");
+    fs::rename(partial, run_dir_ / relative);
+  } catch (const std::exception& e) {
+    std::error_code ignored;
+    fs::remove(partial, ignored);
+    record_event("error", "frame from " + frame.origin + " could not be stored: " + e.what());
+    std::lock_guard lock(mutex_);
+    ++stats_.failures;
+    return;
+  }
+  writer_.push(storage::FrameRecord{0, device_id_, frame.t_ns, frame.device_t_ns, relative.generic_string(),
+                                    frame.image.cols, frame.image.rows, bit_depth_of(frame.image), reference});
+  std::lock_guard lock(mutex_);
+  ++stats_.frames;
+  if (reference) ++stats_.reference_frames;
+}
+
+bool FrameRecorder::take_one(std::chrono::milliseconds wait) {
+  try {
+    if (const auto frame = source_->next(wait)) store(*frame);
+  } catch (const EndOfFrames& e) {
+    record_event("stopped", e.what());
+    return false;
+  } catch (const DeviceError& e) {
+    source_->close();
+    connection_.lost(utc_now_ns());
+    record_event("disconnect", e.what());
+    std::lock_guard lock(mutex_);
+    stats_.connected = false;
+    ++stats_.failures;
+  }
+  return true;
+}
+
+void FrameRecorder::run() {
+  const SteadyTime origin = std::chrono::steady_clock::now();
+  SteadyTime deadline = origin;
+  const bool scheduled = options_.interval > std::chrono::nanoseconds::zero();
+  while (wait_until(deadline)) {
+    if (!ensure_connected()) {
+      deadline = std::chrono::steady_clock::now() + connection_.backoff();
+      continue;
+    }
+    if (!take_one(scheduled ? std::chrono::duration_cast<std::chrono::milliseconds>(options_.interval) : kFolderWait)) {
+      std::lock_guard lock(mutex_);
+      stats_.finished = true;
+      break;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    deadline = scheduled ? origin + ((now - origin) / options_.interval + 1) * options_.interval : now;
+  }
+  source_->close();
+}
+
+}  // namespace bosfuse::acquisition

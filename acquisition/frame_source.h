@@ -1,0 +1,48 @@
+#pragma once
+// A FrameSource is one camera that yields timestamped images: an OpenCV
+// VideoCapture (V4L2 device, video file or stream URL), a folder a tethered
+// DSLR writes into, or a virtual camera. Each frame carries t_ns on the host
+// UTC clock, like every thermocouple sample, and the camera's own time when
+// it has one. The FrameRecorder drives a source on its own thread and stores
+// what it yields; a source only knows how to get the next image. Sources are
+// used from one thread at a time.
+
+#include <chrono>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+
+#include "acquisition/thermocouple_source.h"  // DeviceError
+
+namespace bosfuse::acquisition {
+
+struct CapturedFrame {
+  cv::Mat image;                            // as the camera delivered it: 8- or 16-bit, grey or colour
+  std::int64_t t_ns = 0;                    // host UTC clock
+  std::optional<std::int64_t> device_t_ns;  // the camera's clock, when known
+  std::string origin;                       // e.g. the file it came from
+};
+
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+
+  virtual std::string describe() const = 0;  // "camera 0", "folder /data/dslr"
+  virtual void open() = 0;                   // throws DeviceError
+  virtual void close() = 0;                  // never throws
+  // The next frame, waiting at most `wait`; nullopt when none came in time.
+  // Throws DeviceError when the camera is gone, and EndOfFrames when a
+  // finite source (a video file) has no more.
+  virtual std::optional<CapturedFrame> next(std::chrono::milliseconds wait) = 0;
+};
+
+class EndOfFrames : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Significant bits of an image's pixel type: 8 or 16.
+int bit_depth_of(const cv::Mat& image);
+
+}  // namespace bosfuse::acquisition
