@@ -1,0 +1,198 @@
+// Newton's-law fits: recovery of known parameters, honest intervals, and
+// the diagnostics a user acts on.
+
+#include "fitting/newton_fit.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace bosfuse::fitting {
+namespace {
+
+struct Curve {
+  double ambient_c = 22.0;
+  double t0_c = 80.0;
+  double k_per_s = 0.01;
+  double at(double t_s) const { return ambient_c + (t0_c - ambient_c) * std::exp(-k_per_s * t_s); }
+};
+
+struct Record {
+  std::vector<double> time_s;
+  std::vector<double> temperature_c;
+};
+
+// n samples every dt_s starting at start_s, with Gaussian noise of sigma_c.
+Record sample(const Curve& curve, std::size_t n, double dt_s, double sigma_c, unsigned seed, double start_s = 0.0) {
+  std::mt19937_64 random(seed);
+  std::normal_distribution<double> noise(0.0, sigma_c);
+  Record r;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) * dt_s;
+    r.time_s.push_back(start_s + t);
+    r.temperature_c.push_back(curve.at(t) + (sigma_c > 0 ? noise(random) : 0.0));
+  }
+  return r;
+}
+
+NewtonFit fit(const Record& r, const NewtonFitOptions& options = {}) {
+  return fit_newton(r.time_s, r.temperature_c, options);
+}
+
+TEST(NewtonFit, RecoversExactParametersFromANoiselessCurve) {
+  const Curve curve;
+  const auto result = fit(sample(curve, 200, 2.0, 0.0, 1));
+  ASSERT_TRUE(result.ok()) << result.brief_report();
+  EXPECT_NEAR(result.k_per_s.value, curve.k_per_s, 1e-9);
+  EXPECT_NEAR(result.tau_s.value, 1.0 / curve.k_per_s, 1e-5);
+  EXPECT_NEAR(result.t0_c.value, curve.t0_c, 1e-7);
+  EXPECT_NEAR(result.ambient_c.value, curve.ambient_c, 1e-7);
+}
+
+TEST(NewtonFit, RecoversParametersWithinTheirIntervalsFromNoisyData) {
+  const Curve curve{20.0, 65.0, 0.004};
+  const auto result = fit(sample(curve, 1000, 1.0, 0.1, 7));
+  ASSERT_TRUE(result.ok()) << result.brief_report();
+  EXPECT_NEAR(result.k_per_s.value, curve.k_per_s, 4 * result.k_per_s.std_error);
+  EXPECT_NEAR(result.t0_c.value, curve.t0_c, 4 * result.t0_c.std_error);
+  EXPECT_NEAR(result.ambient_c.value, curve.ambient_c, 4 * result.ambient_c.std_error);
+  EXPECT_NEAR(result.summary.residual_std_c, 0.1, 0.01);
+  EXPECT_LT(result.k_per_s.low, result.k_per_s.value);
+  EXPECT_GT(result.k_per_s.high, result.k_per_s.value);
+  EXPECT_NEAR(result.tau_s.value * result.k_per_s.value, 1.0, 1e-12);
+  EXPECT_EQ(result.summary.dof, 997);
+  EXPECT_TRUE(result.summary.warnings.empty()) << result.brief_report();
+}
+
+TEST(NewtonFit, TheOriginDefaultsToTheFirstSampleAndCanBeChosen) {
+  const Curve curve;
+  const auto r = sample(curve, 300, 1.0, 0.0, 1, 1000.0);
+  const auto automatic = fit(r);
+  ASSERT_TRUE(automatic.ok());
+  EXPECT_EQ(automatic.origin_s, 1000.0);
+  EXPECT_NEAR(automatic.t0_c.value, curve.t0_c, 1e-6);
+  NewtonFitOptions options;
+  options.origin_s = 900.0;  // 100 s before the first sample: T0 is the curve extrapolated back
+  const auto chosen = fit(r, options);
+  ASSERT_TRUE(chosen.ok());
+  EXPECT_NEAR(chosen.t0_c.value, curve.ambient_c + (curve.t0_c - curve.ambient_c) * std::exp(0.01 * 100.0), 1e-5);
+  EXPECT_NEAR(chosen.temperature_at(1150.0), curve.at(150.0), 1e-6);
+}
+
+TEST(NewtonFit, FixedAmbientHasTwoParametersAndNoAmbientUncertainty) {
+  const Curve curve;
+  NewtonFitOptions options;
+  options.ambient = AmbientModel::fixed(curve.ambient_c);
+  const auto result = fit(sample(curve, 100, 3.0, 0.05, 3), options);
+  ASSERT_TRUE(result.ok()) << result.brief_report();
+  EXPECT_EQ(result.summary.parameters, 2);
+  EXPECT_TRUE(result.ambient_c.fixed);
+  EXPECT_EQ(result.ambient_c.std_error, 0.0);
+  EXPECT_EQ(result.ambient_c.value, curve.ambient_c);
+  EXPECT_NEAR(result.k_per_s.value, curve.k_per_s, 4 * result.k_per_s.std_error);
+}
+
+TEST(NewtonFit, AnAmbientPriorPullsAShortRecordTowardsTheMeasurement) {
+  const Curve curve;  // τ = 100 s; 40 s recorded
+  const auto r = sample(curve, 40, 1.0, 0.05, 11);
+  const auto loose = fit(r);
+  NewtonFitOptions options;
+  options.ambient = AmbientModel::prior(curve.ambient_c, 0.1);
+  const auto tied = fit(r, options);
+  ASSERT_TRUE(tied.ok()) << tied.brief_report();
+  EXPECT_EQ(tied.summary.dof, 38);
+  EXPECT_NEAR(tied.ambient_c.value, curve.ambient_c, 0.3);
+  EXPECT_LE(tied.ambient_c.std_error, 0.1 * 1.2);
+  if (loose.ok()) {
+    EXPECT_LT(tied.k_per_s.std_error, loose.k_per_s.std_error);
+  }
+}
+
+TEST(NewtonFit, AShortRecordWithFreeAmbientWarnsAndSuggestsFixingIt) {
+  const Curve curve;
+  const auto result = fit(sample(curve, 50, 1.0, 0.02, 5));  // half a time constant
+  if (result.ok()) {
+    ASSERT_FALSE(result.summary.warnings.empty());
+    EXPECT_NE(result.summary.warnings[0].find("fix the ambient"), std::string::npos) << result.brief_report();
+  } else {
+    EXPECT_NE(result.summary.message.find("ambient"), std::string::npos) << result.brief_report();
+  }
+}
+
+TEST(NewtonFit, KnownSigmaGivesAbsoluteUncertaintiesAndAReducedChiSquare) {
+  const Curve curve;
+  const auto r = sample(curve, 500, 1.0, 0.2, 21);
+  NewtonFitOptions right;
+  right.measurement_sigma_c = 0.2;
+  const auto honest = fit(r, right);
+  ASSERT_TRUE(honest.ok()) << honest.brief_report();
+  EXPECT_TRUE(honest.summary.absolute_sigma);
+  ASSERT_TRUE(honest.summary.reduced_chi_square);
+  EXPECT_NEAR(*honest.summary.reduced_chi_square, 1.0, 0.2);
+  const auto scaled = fit(r);
+  EXPECT_FALSE(scaled.summary.reduced_chi_square);
+  // s ≈ σ, so both conventions give nearly the same errors.
+  EXPECT_NEAR(honest.k_per_s.std_error / scaled.k_per_s.std_error, 1.0, 0.15);
+
+  NewtonFitOptions wrong;
+  wrong.measurement_sigma_c = 0.05;
+  const auto overconfident = fit(r, wrong);
+  ASSERT_TRUE(overconfident.ok());
+  EXPECT_GT(*overconfident.summary.reduced_chi_square, 10.0);
+  ASSERT_FALSE(overconfident.summary.warnings.empty());
+  EXPECT_NE(overconfident.summary.warnings.back().find("too small"), std::string::npos);
+  EXPECT_NEAR(overconfident.k_per_s.std_error / honest.k_per_s.std_error, 0.25, 1e-3);
+}
+
+TEST(NewtonFit, CorrelatedResidualsAreFlagged) {
+  Curve curve;
+  auto r = sample(curve, 400, 1.0, 0.0, 1);
+  for (std::size_t i = 0; i < r.time_s.size(); ++i) r.temperature_c[i] += 0.3 * std::sin(r.time_s[i] / 40.0);
+  const auto result = fit(r);
+  ASSERT_TRUE(result.ok()) << result.brief_report();
+  EXPECT_GT(result.summary.lag1_autocorrelation, 0.9);
+  bool flagged = false;
+  for (const auto& w : result.summary.warnings) flagged |= w.find("optimistic") != std::string::npos;
+  EXPECT_TRUE(flagged) << result.brief_report();
+}
+
+TEST(NewtonFit, TooFewPointsIsAnErrorWithAReason) {
+  const Record r{{0.0, 1.0, 2.0}, {50.0, 45.0, 41.0}};
+  const auto result = fit(r);
+  EXPECT_EQ(result.summary.status, FitStatus::kTooFewPoints);
+  EXPECT_NE(result.summary.message.find("at least 4"), std::string::npos) << result.summary.message;
+  EXPECT_TRUE(std::isnan(result.k_per_s.value)) << "a failed fit must not carry numbers";
+  EXPECT_TRUE(std::isnan(result.temperature_at(1.0)));
+}
+
+TEST(NewtonFit, InvalidOptionsAreRefusedWithAReason) {
+  NewtonFitOptions options;
+  options.ambient = AmbientModel::prior(20.0, 0.0);
+  EXPECT_NE(options.invalid_reason().find("σ"), std::string::npos);
+  const auto result = fit(sample(Curve{}, 50, 1.0, 0.0, 1), options);
+  EXPECT_EQ(result.summary.status, FitStatus::kInvalidOptions);
+  options = {};
+  options.confidence = 1.0;
+  EXPECT_FALSE(options.invalid_reason().empty());
+  options = {};
+  options.loss = RobustLoss::huber(-1.0);
+  EXPECT_FALSE(options.invalid_reason().empty());
+  EXPECT_TRUE(NewtonFitOptions{}.invalid_reason().empty());
+}
+
+TEST(NewtonFit, MismatchedLengthsThrow) {
+  const std::vector<double> t{0, 1, 2}, y{1, 2};
+  EXPECT_THROW(fit_newton(t, y), std::invalid_argument);
+}
+
+TEST(NewtonFit, BriefReportNamesParametersAndWarnings) {
+  const auto result = fit(sample(Curve{}, 300, 1.0, 0.05, 2));
+  const std::string text = result.brief_report();
+  for (const char* word : {"k ", "τ", "T0", "T_amb", "residual RMS", "scaled"}) {
+    EXPECT_NE(text.find(word), std::string::npos) << word << " in\n" << text;
+  }
+}
+
+}  // namespace
+}  // namespace bosfuse::fitting
