@@ -22,6 +22,7 @@ constexpr std::size_t kMaxStartSamples = 4000;  // the start-value grid runs on 
 constexpr int kStartGridSize = 121;
 constexpr double kStartGridDecades = 3.0;      // τ from duration·1e-3 to duration·1e3
 constexpr double kTauBoundFactor = 1e6;        // the solver keeps τ within duration·[1e-6, 1e6]
+constexpr double kOutlierRobustSigmas = 5.0;   // beyond this many robust σ a residual counts as an outlier
 constexpr double kLongestResolvableTau = 1e3;  // with free ambient, τ beyond 1000 durations is a straight line
 
 std::string format(const char* pattern, ...) {
@@ -255,6 +256,20 @@ std::vector<double> residuals(const CleanSeries& s, const Parameters& p) {
   return r;
 }
 
+// A noise scale outliers cannot inflate: 1.4826 × the median absolute
+// residual equals σ for Gaussian noise.
+double robust_sigma(const std::vector<double>& r) {
+  std::vector<double> magnitudes(r.size());
+  for (std::size_t i = 0; i < r.size(); ++i) magnitudes[i] = std::abs(r[i]);
+  const auto middle = magnitudes.begin() + static_cast<std::ptrdiff_t>(magnitudes.size() / 2);
+  std::nth_element(magnitudes.begin(), middle, magnitudes.end());
+  return 1.4826 * *middle;
+}
+
+std::size_t count_outliers(const std::vector<double>& r, double limit_c) {
+  return static_cast<std::size_t>(std::count_if(r.begin(), r.end(), [&](double v) { return std::abs(v) > limit_c; }));
+}
+
 double lag1_autocorrelation(const std::vector<double>& r) {
   if (r.size() < 3) return 0.0;
   double mean = 0;
@@ -303,6 +318,14 @@ void set_estimates(NewtonFit& fit, const Parameters& p, const std::array<std::ar
 
 void add_warnings(NewtonFit& fit, const NewtonFitOptions& options, const Parameters& p) {
   auto& s = fit.summary;
+  const double limit_c = kOutlierRobustSigmas * robust_sigma(fit.residuals_c);
+  s.outliers = count_outliers(fit.residuals_c, limit_c);
+  if (s.outliers > 0 && options.loss.kind == RobustLoss::Kind::kNone) {
+    s.warnings.push_back(
+        format("%zu residuals lie beyond %.3g °C (%.0f robust σ): outliers pull a least-squares fit; "
+               "consider a robust loss (--loss huber:S with S about twice the noise, %.3g °C)",
+               s.outliers, limit_c, kOutlierRobustSigmas, 2.0 * limit_c / kOutlierRobustSigmas));
+  }
   if (options.ambient.mode == AmbientModel::Mode::kFree &&
       s.record_time_constants < options.min_time_constants_for_free_ambient) {
     s.warnings.push_back(
@@ -422,6 +445,7 @@ NewtonFit fit_newton(const CleanSeries& s, const NewtonFitOptions& options) {
   summary.parameters = free_parameter_count(options.ambient);
   summary.dof = degrees_of_freedom(s.size(), options.ambient);
   summary.absolute_sigma = options.measurement_sigma_c.has_value();
+  summary.confidence = options.confidence;
   if (auto reason = options.invalid_reason(); !reason.empty()) {
     return failed(fit, FitStatus::kInvalidOptions, reason);
   }
@@ -541,14 +565,16 @@ std::string NewtonFitSummary::brief_report() const {
 
 std::string NewtonFit::brief_report() const {
   if (!ok()) return summary.brief_report();
+  // Names arrive padded: printf pads bytes, and τ takes two.
   const auto line = [](const char* name, const char* unit, const Estimate& e) {
-    if (e.fixed) return format("  %-6s = %.6g %s (fixed)\n", name, e.value, unit);
-    return format("  %-6s = %.6g ± %.3g %s  [%.6g, %.6g]\n", name, e.value, e.std_error, unit, e.low, e.high);
+    if (e.fixed) return format("  %s = %.6g %s (fixed)\n", name, e.value, unit);
+    return format("  %s = %.6g ± %.3g %s  [%.6g, %.6g]\n", name, e.value, e.std_error, unit, e.low, e.high);
   };
-  std::string text = "T(t) = T_amb + (T0 − T_amb)·exp(−k·t), t from the origin\n";
-  text += line("k", "1/s", k_per_s);
-  text += line("τ", "s", tau_s);
-  text += line("T0", "°C", t0_c);
+  std::string text = "T(t) = T_amb + (T0 − T_amb)·exp(−k·t), t from the origin; intervals at " +
+                     format("%.3g%%", 100.0 * summary.confidence) + "\n";
+  text += line("k    ", "1/s", k_per_s);
+  text += line("τ    ", "s", tau_s);
+  text += line("T0   ", "°C", t0_c);
   text += line("T_amb", "°C", ambient_c);
   return text + summary.brief_report();
 }

@@ -111,7 +111,9 @@ struct NewtonFitSummary {
   std::optional<double> reduced_chi_square;  // only with a known σ
   double lag1_autocorrelation = 0.0;
   double record_time_constants = 0.0;  // duration / τ
-  double t_critical = 0.0;             // Student t for the intervals
+  double confidence = 0.95;
+  double t_critical = 0.0;   // Student t (scaled) or normal (absolute) critical value of the intervals
+  std::size_t outliers = 0;  // residuals beyond 5 robust σ (1.4826 × median |residual|)
 
   bool ok() const { return status == FitStatus::kOk; }
   // A few lines a person can read: status, numbers, warnings.
