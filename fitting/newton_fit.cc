@@ -18,8 +18,9 @@ namespace bosfuse::fitting {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr std::size_t kMaxStartSamples = 4000;  // the start-value grid runs on at most this many points
+constexpr std::size_t kMaxStartSamples = 1000;  // the start-value grid runs on at most this many points
 constexpr int kStartGridSize = 121;
+constexpr std::size_t kSamplesPerResidualBlock = 64;
 constexpr double kStartGridDecades = 3.0;      // τ from duration·1e-3 to duration·1e3
 constexpr double kTauBoundFactor = 1e6;        // the solver keeps τ within duration·[1e-6, 1e6]
 constexpr double kOutlierRobustSigmas = 5.0;   // beyond this many robust σ a residual counts as an outlier
@@ -34,28 +35,36 @@ std::string format(const char* pattern, ...) {
   return text;
 }
 
-// One sample's residual (model − measured) / σ_w, with its analytic
-// derivatives in (log τ, ΔT, T_amb).
-class NewtonResidual final : public ceres::SizedCostFunction<1, 1, 1, 1> {
+// Residuals (model − measured) / σ_w of a run of consecutive samples, with
+// analytic derivatives in (log τ, ΔT, T_amb). Without a robust loss the
+// samples go to Ceres in chunks, which cuts its per-block overhead; a robust
+// loss acts on a block's whole squared norm, so it gets one sample per block.
+class NewtonResidualChunk final : public ceres::CostFunction {
  public:
-  NewtonResidual(double t_s, double temperature_c, double inverse_sigma)
-      : t_s_(t_s), temperature_c_(temperature_c), inverse_sigma_(inverse_sigma) {}
+  NewtonResidualChunk(const double* t_s, const double* temperature_c, int count, double inverse_sigma)
+      : t_s_(t_s), temperature_c_(temperature_c), inverse_sigma_(inverse_sigma) {
+    set_num_residuals(count);
+    *mutable_parameter_block_sizes() = {1, 1, 1};
+  }
 
-  bool Evaluate(double const* const* p, double* residual, double** jacobians) const override {
+  bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
     const double k = std::exp(-p[0][0]);
-    const double decay = std::exp(-k * t_s_);
     const double delta = p[1][0];
-    residual[0] = (p[2][0] + delta * decay - temperature_c_) * inverse_sigma_;
-    if (jacobians == nullptr) return true;
-    if (jacobians[0]) jacobians[0][0] = delta * decay * k * t_s_ * inverse_sigma_;
-    if (jacobians[1]) jacobians[1][0] = decay * inverse_sigma_;
-    if (jacobians[2]) jacobians[2][0] = inverse_sigma_;
+    const double ambient = p[2][0];
+    for (int i = 0; i < num_residuals(); ++i) {
+      const double decay = std::exp(-k * t_s_[i]);
+      residuals[i] = (ambient + delta * decay - temperature_c_[i]) * inverse_sigma_;
+      if (jacobians == nullptr) continue;
+      if (jacobians[0]) jacobians[0][i] = delta * decay * k * t_s_[i] * inverse_sigma_;
+      if (jacobians[1]) jacobians[1][i] = decay * inverse_sigma_;
+      if (jacobians[2]) jacobians[2][i] = inverse_sigma_;
+    }
     return true;
   }
 
  private:
-  double t_s_;
-  double temperature_c_;
+  const double* t_s_;
+  const double* temperature_c_;
   double inverse_sigma_;
 };
 
@@ -86,35 +95,37 @@ struct StartValues {
 };
 
 // Amplitude and ambient for one τ by linear least squares (the model is
-// linear in them once τ is fixed); returns the sum of squared residuals.
+// linear in them once τ is fixed); returns the mean squared residual. The
+// sums are taken about the mean temperature so the closed-form residual
+// does not cancel catastrophically.
 double solve_linear_part(const CleanSeries& s, std::size_t stride, double tau_s, bool ambient_free, double fixed_c,
-                         Parameters& out) {
-  double n = 0, se = 0, see = 0, sy = 0, sey = 0;
+                         double mean_c, Parameters& out) {
+  double n = 0, se = 0, see = 0, sy = 0, sey = 0, syy = 0;
+  const double offset_c = ambient_free ? mean_c : fixed_c;
   for (std::size_t i = 0; i < s.size(); i += stride) {
     const double e = std::exp(-s.time_s[i] / tau_s);
-    const double y = ambient_free ? s.temperature_c[i] : s.temperature_c[i] - fixed_c;
+    const double y = s.temperature_c[i] - offset_c;
     n += 1;
     se += e;
     see += e * e;
     sy += y;
     sey += e * y;
+    syy += y * y;
   }
   out.log_tau = std::log(tau_s);
-  out.ambient_c = fixed_c;
+  double a = 0.0;  // ambient relative to offset_c
   if (ambient_free) {
     const double det = n * see - se * se;
     if (!(det > 1e-12 * n * see)) return std::numeric_limits<double>::infinity();  // e ≈ const: a, ΔT inseparable
-    out.ambient_c = (see * sy - se * sey) / det;
+    a = (see * sy - se * sey) / det;
     out.delta_c = (n * sey - se * sy) / det;
   } else {
     out.delta_c = see > 0 ? sey / see : 0.0;
   }
-  double ssr = 0;
-  for (std::size_t i = 0; i < s.size(); i += stride) {
-    const double model = out.ambient_c + out.delta_c * std::exp(-s.time_s[i] / tau_s);
-    ssr += (s.temperature_c[i] - model) * (s.temperature_c[i] - model);
-  }
-  return ssr / n;
+  out.ambient_c = offset_c + a;
+  const double d = out.delta_c;
+  const double ssr = syy - 2 * a * sy - 2 * d * sey + n * a * a + 2 * a * d * se + d * d * see;
+  return std::max(0.0, ssr) / n;
 }
 
 // Start values by a log-spaced scan of τ with the linear parameters solved
@@ -124,23 +135,23 @@ double solve_linear_part(const CleanSeries& s, std::size_t stride, double tau_s,
 StartValues start_values(const CleanSeries& s, const AmbientModel& ambient) {
   const std::size_t stride = std::max<std::size_t>(1, s.size() / kMaxStartSamples);
   const bool free = ambient.mode != AmbientModel::Mode::kFixed;
+  double mean_c = 0;
+  for (double v : s.temperature_c) mean_c += v / static_cast<double>(s.size());
   StartValues best;
   double best_mean_square = std::numeric_limits<double>::infinity();
   for (int i = 0; i < kStartGridSize; ++i) {
     const double decades = kStartGridDecades * (2.0 * i / (kStartGridSize - 1) - 1.0);
     Parameters candidate;
-    const double mean_square =
-        solve_linear_part(s, stride, s.duration_s() * std::pow(10.0, decades), free, ambient.value_c, candidate);
+    const double mean_square = solve_linear_part(s, stride, s.duration_s() * std::pow(10.0, decades), free,
+                                                 ambient.value_c, mean_c, candidate);
     if (mean_square < best_mean_square) {
       best_mean_square = mean_square;
       best.parameters = candidate;
     }
   }
-  if (!std::isfinite(best_mean_square)) {  // no τ separated ambient from amplitude
-    solve_linear_part(s, stride, s.duration_s(), false,
-                      ambient.mode == AmbientModel::Mode::kPrior ? ambient.value_c : s.temperature_c.back(),
-                      best.parameters);
-    best_mean_square = 0;
+  if (!std::isfinite(best_mean_square)) {  // no τ separated ambient from amplitude: hold ambient at a guess
+    const double guess_c = ambient.mode == AmbientModel::Mode::kPrior ? ambient.value_c : s.temperature_c.back();
+    best_mean_square = solve_linear_part(s, stride, s.duration_s(), false, guess_c, mean_c, best.parameters);
   }
   best.rms_c = std::sqrt(best_mean_square);
   return best;
@@ -174,9 +185,11 @@ class NewtonProblem {
     ceres::Problem::Options problem_options;
     problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;  // one loss shared by every block
     problem_ = std::make_unique<ceres::Problem>(problem_options);
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      problem_->AddResidualBlock(new NewtonResidual(s.time_s[i], s.temperature_c[i], 1.0 / sigma_w_c), loss_.get(),
-                                 &parameters_.log_tau, &parameters_.delta_c, &parameters_.ambient_c);
+    const std::size_t chunk = loss_ ? 1 : kSamplesPerResidualBlock;
+    for (std::size_t i = 0; i < s.size(); i += chunk) {
+      const int count = static_cast<int>(std::min(chunk, s.size() - i));
+      problem_->AddResidualBlock(new NewtonResidualChunk(&s.time_s[i], &s.temperature_c[i], count, 1.0 / sigma_w_c),
+                                 loss_.get(), &parameters_.log_tau, &parameters_.delta_c, &parameters_.ambient_c);
     }
     const double log_duration = std::log(s.duration_s());
     problem_->SetParameterLowerBound(&parameters_.log_tau, 0, log_duration - std::log(kTauBoundFactor));
@@ -207,7 +220,7 @@ class NewtonProblem {
   // when J has a null space (rank deficiency).
   std::optional<std::array<std::array<double, 3>, 3>> covariance(bool ambient_fixed) {
     ceres::Covariance::Options options;
-    options.algorithm_type = ceres::DENSE_SVD;
+    options.algorithm_type = ceres::DENSE_SVD;  // rank deficiency is detected, not papered over
     options.num_threads = 1;
     ceres::Covariance covariance(options);
     std::vector<double*> blocks = {&parameters_.log_tau, &parameters_.delta_c};
@@ -363,6 +376,17 @@ void add_warnings(NewtonFit& fit, const NewtonFitOptions& options, const Paramet
   }
 }
 
+// With a free ambient, a τ far beyond the record makes the curve a straight
+// line, on which ambient and k trade off exactly.
+std::optional<std::string> no_curvature(const Parameters& p, const CleanSeries& s, const AmbientModel& ambient) {
+  const double tau = std::exp(p.log_tau);
+  if (ambient.mode != AmbientModel::Mode::kFree || tau <= kLongestResolvableTau * s.duration_s()) return std::nullopt;
+  return format(
+      "the record shows no curvature (τ ≈ %.3g s, over 1000 times its %.3g s length): ambient and k "
+      "cannot be separated; fix the ambient (--ambient fixed:VALUE) or record longer",
+      tau, s.duration_s());
+}
+
 // Statuses that depend on the solution rather than on the input.
 std::optional<std::pair<FitStatus, std::string>> check_identifiable(const NewtonFit& fit, const CleanSeries& s,
                                                                     const NewtonFitOptions& options) {
@@ -374,12 +398,9 @@ std::optional<std::pair<FitStatus, std::string>> check_identifiable(const Newton
                             "the decay is not resolved; sample faster or start the record earlier",
                             tau, gap)};
   }
-  if (options.ambient.mode == AmbientModel::Mode::kFree && tau > kLongestResolvableTau * fit.duration_s) {
-    return std::pair{FitStatus::kUnidentifiable,
-                     format("the record shows no curvature (τ ≈ %.3g s, over 1000 times its %.3g s length): ambient "
-                            "and k cannot be separated; fix the ambient (--ambient fixed:VALUE) or record longer",
-                            tau, fit.duration_s)};
-  }
+  Parameters p;
+  p.log_tau = std::log(tau);
+  if (auto straight = no_curvature(p, s, options.ambient)) return std::pair{FitStatus::kUnidentifiable, *straight};
   return std::nullopt;
 }
 
@@ -475,12 +496,15 @@ NewtonFit fit_newton(const CleanSeries& s, const NewtonFitOptions& options) {
     problem.emplace(s, options, p, sigma_w_c);
     const auto solver = problem->solve(options.max_iterations);
     summary.iterations += static_cast<int>(solver.iterations.size());
+    p = problem->parameters();
     if (solver.termination_type != ceres::CONVERGENCE) {
+      if (auto straight = no_curvature(p, s, options.ambient))
+        return failed(fit, FitStatus::kUnidentifiable, *straight);
       return failed(fit, FitStatus::kNotConverged,
-                    format("the solver did not converge in %d iterations (%s); try fixing the ambient or a robust loss",
+                    format("the solver did not converge in %d iterations (%s); fix the ambient (--ambient "
+                           "fixed:VALUE) or use a robust loss if there are outliers",
                            options.max_iterations, solver.message.c_str()));
     }
-    p = problem->parameters();
     r = residuals(s, p);
     double ssr = 0;
     for (double v : r) ssr += v * v;
