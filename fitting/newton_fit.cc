@@ -303,11 +303,17 @@ double first_sample_gap_s(const CleanSeries& s) {
   return 0.0;
 }
 
+using Failure = std::pair<FitStatus, std::string>;
+
 NewtonFit failed(NewtonFit fit, FitStatus status, std::string message) {
   fit.summary.status = status;
   fit.summary.message = std::move(message);
   for (Estimate* e : {&fit.k_per_s, &fit.tau_s, &fit.t0_c, &fit.ambient_c}) *e = {kNaN, kNaN, kNaN, kNaN, false};
   return fit;
+}
+
+NewtonFit failed(NewtonFit fit, Failure failure) {
+  return failed(std::move(fit), failure.first, std::move(failure.second));
 }
 
 Estimate symmetric(double value, double std_error, double critical) {
@@ -378,8 +384,7 @@ void add_warnings(NewtonFit& fit, const NewtonFitOptions& options, const Paramet
 
 // With a free ambient, a τ far beyond the record makes the curve a straight
 // line, on which ambient and k trade off exactly.
-std::optional<std::string> no_curvature(const Parameters& p, const CleanSeries& s, const AmbientModel& ambient) {
-  const double tau = std::exp(p.log_tau);
+std::optional<std::string> no_curvature(double tau, const CleanSeries& s, const AmbientModel& ambient) {
   if (ambient.mode != AmbientModel::Mode::kFree || tau <= kLongestResolvableTau * s.duration_s()) return std::nullopt;
   return format(
       "the record shows no curvature (τ ≈ %.3g s, over 1000 times its %.3g s length): ambient and k "
@@ -388,19 +393,134 @@ std::optional<std::string> no_curvature(const Parameters& p, const CleanSeries& 
 }
 
 // Statuses that depend on the solution rather than on the input.
-std::optional<std::pair<FitStatus, std::string>> check_identifiable(const NewtonFit& fit, const CleanSeries& s,
-                                                                    const NewtonFitOptions& options) {
+std::optional<Failure> check_identifiable(const NewtonFit& fit, const CleanSeries& s, const NewtonFitOptions& options) {
   const double tau = fit.tau_s.value;
   const double gap = first_sample_gap_s(s);
   if (tau < gap) {
-    return std::pair{FitStatus::kUnidentifiable,
-                     format("the fitted time constant (%.3g s) is shorter than the first sampling interval (%.3g s): "
-                            "the decay is not resolved; sample faster or start the record earlier",
-                            tau, gap)};
+    return Failure{FitStatus::kUnidentifiable,
+                   format("the fitted time constant (%.3g s) is shorter than the first sampling interval (%.3g s): "
+                          "the decay is not resolved; sample faster or start the record earlier",
+                          tau, gap)};
   }
-  Parameters p;
-  p.log_tau = std::log(tau);
-  if (auto straight = no_curvature(p, s, options.ambient)) return std::pair{FitStatus::kUnidentifiable, *straight};
+  if (auto straight = no_curvature(tau, s, options.ambient)) return Failure{FitStatus::kUnidentifiable, *straight};
+  return std::nullopt;
+}
+
+void describe_input(NewtonFitSummary& summary, const CleanSeries& s, const NewtonFitOptions& options) {
+  summary.points_used = s.size();
+  summary.rejected_non_finite = s.rejected_non_finite;
+  summary.duplicate_times = s.duplicate_times;
+  summary.parameters = free_parameter_count(options.ambient);
+  summary.dof = degrees_of_freedom(s.size(), options.ambient);
+  summary.absolute_sigma = options.measurement_sigma_c.has_value();
+  summary.confidence = options.confidence;
+}
+
+std::optional<Failure> check_input(const NewtonFitSummary& summary, const CleanSeries& s,
+                                   const NewtonFitOptions& options) {
+  if (auto reason = options.invalid_reason(); !reason.empty()) return Failure{FitStatus::kInvalidOptions, reason};
+  if (summary.dof < 1 || s.size() < 3) {
+    const int prior = options.ambient.mode == AmbientModel::Mode::kPrior ? 1 : 0;
+    return Failure{
+        FitStatus::kTooFewPoints,
+        format("%zu usable points (%zu rejected as NaN/inf) for %d parameters: at least %d are needed", s.size(),
+               s.rejected_non_finite, summary.parameters, std::max(3, summary.parameters + 1 - prior))};
+  }
+  if (!(s.duration_s() > 0.0)) {
+    return Failure{FitStatus::kNoTimeSpan, "every sample has the same time: a rate cannot be fitted"};
+  }
+  return std::nullopt;
+}
+
+double sum_of_squares(const std::vector<double>& r) {
+  double sum = 0;
+  for (double v : r) sum += v * v;
+  return sum;
+}
+
+// The solved problem: kept alive because the covariance is computed on it.
+struct Solution {
+  Parameters parameters;
+  std::vector<double> residuals_c;
+  std::unique_ptr<NewtonProblem> problem;
+};
+
+std::optional<Failure> solve(const CleanSeries& s, const NewtonFitOptions& options, Solution& solution,
+                             NewtonFitSummary& summary) {
+  const StartValues start = start_values(s, options.ambient);
+  double scale_c = 0.0;  // a temperature scale for the σ_w floor
+  for (double v : s.temperature_c) scale_c = std::max(scale_c, std::abs(v - s.temperature_c.front()));
+  const double sigma_floor_c = 1e-9 * (scale_c + 1.0);
+  double sigma_w_c = options.measurement_sigma_c.value_or(std::max(start.rms_c, sigma_floor_c));
+  // With an ambient prior and unknown σ the prior's weight depends on the
+  // data noise, which is estimated: one more pass with the estimate settles it.
+  const bool reweight = options.ambient.mode == AmbientModel::Mode::kPrior && !options.measurement_sigma_c;
+  solution.parameters = start.parameters;
+  for (int pass = 0; pass < (reweight ? 2 : 1); ++pass) {
+    solution.problem = std::make_unique<NewtonProblem>(s, options, solution.parameters, sigma_w_c);
+    const auto solver = solution.problem->solve(options.max_iterations);
+    summary.iterations += static_cast<int>(solver.iterations.size());
+    solution.parameters = solution.problem->parameters();
+    if (solver.termination_type != ceres::CONVERGENCE) {
+      if (auto straight = no_curvature(std::exp(solution.parameters.log_tau), s, options.ambient)) {
+        return Failure{FitStatus::kUnidentifiable, *straight};
+      }
+      return Failure{FitStatus::kNotConverged,
+                     format("the solver did not converge in %d iterations (%s); fix the ambient (--ambient "
+                            "fixed:VALUE) or use a robust loss if there are outliers",
+                            options.max_iterations, solver.message.c_str())};
+    }
+    solution.residuals_c = residuals(s, solution.parameters);
+    sigma_w_c = std::max(std::sqrt(sum_of_squares(solution.residuals_c) / summary.dof), sigma_floor_c);
+  }
+  return std::nullopt;
+}
+
+void set_residual_statistics(NewtonFit& fit, const std::vector<double>& r, const NewtonFitOptions& options) {
+  auto& summary = fit.summary;
+  const double ssr_c = sum_of_squares(r);
+  summary.residual_rms_c = std::sqrt(ssr_c / static_cast<double>(r.size()));
+  summary.residual_std_c = std::sqrt(ssr_c / summary.dof);
+  summary.lag1_autocorrelation = lag1_autocorrelation(r);
+  if (options.measurement_sigma_c) {
+    const double sigma = *options.measurement_sigma_c;
+    summary.reduced_chi_square = ssr_c / (sigma * sigma) / summary.dof;
+  }
+}
+
+Failure flat_record(double delta_c, double noise_c, const char* noise_name) {
+  return {FitStatus::kNoDecay, format("no exponential change stands out of the noise (ΔT = %.3g °C, %s %.3g °C): "
+                                      "is the record flat?",
+                                      delta_c, noise_name, noise_c)};
+}
+
+std::optional<Failure> set_uncertainties(NewtonFit& fit, Solution& solution, const NewtonFitOptions& options) {
+  auto& summary = fit.summary;
+  const Parameters& p = solution.parameters;
+  const bool fixed = options.ambient.mode == AmbientModel::Mode::kFixed;
+  auto covariance = solution.problem->covariance(fixed);
+  if (!covariance) {
+    if (std::abs(p.delta_c) < 3.0 * summary.residual_std_c) {
+      return flat_record(p.delta_c, summary.residual_std_c, "residual σ");
+    }
+    return Failure{FitStatus::kRankDeficient,
+                   "the parameters are not all determined by the data (rank-deficient covariance)" +
+                       std::string(fixed ? ""
+                                         : "; fix the ambient temperature (--ambient fixed:VALUE) or record for "
+                                           "longer than one time constant")};
+  }
+  // Scaled convention: multiply the weighted covariance by the (robust)
+  // residual variance in units of σ_w², i.e. s² / σ_w².
+  const double variance_factor =
+      summary.absolute_sigma ? 1.0 : solution.problem->robust_sum_of_squares(solution.residuals_c) / summary.dof;
+  for (auto& row : *covariance)
+    for (double& v : row) v *= variance_factor;
+  summary.t_critical = summary.absolute_sigma ? normal_critical(options.confidence)
+                                              : student_t_critical(summary.dof, options.confidence);
+  set_estimates(fit, p, *covariance, fixed, summary.t_critical);
+  summary.record_time_constants = fit.duration_s / fit.tau_s.value;
+  const double delta_se = std::sqrt((*covariance)[1][1]);
+  if (std::abs(p.delta_c) < summary.t_critical * delta_se) return flat_record(p.delta_c, delta_se, "±");
   return std::nullopt;
 }
 
@@ -459,105 +579,18 @@ NewtonFit fit_newton(const CleanSeries& s, const NewtonFitOptions& options) {
   NewtonFit fit;
   fit.origin_s = s.origin_s;
   fit.duration_s = s.duration_s();
-  auto& summary = fit.summary;
-  summary.points_used = s.size();
-  summary.rejected_non_finite = s.rejected_non_finite;
-  summary.duplicate_times = s.duplicate_times;
-  summary.parameters = free_parameter_count(options.ambient);
-  summary.dof = degrees_of_freedom(s.size(), options.ambient);
-  summary.absolute_sigma = options.measurement_sigma_c.has_value();
-  summary.confidence = options.confidence;
-  if (auto reason = options.invalid_reason(); !reason.empty()) {
-    return failed(fit, FitStatus::kInvalidOptions, reason);
-  }
-  if (summary.dof < 1 || s.size() < 3) {
-    return failed(fit, FitStatus::kTooFewPoints,
-                  format("%zu usable points (%zu rejected as NaN/inf) for %d parameters: at least %d are needed",
-                         s.size(), s.rejected_non_finite, summary.parameters,
-                         std::max(3, summary.parameters + 1 - (options.ambient.mode == AmbientModel::Mode::kPrior))));
-  }
-  if (!(s.duration_s() > 0.0)) {
-    return failed(fit, FitStatus::kNoTimeSpan, "every sample has the same time: a rate cannot be fitted");
-  }
+  describe_input(fit.summary, s, options);
+  if (auto failure = check_input(fit.summary, s, options)) return failed(fit, std::move(*failure));
 
-  const StartValues start = start_values(s, options.ambient);
-  double scale_c = 0.0;  // a temperature scale for the σ_w floor
-  for (double v : s.temperature_c) scale_c = std::max(scale_c, std::abs(v - s.temperature_c.front()));
-  const double sigma_floor_c = 1e-9 * (scale_c + 1.0);
-  double sigma_w_c = options.measurement_sigma_c.value_or(std::max(start.rms_c, sigma_floor_c));
+  Solution solution;
+  if (auto failure = solve(s, options, solution, fit.summary)) return failed(fit, std::move(*failure));
+  set_residual_statistics(fit, solution.residuals_c, options);
+  if (auto failure = set_uncertainties(fit, solution, options)) return failed(fit, std::move(*failure));
+  if (auto failure = check_identifiable(fit, s, options)) return failed(fit, std::move(*failure));
 
-  // With an ambient prior and unknown σ the prior's weight depends on the
-  // data noise, which is estimated: one more pass with the estimate settles it.
-  const bool reweight = options.ambient.mode == AmbientModel::Mode::kPrior && !options.measurement_sigma_c;
-  Parameters p = start.parameters;
-  std::optional<NewtonProblem> problem;
-  std::vector<double> r;
-  for (int pass = 0; pass < (reweight ? 2 : 1); ++pass) {
-    problem.emplace(s, options, p, sigma_w_c);
-    const auto solver = problem->solve(options.max_iterations);
-    summary.iterations += static_cast<int>(solver.iterations.size());
-    p = problem->parameters();
-    if (solver.termination_type != ceres::CONVERGENCE) {
-      if (auto straight = no_curvature(p, s, options.ambient))
-        return failed(fit, FitStatus::kUnidentifiable, *straight);
-      return failed(fit, FitStatus::kNotConverged,
-                    format("the solver did not converge in %d iterations (%s); fix the ambient (--ambient "
-                           "fixed:VALUE) or use a robust loss if there are outliers",
-                           options.max_iterations, solver.message.c_str()));
-    }
-    r = residuals(s, p);
-    double ssr = 0;
-    for (double v : r) ssr += v * v;
-    sigma_w_c = std::max(std::sqrt(ssr / summary.dof), sigma_floor_c);
-  }
-
-  double ssr_c = 0;
-  for (double v : r) ssr_c += v * v;
-  summary.residual_rms_c = std::sqrt(ssr_c / static_cast<double>(r.size()));
-  summary.residual_std_c = std::sqrt(ssr_c / summary.dof);
-  summary.lag1_autocorrelation = lag1_autocorrelation(r);
-  summary.record_time_constants = fit.duration_s / std::exp(p.log_tau);
-  if (options.measurement_sigma_c) {
-    const double sigma = *options.measurement_sigma_c;
-    summary.reduced_chi_square = ssr_c / (sigma * sigma) / summary.dof;
-  }
-
-  const bool fixed = options.ambient.mode == AmbientModel::Mode::kFixed;
-  auto covariance = problem->covariance(fixed);
-  if (!covariance) {
-    if (std::abs(p.delta_c) < 3.0 * summary.residual_std_c) {
-      return failed(fit, FitStatus::kNoDecay,
-                    format("no exponential change stands out of the noise (ΔT = %.3g °C, residual σ = %.3g °C): is "
-                           "the record flat?",
-                           p.delta_c, summary.residual_std_c));
-    }
-    return failed(fit, FitStatus::kRankDeficient,
-                  "the parameters are not all determined by the data (rank-deficient covariance)" +
-                      std::string(fixed ? ""
-                                        : "; fix the ambient temperature (--ambient fixed:VALUE) or record for "
-                                          "longer than one time constant"));
-  }
-  // Scaled convention: multiply the weighted covariance by the robust
-  // residual variance in units of σ_w², i.e. s² / σ_w².
-  const double variance_factor = summary.absolute_sigma ? 1.0 : problem->robust_sum_of_squares(r) / summary.dof;
-  for (auto& row : *covariance)
-    for (double& v : row) v *= variance_factor;
-  summary.t_critical = summary.absolute_sigma ? normal_critical(options.confidence)
-                                              : student_t_critical(summary.dof, options.confidence);
-  set_estimates(fit, p, *covariance, fixed, summary.t_critical);
-
-  const double delta_se = std::sqrt((*covariance)[1][1]);
-  if (std::abs(p.delta_c) < summary.t_critical * delta_se) {
-    return failed(fit, FitStatus::kNoDecay,
-                  format("no exponential change stands out of the noise (ΔT = %.3g ± %.3g °C): is the record flat?",
-                         p.delta_c, delta_se));
-  }
-  if (auto problem_status = check_identifiable(fit, s, options)) {
-    return failed(fit, problem_status->first, problem_status->second);
-  }
-  fit.residuals_c = std::move(r);
-  add_warnings(fit, options, p);
-  summary.status = FitStatus::kOk;
+  fit.residuals_c = std::move(solution.residuals_c);
+  add_warnings(fit, options, solution.parameters);
+  fit.summary.status = FitStatus::kOk;
   return fit;
 }
 
