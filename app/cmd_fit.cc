@@ -11,6 +11,7 @@
 #include <cmath>
 #include <ctime>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -78,6 +79,8 @@ std::optional<std::int64_t> parse_iso8601_utc_ns(const std::string& text) {
   }
   const std::string zone = text.substr(i);
   if (zone != "Z" && zone != "+00:00") return std::nullopt;
+  // timegm would quietly roll 2026-13-45 into 2027; a typo must not become a time.
+  if (month < 1 || month > 12 || day < 1 || day > 31 || hour > 23 || minute > 59 || second > 60) return std::nullopt;
   std::tm fields{};
   fields.tm_year = year - 1900;
   fields.tm_mon = month - 1;
@@ -299,10 +302,13 @@ NewtonFitOptions fit_options(const FitArgs& args) {
   return options;
 }
 
-void print_header(const CsvSeries& series, const std::string& file) {
+void print_header(const CsvSeries& series, const std::string& file, double origin_s) {
   std::cout << file << ": '" << series.temperature_name << "' against '" << series.time_name << "'";
   if (series.iso_origin_ns) {
     std::cout << " (t = 0 at " << acquisition::format_iso8601_utc(*series.iso_origin_ns, 6) << ")";
+  } else if (origin_s != 0.0) {
+    std::cout << " (t = 0 at " << series.time_name << " = " << std::setprecision(15) << origin_s << std::setprecision(6)
+              << ")";
   }
   if (series.empty_rows) std::cout << "; " << series.empty_rows << " rows with an empty cell skipped";
   std::cout << "\n";
@@ -315,7 +321,7 @@ void run_fit(const FitArgs& args) {
   if (!in) throw std::runtime_error("cannot read '" + args.file + "'");
   const CsvSeries series = read_series(in, args.time_column, args.temperature_column);
   const NewtonFit fit = fitting::fit_newton(series.time_s, series.temperature_c, options);
-  print_header(series, args.file);
+  print_header(series, args.file, fit.origin_s);
   std::cout << fit.brief_report();
   if (!args.json.empty()) {
     std::ofstream out(args.json);

@@ -137,6 +137,11 @@ TEST_F(FitCli, NonFiniteValuesAreCountedAndBadCellsNamed) {
   ASSERT_EQ(counted.exit_code, 0) << counted.output;
   EXPECT_EQ(read_json("nan.json").at("diagnostics").at("rejected_non_finite").get<int>(), 2);
 
+  write("month.csv", "time_utc,T\n2026-13-01T00:00:00Z,50\n");
+  const auto month = bosfuse("fit " + path("month.csv"));
+  EXPECT_NE(month.exit_code, 0);
+  EXPECT_NE(month.output.find("line 2: time '2026-13-01T00:00:00Z' is neither"), std::string::npos) << month.output;
+
   write("bad.csv", "t_s,T\n0,50\n1,forty\n");
   const auto bad = bosfuse("fit " + path("bad.csv"));
   EXPECT_NE(bad.exit_code, 0);
