@@ -169,6 +169,7 @@ TimeCell parse_time_cell(const std::string& text, std::size_t line_number) {
 CsvSeries read_series(std::istream& in, const std::string& time_column, const std::string& temperature_column) {
   std::string line;
   if (!std::getline(in, line)) throw std::runtime_error("the file is empty");
+  if (line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // the UTF-8 byte order mark spreadsheets write
   const auto header = split_csv_line(line);
   CsvSeries series;
   const Columns columns{choose_time_column(header, time_column),

@@ -137,6 +137,10 @@ TEST_F(FitCli, NonFiniteValuesAreCountedAndBadCellsNamed) {
   ASSERT_EQ(counted.exit_code, 0) << counted.output;
   EXPECT_EQ(read_json("nan.json").at("diagnostics").at("rejected_non_finite").get<int>(), 2);
 
+  write("bom.csv", "\xEF\xBB\xBF" + seconds_csv(testing::CoolingCurve{}, 100, 0.05, 6));
+  const auto bom = bosfuse("fit " + path("bom.csv") + " --time-column t_s");
+  EXPECT_EQ(bom.exit_code, 0) << "a byte order mark must not hide the t_s column: " << bom.output;
+
   write("month.csv", "time_utc,T\n2026-13-01T00:00:00Z,50\n");
   const auto month = bosfuse("fit " + path("month.csv"));
   EXPECT_NE(month.exit_code, 0);

@@ -18,7 +18,7 @@ namespace bosfuse::fitting {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr std::size_t kMaxStartSamples = 1000;  // the start-value grid runs on at most this many points
+constexpr std::size_t kMaxStartSamples = 1000;  // the start-value scan runs on every n/1000-th sample
 constexpr int kStartGridSize = 121;
 constexpr std::size_t kSamplesPerResidualBlock = 64;
 constexpr double kStartGridDecades = 3.0;      // τ from duration·1e-3 to duration·1e3
