@@ -32,5 +32,6 @@ function(bosfuse_test name)
     BOSFUSE_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     BOSFUSE_BINARY_DIR="${PROJECT_BINARY_DIR}")
   include(GoogleTest)
-  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300)
+  # Names carry the binary (fitting_test.NewtonFit.X) so `ctest -R fitting` selects a library.
+  gtest_discover_tests(${name} TEST_PREFIX "${name}." DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300)
 endfunction()

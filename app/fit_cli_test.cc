@@ -1,0 +1,167 @@
+// `bosfuse fit` as a user runs it: CSV files in, a printed fit and JSON out.
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "acquisition/clock.h"
+#include "tests/support/cooling_curve.h"
+#include "tests/support/subprocess.h"
+#include "tests/support/temp_dir.h"
+
+namespace bosfuse {
+namespace {
+
+const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+
+class FitCli : public ::testing::Test {
+ protected:
+  testing::CommandResult bosfuse(const std::string& args) { return testing::run_command(kBosfuse + " " + args); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
+  nlohmann::json read_json(const std::string& name) const {
+    std::ifstream in(path(name));
+    return nlohmann::json::parse(in);
+  }
+
+  // t_s,T with the curve sampled every second plus noise.
+  std::string seconds_csv(const testing::CoolingCurve& curve, std::size_t n, double sigma_c, unsigned seed) const {
+    const auto r = testing::sample_cooling(curve, n, 1.0, sigma_c, seed);
+    std::string text = "t_s,T\n";
+    for (std::size_t i = 0; i < n; ++i) {
+      text += std::to_string(r.time_s[i]) + "," + std::to_string(r.temperature_c[i]) + "\n";
+    }
+    return text;
+  }
+
+  testing::TempDir dir_;
+};
+
+TEST_F(FitCli, FitsASecondsCsvAndWritesJson) {
+  const testing::CoolingCurve curve{22.0, 75.0, 0.012};
+  write("run.csv", seconds_csv(curve, 400, 0.05, 1));
+  const auto result = bosfuse("fit " + path("run.csv") + " --json " + path("fit.json"));
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("T_amb"), std::string::npos) << result.output;
+  const auto j = read_json("fit.json");
+  EXPECT_TRUE(j.at("ok").get<bool>());
+  const auto& k = j.at("parameters").at("k_per_s");
+  EXPECT_NEAR(k.at("value").get<double>(), curve.k_per_s, 4 * k.at("std_error").get<double>());
+  EXPECT_LT(k.at("interval").at("low").get<double>(), k.at("value").get<double>());
+  EXPECT_EQ(j.at("diagnostics").at("points_used").get<int>(), 400);
+  EXPECT_EQ(j.at("input").at("time_column"), "t_s");
+  EXPECT_EQ(j.at("input").at("temperature_column"), "T");
+  EXPECT_NEAR(j.at("parameters").at("tau_s").at("value").get<double>() * k.at("value").get<double>(), 1.0, 1e-9);
+}
+
+// The layout `bosfuse export --csv` writes: ISO-8601 UTC and seconds since
+// the run start, one column per channel, empty cells where a channel has no
+// sample, quoted names when they need it.
+TEST_F(FitCli, FitsAnExportedRunByIsoTimeOrBySeconds) {
+  const testing::CoolingCurve curve{21.5, 64.0, 0.02};
+  const auto r = testing::sample_cooling(curve, 300, 0.5, 0.03, 2);
+  const std::int64_t start_ns = 1'795'000'000'123'456'000;  // 2026-11-18, epoch scale
+  std::string text = "time_utc,t_s,tc0 [degC],\"tc1, top [degC]\"\n";
+  for (std::size_t i = 0; i < r.time_s.size(); ++i) {
+    const auto t_ns = start_ns + static_cast<std::int64_t>(std::llround(r.time_s[i] * 1e9));
+    const std::string other = i % 50 == 3 ? "" : "20.0";  // a dropped poll of the other channel
+    text += acquisition::format_iso8601_utc(t_ns, 6) + "," + std::to_string(r.time_s[i]) + "," + other + "," +
+            std::to_string(r.temperature_c[i]) + "\n";
+  }
+  write("export.csv", text);
+  const auto by_iso =
+      bosfuse("fit " + path("export.csv") + " --time-column time_utc --temperature-column 'tc1, top [degC]' --json " +
+              path("iso.json"));
+  ASSERT_EQ(by_iso.exit_code, 0) << by_iso.output;
+  const auto iso = read_json("iso.json");
+  EXPECT_EQ(iso.at("origin").at("time_utc"), acquisition::format_iso8601_utc(start_ns, 6));
+  const double k_iso = iso.at("parameters").at("k_per_s").at("value");
+  EXPECT_NEAR(k_iso, curve.k_per_s, 4 * iso.at("parameters").at("k_per_s").at("std_error").get<double>());
+
+  const auto by_seconds =
+      bosfuse("fit " + path("export.csv") + " --temperature-column 'tc1, top [degC]' --json " + path("s.json"));
+  ASSERT_EQ(by_seconds.exit_code, 0) << by_seconds.output;
+  EXPECT_EQ(read_json("s.json").at("input").at("time_column"), "t_s") << "t_s is the default time column";
+  EXPECT_NEAR(read_json("s.json").at("parameters").at("k_per_s").at("value").get<double>(), k_iso, 1e-6 * k_iso);
+
+  const auto ambiguous = bosfuse("fit " + path("export.csv"));
+  EXPECT_NE(ambiguous.exit_code, 0);
+  EXPECT_NE(ambiguous.output.find("choose one with --temperature-column"), std::string::npos) << ambiguous.output;
+
+  const auto other = bosfuse("fit " + path("export.csv") + " --temperature-column 'tc0 [degC]'");
+  EXPECT_NE(other.exit_code, 0) << "a constant channel has no decay: " << other.output;
+  EXPECT_NE(other.output.find("6 rows with an empty cell skipped"), std::string::npos) << other.output;
+}
+
+TEST_F(FitCli, AmbientLossAndSigmaOptionsReachTheFit) {
+  const testing::CoolingCurve curve{22.0, 75.0, 0.012};
+  write("run.csv", seconds_csv(curve, 300, 0.05, 3));
+  ASSERT_EQ(bosfuse("fit " + path("run.csv") + " --ambient fixed:22 --json " + path("fixed.json")).exit_code, 0);
+  const auto fixed = read_json("fixed.json");
+  EXPECT_TRUE(fixed.at("parameters").at("T_amb_c").at("fixed").get<bool>());
+  EXPECT_EQ(fixed.at("diagnostics").at("parameters").get<int>(), 2);
+
+  ASSERT_EQ(bosfuse("fit " + path("run.csv") + " --ambient prior:22,0.05 --json " + path("prior.json")).exit_code, 0);
+  EXPECT_EQ(read_json("prior.json").at("diagnostics").at("dof").get<double>(), 298.0);
+
+  ASSERT_EQ(bosfuse("fit " + path("run.csv") + " --sigma 0.05 --loss huber:0.1 --json " + path("s.json")).exit_code, 0);
+  const auto sigma = read_json("s.json");
+  EXPECT_NEAR(sigma.at("diagnostics").at("reduced_chi_square").get<double>(), 1.0, 0.3);
+  EXPECT_NE(sigma.at("uncertainty").get<std::string>().find("absolute"), std::string::npos);
+
+  for (const char* bad : {"--ambient fixed:", "--ambient prior:22", "--loss huber", "--loss tukey:1", "--sigma -1"}) {
+    const auto refused = bosfuse("fit " + path("run.csv") + " " + bad);
+    EXPECT_NE(refused.exit_code, 0) << bad;
+    EXPECT_TRUE(refused.output.find("expected") != std::string::npos ||
+                refused.output.find("must be positive") != std::string::npos)
+        << bad << ": " << refused.output;
+  }
+}
+
+TEST_F(FitCli, AnUntrustworthyFitIsAnErrorAndTheJsonSaysWhy) {
+  const testing::CoolingCurve flat{22.0, 22.0, 0.01};
+  write("flat.csv", seconds_csv(flat, 200, 0.05, 4));
+  const auto result = bosfuse("fit " + path("flat.csv") + " --json " + path("flat.json"));
+  EXPECT_NE(result.exit_code, 0);
+  EXPECT_NE(result.output.find("no fit"), std::string::npos) << result.output;
+  const auto j = read_json("flat.json");
+  EXPECT_FALSE(j.at("ok").get<bool>());
+  EXPECT_FALSE(j.at("error").get<std::string>().empty());
+  EXPECT_TRUE(j.at("parameters").at("k_per_s").is_null()) << "no numbers for a failed fit";
+}
+
+TEST_F(FitCli, NonFiniteValuesAreCountedAndBadCellsNamed) {
+  write("nan.csv", seconds_csv(testing::CoolingCurve{}, 200, 0.05, 5) + "200,nan\n201,inf\n");
+  const auto counted = bosfuse("fit " + path("nan.csv") + " --json " + path("nan.json"));
+  ASSERT_EQ(counted.exit_code, 0) << counted.output;
+  EXPECT_EQ(read_json("nan.json").at("diagnostics").at("rejected_non_finite").get<int>(), 2);
+
+  write("bom.csv", "\xEF\xBB\xBF" + seconds_csv(testing::CoolingCurve{}, 100, 0.05, 6));
+  const auto bom = bosfuse("fit " + path("bom.csv") + " --time-column t_s");
+  EXPECT_EQ(bom.exit_code, 0) << "a byte order mark must not hide the t_s column: " << bom.output;
+
+  write("month.csv", "time_utc,T\n2026-13-01T00:00:00Z,50\n");
+  const auto month = bosfuse("fit " + path("month.csv"));
+  EXPECT_NE(month.exit_code, 0);
+  EXPECT_NE(month.output.find("line 2: time '2026-13-01T00:00:00Z' is neither"), std::string::npos) << month.output;
+
+  write("bad.csv", "t_s,T\n0,50\n1,forty\n");
+  const auto bad = bosfuse("fit " + path("bad.csv"));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("line 3: temperature 'forty' is not a number"), std::string::npos) << bad.output;
+
+  const auto missing = bosfuse("fit " + path("bad.csv") + " --time-column time");
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.output.find("no time column 'time'; the columns are 't_s', 'T'"), std::string::npos)
+      << missing.output;
+}
+
+TEST_F(FitCli, HasHelp) {
+  const auto help = bosfuse("fit --help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.output.find("--ambient"), std::string::npos) << help.output;
+}
+
+}  // namespace
+}  // namespace bosfuse
