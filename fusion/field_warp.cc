@@ -1,0 +1,138 @@
+#include "fusion/field_warp.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <opencv2/core/utility.hpp>
+
+namespace bosfuse::fusion {
+namespace {
+
+// Bilinear weights along one grid axis, clamped to the outer nodes.
+struct AxisWeight {
+  int i0 = 0;
+  int i1 = 0;
+  double t = 0;
+};
+
+AxisWeight axis_weight(double position_px, double origin_px, double step_px, int nodes) {
+  const double g = std::clamp((position_px - origin_px) / step_px, 0.0, double(nodes - 1));
+  AxisWeight w;
+  w.i0 = std::min(static_cast<int>(g), nodes - 1);
+  w.i1 = std::min(w.i0 + 1, nodes - 1);
+  w.t = g - w.i0;
+  return w;
+}
+
+double bilinear(const cv::Mat& values, const AxisWeight& wx, const AxisWeight& wy) {
+  const double* r0 = values.ptr<double>(wy.i0);
+  const double* r1 = values.ptr<double>(wy.i1);
+  const double top = r0[wx.i0] + wx.t * (r0[wx.i1] - r0[wx.i0]);
+  const double bottom = r1[wx.i0] + wx.t * (r1[wx.i1] - r1[wx.i0]);
+  return top + wy.t * (bottom - top);
+}
+
+void keys_weights(double t, double* w) {
+  w[0] = ((-0.5 * t + 1.0) * t - 0.5) * t;
+  w[1] = (1.5 * t - 2.5) * t * t + 1.0;
+  w[2] = ((-1.5 * t + 2.0) * t + 0.5) * t;
+  w[3] = (0.5 * t - 0.5) * t * t;
+}
+
+void lanczos3_weights(double t, double* w) {
+  double total = 0;
+  for (int k = 0; k < 6; ++k) {
+    const double x = t - (k - 2);  // distance from tap k (taps at −2..3)
+    double value = 1.0;
+    if (std::abs(x) > 1e-12) {
+      const double px = std::numbers::pi * x;
+      value = 3.0 * std::sin(px) * std::sin(px / 3.0) / (px * px);
+    }
+    w[k] = value;
+    total += value;
+  }
+  for (int k = 0; k < 6; ++k) w[k] /= total;  // exact reproduction of a constant
+}
+
+class Sampler {
+ public:
+  Sampler(const cv::Mat& image, Interpolator interpolator)
+      : image_(image),
+        taps_(interpolator == Interpolator::kCubic ? 4 : 6),
+        first_(interpolator == Interpolator::kCubic ? -1 : -2),
+        interpolator_(interpolator) {}
+
+  double sample(double x, double y) const {
+    const double fx = std::floor(x), fy = std::floor(y);
+    double wx[6], wy[6];
+    weights(x - fx, wx);
+    weights(y - fy, wy);
+    const int ix = static_cast<int>(fx) + first_, iy = static_cast<int>(fy) + first_;
+    double total = 0;
+    for (int j = 0; j < taps_; ++j) {
+      const float* row = image_.ptr<float>(std::clamp(iy + j, 0, image_.rows - 1));
+      double row_total = 0;
+      for (int i = 0; i < taps_; ++i) row_total += wx[i] * row[std::clamp(ix + i, 0, image_.cols - 1)];
+      total += wy[j] * row_total;
+    }
+    return total;
+  }
+
+ private:
+  void weights(double t, double* w) const {
+    if (interpolator_ == Interpolator::kCubic) {
+      keys_weights(t, w);
+    } else {
+      lanczos3_weights(t, w);
+    }
+  }
+
+  const cv::Mat& image_;
+  int taps_;
+  int first_;
+  Interpolator interpolator_;
+};
+
+cv::Mat copy_with_replicated_border(const cv::Mat& image, cv::Rect region) {
+  cv::Mat out(region.size(), CV_32F);
+  for (int y = 0; y < region.height; ++y) {
+    const float* src = image.ptr<float>(std::clamp(region.y + y, 0, image.rows - 1));
+    float* dst = out.ptr<float>(y);
+    for (int x = 0; x < region.width; ++x) dst[x] = src[std::clamp(region.x + x, 0, image.cols - 1)];
+  }
+  return out;
+}
+
+}  // namespace
+
+cv::Point2d interpolate_field(const GridField& field, double x_px, double y_px) {
+  const auto& g = field.grid;
+  const AxisWeight wx = axis_weight(x_px, g.x0_px, g.step_px, g.cols);
+  const AxisWeight wy = axis_weight(y_px, g.y0_px, g.step_px, g.rows);
+  return {bilinear(field.u_px, wx, wy), bilinear(field.v_px, wx, wy)};
+}
+
+cv::Mat warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator) {
+  CV_Assert(image.type() == CV_32FC1);
+  if (field.grid.rows == 0 || field.grid.cols == 0) return copy_with_replicated_border(image, region);
+  cv::Mat out(region.size(), CV_32F);
+  const Sampler sampler(image, interpolator);
+  const auto& g = field.grid;
+  cv::parallel_for_(cv::Range(0, region.height), [&](const cv::Range& rows) {
+    std::vector<AxisWeight> column_weights(static_cast<std::size_t>(region.width));
+    for (int x = 0; x < region.width; ++x) column_weights[x] = axis_weight(region.x + x, g.x0_px, g.step_px, g.cols);
+    for (int y = rows.start; y < rows.end; ++y) {
+      const double image_y = region.y + y;
+      const AxisWeight wy = axis_weight(image_y, g.y0_px, g.step_px, g.rows);
+      float* dst = out.ptr<float>(y);
+      for (int x = 0; x < region.width; ++x) {
+        const double u = bilinear(field.u_px, column_weights[x], wy);
+        const double v = bilinear(field.v_px, column_weights[x], wy);
+        dst[x] = static_cast<float>(sampler.sample(region.x + x + u, image_y + v));
+      }
+    }
+  });
+  return out;
+}
+
+}  // namespace bosfuse::fusion
