@@ -144,10 +144,15 @@ void WindowCorrelator::correlate_equal_windows(const cv::Mat& search_patch, int 
     const float* row = window.ptr<float>(y);
     for (int x = 0; x < n; ++x) energy += (row[x] - mean) * (row[x] - mean);
   }
+  // Tile without a modulo per pixel: each output row is the window row
+  // shifted by −r, wrapped once at each end.
   for (int y = 0; y < p; ++y) {
     const float* row = window.ptr<float>((y - radius_px + n) % n);
     float* out = periodic_.ptr<float>(y);
-    for (int x = 0; x < p; ++x) out[x] = static_cast<float>(row[(x - radius_px + n) % n] - mean);
+    const float m = static_cast<float>(mean);
+    for (int x = 0; x < radius_px; ++x) out[x] = row[n - radius_px + x] - m;
+    for (int x = 0; x < n; ++x) out[radius_px + x] = row[x] - m;
+    for (int x = 0; x < radius_px; ++x) out[radius_px + n + x] = row[x] - m;
   }
   if (method == CorrelationMethod::kDirect) {
     direct_products(periodic_, radius_px, n);
