@@ -89,7 +89,7 @@ cv::Point2d DisplacementModel::at(double x_px, double y_px) const {
     case Kind::kBumpGradient: {
       // φ = h·exp(−r²/2s²); ∇φ peaks at r = s with |∇φ| = (h/s)·e^(−1/2).
       const double dx = x_px - centre_x_px, dy = y_px - centre_y_px, s = radius_px;
-      const double g = amplitude_px * std::exp(0.5) / s * std::exp(-(dx * dx + dy * dy) / (2 * s * s));
+      const double g = amplitude_px * std::exp(0.5) * std::exp(-(dx * dx + dy * dy) / (2 * s * s));
       return {g * dx / s, g * dy / s};
     }
   }
