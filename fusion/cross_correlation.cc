@@ -1,6 +1,7 @@
 #include "fusion/cross_correlation.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <chrono>
@@ -22,16 +23,22 @@ struct PreparedPair {
   cv::Rect roi;
 };
 
-PreparedPair prepare(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
-                     const XcorrOptions& options) {
+void check_inputs(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
+                  const XcorrOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw std::invalid_argument(problem);
   check_image_pair(reference, measurement, mask);
+  check_window_fits(options.window_px_per_pass().front(), effective_roi(options.roi, reference.size()).size());
+}
+
+// The images (or the part `crop` of them) as the evaluator works on them;
+// coordinates in the result are relative to the crop.
+PreparedPair prepare(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
+                     const XcorrOptions& options, cv::Rect crop, bool warn_colour) {
   PreparedPair pair;
-  pair.reference = to_grey_unit_float(reference, "reference");
-  pair.measurement = to_grey_unit_float(measurement, "measurement");
-  pair.roi = effective_roi(options.roi, reference.size());
-  check_window_fits(options.window_px_per_pass().front(), pair.roi.size());
-  pair.excluded = to_exclusion_mask(mask);
+  pair.reference = to_grey_unit_float(reference(crop), "reference", warn_colour);
+  pair.measurement = to_grey_unit_float(measurement(crop), "measurement", warn_colour);
+  pair.roi = (effective_roi(options.roi, reference.size()) & crop) - crop.tl();
+  if (!mask.empty()) pair.excluded = to_exclusion_mask(mask(crop));
   if (!pair.excluded.empty()) {
     cv::Mat ones;
     cv::threshold(pair.excluded, ones, 0, 1, cv::THRESH_BINARY);
@@ -237,6 +244,19 @@ GridGeometry probe_grid(cv::Point2d point, const XcorrOptions& options, int cont
   return grid;
 }
 
+// The part of the image a probe's local grid can reach: its windows, the
+// search around them, and the deformation's shift plus interpolation kernel.
+cv::Rect probe_reach(const GridGeometry& grid, const XcorrOptions& options, cv::Size image_size) {
+  const int first = options.window_px_per_pass().front();
+  const int margin = first / 2 + 2 + std::max(options.search_radius_px(0), options.search_radius_px(1)) + 4 +
+                     static_cast<int>(std::ceil(options.max_shift_px));
+  const int x0 = static_cast<int>(std::floor(grid.x0_px)) - margin;
+  const int y0 = static_cast<int>(std::floor(grid.y0_px)) - margin;
+  const int x1 = static_cast<int>(std::ceil(grid.x0_px + (grid.cols - 1) * grid.step_px)) + margin;
+  const int y1 = static_cast<int>(std::ceil(grid.y0_px + (grid.rows - 1) * grid.step_px)) + margin;
+  return cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1) & cv::Rect({0, 0}, image_size);
+}
+
 void flag_nodes_outside(const PreparedPair& pair, int window_px, DisplacementField& field) {
   for (auto& vec : field.vectors) {
     const double half = (window_px - 1) / 2.0;
@@ -301,7 +321,8 @@ int XcorrOptions::exact_probe_context_nodes() const {
 EvaluationResult evaluate_xcorr(const cv::Mat& reference, const cv::Mat& measurement, const XcorrOptions& options,
                                 const cv::Mat& mask) {
   const auto start = std::chrono::steady_clock::now();
-  const PreparedPair pair = prepare(reference, measurement, mask, options);
+  check_inputs(reference, measurement, mask, options);
+  const PreparedPair pair = prepare(reference, measurement, mask, options, cv::Rect({0, 0}, reference.size()), true);
   const GridGeometry grid = evaluation_grid(pair.roi, options.window_px, options.step_px);
   EvaluationResult result;
   result.field = field_on_grid(grid);
@@ -313,26 +334,40 @@ EvaluationResult evaluate_xcorr(const cv::Mat& reference, const cv::Mat& measure
 EvaluationResult probe_xcorr(const cv::Mat& reference, const cv::Mat& measurement,
                              const std::vector<cv::Point2d>& points, const XcorrOptions& options, const cv::Mat& mask) {
   const auto start = std::chrono::steady_clock::now();
-  const PreparedPair pair = prepare(reference, measurement, mask, options);
+  check_inputs(reference, measurement, mask, options);
   const int context =
       options.probe_context_nodes < 0 ? options.exact_probe_context_nodes() : options.probe_context_nodes;
+  if (reference.channels() > 1 || measurement.channels() > 1) {
+    spdlog::warn("colour image converted to grey ({} and {} channels)", reference.channels(), measurement.channels());
+  }
   EvaluationResult result;
   result.summary.method = "xcorr-probe";
   result.field.rows = 1;
   result.field.cols = static_cast<int>(points.size());
   for (const auto& point : points) {
+    // Only the part of the images this probe can reach is converted: the
+    // rest of a 16 MP frame is never touched.
     const GridGeometry grid = probe_grid(point, options, context);
-    DisplacementField local = field_on_grid(grid);
-    flag_nodes_outside(pair, options.window_px, local);
-    const auto& centre = local.at(context, context);
-    if (centre.flag == VectorFlag::kOutOfRoi) {
-      result.field.vectors.push_back(centre);
-      continue;
+    const cv::Rect crop = probe_reach(grid, options, reference.size());
+    DisplacementVector vec{
+        grid.x0_px + context * grid.step_px, grid.y0_px + context * grid.step_px, 0, 0, 0, VectorFlag::kOutOfRoi};
+    if (crop.area() > 0) {
+      const PreparedPair pair = prepare(reference, measurement, mask, options, crop, false);
+      GridGeometry local_grid = grid;
+      local_grid.x0_px -= crop.x;
+      local_grid.y0_px -= crop.y;
+      DisplacementField local = field_on_grid(local_grid);
+      flag_nodes_outside(pair, options.window_px, local);
+      if (local.at(context, context).flag != VectorFlag::kOutOfRoi) {
+        const EvaluationSummary local_summary = run_passes(pair, local_grid, options, local);
+        result.summary.passes_run = std::max(result.summary.passes_run, local_summary.passes_run);
+        result.summary.window_px_per_pass = local_summary.window_px_per_pass;
+        vec = local.at(context, context);
+        vec.x_px += crop.x;
+        vec.y_px += crop.y;
+      }
     }
-    const EvaluationSummary local_summary = run_passes(pair, grid, options, local);
-    result.summary.passes_run = std::max(result.summary.passes_run, local_summary.passes_run);
-    result.summary.window_px_per_pass = local_summary.window_px_per_pass;
-    result.field.vectors.push_back(local.at(context, context));
+    result.field.vectors.push_back(vec);
   }
   count_flags(result.field, result.summary);
   result.summary.seconds = seconds_since(start);

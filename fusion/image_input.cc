@@ -28,11 +28,11 @@ double full_scale(int depth) {
 
 }  // namespace
 
-cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name) {
+cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn_colour) {
   if (image.empty()) throw std::invalid_argument(name + ": the image is empty (unreadable file or no pixels)");
   cv::Mat grey = image;
   if (image.channels() == 3 || image.channels() == 4) {
-    spdlog::warn("{}: colour image ({} channels) converted to grey", name, image.channels());
+    if (warn_colour) spdlog::warn("{}: colour image ({} channels) converted to grey", name, image.channels());
     cv::cvtColor(image, grey, image.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
   } else if (image.channels() != 1) {
     throw std::invalid_argument(fmt::format("{}: {} channels, expected grey or colour", name, image.channels()));

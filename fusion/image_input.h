@@ -15,7 +15,8 @@ namespace bosfuse::fusion {
 // `name` labels the image in messages ("reference", "measurement", a path).
 // Returns CV_32FC1 in [0, 1]; 8-bit divides by 255, 16-bit by 65535, float
 // input is taken as already scaled.
-cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name);
+// `warn_colour` false: convert colour silently (the caller warned once).
+cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn_colour = true);
 
 // Throws std::invalid_argument naming the problem: empty images, sizes that
 // differ, or a mask whose size is not the images'.
