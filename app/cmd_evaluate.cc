@@ -1,0 +1,138 @@
+// bosfuse evaluate: a reference and a measurement image → a displacement
+// field as CSV (x,y,u,v,valid,peak_ratio), optionally a map PNG.
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <iostream>
+#include <map>
+#include <sstream>
+
+#include "app/command.h"
+#include "app/displacement_map.h"
+#include "app/image_io.h"
+#include "fusion/displacement_evaluator.h"
+
+namespace bosfuse::app {
+namespace {
+
+struct EvaluateArgs {
+  std::string reference, measurement, out, png, mask, roi, method = "xcorr", flow = "dis", subpixel = "gauss2d",
+                                                           interpolator = "lanczos3";
+  std::vector<std::string> probes;
+  int window_px = 16, first_window_px = 0, step_px = 8, passes = 3;
+  double max_shift_px = 4, contour_px = 0.1;
+};
+
+std::vector<int> parse_ints(const std::string& text, std::size_t count, const std::string& what) {
+  std::vector<int> values;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    try {
+      values.push_back(std::stoi(item));
+    } catch (const std::exception&) {
+      throw std::runtime_error(fmt::format("{} '{}': '{}' is not a whole number", what, text, item));
+    }
+  }
+  if (values.size() != count) throw std::runtime_error(fmt::format("{} '{}' needs {} numbers", what, text, count));
+  return values;
+}
+
+cv::Point2d parse_point(const std::string& text) {
+  const auto comma = text.find(',');
+  try {
+    if (comma == std::string::npos) throw std::invalid_argument("no comma");
+    return {std::stod(text.substr(0, comma)), std::stod(text.substr(comma + 1))};
+  } catch (const std::exception&) {
+    throw std::runtime_error("probe '" + text + "' must be x,y in pixels");
+  }
+}
+
+fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
+  fusion::EvaluatorOptions options;
+  options.method = args.method == "flow" ? fusion::Method::kOpticalFlow : fusion::Method::kCrossCorrelation;
+  cv::Rect roi;
+  if (!args.roi.empty()) {
+    const auto r = parse_ints(args.roi, 4, "--roi");
+    roi = {r[0], r[1], r[2], r[3]};
+  }
+  options.set_grid(args.window_px, args.step_px, roi);
+  options.xcorr.first_window_px = args.first_window_px;
+  options.xcorr.passes = args.passes;
+  options.xcorr.max_shift_px = args.max_shift_px;
+  options.xcorr.subpixel = args.subpixel == "gauss3" ? fusion::SubpixelEstimator::kGaussian3Point
+                                                     : fusion::SubpixelEstimator::kGaussian2dFit;
+  options.xcorr.interpolator =
+      args.interpolator == "cubic" ? fusion::Interpolator::kCubic : fusion::Interpolator::kLanczos3;
+  const std::map<std::string, fusion::FlowAlgorithm> flows{{"dis", fusion::FlowAlgorithm::kDis},
+                                                           {"farneback", fusion::FlowAlgorithm::kFarneback},
+                                                           {"tvl1", fusion::FlowAlgorithm::kTvl1}};
+  options.flow.algorithm = flows.at(args.flow);
+  if (const auto problem = options.Validate(); !problem.empty()) throw std::runtime_error(problem);
+  return options;
+}
+
+void evaluate(const EvaluateArgs& args) {
+  const auto options = evaluator_options(args);
+  const cv::Mat reference = read_image(args.reference, "reference");
+  const cv::Mat measurement = read_image(args.measurement, "measurement");
+  const cv::Mat mask = args.mask.empty() ? cv::Mat() : read_image(args.mask, "mask");
+  fusion::EvaluationResult result;
+  if (args.probes.empty()) {
+    result = fusion::evaluate_displacement(reference, measurement, options, mask);
+  } else {
+    std::vector<cv::Point2d> points;
+    for (const auto& p : args.probes) points.push_back(parse_point(p));
+    result = fusion::probe_displacement(reference, measurement, points, options, mask);
+  }
+  if (args.out.empty() || args.out == "-") {
+    fusion::write_csv(result.field, std::cout);
+  } else {
+    fusion::write_csv(result.field, std::filesystem::path(args.out));
+  }
+  if (!args.png.empty()) {
+    if (!args.probes.empty()) throw std::runtime_error("--png draws a full field; it cannot be used with --probe");
+    write_image(args.png, draw_displacement_map(result.field, {args.contour_px, 800}));
+  }
+  std::cerr << result.summary.BriefReport() << "\n";
+}
+
+void add_evaluate(CLI::App& root) {
+  auto args = std::make_shared<EvaluateArgs>();
+  CLI::App* cmd =
+      root.add_subcommand("evaluate", "Displacement field of an image pair (CSV: x,y,u,v,valid,peak_ratio)");
+  cmd->add_option("reference", args->reference, "Reference image (no flow)")->required();
+  cmd->add_option("measurement", args->measurement, "Measurement image (through the flow)")->required();
+  cmd->add_option("--out,-o", args->out, "CSV file to write; '-' or none: standard output");
+  cmd->add_option("--window", args->window_px, "Final interrogation window, px (8..128)")->capture_default_str();
+  cmd->add_option("--first-window", args->first_window_px, "First-pass window, px (halved each pass down to --window)");
+  cmd->add_option("--step", args->step_px, "Grid spacing, px")->capture_default_str();
+  cmd->add_option("--passes", args->passes, "Passes at most (window deformation after the first)")
+      ->capture_default_str();
+  cmd->add_option("--max-shift", args->max_shift_px, "Largest displacement expected, px (bounds the search)")
+      ->capture_default_str();
+  cmd->add_option("--method", args->method, "xcorr or flow")
+      ->check(CLI::IsMember({"xcorr", "flow"}))
+      ->capture_default_str();
+  cmd->add_option("--flow", args->flow, "Optical flow algorithm: dis, farneback, tvl1")
+      ->check(CLI::IsMember({"dis", "farneback", "tvl1"}))
+      ->capture_default_str();
+  cmd->add_option("--subpixel", args->subpixel, "Peak estimator: gauss2d (least peak locking) or gauss3")
+      ->check(CLI::IsMember({"gauss2d", "gauss3"}))
+      ->capture_default_str();
+  cmd->add_option("--interpolator", args->interpolator, "Deformation interpolator: lanczos3 or cubic")
+      ->check(CLI::IsMember({"lanczos3", "cubic"}))
+      ->capture_default_str();
+  cmd->add_option("--mask", args->mask, "Mask image: non-zero pixels are not evaluated");
+  cmd->add_option("--roi", args->roi, "Region of interest x,y,w,h in pixels");
+  cmd->add_option("--probe", args->probes, "Evaluate only the window centred at x,y (repeatable)");
+  cmd->add_option("--png", args->png, "Also draw the displacement magnitude map to this PNG");
+  cmd->add_option("--contour", args->contour_px, "Contour spacing of the map, px (0: none)")->capture_default_str();
+  cmd->callback([args] { evaluate(*args); });
+}
+
+BOSFUSE_COMMAND(add_evaluate);
+
+}  // namespace
+}  // namespace bosfuse::app

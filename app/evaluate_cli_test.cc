@@ -1,0 +1,142 @@
+// bosfuse evaluate / quality / background as a user runs them.
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "sim/background_pattern.h"
+#include "sim/synthetic_pair.h"
+#include "tests/support/subprocess.h"
+#include "tests/support/temp_dir.h"
+
+namespace bosfuse {
+namespace {
+
+const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+
+class EvaluateCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    sim::PairOptions options;
+    options.pattern.width_px = 128;
+    options.pattern.height_px = 96;
+    options.field = sim::DisplacementModel::uniform(0.4, -0.3);
+    const auto pair = sim::render_pair(options);
+    cv::imwrite(path("ref.png"), pair.reference);
+    cv::imwrite(path("meas.png"), pair.measurement);
+  }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  testing::CommandResult bosfuse(const std::string& args) { return testing::run_command(kBosfuse + " " + args); }
+  static std::string read(const std::string& file) {
+    std::ifstream in(file);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+  }
+
+  testing::TempDir dir_;
+};
+
+TEST_F(EvaluateCli, AGoodPairGivesACsvWithTheHeader) {
+  const auto run = bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " -o " + path("field.csv") +
+                           " --png " + path("map.png") + " --contour 0.05");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const std::string csv = read(path("field.csv"));
+  std::istringstream lines(csv);
+  std::string header;
+  std::getline(lines, header);
+  EXPECT_EQ(header, "x,y,u,v,valid,peak_ratio");
+  int rows = 0, valid = 0;
+  double sum_u = 0;
+  for (std::string line; std::getline(lines, line) && rows < 10000; ++rows) {
+    double x, y, u, v, peak;
+    int ok;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%d,%lf", &x, &y, &u, &v, &ok, &peak), 6) << line;
+    valid += ok;
+    sum_u += ok ? u : 0;
+  }
+  EXPECT_EQ(rows, ((128 - 16) / 8 + 1) * ((96 - 16) / 8 + 1));
+  ASSERT_GT(valid, rows * 9 / 10);
+  EXPECT_NEAR(sum_u / valid, 0.4, 0.02);
+  EXPECT_FALSE(cv::imread(path("map.png")).empty());
+  EXPECT_NE(run.output.find("valid"), std::string::npos) << "a summary goes to stderr";
+}
+
+TEST_F(EvaluateCli, ProbesGiveOneRowEach) {
+  const auto run = bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " --probe 40,40 --probe 80.5,50");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("x,y,u,v,valid,peak_ratio\n"), std::string::npos);
+  // (40, 40) lies halfway between window centres 39.5 and 40.5: it snaps up.
+  EXPECT_NE(run.output.find("\n40.5,40.5,0.4"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("\n80.5,50.5,0.3"), std::string::npos) << run.output;
+}
+
+TEST_F(EvaluateCli, UnreadableAndMissingFilesAreNamed) {
+  std::ofstream(path("junk.png")) << "not an image";
+  const auto junk = bosfuse("evaluate " + path("junk.png") + " " + path("meas.png") + " -o " + path("f.csv"));
+  EXPECT_NE(junk.exit_code, 0);
+  EXPECT_NE(junk.output.find("junk.png: unreadable image"), std::string::npos) << junk.output;
+  const auto missing = bosfuse("evaluate " + path("ref.png") + " " + path("nope.png"));
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.output.find("nope.png: no such file"), std::string::npos) << missing.output;
+}
+
+TEST_F(EvaluateCli, MismatchedSizesAreNamed) {
+  const cv::Mat small = cv::imread(path("meas.png"), cv::IMREAD_UNCHANGED)(cv::Rect(0, 0, 64, 64)).clone();
+  cv::imwrite(path("small.png"), small);
+  const auto run = bosfuse("evaluate " + path("ref.png") + " " + path("small.png"));
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.output.find("image sizes differ: reference 128x96 but measurement 64x64"), std::string::npos)
+      << run.output;
+}
+
+TEST_F(EvaluateCli, WindowLargerThanTheImageIsNamed) {
+  const auto run = bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " --window 128");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.output.find("interrogation window 128 px is larger than the image (128x96)"), std::string::npos)
+      << run.output;
+}
+
+TEST_F(EvaluateCli, ColourImagesAreConvertedWithAWarning) {
+  for (const char* name : {"ref", "meas"}) {
+    cv::Mat colour;
+    cv::cvtColor(cv::imread(path(std::string(name) + ".png"), cv::IMREAD_GRAYSCALE), colour, cv::COLOR_GRAY2BGR);
+    cv::imwrite(path(std::string(name) + "_rgb.png"), colour);
+  }
+  const auto run = bosfuse("evaluate " + path("ref_rgb.png") + " " + path("meas_rgb.png") + " -o " + path("c.csv"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("colour image (3 channels) converted to grey"), std::string::npos) << run.output;
+}
+
+TEST_F(EvaluateCli, FlowMethodWritesTheSameGrid) {
+  const auto run =
+      bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " --method flow -o " + path("flow.csv"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const std::string csv = read(path("flow.csv"));
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 15 * 11);
+}
+
+TEST_F(EvaluateCli, BackgroundAndQuality) {
+  const auto made = bosfuse("background --out " + path("bg.png") +
+                            " --width 200 --height 120 --dot-mm 0.3 --dpi 600 --coverage 0.3 --seed 4");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  EXPECT_NEAR(sim::read_png_dpi(path("bg.png")), 600, 0.05);
+  cv::Mat captured;
+  cv::imread(path("bg.png"), cv::IMREAD_GRAYSCALE).convertTo(captured, CV_8U, 0.5, 30);
+  cv::imwrite(path("captured.png"), captured);
+  const auto q =
+      bosfuse("quality " + path("captured.png") + " --reference " + path("bg.png") + " --json --map " + path("q.png"));
+  ASSERT_EQ(q.exit_code, 0) << q.output;
+  const auto json = nlohmann::json::parse(q.output.substr(q.output.find('{')));
+  EXPECT_GT(json.at("q_mod").get<double>(), 0.2);
+  EXPECT_LT(json.at("q_mod").get<double>(), 0.9);
+  EXPECT_NEAR(json.at("q_mod").get<double>(), json.at("q_l").get<double>() * json.at("q_c").get<double>(), 1e-9);
+  EXPECT_FALSE(cv::imread(path("q.png")).empty());
+}
+
+}  // namespace
+}  // namespace bosfuse

@@ -1,0 +1,27 @@
+#include "app/image_io.h"
+
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
+
+namespace bosfuse::app {
+
+cv::Mat read_image(const std::string& path, const std::string& role) {
+  if (!std::filesystem::exists(path)) throw std::runtime_error(role + " " + path + ": no such file");
+  cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (image.empty())
+    throw std::runtime_error(role + " " + path + ": unreadable image (not a format OpenCV can decode)");
+  return image;
+}
+
+void write_image(const std::string& path, const cv::Mat& image) {
+  bool written = false;
+  try {
+    written = cv::imwrite(path, image);
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error(path + ": cannot write image: " + e.what());
+  }
+  if (!written) throw std::runtime_error(path + ": cannot write image");
+}
+
+}  // namespace bosfuse::app

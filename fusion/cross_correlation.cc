@@ -1,0 +1,377 @@
+#include "fusion/cross_correlation.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+#include "fusion/image_input.h"
+
+namespace bosfuse::fusion {
+namespace {
+
+struct PreparedPair {
+  cv::Mat reference;      // CV_32F, [0,1]
+  cv::Mat measurement;    // CV_32F, [0,1]
+  cv::Mat mask_integral;  // CV_32S integral of the 0/1 exclusion mask; empty without mask
+  cv::Mat excluded;       // CV_8U, non-zero excluded; empty without mask
+  cv::Rect roi;
+};
+
+void check_inputs(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
+                  const XcorrOptions& options) {
+  if (const std::string problem = options.Validate(); !problem.empty()) throw std::invalid_argument(problem);
+  check_image_pair(reference, measurement, mask);
+  check_window_fits(options.window_px_per_pass().front(), effective_roi(options.roi, reference.size()).size());
+}
+
+// The images (or the part `crop` of them) as the evaluator works on them;
+// coordinates in the result are relative to the crop.
+PreparedPair prepare(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
+                     const XcorrOptions& options, cv::Rect crop, bool warn_colour) {
+  PreparedPair pair;
+  pair.reference = to_grey_unit_float(reference(crop), "reference", warn_colour);
+  pair.measurement = to_grey_unit_float(measurement(crop), "measurement", warn_colour);
+  pair.roi = (effective_roi(options.roi, reference.size()) & crop) - crop.tl();
+  if (!mask.empty()) pair.excluded = to_exclusion_mask(mask(crop));
+  if (!pair.excluded.empty()) {
+    cv::Mat ones;
+    cv::threshold(pair.excluded, ones, 0, 1, cv::THRESH_BINARY);
+    cv::integral(ones, pair.mask_integral, CV_32S);
+  }
+  return pair;
+}
+
+// Top-left corner of a window of `n` px centred at (x, y), kept inside the ROI.
+cv::Point window_origin(double x_px, double y_px, int n, cv::Rect roi) {
+  const int x0 = static_cast<int>(std::floor(x_px - (n - 1) / 2.0 + 1e-9));
+  const int y0 = static_cast<int>(std::floor(y_px - (n - 1) / 2.0 + 1e-9));
+  return {std::clamp(x0, roi.x, roi.x + roi.width - n), std::clamp(y0, roi.y, roi.y + roi.height - n)};
+}
+
+bool window_masked(const PreparedPair& pair, cv::Rect window, double max_fraction, double x_px, double y_px) {
+  if (pair.excluded.empty()) return false;
+  const cv::Point centre(static_cast<int>(std::floor(x_px)), static_cast<int>(std::floor(y_px)));
+  if (pair.excluded.at<std::uint8_t>(centre)) return true;
+  const auto& s = pair.mask_integral;
+  const int count = s.at<int>(window.y + window.height, window.x + window.width) -
+                    s.at<int>(window.y, window.x + window.width) - s.at<int>(window.y + window.height, window.x) +
+                    s.at<int>(window.y, window.x);
+  return count > max_fraction * window.area();
+}
+
+struct Peak {
+  int dx = 0;
+  int dy = 0;
+  double value = 0;
+  double ratio = 0;
+};
+
+Peak find_peak(const CorrelationPlane& plane) {
+  Peak peak{0, 0, -2.0, 0};
+  const int r = plane.radius;
+  for (int dy = -r; dy <= r; ++dy) {
+    for (int dx = -r; dx <= r; ++dx) {
+      if (plane.at(dx, dy) > peak.value) peak = {dx, dy, plane.at(dx, dy), 0};
+    }
+  }
+  // Second peak: the highest value outside the first peak's 3×3 neighbourhood.
+  double second = -2.0;
+  for (int dy = -r; dy <= r; ++dy) {
+    for (int dx = -r; dx <= r; ++dx) {
+      if (std::abs(dx - peak.dx) <= 1 && std::abs(dy - peak.dy) <= 1) continue;
+      second = std::max(second, plane.at(dx, dy));
+    }
+  }
+  // A floor keeps the ratio finite when the rest of the plane is near 0 or
+  // negative; ratios above 100 mean "unambiguous" anyway.
+  peak.ratio = peak.value / std::max(second, 0.01);
+  return peak;
+}
+
+struct PassInput {
+  int window_px = 16;
+  int radius_px = 1;
+  const GridField* predictor = nullptr;  // null in the first pass
+  bool shift_whole_pixels = false;       // no deformation: offset each window by its rounded predictor
+  cv::Mat warped;                        // measurement resampled over `region`
+  cv::Rect region;
+};
+
+void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, int row, int col,
+                   WindowCorrelator& correlator, CorrelationPlane& plane, DisplacementVector& vec) {
+  const int n = in.window_px, r = in.radius_px;
+  const cv::Point origin = window_origin(vec.x_px, vec.y_px, n, pair.roi);
+  const cv::Rect window(origin, cv::Size(n, n));
+  vec.u_px = vec.v_px = vec.peak_ratio = 0;
+  if (window_masked(pair, window, options.max_masked_fraction, vec.x_px, vec.y_px)) {
+    vec.flag = VectorFlag::kMasked;
+    return;
+  }
+  double base_u = in.predictor ? in.predictor->u_px.at<double>(row, col) : 0.0;
+  double base_v = in.predictor ? in.predictor->v_px.at<double>(row, col) : 0.0;
+  cv::Point offset_px(0, 0);
+  if (in.shift_whole_pixels) {
+    offset_px = {static_cast<int>(std::lround(base_u)), static_cast<int>(std::lround(base_v))};
+    base_u = offset_px.x;
+    base_v = offset_px.y;
+  }
+  const cv::Rect search(origin.x + offset_px.x - r - in.region.x, origin.y + offset_px.y - r - in.region.y, n + 2 * r,
+                        n + 2 * r);
+  // After deformation the remaining shift is near 0: equal windows give an
+  // unbiased peak there (see window_correlator.h).
+  const auto pairing = in.predictor && options.deform ? WindowPairing::kEqualWindows : WindowPairing::kSearchArea;
+  correlator.correlate(pair.reference(window), in.warped(search), r, options.correlation, plane, pairing);
+  if (plane.reference_std < options.min_texture_std) {
+    vec.flag = VectorFlag::kNoTexture;
+    return;
+  }
+  const Peak peak = find_peak(plane);
+  if (!(peak.value > 0) || std::abs(peak.dx) >= r || std::abs(peak.dy) >= r) {
+    vec.flag = VectorFlag::kNoPeak;  // flat, anti-correlated, or the shift lies beyond the search
+    return;
+  }
+  std::array<double, 9> c;
+  for (int j = -1; j <= 1; ++j) {
+    for (int i = -1; i <= 1; ++i) c[(j + 1) * 3 + i + 1] = plane.at(peak.dx + i, peak.dy + j);
+  }
+  const SubpixelOffset offset = subpixel_offset(c, options.subpixel);
+  vec.u_px = base_u + peak.dx + offset.dx_px;
+  vec.v_px = base_v + peak.dy + offset.dy_px;
+  vec.peak_ratio = peak.ratio;
+  vec.flag = VectorFlag::kOk;
+}
+
+// Bounding box of every window of the pass, grown by the search radius.
+cv::Rect pass_region(const PreparedPair& pair, const DisplacementField& field, int n, int r) {
+  int x_min = pair.roi.x + pair.roi.width, y_min = pair.roi.y + pair.roi.height, x_max = pair.roi.x, y_max = pair.roi.y;
+  for (const auto& vec : field.vectors) {
+    if (vec.flag == VectorFlag::kOutOfRoi) continue;
+    const cv::Point o = window_origin(vec.x_px, vec.y_px, n, pair.roi);
+    x_min = std::min(x_min, o.x);
+    y_min = std::min(y_min, o.y);
+    x_max = std::max(x_max, o.x + n);
+    y_max = std::max(y_max, o.y + n);
+  }
+  if (x_max <= x_min || y_max <= y_min) return {0, 0, 1, 1};
+  return {x_min - r, y_min - r, x_max - x_min + 2 * r, y_max - y_min + 2 * r};
+}
+
+int max_abs_shift_px(const GridField& field) {
+  if (field.u_px.empty()) return 0;
+  double u_min, u_max, v_min, v_max;
+  cv::minMaxLoc(field.u_px, &u_min, &u_max);
+  cv::minMaxLoc(field.v_px, &v_min, &v_max);
+  return static_cast<int>(std::ceil(std::max({std::abs(u_min), std::abs(u_max), std::abs(v_min), std::abs(v_max)}))) +
+         1;
+}
+
+double max_change_px(const DisplacementField& before, const DisplacementField& after) {
+  double change = 0;
+  for (std::size_t i = 0; i < after.vectors.size(); ++i) {
+    if (!after.vectors[i].valid() || !before.vectors[i].valid()) continue;
+    change = std::max({change, std::abs(after.vectors[i].u_px - before.vectors[i].u_px),
+                       std::abs(after.vectors[i].v_px - before.vectors[i].v_px)});
+  }
+  return change;
+}
+
+void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, DisplacementField& field) {
+  const int node_count = static_cast<int>(field.vectors.size());
+  cv::parallel_for_(
+      cv::Range(0, node_count),
+      [&](const cv::Range& range) {
+        WindowCorrelator correlator;
+        CorrelationPlane plane;
+        for (int i = range.start; i < range.end; ++i) {
+          auto& vec = field.vectors[static_cast<std::size_t>(i)];
+          if (vec.flag == VectorFlag::kOutOfRoi) continue;
+          evaluate_node(pair, in, options, i / field.cols, i % field.cols, correlator, plane, vec);
+        }
+      },
+      std::max(1.0, node_count / 256.0));
+}
+
+// Runs every pass over `field` (centres set; kOutOfRoi nodes are left alone).
+EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid, const XcorrOptions& options,
+                             DisplacementField& field) {
+  EvaluationSummary summary;
+  summary.method = "xcorr";
+  const std::vector<int> windows = options.window_px_per_pass();
+  GridField predictor;
+  for (int pass = 0; pass < static_cast<int>(windows.size()); ++pass) {
+    PassInput in;
+    in.window_px = windows[pass];
+    in.radius_px = options.search_radius_px(pass);
+    if (pass > 0) predictor = predictor_from(field, grid);
+    if (pass > 0 && options.deform && options.smooth_predictor) smooth_predictor(predictor);
+    in.predictor = pass > 0 ? &predictor : nullptr;
+    in.shift_whole_pixels = pass > 0 && !options.deform;
+    const int reach_px = in.radius_px + (in.shift_whole_pixels ? max_abs_shift_px(predictor) : 0);
+    in.region = pass_region(pair, field, in.window_px, reach_px);
+    const bool warp = pass > 0 && options.deform;
+    in.warped = warp_region(pair.measurement, warp ? predictor : GridField{}, in.region, options.interpolator);
+    const DisplacementField before = field;
+    run_pass(pair, in, options, field);
+    if (options.replace_outliers) replace_outliers(field, options.outliers);
+    summary.passes_run = pass + 1;
+    summary.window_px_per_pass.push_back(in.window_px);
+    if (pass > 0) summary.last_change_px = max_change_px(before, field);
+    const bool same_window = pass > 0 && windows[pass] == windows[pass - 1];
+    if (same_window && options.convergence_px > 0 && summary.last_change_px < options.convergence_px) {
+      summary.converged = true;
+      break;
+    }
+  }
+  count_flags(field, summary);
+  return summary;
+}
+
+// A probe's vector is the centre of its own small grid.
+GridGeometry probe_grid(cv::Point2d point, const XcorrOptions& options, int context_nodes) {
+  const double half = (options.window_px - 1) / 2.0;
+  const double x = std::round(point.x - half) + half, y = std::round(point.y - half) + half;
+  GridGeometry grid;
+  grid.step_px = options.step_px;
+  grid.x0_px = x - context_nodes * options.step_px;
+  grid.y0_px = y - context_nodes * options.step_px;
+  grid.rows = grid.cols = 2 * context_nodes + 1;
+  return grid;
+}
+
+// The part of the image a probe's local grid can reach: its windows, the
+// search around them, and the deformation's shift plus interpolation kernel.
+cv::Rect probe_reach(const GridGeometry& grid, const XcorrOptions& options, cv::Size image_size) {
+  const int first = options.window_px_per_pass().front();
+  const int margin = first / 2 + 2 + std::max(options.search_radius_px(0), options.search_radius_px(1)) + 4 +
+                     static_cast<int>(std::ceil(options.max_shift_px));
+  const int x0 = static_cast<int>(std::floor(grid.x0_px)) - margin;
+  const int y0 = static_cast<int>(std::floor(grid.y0_px)) - margin;
+  const int x1 = static_cast<int>(std::ceil(grid.x0_px + (grid.cols - 1) * grid.step_px)) + margin;
+  const int y1 = static_cast<int>(std::ceil(grid.y0_px + (grid.rows - 1) * grid.step_px)) + margin;
+  return cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1) & cv::Rect({0, 0}, image_size);
+}
+
+void flag_nodes_outside(const PreparedPair& pair, int window_px, DisplacementField& field) {
+  for (auto& vec : field.vectors) {
+    const double half = (window_px - 1) / 2.0;
+    const bool inside = vec.x_px - half >= pair.roi.x - 1e-9 && vec.y_px - half >= pair.roi.y - 1e-9 &&
+                        vec.x_px + half <= pair.roi.x + pair.roi.width - 1 + 1e-9 &&
+                        vec.y_px + half <= pair.roi.y + pair.roi.height - 1 + 1e-9;
+    if (!inside) vec.flag = VectorFlag::kOutOfRoi;
+  }
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+std::string XcorrOptions::Validate() const {
+  auto window_ok = [](int w) { return w >= 8 && w <= 128; };
+  if (!window_ok(window_px)) return fmt::format("window must be 8 to 128 px, not {}", window_px);
+  if (first_window_px != 0 && !window_ok(first_window_px)) {
+    return fmt::format("first window must be 8 to 128 px, not {}", first_window_px);
+  }
+  if (first_window_px != 0 && first_window_px < window_px) return "first window must not be smaller than the final one";
+  if (step_px < 1) return fmt::format("step must be at least 1 px, not {}", step_px);
+  if (passes < 1 || passes > 20) return fmt::format("passes must be 1 to 20, not {}", passes);
+  if (!(max_shift_px >= 0) || max_shift_px > 64) return "max shift must be 0 to 64 px";
+  if (!(refine_shift_px >= 0) || refine_shift_px > 16) return "refine shift must be 0 to 16 px";
+  if (2 * search_radius_px(1) >= window_px) return "refine shift must be below a quarter of the window";
+  if (!(min_texture_std >= 0)) return "min texture std must not be negative";
+  if (!(max_masked_fraction >= 0 && max_masked_fraction <= 1)) return "max masked fraction must be 0 to 1";
+  if (!(convergence_px >= 0)) return "convergence tolerance must not be negative";
+  if (probe_context_nodes < -1) return "probe context must be -1 (exact) or at least 0 nodes";
+  return outliers.Validate();
+}
+
+std::vector<int> XcorrOptions::window_px_per_pass() const {
+  // Halve from the first window towards the final one, then stay there.
+  std::vector<int> windows;
+  int w = first_window_px > 0 ? first_window_px : window_px;
+  for (int pass = 0; pass < passes; ++pass) {
+    windows.push_back(std::max(w, window_px));
+    w /= 2;
+  }
+  return windows;
+}
+
+int XcorrOptions::search_radius_px(int pass) const {
+  const double shift = pass == 0 ? max_shift_px : refine_shift_px;
+  return static_cast<int>(std::ceil(shift)) + 1;
+}
+
+int XcorrOptions::exact_probe_context_nodes() const {
+  // Per refinement pass a node's value depends on nodes within its window,
+  // search and interpolation kernel (+1 for the bilinear predictor) and on
+  // the outlier test's neighbours (+1); the first pass only on the latter.
+  const int first = window_px_per_pass().front();
+  const int reach_px = first / 2 + search_radius_px(1) + 3;
+  const int per_pass = (reach_px + step_px - 1) / step_px + 2 + (smooth_predictor ? 1 : 0);
+  return 1 + (passes - 1) * per_pass;
+}
+
+EvaluationResult evaluate_xcorr(const cv::Mat& reference, const cv::Mat& measurement, const XcorrOptions& options,
+                                const cv::Mat& mask) {
+  const auto start = std::chrono::steady_clock::now();
+  check_inputs(reference, measurement, mask, options);
+  const PreparedPair pair = prepare(reference, measurement, mask, options, cv::Rect({0, 0}, reference.size()), true);
+  const GridGeometry grid = evaluation_grid(pair.roi, options.window_px, options.step_px);
+  EvaluationResult result;
+  result.field = field_on_grid(grid);
+  result.summary = run_passes(pair, grid, options, result.field);
+  result.summary.seconds = seconds_since(start);
+  return result;
+}
+
+EvaluationResult probe_xcorr(const cv::Mat& reference, const cv::Mat& measurement,
+                             const std::vector<cv::Point2d>& points, const XcorrOptions& options, const cv::Mat& mask) {
+  const auto start = std::chrono::steady_clock::now();
+  check_inputs(reference, measurement, mask, options);
+  const int context =
+      options.probe_context_nodes < 0 ? options.exact_probe_context_nodes() : options.probe_context_nodes;
+  if (reference.channels() > 1 || measurement.channels() > 1) {
+    spdlog::warn("colour image converted to grey ({} and {} channels)", reference.channels(), measurement.channels());
+  }
+  EvaluationResult result;
+  result.summary.method = "xcorr-probe";
+  result.field.rows = 1;
+  result.field.cols = static_cast<int>(points.size());
+  for (const auto& point : points) {
+    // Only the part of the images this probe can reach is converted: the
+    // rest of a 16 MP frame is never touched.
+    const GridGeometry grid = probe_grid(point, options, context);
+    const cv::Rect crop = probe_reach(grid, options, reference.size());
+    DisplacementVector vec{
+        grid.x0_px + context * grid.step_px, grid.y0_px + context * grid.step_px, 0, 0, 0, VectorFlag::kOutOfRoi};
+    if (crop.area() > 0) {
+      const PreparedPair pair = prepare(reference, measurement, mask, options, crop, false);
+      GridGeometry local_grid = grid;
+      local_grid.x0_px -= crop.x;
+      local_grid.y0_px -= crop.y;
+      DisplacementField local = field_on_grid(local_grid);
+      flag_nodes_outside(pair, options.window_px, local);
+      if (local.at(context, context).flag != VectorFlag::kOutOfRoi) {
+        const EvaluationSummary local_summary = run_passes(pair, local_grid, options, local);
+        result.summary.passes_run = std::max(result.summary.passes_run, local_summary.passes_run);
+        result.summary.window_px_per_pass = local_summary.window_px_per_pass;
+        vec = local.at(context, context);
+        vec.x_px += crop.x;
+        vec.y_px += crop.y;
+      }
+    }
+    result.field.vectors.push_back(vec);
+  }
+  count_flags(result.field, result.summary);
+  result.summary.seconds = seconds_since(start);
+  return result;
+}
+
+}  // namespace bosfuse::fusion

@@ -1,0 +1,72 @@
+#pragma once
+// Multipass cross-correlation of interrogation windows, the standard way to
+// turn a BOS (or PIV) image pair into a displacement field. Use it when you
+// need the field at window resolution with a per-vector quality measure
+// (peak ratio) and outlier handling; use probe_xcorr when you only need the
+// shift at a few points (thermocouple positions) of many frames.
+//
+// Pass 1 correlates reference windows against the measurement within
+// ±max_shift_px. Each later pass warps the measurement by the field so far
+// (window deformation; see field_warp.h) and measures only what remains
+// within ±refine_shift_px, with the window shrinking from first_window_px to
+// window_px. After each pass the normalized-median test replaces outliers.
+// Refinement stops early when a pass at the final window changes no vector by
+// more than convergence_px. Windows whose reference has no texture, that lie
+// under the mask, or give no clear peak are skipped and flagged.
+//
+// Images may be 8- or 16-bit, grey or colour (converted with a warning);
+// input problems raise std::invalid_argument with a message naming them.
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "fusion/evaluation.h"
+#include "fusion/field_warp.h"
+#include "fusion/outlier_filter.h"
+#include "fusion/subpixel.h"
+#include "fusion/window_correlator.h"
+
+namespace bosfuse::fusion {
+
+struct XcorrOptions {
+  int window_px = 16;            // final interrogation window (8..128)
+  int first_window_px = 0;       // first pass window; 0: the same as window_px
+  int step_px = 8;               // grid spacing (window_px/2 is 50% overlap)
+  int passes = 3;                // at most; fewer when refinement converges
+  double max_shift_px = 4;       // largest displacement expected in the scene
+  double refine_shift_px = 1;    // largest residual searched after deformation
+  bool deform = true;            // window deformation in passes after the first
+  bool smooth_predictor = true;  // 3×3 binomial smoothing between passes; keeps deformation stable
+  Interpolator interpolator = Interpolator::kLanczos3;
+  SubpixelEstimator subpixel = SubpixelEstimator::kGaussian2dFit;
+  CorrelationMethod correlation = CorrelationMethod::kAuto;
+  OutlierOptions outliers;
+  bool replace_outliers = true;
+  double min_texture_std = 0.002;    // of full scale; the 8-bit equivalent is 0.5 grey level
+  double max_masked_fraction = 0.5;  // of a window's pixels
+  double convergence_px = 1e-3;      // 0: always run all passes
+  cv::Rect roi;                      // empty: the whole image
+  // Probe mode: grid nodes on each side of a probe evaluated with it, so the
+  // outlier test and the deformation have neighbours. -1: as many as the
+  // full field's value at that point depends on (then the probe equals the
+  // full field there, away from the image edges, when convergence_px is 0).
+  int probe_context_nodes = 1;
+
+  std::string Validate() const;  // empty when valid
+  std::vector<int> window_px_per_pass() const;
+  int search_radius_px(int pass) const;  // including the margin the sub-pixel fit needs
+  int exact_probe_context_nodes() const;
+};
+
+EvaluationResult evaluate_xcorr(const cv::Mat& reference, const cv::Mat& measurement, const XcorrOptions& options,
+                                const cv::Mat& mask = {});
+
+// One vector per point, each from a window centred at the point (snapped to
+// the nearest window centre, which is what x_px, y_px report). A point whose
+// window does not fit in the image or ROI is flagged kOutOfRoi.
+EvaluationResult probe_xcorr(const cv::Mat& reference, const cv::Mat& measurement,
+                             const std::vector<cv::Point2d>& points, const XcorrOptions& options,
+                             const cv::Mat& mask = {});
+
+}  // namespace bosfuse::fusion

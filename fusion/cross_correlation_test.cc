@@ -1,0 +1,383 @@
+#include "fusion/cross_correlation.h"
+
+#include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "sim/synthetic_pair.h"
+
+namespace bosfuse::fusion {
+namespace {
+
+sim::SyntheticPair render(const sim::DisplacementModel& field, int size_px = 256, double noise = 0.01,
+                          std::uint64_t seed = 3) {
+  sim::PairOptions options;
+  options.pattern.width_px = options.pattern.height_px = size_px;
+  options.pattern.dot_diameter_px = 3;
+  options.pattern.coverage = 0.5;
+  options.pattern.seed = seed;
+  options.noise_std = noise;
+  options.field = field;
+  return sim::render_pair(options);
+}
+
+struct ErrorStats {
+  double mean_u = 0, mean_v = 0, rms = 0;
+  std::size_t compared = 0;
+};
+
+// Errors against the window-averaged truth over the valid vectors for which
+// `include` holds.
+template <typename Include>
+ErrorStats errors(const DisplacementField& field, const sim::DisplacementModel& truth, int window_px, Include include) {
+  ErrorStats s;
+  double sum_sq = 0;
+  for (const auto& vec : field.vectors) {
+    if (!vec.valid() || !include(vec)) continue;
+    const cv::Point2d expected = truth.window_mean(vec.x_px, vec.y_px, window_px);
+    s.mean_u += vec.u_px - expected.x;
+    s.mean_v += vec.v_px - expected.y;
+    sum_sq += std::pow(vec.u_px - expected.x, 2) + std::pow(vec.v_px - expected.y, 2);
+    ++s.compared;
+  }
+  if (s.compared == 0) return s;
+  s.mean_u /= s.compared;
+  s.mean_v /= s.compared;
+  s.rms = std::sqrt(sum_sq / s.compared);
+  return s;
+}
+
+ErrorStats errors(const DisplacementField& field, const sim::DisplacementModel& truth, int window_px) {
+  return errors(field, truth, window_px, [](const auto&) { return true; });
+}
+
+bool all_finite(const DisplacementField& field) {
+  for (const auto& v : field.vectors) {
+    if (!std::isfinite(v.u_px) || !std::isfinite(v.v_px) || !std::isfinite(v.peak_ratio)) return false;
+  }
+  return true;
+}
+
+TEST(CrossCorrelation, RecoversAUniformSubpixelShift) {
+  for (const cv::Point2d shift : {cv::Point2d(0.3, -0.7), cv::Point2d(1.45, 0.15)}) {
+    const auto pair = render(sim::DisplacementModel::uniform(shift.x, shift.y));
+    const auto result = evaluate_xcorr(pair.reference, pair.measurement, XcorrOptions{});
+    const auto e = errors(result.field, pair.truth, 16);
+    EXPECT_GT(e.compared, 0.95 * result.field.size()) << result.summary.BriefReport();
+    EXPECT_LT(std::abs(e.mean_u), 0.01) << shift;
+    EXPECT_LT(std::abs(e.mean_v), 0.01) << shift;
+    EXPECT_LT(e.rms, 0.03) << shift;
+  }
+}
+
+TEST(CrossCorrelation, SubpixelEstimatorsAgreeWithoutDeformation) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.35, 0.0));
+  for (const auto estimator : {SubpixelEstimator::kGaussian3Point, SubpixelEstimator::kGaussian2dFit}) {
+    XcorrOptions options;
+    options.passes = 1;
+    options.subpixel = estimator;
+    const auto e = errors(evaluate_xcorr(pair.reference, pair.measurement, options).field, pair.truth, 16);
+    EXPECT_LT(std::abs(e.mean_u), 0.06);
+    EXPECT_LT(e.rms, 0.1);
+  }
+}
+
+TEST(CrossCorrelation, RecoversTheStepAwayFromIt) {
+  const auto pair = render(sim::DisplacementModel::step(64, 1.0, 0.0), 128);
+  XcorrOptions options;
+  options.window_px = 16;
+  options.step_px = 4;
+  const auto result = evaluate_xcorr(pair.reference, pair.measurement, options);
+  const auto far_left = errors(result.field, pair.truth, 16, [](const auto& v) { return v.x_px < 48; });
+  const auto far_right = errors(result.field, pair.truth, 16, [](const auto& v) { return v.x_px > 80; });
+  ASSERT_GT(far_left.compared, 50u);
+  ASSERT_GT(far_right.compared, 50u);
+  EXPECT_LT(far_left.rms, 0.05);
+  EXPECT_LT(far_right.rms, 0.05);
+}
+
+TEST(CrossCorrelation, RecoversASinusoid) {
+  const auto truth = sim::DisplacementModel::sinusoid(1.0, 128);
+  const auto pair = render(truth);
+  const auto result = evaluate_xcorr(pair.reference, pair.measurement, XcorrOptions{});
+  const auto e = errors(result.field, pair.truth, 16);
+  EXPECT_GT(e.compared, 0.95 * result.field.size());
+  EXPECT_LT(e.rms, 0.05);
+}
+
+TEST(CrossCorrelation, RecoversTheGradientOfABump) {
+  const auto truth = sim::DisplacementModel::bump_gradient(128, 128, 40, 1.5);
+  const auto pair = render(truth);
+  const auto e = errors(evaluate_xcorr(pair.reference, pair.measurement, XcorrOptions{}).field, pair.truth, 16);
+  EXPECT_LT(e.rms, 0.05);
+}
+
+TEST(CrossCorrelation, MaskedWindowsAreFlaggedAndTheRestIsMeasured) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.6, 0.2));
+  cv::Mat mask = cv::Mat::zeros(256, 256, CV_8U);
+  const cv::Rect holder(96, 96, 64, 64);
+  mask(holder).setTo(255);
+  // Where the holder hides the background the two images differ entirely.
+  cv::Mat measurement = pair.measurement.clone();
+  measurement(holder).setTo(30);
+  const auto result = evaluate_xcorr(pair.reference, measurement, XcorrOptions{}, mask);
+  std::size_t masked_inside = 0;
+  for (const auto& v : result.field.vectors) {
+    if (holder.contains(cv::Point(int(v.x_px), int(v.y_px)))) {
+      EXPECT_EQ(v.flag, VectorFlag::kMasked) << v.x_px << "," << v.y_px;
+      EXPECT_EQ(v.u_px, 0.0);
+      masked_inside += v.flag == VectorFlag::kMasked;
+    }
+  }
+  EXPECT_GT(masked_inside, 40u);
+  const auto e = errors(result.field, pair.truth, 16);
+  EXPECT_GT(e.compared, 0.8 * result.field.size());
+  EXPECT_LT(e.rms, 0.03);
+}
+
+TEST(CrossCorrelation, RoiLimitsTheGrid) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.5, 0.5));
+  XcorrOptions options;
+  options.roi = cv::Rect(32, 40, 64, 48);
+  const auto result = evaluate_xcorr(pair.reference, pair.measurement, options);
+  EXPECT_EQ(result.field.cols, (64 - 16) / 8 + 1);
+  EXPECT_EQ(result.field.rows, (48 - 16) / 8 + 1);
+  for (const auto& v : result.field.vectors) {
+    EXPECT_GE(v.x_px - 7.5, 32);
+    EXPECT_LE(v.y_px + 7.5, 40 + 47);
+  }
+}
+
+TEST(CrossCorrelation, ProbeWithFullContextEqualsTheFullField) {
+  const auto pair = render(sim::DisplacementModel::sinusoid(1.2, 96));
+  XcorrOptions options;
+  options.convergence_px = 0;  // the same number of passes for both
+  const auto full = evaluate_xcorr(pair.reference, pair.measurement, options);
+  std::vector<cv::Point2d> points;
+  std::vector<const DisplacementVector*> expected;
+  for (int row = 8; row < full.field.rows - 8; row += 5) {
+    for (int col = 9; col < full.field.cols - 8; col += 4) {
+      points.push_back({full.field.at(row, col).x_px, full.field.at(row, col).y_px});
+      expected.push_back(&full.field.at(row, col));
+    }
+  }
+  ASSERT_GE(points.size(), 4u);
+  options.probe_context_nodes = -1;
+  const auto exact = probe_xcorr(pair.reference, pair.measurement, points, options);
+  options.probe_context_nodes = 1;
+  const auto fast = probe_xcorr(pair.reference, pair.measurement, points, options);
+  ASSERT_EQ(exact.field.size(), points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    EXPECT_EQ(exact.field.vectors[i].x_px, expected[i]->x_px);
+    EXPECT_EQ(exact.field.vectors[i].flag, expected[i]->flag);
+    EXPECT_NEAR(exact.field.vectors[i].u_px, expected[i]->u_px, 1e-9);
+    EXPECT_NEAR(exact.field.vectors[i].v_px, expected[i]->v_px, 1e-9);
+    // With one node of context the probe is an independent estimate of the
+    // same quantity: within the measurement's own scatter of the full field.
+    EXPECT_NEAR(fast.field.vectors[i].v_px, expected[i]->v_px, 0.15);
+  }
+}
+
+TEST(CrossCorrelation, ProbeOutsideTheImageIsFlagged) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.5, 0.5), 64);
+  const auto result = probe_xcorr(pair.reference, pair.measurement, {{2, 2}, {31.5, 31.5}, {500, 10}}, XcorrOptions{});
+  ASSERT_EQ(result.field.size(), 3u);
+  EXPECT_EQ(result.field.vectors[0].flag, VectorFlag::kOutOfRoi);
+  EXPECT_EQ(result.field.vectors[1].flag, VectorFlag::kOk);
+  EXPECT_NEAR(result.field.vectors[1].u_px, 0.5, 0.05);
+  EXPECT_EQ(result.field.vectors[2].flag, VectorFlag::kOutOfRoi);
+}
+
+TEST(CrossCorrelation, DirectAndFftCorrelationGiveTheSameField) {
+  const auto pair = render(sim::DisplacementModel::bump_gradient(128, 128, 40, 2.0), 192);
+  XcorrOptions options;
+  options.correlation = CorrelationMethod::kDirect;
+  const auto direct = evaluate_xcorr(pair.reference, pair.measurement, options);
+  options.correlation = CorrelationMethod::kFft;
+  const auto fft = evaluate_xcorr(pair.reference, pair.measurement, options);
+  ASSERT_EQ(direct.field.size(), fft.field.size());
+  for (std::size_t i = 0; i < direct.field.size(); ++i) {
+    EXPECT_EQ(direct.field.vectors[i].flag, fft.field.vectors[i].flag);
+    EXPECT_NEAR(direct.field.vectors[i].u_px, fft.field.vectors[i].u_px, 1e-3);
+    EXPECT_NEAR(direct.field.vectors[i].v_px, fft.field.vectors[i].v_px, 1e-3);
+  }
+}
+
+TEST(CrossCorrelation, ALargerFirstWindowFindsAShiftBeyondTheSmallSearch) {
+  const auto pair = render(sim::DisplacementModel::uniform(5.4, -3.2));
+  XcorrOptions options;
+  options.first_window_px = 32;
+  options.max_shift_px = 7;
+  const auto result = evaluate_xcorr(pair.reference, pair.measurement, options);
+  ASSERT_FALSE(result.summary.window_px_per_pass.empty());
+  EXPECT_EQ(result.summary.window_px_per_pass.front(), 32);
+  const auto e = errors(result.field, pair.truth, 16);
+  EXPECT_GT(e.compared, 0.95 * result.field.size());
+  EXPECT_LT(e.rms, 0.05);
+}
+
+TEST(CrossCorrelation, ShiftsBeyondTheSearchAreFlaggedNoPeak) {
+  const auto pair = render(sim::DisplacementModel::uniform(6.0, 0.0), 128);
+  XcorrOptions options;
+  options.max_shift_px = 2;
+  options.passes = 1;
+  const auto result = evaluate_xcorr(pair.reference, pair.measurement, options);
+  EXPECT_GT(result.field.count(VectorFlag::kNoPeak), result.field.size() / 2);
+  EXPECT_TRUE(all_finite(result.field));
+}
+
+TEST(CrossCorrelation, OutliersAreReplacedAndFlagged) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.4, 0.4), 128, 0.01);
+  // Scramble one window of the measurement: its vector becomes noise.
+  cv::Mat measurement = pair.measurement.clone();
+  cv::Mat patch = measurement(cv::Rect(56, 56, 16, 16));
+  cv::randu(patch, 0, 255);
+  XcorrOptions options;
+  options.passes = 1;
+  options.max_shift_px = 6;
+  const auto result = evaluate_xcorr(pair.reference, measurement, options);
+  const auto& centre = result.field.at(7, 7);  // the window at (56..71, 56..71)
+  ASSERT_EQ(centre.x_px, 63.5);
+  EXPECT_TRUE(centre.flag == VectorFlag::kOutlierReplaced || centre.flag == VectorFlag::kOk);
+  EXPECT_NEAR(centre.u_px, 0.4, 0.1) << to_string(centre.flag);
+  EXPECT_GE(result.summary.outliers_replaced + result.field.count(VectorFlag::kNoPeak), 1u);
+}
+
+TEST(CrossCorrelation, RefinementStopsWhenAPassChangesNothing) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.25, 0.25), 128, 0.0);
+  XcorrOptions options;
+  options.passes = 10;
+  options.convergence_px = 0.01;
+  const auto result = evaluate_xcorr(pair.reference, pair.measurement, options);
+  EXPECT_TRUE(result.summary.converged);
+  EXPECT_LT(result.summary.passes_run, 10);
+}
+
+// Numerical edge cases: flagged vectors, never NaN or a crash.
+
+TEST(CrossCorrelationEdges, ConstantImagesGiveNoTextureVectors) {
+  const cv::Mat flat(64, 64, CV_8U, cv::Scalar(128));
+  const auto result = evaluate_xcorr(flat, flat, XcorrOptions{});
+  EXPECT_EQ(result.field.count(VectorFlag::kNoTexture), result.field.size());
+  EXPECT_TRUE(all_finite(result.field));
+}
+
+TEST(CrossCorrelationEdges, FlatMeasurementGivesNoPeak) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.5, 0), 64);
+  const cv::Mat flat(64, 64, CV_8U, cv::Scalar(255));  // saturated
+  const auto result = evaluate_xcorr(pair.reference, flat, XcorrOptions{});
+  EXPECT_EQ(result.field.count(VectorFlag::kNoPeak), result.field.size());
+  EXPECT_TRUE(all_finite(result.field));
+}
+
+TEST(CrossCorrelationEdges, PartlySaturatedImagesStillMeasure) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.5, 0.25), 128);
+  cv::Mat ref, meas;
+  // Over-exposure: the white background and the edges of dots clip at 255.
+  pair.reference.convertTo(ref, CV_8U, 1.25);
+  pair.measurement.convertTo(meas, CV_8U, 1.25);
+  const auto result = evaluate_xcorr(ref, meas, XcorrOptions{});
+  EXPECT_TRUE(all_finite(result.field));
+  EXPECT_LT(errors(result.field, pair.truth, 16).rms, 0.08);
+}
+
+TEST(CrossCorrelationEdges, SixteenBitFullScaleImagesMeasureLikeEightBit) {
+  sim::PairOptions options;
+  options.pattern.width_px = options.pattern.height_px = 128;
+  options.bit_depth = 16;
+  options.field = sim::DisplacementModel::uniform(0.3, 0.6);
+  const auto pair = sim::render_pair(options);
+  ASSERT_EQ(pair.reference.depth(), CV_16U);
+  double max_value = 0;
+  cv::minMaxLoc(pair.reference, nullptr, &max_value);
+  EXPECT_GT(max_value, 60000);
+  const auto result = evaluate_xcorr(pair.reference, pair.measurement, XcorrOptions{});
+  EXPECT_TRUE(all_finite(result.field));
+  EXPECT_LT(errors(result.field, pair.truth, 16).rms, 0.03);
+  const cv::Mat full(64, 64, CV_16U, cv::Scalar(65535));
+  EXPECT_EQ(evaluate_xcorr(full, full, XcorrOptions{}).field.count(VectorFlag::kNoTexture), 49u);
+}
+
+TEST(CrossCorrelationEdges, TinyImages) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.5, 0), 8, 0.0);
+  XcorrOptions options;
+  options.window_px = 8;
+  const auto result = evaluate_xcorr(pair.reference, pair.measurement, options);
+  ASSERT_EQ(result.field.size(), 1u);
+  EXPECT_TRUE(all_finite(result.field));
+  EXPECT_THROW(evaluate_xcorr(pair.reference(cv::Rect(0, 0, 6, 6)), pair.measurement(cv::Rect(0, 0, 6, 6)), options),
+               std::invalid_argument);
+}
+
+TEST(CrossCorrelationEdges, AllMaskedImageGivesOnlyMaskedVectors) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.5, 0), 64);
+  const cv::Mat mask(64, 64, CV_8U, cv::Scalar(1));
+  const auto result = evaluate_xcorr(pair.reference, pair.measurement, XcorrOptions{}, mask);
+  EXPECT_EQ(result.field.count(VectorFlag::kMasked), result.field.size());
+  EXPECT_TRUE(all_finite(result.field));
+}
+
+TEST(CrossCorrelationEdges, NanPixelsInFloatImagesDoNotLeak) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.5, 0), 64);
+  cv::Mat ref, meas;
+  pair.reference.convertTo(ref, CV_32F, 1 / 255.0);
+  pair.measurement.convertTo(meas, CV_32F, 1 / 255.0);
+  ref.at<float>(20, 20) = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_TRUE(all_finite(evaluate_xcorr(ref, meas, XcorrOptions{}).field));
+}
+
+// Bad input: a message that names the problem.
+
+std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "no exception";
+}
+
+TEST(CrossCorrelationInput, ProblemsAreNamed) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.5, 0), 64);
+  const cv::Mat smaller = pair.measurement(cv::Rect(0, 0, 48, 64)).clone();
+  EXPECT_NE(message_of([&] { evaluate_xcorr(pair.reference, smaller, {}); }).find("sizes differ"), std::string::npos);
+  EXPECT_NE(message_of([&] { evaluate_xcorr(cv::Mat(), pair.measurement, {}); }).find("reference image is empty"),
+            std::string::npos);
+  XcorrOptions big;
+  big.window_px = 128;
+  EXPECT_NE(message_of([&] { evaluate_xcorr(pair.reference, pair.measurement, big); }).find("larger than the image"),
+            std::string::npos);
+  XcorrOptions odd;
+  odd.window_px = 4;
+  EXPECT_NE(message_of([&] { evaluate_xcorr(pair.reference, pair.measurement, odd); }).find("8 to 128"),
+            std::string::npos);
+  const cv::Mat wrong_mask(10, 10, CV_8U, cv::Scalar(0));
+  EXPECT_NE(message_of([&] { evaluate_xcorr(pair.reference, pair.measurement, {}, wrong_mask); }).find("mask size"),
+            std::string::npos);
+}
+
+TEST(CrossCorrelationInput, ColourImagesAreConvertedWithAWarning) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.5, 0.25), 96);
+  cv::Mat ref_bgr, meas_bgr;
+  cv::cvtColor(pair.reference, ref_bgr, cv::COLOR_GRAY2BGR);
+  cv::cvtColor(pair.measurement, meas_bgr, cv::COLOR_GRAY2BGR);
+  std::ostringstream log;
+  auto previous = spdlog::default_logger();
+  spdlog::set_default_logger(
+      std::make_shared<spdlog::logger>("capture", std::make_shared<spdlog::sinks::ostream_sink_mt>(log)));
+  const auto colour = evaluate_xcorr(ref_bgr, meas_bgr, XcorrOptions{});
+  spdlog::set_default_logger(previous);
+  EXPECT_NE(log.str().find("colour image"), std::string::npos) << log.str();
+  const auto grey = evaluate_xcorr(pair.reference, pair.measurement, XcorrOptions{});
+  ASSERT_EQ(colour.field.size(), grey.field.size());
+  for (std::size_t i = 0; i < grey.field.size(); ++i) {
+    EXPECT_NEAR(colour.field.vectors[i].u_px, grey.field.vectors[i].u_px, 1e-6);
+  }
+}
+
+}  // namespace
+}  // namespace bosfuse::fusion

@@ -1,0 +1,60 @@
+#pragma once
+// DisplacementField is what an evaluator returns: one vector per
+// interrogation window, at the window's centre, on a regular grid (or at the
+// probe points in probe mode). Coordinates follow DESIGN.md: origin at the
+// top-left pixel's centre, x right, y down; a feature at (x, y) in the
+// reference appears at (x + u, y + v) in the measurement image.
+//
+// Every vector carries a flag saying why it is or is not a measurement, so a
+// caller never has to guess what a NaN means: u and v are always finite (0
+// where nothing could be measured), and `valid` is true only for kOk.
+
+#include <cstdint>
+#include <filesystem>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace bosfuse::fusion {
+
+enum class VectorFlag : std::uint8_t {
+  kOk = 0,               // measured, passed the outlier test
+  kOutlierReplaced = 1,  // failed the normalized-median test; u, v are the median of its neighbours
+  kNoTexture = 2,        // reference window too uniform to correlate (std below threshold)
+  kMasked = 3,           // window centre or too much of the window under the mask
+  kOutOfRoi = 4,         // window does not fit in the image / region of interest
+  kNoPeak = 5,           // no usable correlation peak (flat, negative, or at the search border)
+};
+
+std::string to_string(VectorFlag flag);
+
+struct DisplacementVector {
+  double x_px = 0;  // window centre
+  double y_px = 0;
+  double u_px = 0;
+  double v_px = 0;
+  double peak_ratio = 0;  // first / second correlation peak; 0 when not measured
+  VectorFlag flag = VectorFlag::kOk;
+
+  bool valid() const { return flag == VectorFlag::kOk; }
+};
+
+struct DisplacementField {
+  // Grid shape: rows × cols vectors in row-major order. A probe-mode field is
+  // one row of `cols` probes.
+  int rows = 0;
+  int cols = 0;
+  std::vector<DisplacementVector> vectors;
+
+  DisplacementVector& at(int row, int col) { return vectors[static_cast<std::size_t>(row) * cols + col]; }
+  const DisplacementVector& at(int row, int col) const { return vectors[static_cast<std::size_t>(row) * cols + col]; }
+  std::size_t size() const { return vectors.size(); }
+  std::size_t count(VectorFlag flag) const;
+  std::size_t count_valid() const { return count(VectorFlag::kOk); }
+};
+
+// CSV with the header `x,y,u,v,valid,peak_ratio`, one vector per line.
+void write_csv(const DisplacementField& field, std::ostream& out);
+void write_csv(const DisplacementField& field, const std::filesystem::path& path);
+
+}  // namespace bosfuse::fusion

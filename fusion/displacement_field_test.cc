@@ -1,0 +1,33 @@
+#include "fusion/displacement_field.h"
+
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+namespace bosfuse::fusion {
+namespace {
+
+TEST(DisplacementField, CsvHasTheHeaderAndOneLinePerVector) {
+  DisplacementField field;
+  field.rows = 1;
+  field.cols = 2;
+  field.vectors = {{7.5, 7.5, 0.25, -1.5, 3.2, VectorFlag::kOk}, {15.5, 7.5, 0, 0, 0, VectorFlag::kMasked}};
+  std::ostringstream out;
+  write_csv(field, out);
+  EXPECT_EQ(out.str(),
+            "x,y,u,v,valid,peak_ratio\n"
+            "7.5,7.5,0.25000,-1.50000,1,3.200\n"
+            "15.5,7.5,0.00000,0.00000,0,0.000\n");
+  EXPECT_EQ(field.count_valid(), 1u);
+  EXPECT_EQ(field.count(VectorFlag::kMasked), 1u);
+}
+
+TEST(DisplacementField, FlagsHaveReadableNames) {
+  EXPECT_EQ(to_string(VectorFlag::kOutlierReplaced), "outlier-replaced");
+  EXPECT_EQ(to_string(VectorFlag::kNoTexture), "no-texture");
+  EXPECT_EQ(to_string(VectorFlag::kOutOfRoi), "out-of-roi");
+  EXPECT_EQ(to_string(VectorFlag::kNoPeak), "no-peak");
+}
+
+}  // namespace
+}  // namespace bosfuse::fusion

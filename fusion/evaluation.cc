@@ -1,0 +1,65 @@
+#include "fusion/evaluation.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <stdexcept>
+
+namespace bosfuse::fusion {
+
+std::string EvaluationSummary::BriefReport() const {
+  const std::string windows = fmt::format("{}", fmt::join(window_px_per_pass, ","));
+  return fmt::format(
+      "{}: {} vectors, {} valid, {} outliers replaced, {} no texture, {} masked, {} out of ROI, {} no peak; "
+      "{} pass(es) (windows {} px){}; {:.3f} s",
+      method, vectors, valid, outliers_replaced, no_texture, masked, out_of_roi, no_peak, passes_run, windows,
+      converged ? ", converged" : "", seconds);
+}
+
+cv::Rect effective_roi(cv::Rect roi, cv::Size image_size) {
+  const cv::Rect image(cv::Point(0, 0), image_size);
+  if (roi.area() == 0) return image;
+  const cv::Rect clipped = roi & image;
+  if (clipped.area() == 0) {
+    throw std::invalid_argument(fmt::format("region of interest {},{},{},{} lies outside the {}x{} image", roi.x, roi.y,
+                                            roi.width, roi.height, image_size.width, image_size.height));
+  }
+  return clipped;
+}
+
+GridGeometry evaluation_grid(cv::Rect roi, int window_px, int step_px) {
+  GridGeometry grid;
+  grid.step_px = step_px;
+  grid.x0_px = roi.x + (window_px - 1) / 2.0;
+  grid.y0_px = roi.y + (window_px - 1) / 2.0;
+  grid.cols = roi.width >= window_px ? (roi.width - window_px) / step_px + 1 : 0;
+  grid.rows = roi.height >= window_px ? (roi.height - window_px) / step_px + 1 : 0;
+  return grid;
+}
+
+DisplacementField field_on_grid(const GridGeometry& grid) {
+  DisplacementField field;
+  field.rows = grid.rows;
+  field.cols = grid.cols;
+  field.vectors.resize(static_cast<std::size_t>(grid.rows) * grid.cols);
+  for (int r = 0; r < grid.rows; ++r) {
+    for (int c = 0; c < grid.cols; ++c) {
+      auto& v = field.at(r, c);
+      v.x_px = grid.x0_px + c * grid.step_px;
+      v.y_px = grid.y0_px + r * grid.step_px;
+    }
+  }
+  return field;
+}
+
+void count_flags(const DisplacementField& field, EvaluationSummary& summary) {
+  summary.vectors = field.size();
+  summary.valid = field.count(VectorFlag::kOk);
+  summary.outliers_replaced = field.count(VectorFlag::kOutlierReplaced);
+  summary.no_texture = field.count(VectorFlag::kNoTexture);
+  summary.masked = field.count(VectorFlag::kMasked);
+  summary.out_of_roi = field.count(VectorFlag::kOutOfRoi);
+  summary.no_peak = field.count(VectorFlag::kNoPeak);
+}
+
+}  // namespace bosfuse::fusion

@@ -1,0 +1,170 @@
+#include "fusion/field_warp.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <opencv2/core/utility.hpp>
+
+namespace bosfuse::fusion {
+namespace {
+
+// Bilinear weights along one grid axis, clamped to the outer nodes.
+struct AxisWeight {
+  int i0 = 0;
+  int i1 = 0;
+  double t = 0;
+};
+
+AxisWeight axis_weight(double position_px, double origin_px, double step_px, int nodes) {
+  const double g = std::clamp((position_px - origin_px) / step_px, 0.0, double(nodes - 1));
+  AxisWeight w;
+  w.i0 = std::min(static_cast<int>(g), nodes - 1);
+  w.i1 = std::min(w.i0 + 1, nodes - 1);
+  w.t = g - w.i0;
+  return w;
+}
+
+double bilinear(const cv::Mat& values, const AxisWeight& wx, const AxisWeight& wy) {
+  const double* r0 = values.ptr<double>(wy.i0);
+  const double* r1 = values.ptr<double>(wy.i1);
+  const double top = r0[wx.i0] + wx.t * (r0[wx.i1] - r0[wx.i0]);
+  const double bottom = r1[wx.i0] + wx.t * (r1[wx.i1] - r1[wx.i0]);
+  return top + wy.t * (bottom - top);
+}
+
+void keys_weights(double t, double* w) {
+  w[0] = ((-0.5 * t + 1.0) * t - 0.5) * t;
+  w[1] = (1.5 * t - 2.5) * t * t + 1.0;
+  w[2] = ((-1.5 * t + 2.0) * t + 0.5) * t;
+  w[3] = (0.5 * t - 0.5) * t * t;
+}
+
+void lanczos3_weights(double t, double* w) {
+  double total = 0;
+  for (int k = 0; k < 6; ++k) {
+    const double x = t - (k - 2);  // distance from tap k (taps at −2..3)
+    double value = 1.0;
+    if (std::abs(x) > 1e-12) {
+      const double px = std::numbers::pi * x;
+      value = 3.0 * std::sin(px) * std::sin(px / 3.0) / (px * px);
+    }
+    w[k] = value;
+    total += value;
+  }
+  for (int k = 0; k < 6; ++k) w[k] /= total;  // exact reproduction of a constant
+}
+
+// Kernel weights tabulated over the sub-pixel position t ∈ [0, 1] and
+// interpolated linearly between entries: the positional error of the table
+// (< 1e-6 px) is far below anything measurable, and it avoids three
+// trigonometric calls per pixel and axis.
+class WeightTable {
+ public:
+  static constexpr int kSteps = 1024;
+
+  WeightTable(Interpolator interpolator) : taps_(interpolator == Interpolator::kCubic ? 4 : 6) {
+    table_.resize(static_cast<std::size_t>(kSteps + 1) * taps_);
+    for (int i = 0; i <= kSteps; ++i) {
+      double w[6];
+      if (interpolator == Interpolator::kCubic) {
+        keys_weights(double(i) / kSteps, w);
+      } else {
+        lanczos3_weights(double(i) / kSteps, w);
+      }
+      for (int k = 0; k < taps_; ++k) table_[static_cast<std::size_t>(i) * taps_ + k] = static_cast<float>(w[k]);
+    }
+  }
+
+  int taps() const { return taps_; }
+
+  void weights(double t, float* w) const {
+    const double position = t * kSteps;
+    const int i = std::min(static_cast<int>(position), kSteps - 1);
+    const float f = static_cast<float>(position - i);
+    const float* a = &table_[static_cast<std::size_t>(i) * taps_];
+    const float* b = a + taps_;
+    for (int k = 0; k < taps_; ++k) w[k] = a[k] + f * (b[k] - a[k]);
+  }
+
+ private:
+  int taps_;
+  std::vector<float> table_;
+};
+
+class Sampler {
+ public:
+  Sampler(const cv::Mat& image, const WeightTable& table)
+      : image_(image), table_(table), taps_(table.taps()), first_(table.taps() == 4 ? -1 : -2) {}
+
+  float sample(double x, double y) const {
+    const double fx = std::floor(x), fy = std::floor(y);
+    float wx[6], wy[6];
+    table_.weights(x - fx, wx);
+    table_.weights(y - fy, wy);
+    const int ix = static_cast<int>(fx) + first_, iy = static_cast<int>(fy) + first_;
+    const bool inside = ix >= 0 && iy >= 0 && ix + taps_ <= image_.cols && iy + taps_ <= image_.rows;
+    float total = 0;
+    for (int j = 0; j < taps_; ++j) {
+      const float* row = image_.ptr<float>(std::clamp(iy + j, 0, image_.rows - 1));
+      float row_total = 0;
+      if (inside) {
+        for (int i = 0; i < taps_; ++i) row_total += wx[i] * row[ix + i];
+      } else {
+        for (int i = 0; i < taps_; ++i) row_total += wx[i] * row[std::clamp(ix + i, 0, image_.cols - 1)];
+      }
+      total += wy[j] * row_total;
+    }
+    return total;
+  }
+
+ private:
+  const cv::Mat& image_;
+  const WeightTable& table_;
+  int taps_;
+  int first_;
+};
+
+cv::Mat copy_with_replicated_border(const cv::Mat& image, cv::Rect region) {
+  cv::Mat out(region.size(), CV_32F);
+  for (int y = 0; y < region.height; ++y) {
+    const float* src = image.ptr<float>(std::clamp(region.y + y, 0, image.rows - 1));
+    float* dst = out.ptr<float>(y);
+    for (int x = 0; x < region.width; ++x) dst[x] = src[std::clamp(region.x + x, 0, image.cols - 1)];
+  }
+  return out;
+}
+
+}  // namespace
+
+cv::Point2d interpolate_field(const GridField& field, double x_px, double y_px) {
+  const auto& g = field.grid;
+  const AxisWeight wx = axis_weight(x_px, g.x0_px, g.step_px, g.cols);
+  const AxisWeight wy = axis_weight(y_px, g.y0_px, g.step_px, g.rows);
+  return {bilinear(field.u_px, wx, wy), bilinear(field.v_px, wx, wy)};
+}
+
+cv::Mat warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator) {
+  CV_Assert(image.type() == CV_32FC1);
+  if (field.grid.rows == 0 || field.grid.cols == 0) return copy_with_replicated_border(image, region);
+  cv::Mat out(region.size(), CV_32F);
+  static const WeightTable cubic(Interpolator::kCubic), lanczos(Interpolator::kLanczos3);
+  const Sampler sampler(image, interpolator == Interpolator::kCubic ? cubic : lanczos);
+  const auto& g = field.grid;
+  cv::parallel_for_(cv::Range(0, region.height), [&](const cv::Range& rows) {
+    std::vector<AxisWeight> column_weights(static_cast<std::size_t>(region.width));
+    for (int x = 0; x < region.width; ++x) column_weights[x] = axis_weight(region.x + x, g.x0_px, g.step_px, g.cols);
+    for (int y = rows.start; y < rows.end; ++y) {
+      const double image_y = region.y + y;
+      const AxisWeight wy = axis_weight(image_y, g.y0_px, g.step_px, g.rows);
+      float* dst = out.ptr<float>(y);
+      for (int x = 0; x < region.width; ++x) {
+        const double u = bilinear(field.u_px, column_weights[x], wy);
+        const double v = bilinear(field.v_px, column_weights[x], wy);
+        dst[x] = sampler.sample(region.x + x + u, image_y + v);
+      }
+    }
+  });
+  return out;
+}
+
+}  // namespace bosfuse::fusion

@@ -1,0 +1,53 @@
+#include "fusion/field_warp.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace bosfuse::fusion {
+namespace {
+
+// A smooth image whose value at any real position is known exactly.
+double smooth(double x, double y) { return 0.5 + 0.2 * std::sin(0.3 * x + 0.1) * std::cos(0.25 * y - 0.2); }
+
+cv::Mat smooth_image(int size) {
+  cv::Mat image(size, size, CV_32F);
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) image.at<float>(y, x) = static_cast<float>(smooth(x, y));
+  }
+  return image;
+}
+
+GridField uniform_field(double u, double v) {
+  return {{0, 0, 8, 4, 4}, cv::Mat(4, 4, CV_64F, cv::Scalar(u)), cv::Mat(4, 4, CV_64F, cv::Scalar(v))};
+}
+
+TEST(FieldWarp, ResamplesAtTheShiftedPositions) {
+  const cv::Mat image = smooth_image(64);
+  for (const auto interpolator : {Interpolator::kCubic, Interpolator::kLanczos3}) {
+    const cv::Mat warped = warp_region(image, uniform_field(0.37, -1.21), cv::Rect(10, 12, 30, 20), interpolator);
+    ASSERT_EQ(warped.size(), cv::Size(30, 20));
+    for (int y = 0; y < 20; y += 3) {
+      for (int x = 0; x < 30; x += 3) EXPECT_NEAR(warped.at<float>(y, x), smooth(10 + x + 0.37, 12 + y - 1.21), 2e-3);
+    }
+  }
+}
+
+TEST(FieldWarp, IntegerShiftsAndAnEmptyFieldCopyPixels) {
+  const cv::Mat image = smooth_image(32);
+  const cv::Mat shifted = warp_region(image, uniform_field(2, 1), cv::Rect(4, 4, 8, 8), Interpolator::kLanczos3);
+  EXPECT_NEAR(shifted.at<float>(0, 0), image.at<float>(5, 6), 1e-6);
+  const cv::Mat copy = warp_region(image, GridField{}, cv::Rect(-2, -2, 6, 6), Interpolator::kCubic);
+  EXPECT_EQ(copy.at<float>(0, 0), image.at<float>(0, 0)) << "outside the image the border is replicated";
+  EXPECT_EQ(copy.at<float>(5, 5), image.at<float>(3, 3));
+}
+
+TEST(FieldWarp, InterpolatesTheFieldBilinearlyBetweenNodes) {
+  GridField field{{3.5, 3.5, 8, 2, 2}, (cv::Mat_<double>(2, 2) << 0, 1, 2, 3), cv::Mat::zeros(2, 2, CV_64F)};
+  EXPECT_NEAR(interpolate_field(field, 7.5, 3.5).x, 0.5, 1e-12);
+  EXPECT_NEAR(interpolate_field(field, 7.5, 7.5).x, 1.5, 1e-12);
+  EXPECT_NEAR(interpolate_field(field, -50, -50).x, 0.0, 1e-12) << "held constant outside the grid";
+}
+
+}  // namespace
+}  // namespace bosfuse::fusion

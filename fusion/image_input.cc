@@ -1,0 +1,76 @@
+#include "fusion/image_input.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+namespace bosfuse::fusion {
+namespace {
+
+std::string describe(cv::Size size) { return fmt::format("{}x{}", size.width, size.height); }
+
+double full_scale(int depth) {
+  switch (depth) {
+    case CV_8U:
+      return 255.0;
+    case CV_8S:
+      return 127.0;
+    case CV_16U:
+      return 65535.0;
+    case CV_16S:
+      return 32767.0;
+    default:
+      return 1.0;  // float images are taken as scaled already
+  }
+}
+
+}  // namespace
+
+cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn_colour) {
+  if (image.empty()) throw std::invalid_argument(name + ": the image is empty (unreadable file or no pixels)");
+  cv::Mat grey = image;
+  if (image.channels() == 3 || image.channels() == 4) {
+    if (warn_colour) spdlog::warn("{}: colour image ({} channels) converted to grey", name, image.channels());
+    cv::cvtColor(image, grey, image.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
+  } else if (image.channels() != 1) {
+    throw std::invalid_argument(fmt::format("{}: {} channels, expected grey or colour", name, image.channels()));
+  }
+  cv::Mat unit;
+  grey.convertTo(unit, CV_32F, 1.0 / full_scale(grey.depth()));
+  // Non-finite pixels in a float input would poison every sum they enter.
+  cv::patchNaNs(unit, 0.0);
+  return unit;
+}
+
+void check_image_pair(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask) {
+  if (reference.empty()) throw std::invalid_argument("reference image is empty (unreadable file or no pixels)");
+  if (measurement.empty()) throw std::invalid_argument("measurement image is empty (unreadable file or no pixels)");
+  if (reference.size() != measurement.size()) {
+    throw std::invalid_argument(fmt::format("image sizes differ: reference {} but measurement {}",
+                                            describe(reference.size()), describe(measurement.size())));
+  }
+  if (!mask.empty() && mask.size() != reference.size()) {
+    throw std::invalid_argument(
+        fmt::format("mask size {} differs from the image size {}", describe(mask.size()), describe(reference.size())));
+  }
+}
+
+void check_window_fits(int window_px, cv::Size image_size) {
+  if (window_px > image_size.width || window_px > image_size.height) {
+    throw std::invalid_argument(
+        fmt::format("interrogation window {} px is larger than the image ({})", window_px, describe(image_size)));
+  }
+}
+
+cv::Mat to_exclusion_mask(const cv::Mat& mask) {
+  if (mask.empty()) return {};
+  cv::Mat grey = mask;
+  if (mask.channels() > 1) cv::cvtColor(mask, grey, mask.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
+  cv::Mat excluded;
+  cv::compare(grey, 0, excluded, cv::CMP_NE);
+  return excluded;
+}
+
+}  // namespace bosfuse::fusion

@@ -1,0 +1,31 @@
+#pragma once
+// Input checks shared by every evaluator: an image pair (and an optional
+// mask) is turned into single-channel float images scaled to [0, 1] of full
+// scale, whatever the camera delivered (8- or 16-bit, grey or colour). A
+// problem a user can fix — an empty image, sizes that differ, a window larger
+// than the image — raises std::invalid_argument whose message names it.
+// Colour images are accepted and converted to grey with a warning, since a
+// colour camera is a legitimate (if wasteful) BOS camera.
+
+#include <opencv2/core.hpp>
+#include <string>
+
+namespace bosfuse::fusion {
+
+// `name` labels the image in messages ("reference", "measurement", a path).
+// Returns CV_32FC1 in [0, 1]; 8-bit divides by 255, 16-bit by 65535, float
+// input is taken as already scaled.
+// `warn_colour` false: convert colour silently (the caller warned once).
+cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn_colour = true);
+
+// Throws std::invalid_argument naming the problem: empty images, sizes that
+// differ, or a mask whose size is not the images'.
+void check_image_pair(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask = {});
+
+// Throws when a window of `window_px` does not fit in `image_size`.
+void check_window_fits(int window_px, cv::Size image_size);
+
+// A mask as CV_8U where non-zero marks excluded pixels; empty stays empty.
+cv::Mat to_exclusion_mask(const cv::Mat& mask);
+
+}  // namespace bosfuse::fusion

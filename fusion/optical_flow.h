@@ -1,0 +1,44 @@
+#pragma once
+// Dense optical flow as a second displacement method, behind the same
+// interface as cross-correlation: OpenCV computes a flow vector per pixel
+// (DIS, Farneback, or TV-L1 where opencv_contrib's optflow module is
+// available), and the flow is averaged over each interrogation window of the
+// same grid the cross-correlation uses, so the two can be compared vector by
+// vector. Use it to cross-check cross-correlation or where windows are too
+// coarse; expect it to be less accurate at the 0.01 px level BOS needs, since
+// the images are reduced to 8 bits and the methods regularise the field.
+//
+// Flow from reference to measurement is exactly the DESIGN.md displacement:
+// reference(x, y) ≈ measurement(x + u, y + v).
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "fusion/evaluation.h"
+
+namespace bosfuse::fusion {
+
+enum class FlowAlgorithm { kDis, kFarneback, kTvl1 };
+
+std::string to_string(FlowAlgorithm algorithm);
+bool flow_algorithm_available(FlowAlgorithm algorithm);
+
+struct FlowOptions {
+  FlowAlgorithm algorithm = FlowAlgorithm::kDis;
+  int window_px = 16;  // averaging window, same grid as cross-correlation
+  int step_px = 8;
+  cv::Rect roi;                      // empty: the whole image
+  double min_texture_std = 0.002;    // of full scale
+  double max_masked_fraction = 0.5;  // of a window's pixels
+
+  std::string Validate() const;  // empty when valid
+};
+
+EvaluationResult evaluate_flow(const cv::Mat& reference, const cv::Mat& measurement, const FlowOptions& options,
+                               const cv::Mat& mask = {});
+
+// The dense flow (CV_32FC2, u then v) of a pair, for maps and tests.
+cv::Mat dense_flow(const cv::Mat& reference, const cv::Mat& measurement, FlowAlgorithm algorithm);
+
+}  // namespace bosfuse::fusion

@@ -1,0 +1,151 @@
+#include "fusion/outlier_filter.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace bosfuse::fusion {
+namespace {
+
+bool has_value(VectorFlag flag) { return flag == VectorFlag::kOk || flag == VectorFlag::kOutlierReplaced; }
+
+double median(double* begin, int n) {
+  std::nth_element(begin, begin + n / 2, begin + n);
+  const double upper = begin[n / 2];
+  if (n % 2 == 1) return upper;
+  const double lower = *std::max_element(begin, begin + n / 2);
+  return 0.5 * (lower + upper);
+}
+
+struct Neighbours {
+  std::array<double, 8> u{};
+  std::array<double, 8> v{};
+  int count = 0;
+};
+
+template <typename Accept>
+Neighbours neighbours_of(const DisplacementField& field, int row, int col, Accept accept) {
+  Neighbours n;
+  for (int dr = -1; dr <= 1; ++dr) {
+    for (int dc = -1; dc <= 1; ++dc) {
+      const int r = row + dr, c = col + dc;
+      if ((dr == 0 && dc == 0) || r < 0 || c < 0 || r >= field.rows || c >= field.cols) continue;
+      const auto& vec = field.at(r, c);
+      if (!accept(vec)) continue;
+      n.u[n.count] = vec.u_px;
+      n.v[n.count] = vec.v_px;
+      ++n.count;
+    }
+  }
+  return n;
+}
+
+// Normalised residual of one component against its neighbours.
+double normalised_residual(double value, std::array<double, 8> neighbours, int count, double epsilon_px) {
+  const double med = median(neighbours.data(), count);
+  std::array<double, 8> residuals{};
+  for (int i = 0; i < count; ++i) residuals[i] = std::abs(neighbours[i] - med);
+  return std::abs(value - med) / (median(residuals.data(), count) + epsilon_px);
+}
+
+}  // namespace
+
+std::string OutlierOptions::Validate() const {
+  if (!(threshold > 0)) return "outlier threshold must be positive";
+  if (!(epsilon_px >= 0)) return "outlier epsilon must not be negative";
+  if (min_neighbours < 1 || min_neighbours > 8) return "outlier test needs 1 to 8 neighbours";
+  return {};
+}
+
+std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& options) {
+  const DisplacementField snapshot = field;
+  auto measured = [](const DisplacementVector& v) { return v.flag == VectorFlag::kOk; };
+  std::vector<std::size_t> outliers;
+  for (int row = 0; row < field.rows; ++row) {
+    for (int col = 0; col < field.cols; ++col) {
+      const auto& vec = snapshot.at(row, col);
+      if (!measured(vec)) continue;
+      const Neighbours n = neighbours_of(snapshot, row, col, measured);
+      if (n.count < options.min_neighbours) continue;
+      const double ru = normalised_residual(vec.u_px, n.u, n.count, options.epsilon_px);
+      const double rv = normalised_residual(vec.v_px, n.v, n.count, options.epsilon_px);
+      if (std::hypot(ru, rv) > options.threshold) outliers.push_back(static_cast<std::size_t>(row) * field.cols + col);
+    }
+  }
+  for (const std::size_t i : outliers) {
+    const int row = static_cast<int>(i / field.cols), col = static_cast<int>(i % field.cols);
+    // Replace from neighbours that are not outliers themselves.
+    Neighbours n = neighbours_of(snapshot, row, col, [&](const DisplacementVector& v) {
+      return measured(v) && !std::binary_search(outliers.begin(), outliers.end(),
+                                                static_cast<std::size_t>(&v - snapshot.vectors.data()));
+    });
+    if (n.count == 0) n = neighbours_of(snapshot, row, col, measured);
+    auto& vec = field.vectors[i];
+    vec.u_px = median(n.u.data(), n.count);
+    vec.v_px = median(n.v.data(), n.count);
+    vec.flag = VectorFlag::kOutlierReplaced;
+  }
+  return outliers.size();
+}
+
+GridField predictor_from(const DisplacementField& field, const GridGeometry& grid, int max_sweeps) {
+  GridField predictor{grid, cv::Mat::zeros(field.rows, field.cols, CV_64F),
+                      cv::Mat::zeros(field.rows, field.cols, CV_64F)};
+  cv::Mat filled = cv::Mat::zeros(field.rows, field.cols, CV_8U);
+  DisplacementField work = field;  // flags double as "has a value" below
+  for (int row = 0; row < field.rows; ++row) {
+    for (int col = 0; col < field.cols; ++col) {
+      const auto& vec = field.at(row, col);
+      if (!has_value(vec.flag)) continue;
+      predictor.u_px.at<double>(row, col) = vec.u_px;
+      predictor.v_px.at<double>(row, col) = vec.v_px;
+      filled.at<std::uint8_t>(row, col) = 1;
+      work.at(row, col).flag = VectorFlag::kOk;
+    }
+  }
+  for (int sweep = 0; sweep < max_sweeps; ++sweep) {
+    std::vector<std::pair<std::size_t, cv::Point2d>> updates;
+    for (int row = 0; row < field.rows; ++row) {
+      for (int col = 0; col < field.cols; ++col) {
+        if (filled.at<std::uint8_t>(row, col)) continue;
+        Neighbours n =
+            neighbours_of(work, row, col, [](const DisplacementVector& v) { return v.flag == VectorFlag::kOk; });
+        if (n.count == 0) continue;
+        updates.push_back({static_cast<std::size_t>(row) * field.cols + col,
+                           {median(n.u.data(), n.count), median(n.v.data(), n.count)}});
+      }
+    }
+    if (updates.empty()) break;
+    for (const auto& [i, value] : updates) {
+      const int row = static_cast<int>(i / field.cols), col = static_cast<int>(i % field.cols);
+      predictor.u_px.at<double>(row, col) = value.x;
+      predictor.v_px.at<double>(row, col) = value.y;
+      filled.at<std::uint8_t>(row, col) = 1;
+      work.vectors[i] = {0, 0, value.x, value.y, 0, VectorFlag::kOk};
+    }
+  }
+  return predictor;
+}
+
+void smooth_predictor(GridField& predictor) {
+  for (cv::Mat* values : {&predictor.u_px, &predictor.v_px}) {
+    const cv::Mat source = values->clone();
+    for (int row = 0; row < source.rows; ++row) {
+      for (int col = 0; col < source.cols; ++col) {
+        double sum = 0, weight = 0;
+        for (int dr = -1; dr <= 1; ++dr) {
+          for (int dc = -1; dc <= 1; ++dc) {
+            const int r = row + dr, c = col + dc;
+            if (r < 0 || c < 0 || r >= source.rows || c >= source.cols) continue;
+            const double w = (dr == 0 ? 2 : 1) * (dc == 0 ? 2 : 1);
+            sum += w * source.at<double>(r, c);
+            weight += w;
+          }
+        }
+        values->at<double>(row, col) = sum / weight;
+      }
+    }
+  }
+}
+
+}  // namespace bosfuse::fusion

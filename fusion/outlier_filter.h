@@ -1,0 +1,45 @@
+#pragma once
+// Normalized median test (Westerweel & Scarano 2005) for a gridded field: a
+// vector is an outlier when its distance from the median of its (up to 8)
+// measured neighbours, divided by the median of the neighbours' own
+// distances from that median plus ε, exceeds a threshold. ε (0.1 px)
+// accounts for the noise floor of cross-correlation, so a smooth field is not
+// torn apart by tiny residuals. Outliers are replaced by the median of their
+// measured neighbours and flagged; the test is applied to a snapshot, so the
+// result does not depend on the order the grid is visited.
+//
+// fill_unmeasured then gives every vector that was not measured (no peak,
+// masked, no texture) a value from its neighbours — only for use as the
+// predictor of the next pass, so deformation near a gap is not dragged to 0.
+
+#include <string>
+
+#include "fusion/displacement_field.h"
+#include "fusion/field_warp.h"
+
+namespace bosfuse::fusion {
+
+struct OutlierOptions {
+  double threshold = 2.0;
+  double epsilon_px = 0.1;
+  int min_neighbours = 3;  // fewer measured neighbours: no verdict, the vector stays
+
+  std::string Validate() const;  // empty when valid
+};
+
+// Tests vectors flagged kOk; returns how many were replaced.
+std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& options);
+
+// The predictor for the next pass on `grid` (the field's own grid):
+// measured and replaced vectors as they are; every other node the median of
+// its already-filled neighbours, spreading outwards for at most `max_sweeps`
+// sweeps, and 0 where nothing reaches.
+GridField predictor_from(const DisplacementField& field, const GridGeometry& grid, int max_sweeps = 32);
+
+// Smooths a predictor with the 3×3 binomial kernel (weights 1-2-1 in x and y,
+// renormalised at the grid's edge). Iterated window deformation is unstable
+// for errors at the grid's Nyquist wavelength — each pass would amplify them
+// (Schrijer & Scarano 2008) — and this kernel removes exactly that component.
+void smooth_predictor(GridField& predictor);
+
+}  // namespace bosfuse::fusion

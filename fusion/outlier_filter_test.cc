@@ -1,0 +1,70 @@
+#include "fusion/outlier_filter.h"
+
+#include <gtest/gtest.h>
+
+namespace bosfuse::fusion {
+namespace {
+
+DisplacementField smooth_field(int rows, int cols) {
+  DisplacementField field;
+  field.rows = rows;
+  field.cols = cols;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      // A gentle gradient with a little noise: nothing here is an outlier.
+      field.vectors.push_back(
+          {double(c), double(r), 0.5 + 0.01 * c + 0.003 * ((r * 7 + c * 3) % 5), 0.2, 5, VectorFlag::kOk});
+    }
+  }
+  return field;
+}
+
+TEST(OutlierFilter, ReplacesASpuriousVectorWithItsNeighboursMedian) {
+  DisplacementField field = smooth_field(7, 7);
+  field.at(3, 3).u_px = 4.0;
+  field.at(3, 3).v_px = -2.0;
+  EXPECT_EQ(replace_outliers(field, OutlierOptions{}), 1u);
+  EXPECT_EQ(field.at(3, 3).flag, VectorFlag::kOutlierReplaced);
+  EXPECT_NEAR(field.at(3, 3).u_px, 0.53, 0.02);
+  EXPECT_NEAR(field.at(3, 3).v_px, 0.2, 1e-12);
+  EXPECT_EQ(field.count(VectorFlag::kOk), 48u);
+}
+
+TEST(OutlierFilter, LeavesASmoothFieldAlone) {
+  DisplacementField field = smooth_field(6, 9);
+  const DisplacementField before = field;
+  EXPECT_EQ(replace_outliers(field, OutlierOptions{}), 0u);
+  for (std::size_t i = 0; i < field.size(); ++i) EXPECT_EQ(field.vectors[i].u_px, before.vectors[i].u_px);
+}
+
+TEST(OutlierFilter, PredictorFillsGapsFromNeighbours) {
+  DisplacementField field = smooth_field(5, 5);
+  for (int c = 0; c < 5; ++c) field.at(2, c).flag = VectorFlag::kMasked;
+  field.at(2, 2).u_px = 99;  // must not leak into the predictor
+  const GridField predictor = predictor_from(field, {0, 0, 1, 5, 5});
+  EXPECT_NEAR(predictor.u_px.at<double>(2, 2), 0.52, 0.02);
+  EXPECT_NEAR(predictor.v_px.at<double>(2, 2), 0.2, 1e-12);
+}
+
+TEST(OutlierFilter, NothingMeasuredGivesAZeroPredictor) {
+  DisplacementField field = smooth_field(3, 3);
+  for (auto& v : field.vectors) v.flag = VectorFlag::kNoTexture;
+  const GridField predictor = predictor_from(field, {0, 0, 1, 3, 3});
+  EXPECT_EQ(cv::countNonZero(predictor.u_px), 0);
+}
+
+TEST(OutlierFilter, SmoothingKeepsALinearFieldAndRemovesACheckerboard) {
+  GridField field{{0, 0, 1, 6, 6}, cv::Mat(6, 6, CV_64F), cv::Mat(6, 6, CV_64F)};
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) {
+      field.u_px.at<double>(r, c) = 0.1 * c;
+      field.v_px.at<double>(r, c) = (r + c) % 2 ? 0.05 : -0.05;
+    }
+  }
+  smooth_predictor(field);
+  EXPECT_NEAR(field.u_px.at<double>(3, 2), 0.2, 1e-12);
+  EXPECT_NEAR(field.v_px.at<double>(3, 2), 0.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace bosfuse::fusion

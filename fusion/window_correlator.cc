@@ -1,0 +1,201 @@
+#include "fusion/window_correlator.h"
+
+#include <cmath>
+#include <opencv2/core.hpp>
+
+namespace bosfuse::fusion {
+namespace {
+
+// Below this (in squared full-scale units summed over a window) a window is
+// flat to float precision: its correlation is meaningless.
+constexpr double kMinEnergy = 1e-12;
+
+}  // namespace
+
+CorrelationMethod WindowCorrelator::cheaper_method(int window_px, int radius_px) {
+  const double shifts = std::pow(2.0 * radius_px + 1, 2);
+  const double direct = shifts * window_px * window_px;
+  const int n = cv::getOptimalDFTSize(window_px + 2 * radius_px);
+  // Three real 2-D transforms, ~2.5·N²·log2(N²) each, plus the spectrum product.
+  const double fft = 3 * 2.5 * n * n * std::log2(double(n) * n) + 4.0 * n * n;
+  return direct <= fft ? CorrelationMethod::kDirect : CorrelationMethod::kFft;
+}
+
+void WindowCorrelator::correlate(const cv::Mat& reference_window, const cv::Mat& search_patch, int radius_px,
+                                 CorrelationMethod method, CorrelationPlane& plane, WindowPairing pairing) {
+  CV_Assert(reference_window.type() == CV_32FC1 && search_patch.type() == CV_32FC1);
+  const int n = reference_window.rows;
+  CV_Assert(reference_window.cols == n && search_patch.rows == n + 2 * radius_px &&
+            search_patch.cols == n + 2 * radius_px);
+  plane.radius = radius_px;
+  plane.value.assign(static_cast<std::size_t>(plane.side() * plane.side()), 0.0);
+  prepare_reference(reference_window, plane);
+  if (method == CorrelationMethod::kAuto) method = cheaper_method(n, radius_px);
+  if (pairing == WindowPairing::kEqualWindows) {
+    correlate_equal_windows(search_patch, radius_px, n, method, plane);
+    return;
+  }
+  prepare_patch_sums(search_patch);
+  if (method == CorrelationMethod::kDirect) {
+    direct_products(search_patch, radius_px, n);
+  } else {
+    fft_products(search_patch, radius_px, n);
+  }
+  normalise(radius_px, n, plane);
+}
+
+void WindowCorrelator::prepare_reference(const cv::Mat& reference_window, CorrelationPlane& plane) {
+  const int n = reference_window.rows;
+  double sum = 0;
+  for (int y = 0; y < n; ++y) {
+    const float* row = reference_window.ptr<float>(y);
+    for (int x = 0; x < n; ++x) sum += row[x];
+  }
+  const double mean = sum / (double(n) * n);
+  centred_reference_.resize(static_cast<std::size_t>(n) * n);
+  reference_energy_ = 0;
+  for (int y = 0; y < n; ++y) {
+    const float* row = reference_window.ptr<float>(y);
+    for (int x = 0; x < n; ++x) {
+      const double centred = row[x] - mean;
+      centred_reference_[static_cast<std::size_t>(y) * n + x] = static_cast<float>(centred);
+      reference_energy_ += centred * centred;
+    }
+  }
+  plane.reference_std = n > 1 ? std::sqrt(reference_energy_ / (double(n) * n - 1)) : 0.0;
+}
+
+void WindowCorrelator::prepare_patch_sums(const cv::Mat& search_patch) {
+  const int p = search_patch.rows;
+  const std::size_t stride = static_cast<std::size_t>(p) + 1;
+  sum_.assign(stride * stride, 0.0);
+  sum_sq_.assign(stride * stride, 0.0);
+  for (int y = 0; y < p; ++y) {
+    const float* row = search_patch.ptr<float>(y);
+    double row_sum = 0, row_sum_sq = 0;
+    for (int x = 0; x < p; ++x) {
+      row_sum += row[x];
+      row_sum_sq += double(row[x]) * row[x];
+      sum_[(y + 1) * stride + x + 1] = sum_[y * stride + x + 1] + row_sum;
+      sum_sq_[(y + 1) * stride + x + 1] = sum_sq_[y * stride + x + 1] + row_sum_sq;
+    }
+  }
+}
+
+void WindowCorrelator::direct_products(const cv::Mat& search_patch, int radius_px, int n) {
+  const int side = 2 * radius_px + 1;
+  products_.assign(static_cast<std::size_t>(side) * side, 0.0);
+  // Column accumulators: each lane sums n products in float (exact enough for
+  // n ≤ 128 values in [0,1]); the lanes are then summed in double. Written so
+  // the inner loop vectorises.
+  float column[128];
+  for (int dy = 0; dy < side; ++dy) {
+    for (int dx = 0; dx < side; ++dx) {
+      for (int i = 0; i < n; ++i) column[i] = 0.f;
+      for (int y = 0; y < n; ++y) {
+        const float* __restrict a = centred_reference_.data() + static_cast<std::size_t>(y) * n;
+        const float* __restrict b = search_patch.ptr<float>(y + dy) + dx;
+        for (int i = 0; i < n; ++i) column[i] += a[i] * b[i];
+      }
+      double total = 0;
+      for (int i = 0; i < n; ++i) total += column[i];
+      products_[static_cast<std::size_t>(dy) * side + dx] = total;
+    }
+  }
+}
+
+void WindowCorrelator::fft_products(const cv::Mat& search_patch, int radius_px, int n) {
+  const int p = search_patch.rows;
+  const int size = cv::getOptimalDFTSize(p);
+  fft_a_.create(size, size, CV_32F);
+  fft_b_.create(size, size, CV_32F);
+  fft_a_.setTo(0);
+  fft_b_.setTo(0);
+  cv::Mat(n, n, CV_32F, centred_reference_.data()).copyTo(fft_a_(cv::Rect(0, 0, n, n)));
+  search_patch.copyTo(fft_b_(cv::Rect(0, 0, p, p)));
+  cv::dft(fft_a_, spectrum_a_, 0, n);
+  cv::dft(fft_b_, spectrum_b_, 0, p);
+  // B·conj(A) is the spectrum of Σ a(p) b(p+s); the patch is padded to at
+  // least n+2r so shifts 0..2r never wrap around.
+  cv::mulSpectrums(spectrum_b_, spectrum_a_, product_spectrum_, 0, true);
+  cv::dft(product_spectrum_, correlation_, cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT);
+  const int side = 2 * radius_px + 1;
+  products_.assign(static_cast<std::size_t>(side) * side, 0.0);
+  for (int dy = 0; dy < side; ++dy) {
+    for (int dx = 0; dx < side; ++dx)
+      products_[static_cast<std::size_t>(dy) * side + dx] = correlation_.at<float>(dy, dx);
+  }
+}
+
+void WindowCorrelator::correlate_equal_windows(const cv::Mat& search_patch, int radius_px, int n,
+                                               CorrelationMethod method, CorrelationPlane& plane) {
+  CV_Assert(2 * radius_px < n);
+  const cv::Mat window = search_patch(cv::Rect(radius_px, radius_px, n, n));
+  double sum = 0;
+  for (int y = 0; y < n; ++y) {
+    const float* row = window.ptr<float>(y);
+    for (int x = 0; x < n; ++x) sum += row[x];
+  }
+  const double mean = sum / (double(n) * n);
+  const int p = n + 2 * radius_px;
+  periodic_.create(p, p, CV_32F);
+  double energy = 0;
+  for (int y = 0; y < n; ++y) {
+    const float* row = window.ptr<float>(y);
+    for (int x = 0; x < n; ++x) energy += (row[x] - mean) * (row[x] - mean);
+  }
+  // Tile without a modulo per pixel: each output row is the window row
+  // shifted by −r, wrapped once at each end.
+  for (int y = 0; y < p; ++y) {
+    const float* row = window.ptr<float>((y - radius_px + n) % n);
+    float* out = periodic_.ptr<float>(y);
+    const float m = static_cast<float>(mean);
+    for (int x = 0; x < radius_px; ++x) out[x] = row[n - radius_px + x] - m;
+    for (int x = 0; x < n; ++x) out[radius_px + x] = row[x] - m;
+    for (int x = 0; x < radius_px; ++x) out[radius_px + n + x] = row[x] - m;
+  }
+  if (method == CorrelationMethod::kDirect) {
+    direct_products(periodic_, radius_px, n);
+  } else {
+    // Transforms of exactly n×n are periodic over the window.
+    cv::Mat a(n, n, CV_32F, centred_reference_.data());
+    cv::Mat b = periodic_(cv::Rect(radius_px, radius_px, n, n)).clone();
+    cv::dft(a, spectrum_a_);
+    cv::dft(b, spectrum_b_);
+    cv::mulSpectrums(spectrum_b_, spectrum_a_, product_spectrum_, 0, true);
+    cv::dft(product_spectrum_, correlation_, cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT);
+    const int side = 2 * radius_px + 1;
+    products_.assign(static_cast<std::size_t>(side) * side, 0.0);
+    for (int dy = -radius_px; dy <= radius_px; ++dy) {
+      for (int dx = -radius_px; dx <= radius_px; ++dx) {
+        products_[static_cast<std::size_t>(dy + radius_px) * side + dx + radius_px] =
+            correlation_.at<float>((dy + n) % n, (dx + n) % n);
+      }
+    }
+  }
+  const bool flat = reference_energy_ < kMinEnergy || energy < kMinEnergy;
+  const double denominator = std::sqrt(reference_energy_ * energy);
+  for (std::size_t i = 0; i < plane.value.size(); ++i) plane.value[i] = flat ? 0.0 : products_[i] / denominator;
+}
+
+void WindowCorrelator::normalise(int radius_px, int n, CorrelationPlane& plane) const {
+  const int side = 2 * radius_px + 1;
+  const std::size_t stride = static_cast<std::size_t>(n) + 2 * radius_px + 1;
+  const double count = double(n) * n;
+  for (int dy = 0; dy < side; ++dy) {
+    for (int dx = 0; dx < side; ++dx) {
+      auto box = [&](const std::vector<double>& s) {
+        return s[(dy + n) * stride + dx + n] - s[dy * stride + dx + n] - s[(dy + n) * stride + dx] +
+               s[dy * stride + dx];
+      };
+      const double sum = box(sum_);
+      const double energy = box(sum_sq_) - sum * sum / count;
+      const double denominator = reference_energy_ * energy;
+      const std::size_t i = static_cast<std::size_t>(dy) * side + dx;
+      const bool flat = reference_energy_ < kMinEnergy || energy < kMinEnergy;
+      plane.value[i] = flat ? 0.0 : products_[i] / std::sqrt(denominator);
+    }
+  }
+}
+
+}  // namespace bosfuse::fusion

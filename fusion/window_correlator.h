@@ -1,0 +1,73 @@
+#pragma once
+// WindowCorrelator computes the zero-normalised cross-correlation (ZNCC) of
+// one interrogation window of the reference against every shift of it within
+// ±radius px in a search patch of the measurement image:
+//
+//   c(s) = Σ a'(p)·b(p+s) / sqrt(Σ a'(p)² · Σ (b(p+s) − mean_s b)²),  a' = a − mean a
+//
+// so c ∈ [−1, 1] whatever the illumination of either window. Two ways give
+// the same plane: direct summation, cheap when the search is small (BOS
+// shifts are a few pixels), and FFT, cheap for large windows or searches;
+// kAuto picks the cheaper by an operation count. Window sums use double;
+// windows without variance give c = 0 rather than a division by zero.
+//
+// Two pairings of windows:
+//  - kSearchArea: the reference window slides over the larger search patch
+//    (the formula above). Robust for a first pass with shifts of several
+//    pixels, but c(+1) and c(−1) pair different pixels, so even identical
+//    windows give a slightly asymmetric peak (a few 0.01 px of bias);
+//  - kEqualWindows: the measurement window of the same size at the same
+//    place, correlated periodically (as FFT-based PIV does). The peak of two
+//    identical windows is exactly symmetric, so after window deformation,
+//    where the remaining shift is close to 0, it has no such bias. Used for
+//    the refinement passes.
+// One correlator per thread: it keeps scratch buffers between calls.
+
+#include <opencv2/core.hpp>
+#include <vector>
+
+namespace bosfuse::fusion {
+
+enum class CorrelationMethod { kAuto, kDirect, kFft };
+enum class WindowPairing { kSearchArea, kEqualWindows };
+
+struct CorrelationPlane {
+  int radius = 0;             // shifts −radius..radius in x and y
+  std::vector<double> value;  // (2·radius+1)² row-major, index (dy+radius)·side + (dx+radius)
+  double reference_std = 0;   // sample standard deviation of the reference window
+
+  int side() const { return 2 * radius + 1; }
+  double at(int dx, int dy) const { return value[static_cast<std::size_t>((dy + radius) * side() + dx + radius)]; }
+};
+
+class WindowCorrelator {
+ public:
+  // `reference_window` is n×n, `search_patch` (n+2r)×(n+2r), both CV_32FC1
+  // (views into larger images are fine). The patch's top-left is the window's
+  // top-left shifted by (−r, −r).
+  // With kEqualWindows the central n×n of the patch is the measurement
+  // window, and the radius must be below n/2.
+  void correlate(const cv::Mat& reference_window, const cv::Mat& search_patch, int radius_px, CorrelationMethod method,
+                 CorrelationPlane& plane, WindowPairing pairing = WindowPairing::kSearchArea);
+
+  // Which method kAuto picks for an n-px window and a search radius.
+  static CorrelationMethod cheaper_method(int window_px, int radius_px);
+
+ private:
+  void prepare_reference(const cv::Mat& reference_window, CorrelationPlane& plane);
+  void prepare_patch_sums(const cv::Mat& search_patch);
+  void direct_products(const cv::Mat& search_patch, int radius_px, int window_px);
+  void fft_products(const cv::Mat& search_patch, int radius_px, int window_px);
+  void normalise(int radius_px, int window_px, CorrelationPlane& plane) const;
+  void correlate_equal_windows(const cv::Mat& search_patch, int radius_px, int window_px, CorrelationMethod method,
+                               CorrelationPlane& plane);
+
+  std::vector<float> centred_reference_;
+  double reference_energy_ = 0;       // Σ a'²
+  std::vector<double> products_;      // Σ a'·b per shift
+  std::vector<double> sum_, sum_sq_;  // integral images of the patch, (P+1)²
+  cv::Mat periodic_;                  // the centred measurement window tiled periodically, (n+2r)²
+  cv::Mat fft_a_, fft_b_, spectrum_a_, spectrum_b_, product_spectrum_, correlation_;
+};
+
+}  // namespace bosfuse::fusion
