@@ -308,6 +308,30 @@ std::string read_device(const TomlReader& r, ExperimentConfig& config) {
   r.fail("kind", "unknown device kind \"" + kind + "\" (modbus, hid or usb)");
 }
 
+CameraConfig read_camera(const TomlReader& r) {
+  CameraConfig c;
+  c.name = r.string("name");
+  if (c.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_") !=
+      std::string::npos) {
+    r.fail("name", "a camera name names its frame folder: use letters, digits, - and _");
+  }
+  c.source = r.string("source");
+  if (c.source == "video") {
+    c.target = r.string("device");
+    c.recorder.interval = r.seconds("interval_s", 1.0, 0.001);
+  } else if (c.source == "folder") {
+    c.folder.folder = r.string("folder");
+    c.folder.settle = std::chrono::duration_cast<std::chrono::milliseconds>(r.seconds("settle_s", 0.5, 0.0));
+    c.folder.camera_clock_offset_s = r.optional_number("camera_clock_offset_s").value_or(0.0);
+  } else {
+    r.fail("source", "expected \"video\" (a camera, video file or URL) or \"folder\" (files a camera writes)");
+  }
+  c.recorder.reference_frames = r.integer_in("reference_frames", 1, 0, 1'000'000);
+  c.reference_flag = r.optional_string("reference_flag").value_or("reference.flag");
+  r.reject_unknown_keys();
+  return c;
+}
+
 }  // namespace
 
 ExperimentConfig parse_experiment(std::string_view text, const std::string& source_name) {
@@ -324,6 +348,12 @@ ExperimentConfig parse_experiment(std::string_view text, const std::string& sour
   for (const TomlReader& device : reader.tables("devices")) {
     const std::string name = read_device(device, config);
     if (!names.insert(name).second) device.fail("name", "duplicate device name \"" + name + "\"");
+  }
+  for (const TomlReader& camera : reader.tables("cameras")) {
+    config.cameras.push_back(read_camera(camera));
+    if (!names.insert(config.cameras.back().name).second) {
+      camera.fail("name", "duplicate device name \"" + config.cameras.back().name + "\"");
+    }
   }
   reader.reject_unknown_keys();
   return config;

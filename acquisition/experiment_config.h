@@ -12,10 +12,12 @@
 #include <string>
 #include <vector>
 
+#include "acquisition/frame_recorder.h"
 #include "acquisition/hid_device.h"
 #include "acquisition/modbus_device.h"
 #include "acquisition/toml_reader.h"
 #include "acquisition/usb_tc32_device.h"
+#include "acquisition/watched_folder_source.h"
 
 namespace bosfuse::acquisition {
 
@@ -46,15 +48,29 @@ struct UsbDeviceConfig {
   std::chrono::milliseconds timeout{500};
 };
 
+// A camera: a VideoCapture device/file/URL read at an interval, or a folder
+// a tethered camera writes into.
+struct CameraConfig {
+  std::string name;
+  std::string source;  // "video" or "folder"
+  std::string target;  // video: camera index, file or URL
+  WatchedFolderOptions folder;
+  FrameRecorder::Options recorder;
+  std::filesystem::path reference_flag;  // relative paths are relative to the run folder
+};
+
 struct ExperimentConfig {
   std::string run_name;
   std::string description;
   std::vector<ModbusDeviceConfig> modbus_devices;
   std::vector<HidDeviceConfig> hid_devices;
   std::vector<UsbDeviceConfig> usb_devices;
+  std::vector<CameraConfig> cameras;
   std::string source_text;  // the file as written
 
-  std::size_t device_count() const { return modbus_devices.size() + hid_devices.size() + usb_devices.size(); }
+  std::size_t device_count() const {
+    return modbus_devices.size() + hid_devices.size() + usb_devices.size() + cameras.size();
+  }
 };
 
 ExperimentConfig parse_experiment(std::string_view text, const std::string& source_name);

@@ -103,6 +103,27 @@ TEST(ExperimentConfig, UsbTc32ChannelsAndMistakes) {
             "exp.toml:5: devices[0].channels[0]: missing required key 'input'");
 }
 
+TEST(ExperimentConfig, CamerasAndTheirMistakes) {
+  const auto config = parse_experiment(
+      "[[cameras]]\nname = \"cam\"\nsource = \"video\"\ndevice = \"0\"\ninterval_s = 2.5\n"
+      "[[cameras]]\nname = \"dslr\"\nsource = \"folder\"\nfolder = \"/data/shots\"\ncamera_clock_offset_s = -3600\n"
+      "reference_frames = 3\n",
+      "exp.toml");
+  ASSERT_EQ(config.cameras.size(), 2u);
+  EXPECT_EQ(config.cameras[0].target, "0");
+  EXPECT_EQ(config.cameras[0].recorder.interval, std::chrono::milliseconds(2500));
+  EXPECT_EQ(config.cameras[1].folder.folder, "/data/shots");
+  EXPECT_DOUBLE_EQ(config.cameras[1].folder.camera_clock_offset_s, -3600.0);
+  EXPECT_EQ(config.cameras[1].recorder.reference_frames, 3);
+  EXPECT_EQ(config.cameras[1].reference_flag, "reference.flag");
+  EXPECT_EQ(error_of("[[cameras]]\nname = \"c\"\nsource = \"webcam\"\n").substr(0, 31),
+            "exp.toml:3: cameras[0].source: ");
+  EXPECT_EQ(error_of("[[cameras]]\nname = \"my cam\"\nsource = \"video\"\ndevice = \"0\"\n").substr(0, 29),
+            "exp.toml:2: cameras[0].name: ");
+  EXPECT_EQ(error_of("[[cameras]]\nname = \"c\"\nsource = \"folder\"\n"),
+            "exp.toml:1: cameras[0]: missing required key 'folder'");
+}
+
 TEST(ExperimentConfig, HidMistakesNameTheKeyAndLine) {
   const std::string usb_tc = "[[devices]]\nname = \"u\"\nkind = \"hid\"\nprofile = \"mcc-usb-tc\"\n";
   EXPECT_EQ(error_of(usb_tc + "[[devices.channels]]\nname = \"t\"\ninput = 8\n"),

@@ -28,6 +28,7 @@ class FrameSource {
  public:
   virtual ~FrameSource() = default;
 
+  virtual std::string kind() const = 0;      // "video", "folder", "virtual": stored as the device's profile
   virtual std::string describe() const = 0;  // "camera 0", "folder /data/dslr"
   virtual void open() = 0;                   // throws DeviceError
   virtual void close() = 0;                  // never throws

@@ -6,6 +6,8 @@
 #include <thread>
 
 #include "acquisition/clock.h"
+#include "acquisition/video_capture_source.h"
+#include "acquisition/watched_folder_source.h"
 
 namespace bosfuse::acquisition {
 namespace {
@@ -16,13 +18,18 @@ constexpr auto kStopCheckInterval = std::chrono::milliseconds(20);
 
 std::string Logger::Summary::BriefReport() const {
   std::ostringstream out;
-  out << "logged " << writer.samples_committed << " samples and " << writer.events_committed << " events in "
-      << elapsed_s << " s";
+  out << "logged " << writer.samples_committed << " samples, " << writer.frames_committed << " frames and "
+      << writer.events_committed << " events in " << elapsed_s << " s";
   for (const DeviceSummary& d : devices) {
     out << "\n  " << d.name << ": " << d.stats.polls_ok << " polls ok, " << d.stats.polls_failed << " failed, "
         << d.stats.reconnects << " reconnects";
     if (d.stats.connect_failures > 0) out << ", " << d.stats.connect_failures << " failed connection attempts";
     if (d.stats.missed_ticks > 0) out << ", " << d.stats.missed_ticks << " polls skipped (device too slow)";
+  }
+  for (const CameraSummary& c : cameras) {
+    out << "\n  " << c.name << ": " << c.stats.frames << " frames (" << c.stats.reference_frames << " reference)";
+    if (c.stats.failures > 0) out << ", " << c.stats.failures << " failures";
+    if (c.stats.finished) out << ", source ended";
   }
   if (writer.uncommitted_at_stop > 0) {
     out << "\n  ERROR: " << writer.uncommitted_at_stop << " records could not be committed: " << writer.last_error;
@@ -84,6 +91,34 @@ void Logger::add_devices(const ExperimentConfig& config) {
   for (const UsbDeviceConfig& d : config.usb_devices) {
     add_source(std::make_unique<UsbTc32Device>(d.name, d.serial, d.channels, d.timeout), d.poll_period);
   }
+  for (const CameraConfig& c : config.cameras) {
+    std::unique_ptr<FrameSource> source;
+    if (c.source == "video") {
+      source = std::make_unique<VideoCaptureSource>(c.target);
+    } else {
+      source = std::make_unique<WatchedFolderSource>(c.folder);
+    }
+    FrameRecorder::Options options = c.recorder;
+    options.reference_flag = c.reference_flag.is_absolute() ? c.reference_flag : store_.dir() / c.reference_flag;
+    add_camera(std::move(source), c.name, options);
+  }
+}
+
+void Logger::add_camera(std::unique_ptr<FrameSource> source, std::string name, FrameRecorder::Options options) {
+  cameras_.push_back({std::move(source), std::move(name), std::move(options)});
+}
+
+std::vector<std::unique_ptr<FrameRecorder>> Logger::make_recorders(storage::RunWriter& writer) {
+  std::vector<std::unique_ptr<FrameRecorder>> recorders;
+  for (PendingCamera& camera : cameras_) {
+    const std::int64_t device_id =
+        store_.add_device({0, camera.name, "camera", camera.source->kind(), camera.source->describe()});
+    camera.options.backoff = {options_.backoff_initial, options_.backoff_max};
+    recorders.push_back(std::make_unique<FrameRecorder>(std::move(camera.source), camera.name, device_id, store_.dir(),
+                                                        writer, camera.options));
+  }
+  cameras_.clear();
+  return recorders;
 }
 
 Logger::Summary Logger::run(const std::atomic<bool>& stop_requested) {
@@ -116,14 +151,22 @@ Logger::Summary Logger::run_devices(const std::atomic<bool>& stop_requested) {
         std::make_unique<DevicePoller>(std::move(pending.source), device_id, channel_ids, writer, poll_options));
   }
   sources_.clear();
-  writer.push(storage::Event{0, std::nullopt, utc_now_ns(), "started", std::to_string(pollers.size()) + " devices"});
+  std::vector<std::unique_ptr<FrameRecorder>> recorders = make_recorders(writer);
+  writer.push(
+      storage::Event{0, std::nullopt, utc_now_ns(), "started",
+                     std::to_string(pollers.size()) + " devices, " + std::to_string(recorders.size()) + " cameras"});
   for (auto& poller : pollers) poller->start();
+  for (auto& recorder : recorders) recorder->start();
 
   wait_for_end(stop_requested, pollers);
 
   for (auto& poller : pollers) {
     poller->stop();
     summary.devices.push_back({poller->name(), poller->stats()});
+  }
+  for (auto& recorder : recorders) {
+    recorder->stop();
+    summary.cameras.push_back({recorder->name(), recorder->stats()});
   }
   writer.push(storage::Event{0, std::nullopt, utc_now_ns(), "stopped",
                              stop_requested.load() ? "stop requested" : "duration reached"});

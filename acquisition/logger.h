@@ -39,8 +39,14 @@ class Logger {
     DevicePoller::Stats stats;
   };
 
+  struct CameraSummary {
+    std::string name;
+    FrameRecorder::Stats stats;
+  };
+
   struct Summary {
     std::vector<DeviceSummary> devices;
+    std::vector<CameraSummary> cameras;
     storage::RunWriter::Stats writer;
     double elapsed_s = 0;
     std::string BriefReport() const;
@@ -50,7 +56,9 @@ class Logger {
 
   // Adds a device polled every `period`. Call before run().
   void add_source(std::unique_ptr<ThermocoupleSource> source, std::chrono::nanoseconds period);
-  // Adds every device of an experiment file.
+  // Adds a camera whose frames are stored under frames/<name>/. Call before run().
+  void add_camera(std::unique_ptr<FrameSource> source, std::string name, FrameRecorder::Options options);
+  // Adds every device and camera of an experiment file.
   void add_devices(const ExperimentConfig& config);
 
   Summary run(const std::atomic<bool>& stop_requested);
@@ -70,7 +78,16 @@ class Logger {
 
   storage::RunStore& store_;
   Options options_;
+  struct PendingCamera {
+    std::unique_ptr<FrameSource> source;
+    std::string name;
+    FrameRecorder::Options options;
+  };
+
+  std::vector<std::unique_ptr<FrameRecorder>> make_recorders(storage::RunWriter& writer);
+
   std::vector<PendingSource> sources_;
+  std::vector<PendingCamera> cameras_;
 };
 
 }  // namespace bosfuse::acquisition

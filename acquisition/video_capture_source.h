@@ -15,6 +15,7 @@ class VideoCaptureSource : public FrameSource {
  public:
   explicit VideoCaptureSource(std::string target);  // index, file or URL
 
+  std::string kind() const override { return "video"; }
   std::string describe() const override;
   void open() override;
   void close() override;

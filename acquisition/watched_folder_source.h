@@ -29,6 +29,7 @@ class WatchedFolderSource : public FrameSource {
  public:
   explicit WatchedFolderSource(WatchedFolderOptions options);
 
+  std::string kind() const override { return "folder"; }
   std::string describe() const override;
   void open() override;
   void close() override {}

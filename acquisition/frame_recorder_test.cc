@@ -1,0 +1,122 @@
+// The recorder against a scripted camera: lossless files at the camera's bit
+// depth, reference frames, frames in the run store, and a camera that fails.
+
+#include "acquisition/frame_recorder.h"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
+
+#include "acquisition/clock.h"
+#include "tests/support/temp_dir.h"
+#include "tests/support/test_images.h"
+
+namespace bosfuse::acquisition {
+namespace {
+
+using namespace std::chrono_literals;
+
+// Yields a fixed list of frames, one per call; `fail_at` makes that call throw
+// DeviceError once.
+class ScriptedCamera : public FrameSource {
+ public:
+  std::vector<cv::Mat> frames;
+  int fail_at = -1;
+
+  std::string kind() const override { return "virtual"; }
+  std::string describe() const override { return "scripted camera"; }
+  void open() override {}
+  void close() override {}
+  std::optional<CapturedFrame> next(std::chrono::milliseconds wait) override {
+    const int call = calls_++;
+    if (call == fail_at) throw DeviceError("cable pulled");
+    if (next_ >= frames.size()) {
+      std::this_thread::sleep_for(wait);
+      return std::nullopt;
+    }
+    return CapturedFrame{frames[next_++], utc_now_ns(), std::nullopt, "scripted"};
+  }
+
+ private:
+  std::size_t next_ = 0;
+  int calls_ = 0;
+};
+
+struct Harness {
+  testing::TempDir dir;
+  storage::RunStore store = storage::RunStore::create(dir / "run", {0, "t", 0, {}, "", storage::RunStatus::kRunning},
+                                                      storage::RunStore::CreateMode::kNew);
+  std::int64_t device = store.add_device({0, "cam", "camera", "virtual", ""});
+
+  FrameRecorder::Stats record(std::unique_ptr<ScriptedCamera> camera, FrameRecorder::Options options,
+                              std::size_t expected_frames) {
+    storage::RunWriter writer(store, {20ms, 10'000});
+    FrameRecorder recorder(std::move(camera), "cam", device, store.dir(), writer, options);
+    recorder.start();
+    for (int i = 0; i < 300 && recorder.stats().frames < static_cast<std::int64_t>(expected_frames); ++i) {
+      std::this_thread::sleep_for(10ms);
+    }
+    recorder.stop();
+    writer.flush();
+    return recorder.stats();
+  }
+};
+
+FrameRecorder::Options fast_options() {
+  FrameRecorder::Options options;
+  options.interval = 20ms;
+  options.backoff = {20ms, 100ms};
+  return options;
+}
+
+TEST(FrameRecorder, StoresLosslessFramesAtTheirBitDepthWithTheFirstAsReference) {
+  Harness h;
+  auto camera = std::make_unique<ScriptedCamera>();
+  camera->frames = {testing::textured_frame(0, CV_16U), testing::textured_frame(1, CV_16U),
+                    testing::textured_frame(2, CV_8UC3)};
+  const auto originals = camera->frames;
+  const auto stats = h.record(std::move(camera), fast_options(), 3);
+  EXPECT_EQ(stats.frames, 3);
+  const auto frames = h.store.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_EQ(frames[i].is_reference, i == 0);
+    EXPECT_EQ(frames[i].bit_depth, i < 2 ? 16 : 8);
+    EXPECT_EQ(frames[i].path, "frames/cam/00000" + std::to_string(i) + ".png");
+    const cv::Mat stored = cv::imread((h.store.dir() / frames[i].path).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(stored.type(), originals[i].type());
+    EXPECT_EQ(cv::norm(stored, originals[i], cv::NORM_INF), 0.0) << "frame " << i;
+  }
+  for (const auto& entry : std::filesystem::directory_iterator(h.store.dir() / "frames/cam")) {
+    EXPECT_EQ(entry.path().string().find("partial"), std::string::npos) << entry.path();
+  }
+}
+
+TEST(FrameRecorder, FramesTakenWhileFlaggedAreReferences) {
+  Harness h;
+  auto camera = std::make_unique<ScriptedCamera>();
+  camera->frames = {testing::textured_frame(0), testing::textured_frame(1)};
+  FrameRecorder::Options options = fast_options();
+  options.reference_frames = 0;
+  options.reference_flag = h.dir.path() / "reference.flag";
+  testing::write_file(options.reference_flag, {});
+  h.record(std::move(camera), options, 2);
+  for (const auto& frame : h.store.frames()) EXPECT_TRUE(frame.is_reference);
+}
+
+TEST(FrameRecorder, FailingCameraIsRecordedAndReopened) {
+  Harness h;
+  auto camera = std::make_unique<ScriptedCamera>();
+  camera->frames = {testing::textured_frame(0), testing::textured_frame(1)};
+  camera->fail_at = 1;
+  const auto stats = h.record(std::move(camera), fast_options(), 2);
+  EXPECT_EQ(stats.frames, 2);
+  EXPECT_EQ(stats.failures, 1);
+  std::vector<std::string> kinds;
+  for (const auto& e : h.store.events()) kinds.push_back(e.kind);
+  EXPECT_EQ(kinds, (std::vector<std::string>{"connect", "disconnect", "reconnect"}));
+}
+
+}  // namespace
+}  // namespace bosfuse::acquisition
