@@ -58,6 +58,34 @@ void read_channel_identity(const TomlReader& r, Channel& c) {
   read_position(r, c);
 }
 
+// `emf_type` marks a channel that delivers millivolts from a thermocouple;
+// its cold junction is another channel of the device or a fixed temperature.
+std::optional<EmfInput> read_emf_input(const TomlReader& r) {
+  const auto type_text = r.optional_string("emf_type");
+  if (!type_text) {
+    if (r.has("cold_junction") || r.has("cold_junction_c")) r.fail("emf_type", "cold junction given without emf_type");
+    return std::nullopt;
+  }
+  const auto type = parse_thermocouple_type(*type_text);
+  if (!type) r.fail("emf_type", "expected a thermocouple type: B, E, J, K, N, R, S or T");
+  EmfInput input{*type, r.optional_string("cold_junction").value_or(""), r.optional_number("cold_junction_c")};
+  if (input.cold_junction_channel.empty() == !input.cold_junction_c) {
+    r.fail("", "a millivolt channel needs exactly one of cold_junction (a channel name) and cold_junction_c");
+  }
+  return input;
+}
+
+// Cold-junction channels must exist on the same device.
+void check_cold_junctions(const TomlReader& device, const std::vector<std::optional<EmfInput>>& inputs,
+                          const std::set<std::string>& channel_names) {
+  const auto tables = device.tables("channels");
+  for (std::size_t i = 0; i < inputs.size() && i < tables.size(); ++i) {
+    if (inputs[i] && !inputs[i]->cold_junction_c && !channel_names.count(inputs[i]->cold_junction_channel)) {
+      tables[i].fail("cold_junction", "no channel \"" + inputs[i]->cold_junction_channel + "\" on this device");
+    }
+  }
+}
+
 template <typename Channel>
 void read_validity(const TomlReader& r, Channel& c) {
   if (r.has("open_circuit_codes")) c.open_circuit_codes = r.numbers("open_circuit_codes");
@@ -141,12 +169,14 @@ ModbusDeviceConfig read_modbus_device(const TomlReader& r) {
   read_schedule(r, d.poll_period, d.timeout);
   std::set<std::string> names;
   for (const TomlReader& channel : r.tables("channels")) {
+    d.emf_inputs.push_back(read_emf_input(channel));
     d.channels.push_back(read_channel(channel, *profile));
     if (!names.insert(d.channels.back().name).second) {
       channel.fail("name", "duplicate channel name \"" + d.channels.back().name + "\"");
     }
   }
   if (d.channels.empty()) r.fail("", "a device needs at least one [[devices.channels]] entry");
+  check_cold_junctions(r, d.emf_inputs, names);
   r.reject_unknown_keys();
   return d;
 }
@@ -247,12 +277,14 @@ HidDeviceConfig read_hid_device(const TomlReader& r) {
   for (auto& request : r.byte_arrays("setup_requests")) d.protocol.setup_requests.push_back(std::move(request));
   std::set<std::string> names;
   for (const TomlReader& channel : r.tables("channels")) {
+    d.emf_inputs.push_back(read_emf_input(channel));
     d.protocol.channels.push_back(read_hid_channel(channel, d.profile, d.protocol));
     if (!names.insert(d.protocol.channels.back().name).second) {
       channel.fail("name", "duplicate channel name \"" + d.protocol.channels.back().name + "\"");
     }
   }
   if (d.protocol.channels.empty()) r.fail("", "a device needs at least one [[devices.channels]] entry");
+  check_cold_junctions(r, d.emf_inputs, names);
   r.reject_unknown_keys();
   return d;
 }

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "acquisition/emf_conversion.h"
 #include "acquisition/frame_recorder.h"
 #include "acquisition/hid_device.h"
 #include "acquisition/modbus_device.h"
@@ -28,6 +29,7 @@ struct ModbusDeviceConfig {
   std::chrono::nanoseconds poll_period = std::chrono::seconds(1);
   std::chrono::milliseconds timeout{500};
   std::vector<ModbusChannel> channels;
+  std::vector<std::optional<EmfInput>> emf_inputs;  // one per channel: set when it delivers millivolts
 };
 
 struct HidDeviceConfig {
@@ -35,6 +37,7 @@ struct HidDeviceConfig {
   std::string profile;  // mcc-usb-tc, temper or generic-hid
   HidMatch match;
   HidProtocol protocol;
+  std::vector<std::optional<EmfInput>> emf_inputs;  // one per channel: set when it delivers millivolts
   std::chrono::nanoseconds poll_period = std::chrono::seconds(1);
   std::chrono::milliseconds timeout{500};
 };

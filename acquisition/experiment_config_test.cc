@@ -103,6 +103,24 @@ TEST(ExperimentConfig, UsbTc32ChannelsAndMistakes) {
             "exp.toml:5: devices[0].channels[0]: missing required key 'input'");
 }
 
+TEST(ExperimentConfig, MillivoltChannelsNameTheirColdJunction) {
+  const std::string device = "[[devices]]\nname = \"g\"\nprofile = \"generic\"\ntransport = \"tcp\"\nhost = \"h\"\n";
+  const std::string cj = "[[devices.channels]]\nname = \"cj\"\nregister = \"input\"\naddress = 8\n";
+  const std::string mv = "[[devices.channels]]\nname = \"tc\"\nregister = \"input\"\naddress = 0\nemf_type = \"K\"\n";
+  const auto config = parse_experiment(device + cj + mv + "cold_junction = \"cj\"\n", "exp.toml");
+  const auto& inputs = config.modbus_devices[0].emf_inputs;
+  ASSERT_EQ(inputs.size(), 2u);
+  EXPECT_FALSE(inputs[0].has_value());
+  EXPECT_EQ(inputs[1]->cold_junction_channel, "cj");
+  EXPECT_EQ(error_of(device + cj + mv + "cold_junction = \"cjj\"\n"),
+            "exp.toml:15: devices[0].channels[1].cold_junction: no channel \"cjj\" on this device");
+  EXPECT_EQ(error_of(device + cj + mv),
+            "exp.toml:10: devices[0].channels[1]: a millivolt channel needs exactly one "
+            "of cold_junction (a channel name) and cold_junction_c");
+  EXPECT_EQ(error_of(device + cj + "cold_junction_c = 20\n"),
+            "exp.toml:6: devices[0].channels[0].emf_type: cold junction given without emf_type");
+}
+
 TEST(ExperimentConfig, CamerasAndTheirMistakes) {
   const auto config = parse_experiment(
       "[[cameras]]\nname = \"cam\"\nsource = \"video\"\ndevice = \"0\"\ninterval_s = 2.5\n"

@@ -83,10 +83,14 @@ void Logger::add_source(std::unique_ptr<ThermocoupleSource> source, std::chrono:
 
 void Logger::add_devices(const ExperimentConfig& config) {
   for (const ModbusDeviceConfig& d : config.modbus_devices) {
-    add_source(std::make_unique<ModbusDevice>(d.name, d.profile, d.endpoint, d.channels, d.timeout), d.poll_period);
+    add_source(with_emf_conversion(std::make_unique<ModbusDevice>(d.name, d.profile, d.endpoint, d.channels, d.timeout),
+                                   d.emf_inputs),
+               d.poll_period);
   }
   for (const HidDeviceConfig& d : config.hid_devices) {
-    add_source(std::make_unique<HidDevice>(d.name, d.profile, d.match, d.protocol, d.timeout), d.poll_period);
+    add_source(with_emf_conversion(std::make_unique<HidDevice>(d.name, d.profile, d.match, d.protocol, d.timeout),
+                                   d.emf_inputs),
+               d.poll_period);
   }
   for (const UsbDeviceConfig& d : config.usb_devices) {
     add_source(std::make_unique<UsbTc32Device>(d.name, d.serial, d.channels, d.timeout), d.poll_period);
