@@ -77,6 +77,8 @@ TEST(ExperimentConfig, ExamplesParse) {
 TEST(ExperimentConfig, UsbTcChannelsSetTheirTypesAndReadBurnout) {
   const auto config = load_experiment(std::string(BOSFUSE_SOURCE_DIR) + "/examples/usb-thermometers.toml");
   ASSERT_EQ(config.hid_devices.size(), 2u);
+  ASSERT_EQ(config.usb_devices.size(), 1u);
+  EXPECT_TRUE(config.usb_devices[0].channels[1].cold_junction);
   const HidDeviceConfig& tc = config.hid_devices[0];
   EXPECT_EQ(tc.match.vendor_id, kMccVendorId);
   EXPECT_EQ(tc.protocol.setup_requests,
