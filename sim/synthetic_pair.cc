@@ -33,17 +33,23 @@ cv::Mat quantise(const cv::Mat& unit, int bit_depth) {
 }
 
 cv::Mat finish(cv::Mat image, const PairOptions& options, std::uint64_t stream) {
-  if (options.blur_sigma_px > 0) cv::GaussianBlur(image, image, cv::Size(0, 0), options.blur_sigma_px);
-  if (options.noise_std > 0) {
-    cv::Mat noise(image.size(), CV_64F);
-    cv::RNG rng(options.noise_seed * 2654435761u + stream);
-    rng.fill(noise, cv::RNG::NORMAL, 0.0, options.noise_std);
-    image += noise;
-  }
-  return quantise(image, options.bit_depth);
+  return camera_image(std::move(image), options.blur_sigma_px, options.noise_std, options.bit_depth,
+                      options.noise_seed, stream);
 }
 
 }  // namespace
+
+cv::Mat camera_image(cv::Mat image, double blur_sigma_px, double noise_std, int bit_depth, std::uint64_t noise_seed,
+                     std::uint64_t stream) {
+  if (blur_sigma_px > 0) cv::GaussianBlur(image, image, cv::Size(0, 0), blur_sigma_px);
+  if (noise_std > 0) {
+    cv::Mat noise(image.size(), CV_64F);
+    cv::RNG rng(noise_seed * 2654435761u + stream);
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, noise_std);
+    image += noise;
+  }
+  return quantise(image, bit_depth);
+}
 
 DisplacementModel DisplacementModel::uniform(double u_px, double v_px) {
   DisplacementModel m;
@@ -118,13 +124,18 @@ std::string PairOptions::Validate() const {
 }
 
 cv::Mat render_dots(const BackgroundPattern& pattern, const DisplacementModel* displacement) {
+  if (!displacement) return render_dots(pattern, DisplacementFunction{});
+  return render_dots(pattern, [displacement](double x, double y) { return displacement->at(x, y); });
+}
+
+cv::Mat render_dots(const BackgroundPattern& pattern, const DisplacementFunction& displacement) {
   cv::Mat image(pattern.size, CV_64F, cv::Scalar(pattern.background_grey / 255.0));
   const double sigma = pattern.dot_diameter_px / 4;
   const double reach = 3.5 * sigma + 1;
   std::vector<double> along_x, along_y;
   for (const Dot& dot : pattern.dots) {
     cv::Point2d centre(dot.x_px, dot.y_px);
-    if (displacement) centre += displacement->at(dot.x_px, dot.y_px);
+    if (displacement) centre += displacement(dot.x_px, dot.y_px);
     const int x0 = std::max(0, int(std::floor(centre.x - reach))),
               x1 = std::min(image.cols - 1, int(std::ceil(centre.x + reach)));
     const int y0 = std::max(0, int(std::floor(centre.y - reach))),

@@ -13,6 +13,7 @@
 // measurement image, as DESIGN.md defines displacement.
 
 #include <cstdint>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -64,8 +65,18 @@ struct SyntheticPair {
 
 SyntheticPair render_pair(const PairOptions& options);
 
+// Where the dot centred at (x, y) in the reference has moved: (u, v) in px.
+using DisplacementFunction = std::function<cv::Point2d(double x_px, double y_px)>;
+
 // Gaussian dots (σ = diameter/4) integrated over each pixel, painted in
-// order; full scale is 1.0 (grey 255). CV_64FC1.
+// order; full scale is 1.0 (grey 255). CV_64FC1. No displacement: the reference.
+cv::Mat render_dots(const BackgroundPattern& pattern, const DisplacementFunction& displacement);
 cv::Mat render_dots(const BackgroundPattern& pattern, const DisplacementModel* displacement);
+
+// The camera after the optics: blur, Gaussian noise (fraction of full scale,
+// seeded by noise_seed and stream) and quantisation of a CV_64F image with
+// full scale 1.0 to 8 or 16 bits.
+cv::Mat camera_image(cv::Mat image, double blur_sigma_px, double noise_std, int bit_depth, std::uint64_t noise_seed,
+                     std::uint64_t stream);
 
 }  // namespace bosfuse::sim
