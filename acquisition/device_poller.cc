@@ -11,6 +11,7 @@
 namespace bosfuse::acquisition {
 std::string DevicePoller::Options::Validate() const {
   if (period <= std::chrono::nanoseconds::zero()) return "poll period must be positive";
+  if (poll_count && *poll_count < 1) return "poll count must be at least 1";
   return ConnectionKeeper::Backoff{backoff_initial, backoff_max}.Validate();
 }
 
@@ -149,6 +150,10 @@ void DevicePoller::run() {
     if (const std::string failure = poll_once(); !failure.empty()) {
       source_->disconnect();  // the next attempt starts from a fresh connection
       record_event("disconnect", failure);
+    }
+    if (options_.poll_count && stats().polls_ok + stats().polls_failed >= *options_.poll_count) {
+      record_event("stopped", "poll count reached");
+      break;
     }
     const SteadyTime next = next_tick_after(std::chrono::steady_clock::now());
     count_missed_ticks(deadline, next);

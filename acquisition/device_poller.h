@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -30,6 +31,7 @@ class DevicePoller {
     std::chrono::nanoseconds period = std::chrono::seconds(1);
     std::chrono::milliseconds backoff_initial{250};
     std::chrono::milliseconds backoff_max{10'000};
+    std::optional<std::int64_t> poll_count;  // stop after this many polls (ok or failed)
     std::string Validate() const;
   };
 

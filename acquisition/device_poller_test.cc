@@ -84,7 +84,7 @@ TEST(DevicePoller, FixedScheduleDoesNotDriftWhenReadsTakeTime) {
   Harness h;
   auto source = std::make_unique<ScriptedSource>();
   source->read_time = 4ms;  // a drifting "sleep one period after each poll" loop would lose 4 ms per poll
-  const auto stats = h.run(std::move(source), {20ms, 250ms, 10s}, 2050ms);
+  const auto stats = h.run(std::move(source), {20ms, 250ms, 10s, {}}, 2050ms);
   const auto samples = h.store.read_samples(h.channels[0]);
   ASSERT_GE(samples.size(), 90u);
   // 100 polls due in 2.05 s; drift would have cost 100 × 4 ms = 0.4 s, i.e. ~17 polls.
@@ -96,7 +96,7 @@ TEST(DevicePoller, FixedScheduleDoesNotDriftWhenReadsTakeTime) {
 
 TEST(DevicePoller, StatusesPassThroughAndOpenCircuitHasNoValue) {
   Harness h;
-  h.run(std::make_unique<ScriptedSource>(), {50ms, 250ms, 10s}, 300ms);
+  h.run(std::make_unique<ScriptedSource>(), {50ms, 250ms, 10s, {}}, 300ms);
   for (const auto& s : h.store.read_samples(h.channels[1])) {
     EXPECT_EQ(s.status, SampleStatus::kOpenCircuit);
     EXPECT_FALSE(s.value.has_value());
@@ -110,7 +110,7 @@ TEST(DevicePoller, UnreachableDeviceIsReportedOnceAndRetriedWithBackoff) {
   auto source = std::make_unique<ScriptedSource>();
   source->connect_failures_left = 4;
   ScriptedSource* probe = source.get();
-  const auto stats = h.run(std::move(source), {20ms, 20ms, 80ms}, 800ms);
+  const auto stats = h.run(std::move(source), {20ms, 20ms, 80ms, {}}, 800ms);
   // Backoff 20, 40, 80, 80 ms: connected after ~220 ms, then polled.
   EXPECT_EQ(stats.connect_failures, 4);
   EXPECT_EQ(probe->connects.load(), 5);
@@ -124,7 +124,7 @@ TEST(DevicePoller, FailedReadsBecomeTimeoutSamplesThenReconnect) {
   auto source = std::make_unique<ScriptedSource>();
   source->reads_failing_from = 5;
   source->reads_failing_count = 1;
-  const auto stats = h.run(std::move(source), {20ms, 20ms, 80ms}, 600ms);
+  const auto stats = h.run(std::move(source), {20ms, 20ms, 80ms, {}}, 600ms);
   EXPECT_EQ(stats.polls_failed, 1);
   EXPECT_EQ(stats.reconnects, 1);
   const auto samples = h.store.read_samples(h.channels[0]);
@@ -135,12 +135,20 @@ TEST(DevicePoller, FailedReadsBecomeTimeoutSamplesThenReconnect) {
   EXPECT_EQ(h.event_kinds(), (std::vector<std::string>{"connect", "disconnect", "reconnect"}));
 }
 
+TEST(DevicePoller, StopsAfterItsPollCount) {
+  Harness h;
+  const auto stats = h.run(std::make_unique<ScriptedSource>(), {10ms, 250ms, 10s, 7}, 400ms);
+  EXPECT_EQ(stats.polls_ok, 7);
+  EXPECT_EQ(h.store.read_samples(h.channels[0]).size(), 7u);
+  EXPECT_EQ(h.event_kinds().back(), "stopped");
+}
+
 TEST(DevicePoller, InvalidOptionsAreRefused) {
   Harness h;
   storage::RunWriter writer(h.store);
-  EXPECT_THROW(DevicePoller(std::make_unique<ScriptedSource>(), h.device, h.channels, writer, {0ms, 20ms, 80ms}),
+  EXPECT_THROW(DevicePoller(std::make_unique<ScriptedSource>(), h.device, h.channels, writer, {0ms, 20ms, 80ms, {}}),
                std::invalid_argument);
-  EXPECT_THROW(DevicePoller(std::make_unique<ScriptedSource>(), h.device, {1}, writer, {20ms, 20ms, 80ms}),
+  EXPECT_THROW(DevicePoller(std::make_unique<ScriptedSource>(), h.device, {1}, writer, {20ms, 20ms, 80ms, {}}),
                std::invalid_argument);
 }
 
@@ -148,7 +156,7 @@ TEST(DevicePoller, SourceNoticesBecomeHotplugEvents) {
   Harness h;
   auto source = std::make_unique<ScriptedSource>();
   source->notices = {"unplugged from bus 1 device 7", "plugged in at bus 1 device 8"};
-  h.run(std::move(source), {20ms, 250ms, 10s}, 200ms);
+  h.run(std::move(source), {20ms, 250ms, 10s, {}}, 200ms);
   std::vector<std::string> messages;
   for (const auto& e : h.store.events()) {
     if (e.kind == "hotplug") messages.push_back(e.message);

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -95,9 +96,11 @@ void read_validity(const TomlReader& r, Channel& c) {
   }
 }
 
-void read_schedule(const TomlReader& r, std::chrono::nanoseconds& poll_period, std::chrono::milliseconds& timeout) {
-  poll_period = r.seconds("poll_period_s", 1.0, 0.001);
-  timeout = std::chrono::duration_cast<std::chrono::milliseconds>(r.seconds("timeout_s", 0.5, 0.001));
+template <typename Device>
+void read_schedule(const TomlReader& r, Device& d) {
+  d.poll_period = r.seconds("poll_period_s", 1.0, 0.001);
+  if (r.has("poll_count")) d.poll_count = r.integer_in("poll_count", 1, 1, std::numeric_limits<int>::max());
+  d.timeout = std::chrono::duration_cast<std::chrono::milliseconds>(r.seconds("timeout_s", 0.5, 0.001));
 }
 
 // Register fields, required for a generic channel, optional overrides
@@ -166,7 +169,7 @@ ModbusDeviceConfig read_modbus_device(const TomlReader& r) {
   const ModbusProfile* profile = find_modbus_profile(d.profile);
   if (!profile) r.fail("profile", "unknown profile \"" + d.profile + "\" (adam-6018, icpdas-m7018 or generic)");
   d.endpoint = read_endpoint(r, *profile);
-  read_schedule(r, d.poll_period, d.timeout);
+  read_schedule(r, d);
   std::set<std::string> names;
   for (const TomlReader& channel : r.tables("channels")) {
     d.emf_inputs.push_back(read_emf_input(channel));
@@ -269,7 +272,7 @@ HidDeviceConfig read_hid_device(const TomlReader& r) {
     r.fail("profile", "unknown HID profile \"" + d.profile + "\" (mcc-usb-tc, temper or generic-hid)");
   }
   d.match = read_hid_match(r, d.profile);
-  read_schedule(r, d.poll_period, d.timeout);
+  read_schedule(r, d);
   if (d.profile == "mcc-usb-tc") {
     d.protocol.burnout_request = mcc_burnout_request();
     d.protocol.burnout_reply_report_id = d.protocol.burnout_request->front();
@@ -310,7 +313,7 @@ UsbDeviceConfig read_usb_device(const TomlReader& r) {
   d.profile = r.string("profile");
   if (d.profile != "usb-tc-32") r.fail("profile", "unknown USB profile \"" + d.profile + "\" (usb-tc-32)");
   d.serial = r.optional_string("serial");
-  read_schedule(r, d.poll_period, d.timeout);
+  read_schedule(r, d);
   std::set<std::string> names;
   for (const TomlReader& channel : r.tables("channels")) {
     d.channels.push_back(read_usb_tc32_channel(channel));
@@ -355,8 +358,14 @@ CameraConfig read_camera(const TomlReader& r) {
     c.folder.folder = r.string("folder");
     c.folder.settle = std::chrono::duration_cast<std::chrono::milliseconds>(r.seconds("settle_s", 0.5, 0.0));
     c.folder.camera_clock_offset_s = r.optional_number("camera_clock_offset_s").value_or(0.0);
+  } else if (c.source == "replay") {
+    c.target = r.string("run");
+    c.replay_camera = r.string("camera");
+    c.replay_speed = r.optional_number("speed").value_or(1.0);
+    if (!(c.replay_speed > 0) || c.replay_speed > 1e4) r.fail("speed", "expected a speed-up between 0 and 10000");
   } else {
-    r.fail("source", "expected \"video\" (a camera, video file or URL) or \"folder\" (files a camera writes)");
+    r.fail("source",
+           "expected \"video\" (a camera, video file or URL), \"folder\" (files a camera writes) or \"replay\"");
   }
   c.recorder.reference_frames = r.integer_in("reference_frames", 1, 0, 1'000'000);
   c.reference_flag = r.optional_string("reference_flag").value_or("reference.flag");

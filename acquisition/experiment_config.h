@@ -27,6 +27,7 @@ struct ModbusDeviceConfig {
   std::string profile;
   ModbusEndpoint endpoint;
   std::chrono::nanoseconds poll_period = std::chrono::seconds(1);
+  std::optional<std::int64_t> poll_count;  // stop polling after this many polls
   std::chrono::milliseconds timeout{500};
   std::vector<ModbusChannel> channels;
   std::vector<std::optional<EmfInput>> emf_inputs;  // one per channel: set when it delivers millivolts
@@ -39,6 +40,7 @@ struct HidDeviceConfig {
   HidProtocol protocol;
   std::vector<std::optional<EmfInput>> emf_inputs;  // one per channel: set when it delivers millivolts
   std::chrono::nanoseconds poll_period = std::chrono::seconds(1);
+  std::optional<std::int64_t> poll_count;  // stop polling after this many polls
   std::chrono::milliseconds timeout{500};
 };
 
@@ -48,6 +50,7 @@ struct UsbDeviceConfig {
   std::optional<std::string> serial;
   std::vector<UsbTc32Channel> channels;
   std::chrono::nanoseconds poll_period = std::chrono::seconds(1);
+  std::optional<std::int64_t> poll_count;  // stop polling after this many polls
   std::chrono::milliseconds timeout{500};
 };
 
@@ -55,8 +58,10 @@ struct UsbDeviceConfig {
 // a tethered camera writes into.
 struct CameraConfig {
   std::string name;
-  std::string source;  // "video" or "folder"
-  std::string target;  // video: camera index, file or URL
+  std::string source;         // "video", "folder" or "replay"
+  std::string target;         // video: camera index, file or URL; replay: the recorded run's folder
+  std::string replay_camera;  // replay: the camera's name in the recorded run
+  double replay_speed = 1;
   WatchedFolderOptions folder;
   FrameRecorder::Options recorder;
   std::filesystem::path reference_flag;  // relative paths are relative to the run folder

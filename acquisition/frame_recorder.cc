@@ -104,7 +104,7 @@ bool FrameRecorder::is_reference_now() const {
 }
 
 void FrameRecorder::store(const CapturedFrame& frame) {
-  const bool reference = is_reference_now();
+  const bool reference = frame.is_reference.value_or(is_reference_now());
   const fs::path relative = frame_dir_ / frame_file_name(stats().frames);
   const fs::path partial = run_dir_ / (relative.string() + ".partial.png");
   try {

@@ -22,6 +22,7 @@ struct CapturedFrame {
   std::int64_t t_ns = 0;                    // host UTC clock
   std::optional<std::int64_t> device_t_ns;  // the camera's clock, when known
   std::string origin;                       // e.g. the file it came from
+  std::optional<bool> is_reference;         // set when the source knows (a replay)
 };
 
 class FrameSource {

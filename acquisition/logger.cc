@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "acquisition/clock.h"
+#include "acquisition/recorded_frame_source.h"
 #include "acquisition/video_capture_source.h"
 #include "acquisition/watched_folder_source.h"
 
@@ -77,28 +78,31 @@ void Logger::wait_for_end(const std::atomic<bool>& stop_requested,
 
 Logger::Logger(storage::RunStore& store, Options options) : store_(store), options_(std::move(options)) {}
 
-void Logger::add_source(std::unique_ptr<ThermocoupleSource> source, std::chrono::nanoseconds period) {
-  sources_.push_back({std::move(source), period});
+void Logger::add_source(std::unique_ptr<ThermocoupleSource> source, std::chrono::nanoseconds period,
+                        std::optional<std::int64_t> poll_count) {
+  sources_.push_back({std::move(source), period, poll_count});
 }
 
 void Logger::add_devices(const ExperimentConfig& config) {
   for (const ModbusDeviceConfig& d : config.modbus_devices) {
     add_source(with_emf_conversion(std::make_unique<ModbusDevice>(d.name, d.profile, d.endpoint, d.channels, d.timeout),
                                    d.emf_inputs),
-               d.poll_period);
+               d.poll_period, d.poll_count);
   }
   for (const HidDeviceConfig& d : config.hid_devices) {
     add_source(with_emf_conversion(std::make_unique<HidDevice>(d.name, d.profile, d.match, d.protocol, d.timeout),
                                    d.emf_inputs),
-               d.poll_period);
+               d.poll_period, d.poll_count);
   }
   for (const UsbDeviceConfig& d : config.usb_devices) {
-    add_source(std::make_unique<UsbTc32Device>(d.name, d.serial, d.channels, d.timeout), d.poll_period);
+    add_source(std::make_unique<UsbTc32Device>(d.name, d.serial, d.channels, d.timeout), d.poll_period, d.poll_count);
   }
   for (const CameraConfig& c : config.cameras) {
     std::unique_ptr<FrameSource> source;
     if (c.source == "video") {
       source = std::make_unique<VideoCaptureSource>(c.target);
+    } else if (c.source == "replay") {
+      source = std::make_unique<RecordedFrameSource>(load_recorded_frames(c.target, c.replay_camera, c.replay_speed));
     } else {
       source = std::make_unique<WatchedFolderSource>(c.folder);
     }
@@ -150,7 +154,8 @@ Logger::Summary Logger::run_devices(const std::atomic<bool>& stop_requested) {
       channel.device_id = device_id;
       channel_ids.push_back(store_.add_channel(channel));
     }
-    const DevicePoller::Options poll_options{pending.period, options_.backoff_initial, options_.backoff_max};
+    const DevicePoller::Options poll_options{pending.period, options_.backoff_initial, options_.backoff_max,
+                                             pending.poll_count};
     pollers.push_back(
         std::make_unique<DevicePoller>(std::move(pending.source), device_id, channel_ids, writer, poll_options));
   }

@@ -54,8 +54,9 @@ class Logger {
 
   Logger(storage::RunStore& store, Options options);
 
-  // Adds a device polled every `period`. Call before run().
-  void add_source(std::unique_ptr<ThermocoupleSource> source, std::chrono::nanoseconds period);
+  // Adds a device polled every `period`, `poll_count` times when given. Call before run().
+  void add_source(std::unique_ptr<ThermocoupleSource> source, std::chrono::nanoseconds period,
+                  std::optional<std::int64_t> poll_count = std::nullopt);
   // Adds a camera whose frames are stored under frames/<name>/. Call before run().
   void add_camera(std::unique_ptr<FrameSource> source, std::string name, FrameRecorder::Options options);
   // Adds every device and camera of an experiment file.
@@ -70,6 +71,7 @@ class Logger {
   struct PendingSource {
     std::unique_ptr<ThermocoupleSource> source;
     std::chrono::nanoseconds period;
+    std::optional<std::int64_t> poll_count;
   };
 
   Summary run_devices(const std::atomic<bool>& stop_requested);

@@ -204,6 +204,11 @@ void ModbusSimServer::refresh_registers(int function, int address, int count) {
   }
 }
 
+std::uint64_t ModbusSimServer::draws(int channel) const {
+  std::lock_guard lock(mutex_);
+  return draws_.at(static_cast<std::size_t>(channel));
+}
+
 std::vector<ModbusSimServer::ServedValue> ModbusSimServer::served() const {
   std::lock_guard lock(mutex_);
   return served_;

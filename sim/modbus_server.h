@@ -53,6 +53,7 @@ class ModbusSimServer {
   int port() const { return port_; }  // the bound TCP port
   std::vector<ServedValue> served() const;
   std::int64_t requests_answered() const { return requests_answered_.load(); }
+  std::uint64_t draws(int channel) const;  // values produced for `channel` so far
 
   // Fault injection.
   void set_open_circuit(int channel, bool open);

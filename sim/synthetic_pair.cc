@@ -33,8 +33,8 @@ cv::Mat quantise(const cv::Mat& unit, int bit_depth) {
 }
 
 cv::Mat finish(cv::Mat image, const PairOptions& options, std::uint64_t stream) {
-  return camera_image(std::move(image), options.blur_sigma_px, options.noise_std, options.bit_depth,
-                      options.noise_seed, stream);
+  return camera_image(std::move(image), options.blur_sigma_px, options.noise_std, options.bit_depth, options.noise_seed,
+                      stream);
 }
 
 }  // namespace

@@ -1,0 +1,105 @@
+// bosfuse replay: record a recorded run again through the real device paths.
+
+#include <spdlog/spdlog.h>
+
+#include <iostream>
+#include <memory>
+#include <thread>
+
+#include "acquisition/clock.h"
+#include "acquisition/experiment_config.h"
+#include "acquisition/logger.h"
+#include "app/command.h"
+#include "app/run_control.h"
+#include "sim/replay.h"
+#include "storage/run_store.h"
+
+namespace bosfuse::app {
+namespace {
+
+using namespace std::chrono_literals;
+
+struct ReplayArgs {
+  std::string run;
+  std::string out;
+  double speed = 1;
+};
+
+bool every_sample_served(const sim::RecordedRun& recorded,
+                         const std::vector<std::unique_ptr<sim::ModbusSimServer>>& servers) {
+  for (std::size_t d = 0; d < servers.size(); ++d) {
+    const auto& samples = recorded.devices[d].samples;
+    for (std::size_t c = 0; c < samples.size(); ++c) {
+      if (servers[d]->draws(static_cast<int>(c)) < samples[c].size()) return false;
+    }
+  }
+  return true;
+}
+
+// Ends the logger once every sample has been served and the last frame is
+// due, or when the user presses Ctrl-C.
+void stop_when_replayed(const sim::RecordedRun& recorded,
+                        const std::vector<std::unique_ptr<sim::ModbusSimServer>>& servers, double speed,
+                        std::atomic<bool>& stop) {
+  const auto frames_done = std::chrono::steady_clock::now() +
+                           std::chrono::nanoseconds(static_cast<std::int64_t>(recorded.last_offset_ns / speed)) + 1s;
+  const auto& interrupted = stop_requested_by_signal();
+  while (!stop && !interrupted) {
+    if (every_sample_served(recorded, servers) && std::chrono::steady_clock::now() > frames_done) break;
+    std::this_thread::sleep_for(20ms);
+  }
+  stop = true;
+}
+
+void replay(const ReplayArgs& args) {
+  const sim::RecordedRun recorded = sim::inspect_recorded_run(args.run);
+  for (const std::string& problem : recorded.problems) spdlog::warn("{}: {}", args.run, problem);
+  if (recorded.devices.empty() && recorded.cameras.empty()) throw std::runtime_error(args.run + ": nothing to replay");
+
+  std::vector<std::unique_ptr<sim::ModbusSimServer>> servers;
+  std::vector<int> ports;
+  for (const sim::ReplayDevice& device : recorded.devices) {
+    servers.push_back(std::make_unique<sim::ModbusSimServer>(sim::replay_module_options(device, 0)));
+    servers.back()->start();
+    ports.push_back(servers.back()->port());
+  }
+  const std::string toml = sim::replay_experiment_toml(recorded, ports, args.speed);
+  const auto config = acquisition::parse_experiment(toml, "replay.toml");
+  auto store = storage::RunStore::create(args.out,
+                                         {0, "replay of " + recorded.run.name, acquisition::utc_now_ns(), std::nullopt,
+                                          toml, storage::RunStatus::kRunning},
+                                         storage::RunStore::CreateMode::kNew);
+  acquisition::Logger::Options options;
+  options.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
+  acquisition::Logger logger(store, options);
+  logger.add_devices(config);
+  spdlog::info("replaying {} at {}x into {}", args.run, args.speed, args.out);
+
+  std::atomic<bool> stop{false};
+  std::thread watcher([&] { stop_when_replayed(recorded, servers, args.speed, stop); });
+  acquisition::Logger::Summary summary;
+  try {
+    summary = logger.run(stop);
+  } catch (...) {
+    stop = true;
+    watcher.join();
+    throw;
+  }
+  watcher.join();
+  std::cout << summary.BriefReport() << "\nreplayed run: " << store.dir().string() << "\n";
+}
+
+void add_replay(CLI::App& root) {
+  auto args = std::make_shared<ReplayArgs>();
+  CLI::App* cmd = root.add_subcommand(
+      "replay", "Record a recorded run again through simulated devices (Modbus on loopback, a replayed camera)");
+  cmd->add_option("run", args->run, "Recorded run folder")->required()->check(CLI::ExistingDirectory);
+  cmd->add_option("--out,-o", args->out, "New run folder to create")->required();
+  cmd->add_option("--speed", args->speed, "Replay N times faster than recorded")->check(CLI::Range(0.01, 10000.0));
+  cmd->callback([args] { replay(*args); });
+}
+
+BOSFUSE_COMMAND(add_replay);
+
+}  // namespace
+}  // namespace bosfuse::app

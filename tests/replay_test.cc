@@ -1,0 +1,139 @@
+// Record → replay → record: a recorded run served again by simulated Modbus
+// modules on loopback and a replayed camera holds the same samples and
+// frames; a damaged run says what is missing and replays what is sound.
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "acquisition/clock.h"
+#include "storage/run_store.h"
+#include "tests/support/subprocess.h"
+#include "tests/support/temp_dir.h"
+#include "tests/support/test_images.h"
+
+namespace bosfuse {
+namespace {
+
+using storage::SampleStatus;
+namespace fs = std::filesystem;
+
+const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+
+// A run as the logger leaves it: two thermocouples polled every 50 ms (with
+// an open input and an out-of-range reading among them) and three frames.
+void make_recorded_run(const fs::path& dir, bool close_it) {
+  const std::int64_t start = acquisition::utc_now_ns();
+  auto store = storage::RunStore::create(dir, {0, "cooling", start, {}, "# recorded", storage::RunStatus::kRunning},
+                                         storage::RunStore::CreateMode::kNew);
+  const auto adam = store.add_device({0, "adam", "modbus-tcp", "adam-6018", "10.0.0.5:502"});
+  const auto tc0 = store.add_channel({0, adam, "tc0", "thermocouple", "degC", "K", 612.0, 388.0});
+  const auto tc1 = store.add_channel({0, adam, "tc1", "thermocouple", "degC", "K", {}, {}});
+  std::vector<storage::Sample> samples;
+  for (int i = 0; i < 30; ++i) {
+    const std::int64_t t = start + 50'000'000LL * (i + 1);
+    samples.push_back({tc0, t, {}, 80.0 * std::exp(-0.01 * i) + 0.123456789, 1.0, SampleStatus::kOk});
+    samples.push_back(i == 7   ? storage::Sample{tc1, t, {}, {}, 65535.0, SampleStatus::kOpenCircuit}
+                      : i == 9 ? storage::Sample{tc1, t, {}, {}, 0.0, SampleStatus::kOutOfRange}
+                               : storage::Sample{tc1, t, {}, 40.0 + 0.1 * i, 2.0, SampleStatus::kOk});
+  }
+  store.write_samples(samples);
+  const auto cam = store.add_device({0, "cam", "camera", "folder", "folder /shots"});
+  fs::create_directories(dir / "frames/cam");
+  for (int i = 0; i < 3; ++i) {
+    const std::string path = "frames/cam/00000" + std::to_string(i) + ".png";
+    testing::write_file(dir / path, testing::encoded(testing::textured_frame(i, CV_16U), ".png"));
+    store.add_frame({0, cam, start + 400'000'000LL * (i + 1), {}, path, 64, 48, 16, i == 0});
+  }
+  if (close_it) store.finish(storage::RunStatus::kComplete, start + 2'000'000'000LL);
+}
+
+std::map<std::string, std::vector<storage::Sample>> samples_by_name(const storage::RunStore& store) {
+  std::map<std::string, std::vector<storage::Sample>> out;
+  for (const auto& c : store.channels()) out[c.name] = store.read_samples(c.id);
+  return out;
+}
+
+testing::CommandResult replay(const fs::path& from, const fs::path& to) {
+  return testing::run_command(kBosfuse + " replay " + from.string() + " --out " + to.string() + " --speed 4", 60);
+}
+
+// Values travel as float32 registers: a replay holds each value rounded to
+// float32 (7 digits), and a replay of a replay holds exactly the same.
+void expect_same_samples(const storage::RunStore& original, const storage::RunStore& replayed) {
+  const auto before = samples_by_name(original), after = samples_by_name(replayed);
+  ASSERT_EQ(after.size(), before.size());
+  for (const auto& [name, series] : before) {
+    SCOPED_TRACE(name);
+    const auto& again = after.at(name);
+    ASSERT_EQ(again.size(), series.size());
+    for (std::size_t i = 0; i < series.size(); ++i) {
+      ASSERT_EQ(again[i].status, series[i].status) << "sample " << i;
+      if (series[i].value) {
+        ASSERT_EQ(again[i].value, static_cast<double>(static_cast<float>(*series[i].value))) << "sample " << i;
+      }
+    }
+  }
+}
+
+void expect_same_frames(const storage::RunStore& original, const storage::RunStore& replayed,
+                        std::size_t skipped_index = SIZE_MAX) {
+  std::vector<storage::FrameRecord> before = original.frames();
+  if (skipped_index < before.size()) before.erase(before.begin() + static_cast<std::ptrdiff_t>(skipped_index));
+  const auto after = replayed.frames();
+  ASSERT_EQ(after.size(), before.size());
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    EXPECT_EQ(after[i].is_reference, before[i].is_reference);
+    EXPECT_EQ(after[i].device_t_ns, before[i].t_ns);  // the original time, kept as the camera's own
+    const cv::Mat a = cv::imread((original.dir() / before[i].path).string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat b = cv::imread((replayed.dir() / after[i].path).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(a.type(), b.type());
+    EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0) << after[i].path;
+  }
+}
+
+TEST(Replay, RecordReplayRecordHoldsTheSameSamplesAndFrames) {
+  testing::TempDir dir;
+  make_recorded_run(dir / "original", true);
+  const auto first = replay(dir / "original", dir / "replay1");
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  const auto second = replay(dir / "replay1", dir / "replay2");
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+
+  const auto original = storage::RunStore::open(dir / "original");
+  const auto replay1 = storage::RunStore::open(dir / "replay1");
+  const auto replay2 = storage::RunStore::open(dir / "replay2");
+  expect_same_samples(original, replay1);
+  expect_same_samples(replay1, replay2);
+  expect_same_frames(original, replay1);
+  EXPECT_EQ(replay1.run().status, storage::RunStatus::kComplete);
+  const auto channels = replay1.channels();
+  const auto tc0 = std::find_if(channels.begin(), channels.end(), [](const auto& c) { return c.name == "tc0"; });
+  ASSERT_NE(tc0, channels.end());
+  EXPECT_EQ(tc0->image_x_px, 612.0);  // positions travel with the channels
+  EXPECT_EQ(tc0->tc_type, "K");
+}
+
+TEST(Replay, DamagedRunSaysWhatIsMissingAndReplaysTheRest) {
+  testing::TempDir dir;
+  make_recorded_run(dir / "original", false);  // never closed: its logger died
+  fs::remove(dir / "original/frames/cam/000001.png");
+  const auto result = replay(dir / "original", dir / "replay");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("never closed"), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("1 of 3 frame files are missing"), std::string::npos) << result.output;
+  const auto original = storage::RunStore::open(dir / "original");
+  const auto replayed = storage::RunStore::open(dir / "replay");
+  expect_same_samples(original, replayed);
+  expect_same_frames(original, replayed, 1);
+}
+
+TEST(Replay, AFolderWithoutARunIsRefused) {
+  testing::TempDir dir;
+  const auto result = replay(dir.path(), dir / "replay");
+  EXPECT_NE(result.exit_code, 0);
+  EXPECT_NE(result.output.find("holds no bosfuse run"), std::string::npos) << result.output;
+}
+
+}  // namespace
+}  // namespace bosfuse
