@@ -390,6 +390,10 @@ ExperimentConfig parse_experiment(std::string_view text, const std::string& sour
     const std::string name = read_device(device, config);
     if (!names.insert(name).second) device.fail("name", "duplicate device name \"" + name + "\"");
   }
+  // The optical set-up and camera alignment are for processing (bosfuse
+  // process reads and checks them); the logger only keeps them in the run.
+  reader.node("geometry");
+  reader.node("alignment");
   for (const TomlReader& camera : reader.tables("cameras")) {
     config.cameras.push_back(read_camera(camera));
     if (!names.insert(config.cameras.back().name).second) {

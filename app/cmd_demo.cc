@@ -1,6 +1,8 @@
-// bosfuse demo: the main job, runnable without hardware. A simulated
-// thermocouple module serves a cooling curve on loopback and the logger
-// records it through the real Modbus path into a new run folder.
+// bosfuse demo: the main job, runnable without hardware. The simulated
+// convection experiment (sim/convection_scene.h) is recorded through the real
+// device paths — its thermocouples served by a Modbus module on loopback, its
+// frames by the virtual camera — into a new run folder, a few minutes of
+// cooling in a few seconds.
 
 #include <fmt/format.h>
 
@@ -12,58 +14,120 @@
 #include "acquisition/logger.h"
 #include "app/command.h"
 #include "app/run_control.h"
-#include "sim/modbus_server.h"
+#include "sim/virtual_devices.h"
 #include "storage/run_store.h"
 
 namespace bosfuse::app {
 namespace {
 
+using namespace std::chrono_literals;
+
 struct DemoArgs {
   std::string out = "demo-run";
-  std::string duration = "10s";
-  double poll_period_s = 0.2;
+  double experiment_s = 240;     // cooling time simulated
+  double speed = 16;             // times faster than real time
+  double frame_interval_s = 10;  // experiment time between frames
 };
 
-std::string demo_experiment(int port, int inputs, double poll_period_s) {
+// The paper's experiment at a scale that runs in seconds: a 20 mm heater
+// tube cooling from 120 °C, the plume seen at 8 px/mm, two thermocouples
+// 35 mm above the cylinder, one on the plume's axis and one beside it.
+struct DemoSetup {
+  sim::SceneOptions scene;
+  std::vector<sim::SceneThermocouple> thermocouples;
+  double pixel_pitch_um = 5;
+};
+
+DemoSetup demo_setup(double experiment_s) {
+  DemoSetup setup;
+  sim::SceneOptions& s = setup.scene;
+  s.pure_exponential = true;  // so the true cooling rate is one number
+  s.duration_s = experiment_s + 30;
+  s.width_px = 480;
+  s.height_px = 440;
+  s.px_per_mm = 8;
+  s.cylinder_x_px = 240;
+  s.cylinder_y_px = 420;
+  s.z_d_m = 0.5;
+  setup.thermocouples = {{"tc-axis", 0.0, 0.035, 0.5, 0.05}, {"tc-side", 0.002, 0.035, 0.5, 0.05}};
+  return setup;
+}
+
+std::string demo_experiment(const DemoSetup& setup, int port, double poll_period_s) {
+  const sim::SceneOptions& s = setup.scene;
   std::string text = fmt::format(
-      "# Written by 'bosfuse demo': a simulated ADAM-6018 on loopback.\n"
-      "[run]\nname = \"demo\"\ndescription = \"simulated cylinder cooling, logged over Modbus TCP\"\n\n"
+      "# Written by 'bosfuse demo': the simulated convection experiment, its thermocouples\n"
+      "# served by a simulated ADAM-6018 on loopback and its frames by a virtual camera.\n"
+      "[run]\nname = \"demo\"\ndescription = \"simulated cylinder cooling (pure exponential), {} s\"\n\n"
+      "[geometry]\nz_d_m = {}\ndepth_m = {}\nmagnification = {}\npixel_pitch_um = {}\n"
+      "ambient_pressure_pa = {}\n\n"
       "[[devices]]\nname = \"sim-adam\"\nprofile = \"adam-6018\"\nhost = \"127.0.0.1\"\nport = {}\n"
       "poll_period_s = {}\ntimeout_s = 0.5\n",
+      s.duration_s, s.z_d_m, s.depth_m, s.px_per_mm * setup.pixel_pitch_um * 1e-3, setup.pixel_pitch_um, s.pressure_pa,
       port, poll_period_s);
-  for (int i = 0; i < inputs; ++i) {
-    text += fmt::format("\n  [[devices.channels]]\n  name = \"tc{}\"\n  input = {}\n  tc_type = \"K\"\n", i, i);
+  const sim::ConvectionScene scene(s);
+  for (std::size_t i = 0; i < setup.thermocouples.size(); ++i) {
+    const auto& tc = setup.thermocouples[i];
+    const cv::Point2d at = scene.image_position_px(tc.x_m, tc.z_m);
+    text += fmt::format(
+        "\n  [[devices.channels]]\n  name = \"{}\"\n  input = {}\n  tc_type = \"K\"\n"
+        "  position_px = [{:.2f}, {:.2f}]\n",
+        tc.name, i, at.x, at.y);
   }
   return text;
 }
 
-void run_demo(const DemoArgs& args) {
+struct Recording {
+  std::filesystem::path run_dir;
+  acquisition::Logger::Summary summary;
+};
+
+// Simulates the experiment and logs it through the real paths.
+Recording record_demo(const DemoArgs& args, const DemoSetup& setup, const std::filesystem::path& run_dir) {
   const std::int64_t started_ns = acquisition::utc_now_ns();
-  // A new folder per demo, so running it again never touches an earlier run.
-  const std::filesystem::path run_dir = std::filesystem::path(args.out) / acquisition::format_compact_utc(started_ns);
-
-  sim::SimulatedModule module;
-  module.signal = {22.0, 80.0, 0.02, 0.05, static_cast<std::uint64_t>(started_ns)};
-  acquisition::ModbusEndpoint endpoint;
-  endpoint.port = 0;  // any free loopback port
-  sim::ModbusSimServer server(sim::module_server_options(module, endpoint));
+  const auto scene = std::make_shared<const sim::ConvectionScene>(setup.scene);
+  const auto table = std::make_shared<const sim::SceneThermocoupleTable>(*scene, setup.thermocouples, args.speed,
+                                                                         static_cast<std::uint64_t>(started_ns));
+  sim::ModbusSimServer server(sim::scene_module_options(table, "adam-6018", setup.scene.ambient_c, 0));
   server.start();
-
-  const std::string toml = demo_experiment(server.port(), module.inputs, args.poll_period_s);
-  const auto config = acquisition::parse_experiment(toml, "demo.toml");
+  const double poll_period_s = 1.0 / args.speed;  // one reading per second of experiment time
+  const std::string toml = demo_experiment(setup, server.port(), poll_period_s);
   auto store =
       storage::RunStore::create(run_dir, {0, "demo", started_ns, std::nullopt, toml, storage::RunStatus::kRunning},
                                 storage::RunStore::CreateMode::kNew);
   acquisition::Logger::Options options;
-  options.duration = parse_duration(args.duration);
+  options.duration = std::chrono::duration_cast<std::chrono::nanoseconds>(
+      std::chrono::duration<double>(args.experiment_s / args.speed));
   acquisition::Logger logger(store, options);
-  logger.add_devices(config);
+  logger.add_devices(acquisition::parse_experiment(toml, "demo.toml"));
+  sim::PatternOptions pattern;
+  pattern.width_px = setup.scene.width_px;
+  pattern.height_px = setup.scene.height_px;
+  pattern.dot_diameter_px = 3;
+  pattern.seed = static_cast<std::uint64_t>(started_ns);
+  acquisition::FrameRecorder::Options camera;
+  camera.interval = std::chrono::duration_cast<std::chrono::nanoseconds>(
+      std::chrono::duration<double>(args.frame_interval_s / args.speed));
+  logger.add_camera(
+      std::make_unique<sim::SceneCamera>(scene, sim::generate_pattern(pattern), sim::CameraModel{}, args.speed, 1),
+      "camera", camera);
   std::cout << fmt::format(
-      "demo: simulated ADAM-6018 on 127.0.0.1:{} cooling from {} to {} degC (k = {} 1/s); "
-      "logging for {}\n",
-      server.port(), module.signal.initial_c, module.signal.ambient_c, module.signal.k_per_s, args.duration);
-  const auto summary = logger.run(stop_requested_by_signal());
-  std::cout << summary.BriefReport() << "\n\n"
+      "demo: simulating {:.0f} s of cooling ({:.0f} -> {:.0f} degC, k = {:.5f} 1/s at the cylinder) at {}x, "
+      "logging thermocouples over Modbus TCP (127.0.0.1:{}) and frames from the virtual camera\n",
+      args.experiment_s, setup.scene.initial_c, setup.scene.ambient_c, scene->initial_cooling_rate_per_s(), args.speed,
+      server.port());
+  Recording recording{run_dir, logger.run(stop_requested_by_signal())};
+  server.stop();
+  return recording;
+}
+
+void run_demo(const DemoArgs& args) {
+  // A new folder per demo, so running it again never touches an earlier run.
+  const std::filesystem::path run_dir =
+      std::filesystem::path(args.out) / acquisition::format_compact_utc(acquisition::utc_now_ns());
+  const DemoSetup setup = demo_setup(args.experiment_s);
+  const Recording recording = record_demo(args, setup, run_dir);
+  std::cout << recording.summary.BriefReport() << "\n\n"
             << "data:    " << (run_dir / storage::RunStore::kDatabaseFileName).string() << "\n"
             << "inspect: bosfuse runs " << run_dir.string() << "\n"
             << "export:  bosfuse export " << run_dir.string() << " --csv -o demo.csv\n";
@@ -71,12 +135,18 @@ void run_demo(const DemoArgs& args) {
 
 void add_demo(CLI::App& root) {
   auto args = std::make_shared<DemoArgs>();
-  CLI::App* cmd = root.add_subcommand("demo", "Simulate a cooling experiment and log it through the real device path");
+  CLI::App* cmd = root.add_subcommand(
+      "demo", "Simulate a convection experiment and record it through the real device paths (no hardware needed)");
   cmd->add_option("--out,-o", args->out, "Folder for demo runs (each run gets a new timestamped folder)")
       ->capture_default_str();
-  cmd->add_option("--duration", args->duration, "How long to log")->capture_default_str();
-  cmd->add_option("--poll-period", args->poll_period_s, "Seconds between polls")
-      ->check(CLI::PositiveNumber)
+  cmd->add_option("--experiment-time", args->experiment_s, "Seconds of cooling to simulate")
+      ->check(CLI::Range(20.0, 3600.0))
+      ->capture_default_str();
+  cmd->add_option("--speed", args->speed, "Times faster than real time")
+      ->check(CLI::Range(1.0, 100.0))
+      ->capture_default_str();
+  cmd->add_option("--frame-interval", args->frame_interval_s, "Experiment seconds between frames")
+      ->check(CLI::Range(1.0, 600.0))
       ->capture_default_str();
   cmd->callback([args] { run_demo(*args); });
 }
