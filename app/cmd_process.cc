@@ -14,7 +14,7 @@ namespace {
 struct ProcessArgs {
   std::string run;
   bool probes_only = false;
-  int window_px = 32, step_px = 16, passes = 3;
+  int window_px = 32, step_px = 16, passes = 3, probe_context = 1;
   double max_shift_px = 4;
   std::string geometry;
 };
@@ -25,6 +25,7 @@ void process(const ProcessArgs& args) {
   options.evaluator.set_grid(args.window_px, args.step_px);
   options.evaluator.xcorr.passes = args.passes;
   options.evaluator.xcorr.max_shift_px = args.max_shift_px;
+  options.evaluator.xcorr.probe_context_nodes = args.probe_context;
   options.geometry_file = args.geometry;
   options.progress = [](const std::string& line) { std::cerr << line << (line.ends_with('\n') ? "" : "\n"); };
   const ProcessReport report = process_run(args.run, options);
@@ -41,6 +42,11 @@ void add_process(CLI::App& root) {
   cmd->add_option("--window", args->window_px, "Final interrogation window, px")->capture_default_str();
   cmd->add_option("--step", args->step_px, "Grid spacing, px")->capture_default_str();
   cmd->add_option("--passes", args->passes, "Passes (window deformation after the first)")->capture_default_str();
+  cmd->add_option("--probe-context", args->probe_context,
+                  "Probe mode: grid nodes evaluated around each probe; -1: all the full field depends on (then a "
+                  "probe equals the full field there, but is ~40x slower)")
+      ->check(CLI::Range(-1, 16))
+      ->capture_default_str();
   cmd->add_option("--max-shift", args->max_shift_px, "Largest displacement expected, px")->capture_default_str();
   cmd->add_option("--geometry", args->geometry,
                   "TOML file with [geometry] (and [alignment]); default: the run's config, else built-in defaults");

@@ -297,8 +297,8 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres' own logging; the fit summaries say it better
   const auto start = std::chrono::steady_clock::now();
   ProcessOptions options = options_in;
-  // Exact probe context and every pass run: a probe then equals the full field at its point.
-  options.evaluator.xcorr.probe_context_nodes = -1;
+  // Every pass run, as in the full field; with the exact context (-1) a probe
+  // then equals the full field at its point.
   options.evaluator.xcorr.convergence_px = 0;
   if (const auto problem = options.evaluator.Validate(); !problem.empty()) throw std::runtime_error(problem);
   auto say = [&](const std::string& line) {

@@ -32,6 +32,8 @@ namespace bosfuse::app {
 
 struct ProcessOptions {
   bool probes_only = false;
+  // xcorr.probe_context_nodes: 1 (fast, within ~0.01-0.02 px of the full field)
+  // or -1 (exact: equal to the full field, ~40x slower per probe).
   fusion::EvaluatorOptions evaluator;
   std::string geometry_file;                         // empty: the run's config, else defaults
   std::function<void(const std::string&)> progress;  // one line per step; may be empty
