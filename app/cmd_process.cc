@@ -17,6 +17,7 @@ struct ProcessArgs {
   int window_px = 32, step_px = 16, passes = 3, probe_context = 1;
   double max_shift_px = 4;
   std::string geometry;
+  std::string mask;
 };
 
 void process(const ProcessArgs& args) {
@@ -27,6 +28,7 @@ void process(const ProcessArgs& args) {
   options.evaluator.xcorr.max_shift_px = args.max_shift_px;
   options.evaluator.xcorr.probe_context_nodes = args.probe_context;
   options.geometry_file = args.geometry;
+  options.mask_file = args.mask;
   options.progress = [](const std::string& line) { std::cerr << line << (line.ends_with('\n') ? "" : "\n"); };
   const ProcessReport report = process_run(args.run, options);
   std::cout << report.text;
@@ -50,6 +52,9 @@ void add_process(CLI::App& root) {
   cmd->add_option("--max-shift", args->max_shift_px, "Largest displacement expected, px")->capture_default_str();
   cmd->add_option("--geometry", args->geometry,
                   "TOML file with [geometry] (and [alignment]); default: the run's config, else built-in defaults");
+  cmd->add_option("--mask", args->mask,
+                  "Mask image (e.g. the heater's holder): non-zero pixels are not evaluated and the temperature "
+                  "field is filled there from its surroundings; a path relative to the run folder or absolute");
   cmd->callback([args] { process(*args); });
 }
 

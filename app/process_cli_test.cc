@@ -157,6 +157,36 @@ TEST_F(ProcessCli, FullFieldsEqualProbesAtTheProbePointsAndWriteFieldFiles) {
   for (const auto& f : fields) EXPECT_TRUE(std::filesystem::exists(run_dir() / f.path)) << f.path;
 }
 
+TEST_F(ProcessCli, AMaskedHolderIsNotEvaluatedAndTheTemperatureFieldIsFilledThere) {
+  cv::Mat mask(192, 256, CV_8U, cv::Scalar(0));
+  mask(cv::Rect(112, 104, 32, 40)).setTo(255);  // a holder below the hot spot's centre
+  cv::imwrite((run_dir() / "mask.png").string(), mask);
+  const auto run = bosfuse("process " + grid_ + " --mask mask.png");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const storage::ProcessingStore results(run_dir());
+  std::size_t temperature_files = 0;
+  for (const auto& f : results.fields()) {
+    const auto summary = nlohmann::json::parse(f.json);
+    if (f.kind == "displacement") {
+      EXPECT_GT(summary.at("masked").get<int>(), 0) << f.json;
+    }
+    if (f.kind != "temperature") continue;
+    ++temperature_files;
+    EXPECT_GT(summary.at("unmeasured_nodes").get<int>(), 0) << f.json;
+    std::ifstream csv(run_dir() / f.path);
+    std::string header;
+    std::getline(csv, header);
+    EXPECT_EQ(header, "x,y,temperature_c,measured");
+  }
+  EXPECT_EQ(temperature_files, 8u);
+  for (const auto& p : results.probes()) {
+    for (const auto& s : results.probe_samples(p.id)) EXPECT_GT(s.temperature_c.value_or(0), 20);
+  }
+  const auto missing = bosfuse("process " + grid_ + " --mask nope.png");
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.output.find("nope.png: no such file"), std::string::npos) << missing.output;
+}
+
 TEST_F(ProcessCli, CalibrationGivesDegreesPerPixelAndProbeTemperatures) {
   ASSERT_EQ(bosfuse("process --probes-only " + grid_).exit_code, 0);
   const auto calibrate = bosfuse("calibrate");

@@ -233,10 +233,10 @@ struct FrameResult {
 };
 
 FrameResult evaluate_full(const fs::path& run_dir, const FrameRecord& frame, const cv::Mat& reference,
-                          const cv::Mat& measurement, const std::vector<cv::Point2d>& points,
+                          const cv::Mat& measurement, const cv::Mat& mask, const std::vector<cv::Point2d>& points,
                           const ProcessOptions& options, const fusion::BosGeometry& geometry) {
   FrameResult out;
-  const auto evaluated = fusion::evaluate_displacement(reference, measurement, options.evaluator);
+  const auto evaluated = fusion::evaluate_displacement(reference, measurement, options.evaluator, mask);
   const std::string stem = fmt::format("fields/frame_{:06d}", frame.id);
   fusion::write_csv(evaluated.field, run_dir / (stem + "_displacement.csv"));
   out.fields.push_back(
@@ -261,11 +261,11 @@ FrameResult evaluate_full(const fs::path& run_dir, const FrameRecord& frame, con
   return out;
 }
 
-FrameResult evaluate_probes(const cv::Mat& reference, const cv::Mat& measurement,
+FrameResult evaluate_probes(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
                             const std::vector<cv::Point2d>& points, const ProcessOptions& options) {
   FrameResult out;
   if (points.empty()) return out;
-  const auto evaluated = fusion::probe_displacement(reference, measurement, points, options.evaluator);
+  const auto evaluated = fusion::probe_displacement(reference, measurement, points, options.evaluator, mask);
   for (const auto& v : evaluated.field.vectors) {
     out.shifts.push_back({v.u_px, v.v_px, v.valid()});
     out.model_temperature_c.push_back(std::nullopt);
@@ -309,6 +309,11 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   const auto store = storage::RunStore::open(run_dir);
   const RunFrames frames = split_frames(store.frames());
   const auto channels = positioned_channels(store.channels());
+  if (options.probes_only && channels.empty()) {
+    throw std::runtime_error(
+        "no channel of the run has an image position (image_x_px, image_y_px): nothing to "
+        "evaluate in probe mode");
+  }
   std::vector<cv::Point2d> points;
   for (const auto& c : channels) points.emplace_back(*c.image_x_px, *c.image_y_px);
   std::vector<Series> tc_series;
@@ -331,14 +336,20 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
     say("geometry from " + config.source + ":\n" + geometry.brief_report());
   }
   const cv::Mat reference = load_frame(run_dir, frames.reference);
+  cv::Mat mask;
+  if (!options.mask_file.empty()) {
+    const fs::path path =
+        fs::path(options.mask_file).is_absolute() ? fs::path(options.mask_file) : run_dir / options.mask_file;
+    mask = read_image(path.string(), "mask");
+  }
   std::vector<ProbeSeriesData> probe_data(channels.size());
   std::vector<storage::FieldRecord> field_rows;
   for (std::size_t i = 0; i < frames.measurements.size(); ++i) {
     const FrameRecord& frame = frames.measurements[i];
     const cv::Mat measurement = load_frame(run_dir, frame);
     const FrameResult r = options.probes_only
-                              ? evaluate_probes(reference, measurement, points, options)
-                              : evaluate_full(run_dir, frame, reference, measurement, points, options, geometry);
+                              ? evaluate_probes(reference, measurement, mask, points, options)
+                              : evaluate_full(run_dir, frame, reference, measurement, mask, points, options, geometry);
     field_rows.insert(field_rows.end(), r.fields.begin(), r.fields.end());
     for (std::size_t p = 0; p < channels.size(); ++p) {
       const PointShift& s = r.shifts[p];

@@ -35,7 +35,8 @@ struct ProcessOptions {
   // xcorr.probe_context_nodes: 1 (fast, within ~0.01-0.02 px of the full field)
   // or -1 (exact: equal to the full field, ~40x slower per probe).
   fusion::EvaluatorOptions evaluator;
-  std::string geometry_file;                         // empty: the run's config, else defaults
+  std::string geometry_file;  // empty: the run's config, else defaults
+  std::string mask_file;      // non-zero pixels are not evaluated; relative to the run folder unless absolute
   std::function<void(const std::string&)> progress;  // one line per step; may be empty
 };
 
