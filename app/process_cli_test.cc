@@ -209,6 +209,8 @@ TEST_F(ProcessCli, CalibrationGivesDegreesPerPixelAndProbeTemperatures) {
   }
   const auto again = bosfuse("process --probes-only " + grid_);
   ASSERT_EQ(again.exit_code, 0) << again.output;
+  RecordProperty("calibrate_output", calibrate.output);  // readable with --gtest_output=xml
+  RecordProperty("process_output", again.output);
   const storage::ProcessingStore results(run_dir());
   for (const auto& p : results.probes()) {
     for (const auto& s : results.probe_samples(p.id)) {
