@@ -224,6 +224,20 @@ TEST_F(ProcessCli, CalibrationGivesDegreesPerPixelAndProbeTemperatures) {
   EXPECT_FALSE(agreement.at("series").is_null());
 }
 
+TEST_F(ProcessCli, AnOffsetThatTheRecordCannotFixIsNotEstimated) {
+  ASSERT_EQ(bosfuse("process --probes-only " + grid_).exit_code, 0);
+  // The frames see only the smooth decay: shifting it in time only rescales it.
+  const auto calibrate = bosfuse("calibrate --estimate-offset 2");
+  ASSERT_EQ(calibrate.exit_code, 0) << calibrate.output;
+  EXPECT_NE(calibrate.output.find("not estimated"), std::string::npos) << calibrate.output;
+  const storage::ProcessingStore results(run_dir());
+  const auto j = nlohmann::json::parse(results.latest_calibration()->json);
+  for (const auto& c : j.at("channels")) {
+    EXPECT_FALSE(c.at("offset_estimate").at("ok").get<bool>());
+    EXPECT_EQ(c.at("camera_offset_s").get<double>(), 0.0) << "the configured offset is kept";
+  }
+}
+
 TEST_F(ProcessCli, CalibrateBeforeProcessAndARunWithoutReferenceAreExplained) {
   const auto calibrate = bosfuse("calibrate");
   EXPECT_NE(calibrate.exit_code, 0);
@@ -235,6 +249,24 @@ TEST_F(ProcessCli, CalibrateBeforeProcessAndARunWithoutReferenceAreExplained) {
   const auto run = bosfuse("process --probes-only");
   EXPECT_NE(run.exit_code, 0);
   EXPECT_NE(run.output.find("no reference frame"), std::string::npos) << run.output;
+}
+
+TEST_F(ProcessCli, TheCameraOffsetMovesProbeTimesOntoTheHostClock) {
+  auto probe_t0 = [&](const std::string& extra) {
+    EXPECT_EQ(bosfuse("process --probes-only " + grid_ + extra).exit_code, 0);
+    const storage::ProcessingStore results(run_dir());
+    for (const auto& fit : results.fits()) {
+      if (fit.subject == storage::FitSubject::kProbe) {
+        return nlohmann::json::parse(fit.json).at("parameters").at("T0_c").at("value").get<double>();
+      }
+    }
+    return 0.0;
+  };
+  const double t0 = probe_t0("");
+  const auto alignment = dir_.path() / "alignment.toml";
+  std::ofstream(alignment) << "[alignment]\ncamera_offset_s = 3.0\n";
+  // The same shifts 3 s later on the fits' time axis: extrapolated back to t = 0 they are e^(3k) larger.
+  EXPECT_NEAR(probe_t0(" --geometry " + alignment.string()), t0 * std::exp(3 * kRate), 0.03 * t0);
 }
 
 TEST_F(ProcessCli, GeometryFileIsUsedAndItsMistakesAreNamed) {

@@ -170,6 +170,7 @@ json agreement_json(const fitting::Agreement& a) {
 struct ChannelCalibration {
   double slope_c_per_px = 0;
   double reference_temperature_c = 0;
+  double camera_offset_s = 0;  // the offset the calibration was made with
 };
 
 std::map<std::int64_t, ChannelCalibration> stored_calibration(const storage::ProcessingStore& results) {
@@ -180,7 +181,8 @@ std::map<std::int64_t, ChannelCalibration> stored_calibration(const storage::Pro
   for (const auto& c : j.at("channels")) {
     if (!c.at("ok").get<bool>()) continue;
     out[c.at("channel_id").get<std::int64_t>()] = {c.at("slope_c_per_px").get<double>(),
-                                                   c.at("reference_temperature_c").get<double>()};
+                                                   c.at("reference_temperature_c").get<double>(),
+                                                   c.value("camera_offset_s", 0.0)};
   }
   return out;
 }
@@ -322,8 +324,8 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   GeometryConfig config = resolve_geometry_config(options.geometry_file, store.run().config_toml);
   const double reference_t_s = seconds_between(frames.origin_ns, frames.reference.t_ns);
   if (!config.ambient_given) {
-    config.geometry.ambient_temperature_c =
-        ambient_from_thermocouples(tc_series, reference_t_s, config.geometry.ambient_temperature_c);
+    config.geometry.ambient_temperature_c = ambient_from_thermocouples(
+        tc_series, reference_t_s + config.camera_offset_s, config.geometry.ambient_temperature_c);
   }
   const fusion::BosGeometry geometry(config.geometry);
   const auto calibration = stored_calibration(results);
@@ -392,6 +394,9 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
     Pending pair{p, {}, {}, fitting::clean_series(tc.t_s, tc.value, 0.0), {}};
     pair.tc_fit = fitting::fit_newton(pair.tc_clean);
     record_fit(pair.tc_fit, storage::FitSubject::kChannel, channels[p].id, "temperature_c", "degC");
+    // Probe times onto the host clock of the thermocouples.
+    const auto cal = calibration.find(channels[p].id);
+    const double offset_s = cal != calibration.end() ? cal->second.camera_offset_s : config.camera_offset_s;
     std::vector<double> t, y;
     bool all_have_temperature = true;
     for (const auto& s : probe_data[p].samples) {
@@ -399,7 +404,7 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
     }
     for (const auto& s : probe_data[p].samples) {
       if (!s.valid) continue;
-      t.push_back(seconds_between(frames.origin_ns, s.t_ns));
+      t.push_back(seconds_between(frames.origin_ns, s.t_ns) + offset_s);
       y.push_back(all_have_temperature ? *s.temperature_c : s.shift_px);
     }
     probe_data[p].quantity = all_have_temperature ? "temperature_c" : "shift_px";

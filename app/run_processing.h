@@ -11,8 +11,9 @@
 // calibration when there is one, else from the model's field (full mode),
 // else they stay empty and the probe's Newton fit is made on its shift. Each
 // thermocouple and each probe series gets a Newton fit (t = 0 at the first
-// evaluated frame; thermocouple samples within the frames' span), each
-// thermocouple–probe pair an agreement. Everything replaces the run's earlier
+// evaluated frame; thermocouple samples within the frames' span; probe times
+// moved onto the host clock by the camera offset of the calibration, else of
+// [alignment]), each thermocouple–probe pair an agreement. Everything replaces the run's earlier
 // results in one transaction.
 //
 // calibrate_run: from the stored probe series (process first), the

@@ -78,6 +78,7 @@ std::string OffsetSearchOptions::Validate() const {
     return "max_offset_s / step_s is too fine a search (more than 100000 steps)";
   }
   if (min_common_points < 3) return "min_common_points must be at least 3";
+  if (!(std::isfinite(resolution_s) && resolution_s >= step_s)) return "resolution_s must be at least step_s";
   return {};
 }
 
@@ -104,13 +105,16 @@ OffsetEstimate estimate_clock_offset(std::span<const double> series_time_s, std:
     estimate.message = "no offset in the search leaves enough common, varying points";
     return estimate;
   }
-  std::vector<double> finite;
-  for (double r : r2s) {
-    if (std::isfinite(r)) finite.push_back(r);
+  // Identifiable only if r² falls on both sides: the best r² at least
+  // resolution_s away on the worse side must be lower by min_r2_contrast.
+  double left = -1, right = -1;
+  for (std::size_t i = 0; i < r2s.size(); ++i) {
+    if (!std::isfinite(r2s[i])) continue;
+    if (offsets[i] <= offsets[best] - options.resolution_s) left = std::max(left, r2s[i]);
+    if (offsets[i] >= offsets[best] + options.resolution_s) right = std::max(right, r2s[i]);
   }
-  std::nth_element(finite.begin(), finite.begin() + finite.size() / 2, finite.end());
   estimate.r2 = r2s[best];
-  estimate.r2_contrast = r2s[best] - finite[finite.size() / 2];
+  estimate.r2_contrast = r2s[best] - std::max(left, right);
   estimate.offset_s = offsets[best];
   estimate.at_search_edge = best == 0 || best + 1 == r2s.size();
   if (!estimate.at_search_edge && std::isfinite(r2s[best - 1]) && std::isfinite(r2s[best + 1])) {
@@ -120,14 +124,14 @@ OffsetEstimate estimate_clock_offset(std::span<const double> series_time_s, std:
   }
   const auto aligned = align_to_frames(series_time_s, series_value, frame_time_s, estimate.offset_s);
   squared_correlation(aligned.value, probe_value, options.min_common_points, estimate.common_points);
-  if (estimate.r2_contrast < options.min_r2_contrast) {
-    estimate.message =
-        "the fit hardly depends on the offset: the record has no feature that fixes it (a smooth exponential is the "
-        "same curve at every offset); configure the offset instead";
-    return estimate;
-  }
   if (estimate.at_search_edge) {
     estimate.message = "the best offset is at the edge of the search: widen max_offset_s";
+    return estimate;
+  }
+  if (estimate.r2_contrast < options.min_r2_contrast) {
+    estimate.message =
+        "the fit hardly depends on the offset on at least one side: the record has no feature that fixes it (a "
+        "smooth exponential is the same curve at every offset); configure the offset instead";
     return estimate;
   }
   estimate.ok = true;

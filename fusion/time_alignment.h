@@ -45,7 +45,8 @@ struct OffsetSearchOptions {
   double max_offset_s = 5;
   double step_s = 0.05;
   std::size_t min_common_points = 5;
-  double min_r2_contrast = 1e-4;  // best r² minus the median r² over the search: below this, no feature fixes it
+  double resolution_s = 0.5;      // offsets closer than this are not told apart
+  double min_r2_contrast = 1e-4;  // needed drop of r² at resolution_s on each side
 
   std::string Validate() const;  // empty when valid
 };
@@ -55,7 +56,7 @@ struct OffsetEstimate {
   std::string message;  // why not ok
   double offset_s = 0;
   double r2 = 0;                // at the offset
-  double r2_contrast = 0;       // best minus median over the search
+  double r2_contrast = 0;       // best minus the best r² at least resolution_s away on either side
   bool at_search_edge = false;  // the best offset is the search's limit: widen it
   std::size_t common_points = 0;
 };
