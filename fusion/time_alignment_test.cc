@@ -47,7 +47,7 @@ struct Record {
 
 double rise_c(double t) { return t < 10 ? 40 : 40 * std::exp(-(t - 10) / 20); }
 
-Record heater_off_record(double offset_s, bool with_feature) {
+Record heater_off_record(double offset_s, bool with_feature, int first_frame = 4) {
   std::mt19937 random(4);
   std::normal_distribution<double> noise(0, 0.05);
   Record r;
@@ -56,7 +56,7 @@ Record heater_off_record(double offset_s, bool with_feature) {
     r.tc_t.push_back(i);
     r.tc_value.push_back(20 + signal(i) + noise(random));
   }
-  for (int i = 4; i <= 140; ++i) {
+  for (int i = first_frame; i <= 140; ++i) {
     r.frame_t.push_back(0.5 * i);
     r.probe.push_back(0.02 * signal(0.5 * i + offset_s) + 0.1 * noise(random) / 5);
   }
@@ -77,6 +77,14 @@ TEST(TimeAlignment, APureExponentialCannotFixTheOffset) {
   const auto estimate = estimate_clock_offset(r.tc_t, r.tc_value, r.frame_t, r.probe);
   EXPECT_FALSE(estimate.ok);
   EXPECT_NE(estimate.message.find("no feature"), std::string::npos) << estimate.message;
+}
+
+TEST(TimeAlignment, AFeatureAtTheFirstFrameBoundsTheOffsetFromOneSideOnly) {
+  // Frames from 10 s, when the heater goes off: later offsets see the same decay.
+  const Record r = heater_off_record(0.0, true, 20);
+  const auto estimate = estimate_clock_offset(r.tc_t, r.tc_value, r.frame_t, r.probe);
+  EXPECT_FALSE(estimate.ok) << "offset " << estimate.offset_s;
+  EXPECT_NE(estimate.message.find("on at least one side"), std::string::npos) << estimate.message;
 }
 
 TEST(TimeAlignment, AnOffsetBeyondTheSearchIsReportedAtItsEdge) {
