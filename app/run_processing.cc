@@ -293,6 +293,87 @@ struct ProbeSeriesData {
   std::string quantity;  // temperature_c or shift_px
 };
 
+std::optional<double> probe_temperature_c(const std::map<std::int64_t, ChannelCalibration>& calibration,
+                                          std::int64_t channel_id, double shift_px, std::optional<double> model_c) {
+  const auto cal = calibration.find(channel_id);
+  if (cal == calibration.end()) return model_c;
+  return cal->second.reference_temperature_c + cal->second.slope_c_per_px * shift_px;
+}
+
+// What every frame's evaluation needs besides the frame itself.
+struct FrameContext {
+  const fs::path& run_dir;
+  const std::vector<ChannelInfo>& channels;
+  const std::vector<cv::Point2d>& points;
+  const cv::Mat& reference;
+  const cv::Mat& mask;
+  const fusion::BosGeometry& geometry;
+  const std::map<std::int64_t, ChannelCalibration>& calibration;
+};
+
+struct EvaluatedFrames {
+  std::vector<ProbeSeriesData> probes;  // one per channel, samples in frame order
+  std::vector<storage::FieldRecord> fields;
+};
+
+EvaluatedFrames evaluate_frames(const FrameContext& ctx, const RunFrames& frames, const ProcessOptions& options) {
+  EvaluatedFrames out;
+  out.probes.resize(ctx.channels.size());
+  for (std::size_t i = 0; i < frames.measurements.size(); ++i) {
+    const FrameRecord& frame = frames.measurements[i];
+    const cv::Mat measurement = load_frame(ctx.run_dir, frame);
+    const FrameResult r = options.probes_only
+                              ? evaluate_probes(ctx.reference, measurement, ctx.mask, ctx.points, options)
+                              : evaluate_full(ctx.run_dir, frame, ctx.reference, measurement, ctx.mask, ctx.points,
+                                              options, ctx.geometry);
+    out.fields.insert(out.fields.end(), r.fields.begin(), r.fields.end());
+    for (std::size_t p = 0; p < ctx.channels.size(); ++p) {
+      const PointShift& s = r.shifts[p];
+      const double shift = std::hypot(s.u_px, s.v_px);
+      const auto t_c = probe_temperature_c(ctx.calibration, ctx.channels[p].id, shift, r.model_temperature_c[p]);
+      out.probes[p].samples.push_back(
+          {0, frame.id, frame.t_ns, s.u_px, s.v_px, shift, s.valid ? t_c : std::nullopt, s.valid});
+    }
+    if (options.progress) {
+      options.progress(fmt::format("frame {}/{} (id {}, t = {:.2f} s) evaluated", i + 1, frames.measurements.size(),
+                                   frame.id, seconds_between(frames.origin_ns, frame.t_ns)));
+    }
+  }
+  return out;
+}
+
+// The probe series a Newton fit sees: temperatures when every valid sample
+// has one, else the shift; times on the host clock (frame time + offset).
+fitting::CleanSeries probe_fit_series(ProbeSeriesData& probe, std::int64_t origin_ns, double offset_s) {
+  bool all_have_temperature = true;
+  for (const auto& s : probe.samples) {
+    if (s.valid) all_have_temperature = all_have_temperature && s.temperature_c.has_value();
+  }
+  probe.quantity = all_have_temperature ? "temperature_c" : "shift_px";
+  std::vector<double> t, y;
+  for (const auto& s : probe.samples) {
+    if (!s.valid) continue;
+    t.push_back(seconds_between(origin_ns, s.t_ns) + offset_s);
+    y.push_back(all_have_temperature ? *s.temperature_c : s.shift_px);
+  }
+  return fitting::clean_series(t, y, 0.0);
+}
+
+struct FittedPair {
+  std::size_t channel_index = 0;
+  fitting::NewtonFit tc_fit, probe_fit;
+  fitting::CleanSeries tc_series, probe_series;
+};
+
+// A shift series is not a temperature: then only the two k are compared.
+fitting::Agreement agree(const FittedPair& pair, const std::string& name, const std::string& quantity) {
+  fitting::AgreementOptions options;
+  options.label_a = "thermocouple " + name;
+  options.label_b = "BOS probe at " + name;
+  return fitting::compare_fits(pair.tc_fit, pair.probe_fit, pair.tc_series,
+                               quantity == "shift_px" ? fitting::CleanSeries{} : pair.probe_series, options);
+}
+
 }  // namespace
 
 ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options_in) {
@@ -303,9 +384,6 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   // then equals the full field at its point.
   options.evaluator.xcorr.convergence_px = 0;
   if (const auto problem = options.evaluator.Validate(); !problem.empty()) throw std::runtime_error(problem);
-  auto say = [&](const std::string& line) {
-    if (options.progress) options.progress(line);
-  };
 
   storage::ProcessingStore results(run_dir, true);
   const auto store = storage::RunStore::open(run_dir);
@@ -335,7 +413,7 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   report.probes = channels.size();
   if (!options.probes_only) {
     fs::create_directories(run_dir / "fields");
-    say("geometry from " + config.source + ":\n" + geometry.brief_report());
+    if (options.progress) options.progress("geometry from " + config.source + ":\n" + geometry.brief_report());
   }
   const cv::Mat reference = load_frame(run_dir, frames.reference);
   cv::Mat mask;
@@ -344,30 +422,9 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
         fs::path(options.mask_file).is_absolute() ? fs::path(options.mask_file) : run_dir / options.mask_file;
     mask = read_image(path.string(), "mask");
   }
-  std::vector<ProbeSeriesData> probe_data(channels.size());
-  std::vector<storage::FieldRecord> field_rows;
-  for (std::size_t i = 0; i < frames.measurements.size(); ++i) {
-    const FrameRecord& frame = frames.measurements[i];
-    const cv::Mat measurement = load_frame(run_dir, frame);
-    const FrameResult r = options.probes_only
-                              ? evaluate_probes(reference, measurement, mask, points, options)
-                              : evaluate_full(run_dir, frame, reference, measurement, mask, points, options, geometry);
-    field_rows.insert(field_rows.end(), r.fields.begin(), r.fields.end());
-    for (std::size_t p = 0; p < channels.size(); ++p) {
-      const PointShift& s = r.shifts[p];
-      const double shift = std::hypot(s.u_px, s.v_px);
-      std::optional<double> t_c;
-      if (const auto cal = calibration.find(channels[p].id); cal != calibration.end()) {
-        t_c = cal->second.reference_temperature_c + cal->second.slope_c_per_px * shift;
-      } else {
-        t_c = r.model_temperature_c[p];
-      }
-      probe_data[p].samples.push_back(
-          {0, frame.id, frame.t_ns, s.u_px, s.v_px, shift, s.valid ? t_c : std::nullopt, s.valid});
-    }
-    say(fmt::format("frame {}/{} (id {}, t = {:.2f} s) evaluated", i + 1, frames.measurements.size(), frame.id,
-                    seconds_between(frames.origin_ns, frame.t_ns)));
-  }
+  EvaluatedFrames evaluated =
+      evaluate_frames({run_dir, channels, points, reference, mask, geometry, calibration}, frames, options);
+  auto& probe_data = evaluated.probes;
   report.temperature_source = !calibration.empty()   ? "calibration"
                               : !options.probes_only ? "physical model"
                                                      : "none (probe fits on the shift; run bosfuse calibrate)";
@@ -383,33 +440,16 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
     ++report.fits;
     report.fits_ok += fit.ok() ? 1 : 0;
   };
-  struct Pending {
-    std::size_t channel_index;
-    fitting::NewtonFit tc_fit, probe_fit;
-    fitting::CleanSeries tc_clean, probe_clean;
-  };
-  std::vector<Pending> pairs;
+  std::vector<FittedPair> pairs;
   for (std::size_t p = 0; p < channels.size(); ++p) {
     const Series tc = within(tc_series[p], 0.0, span_end_s);
-    Pending pair{p, {}, {}, fitting::clean_series(tc.t_s, tc.value, 0.0), {}};
-    pair.tc_fit = fitting::fit_newton(pair.tc_clean);
+    FittedPair pair{p, {}, {}, fitting::clean_series(tc.t_s, tc.value, 0.0), {}};
+    pair.tc_fit = fitting::fit_newton(pair.tc_series);
     record_fit(pair.tc_fit, storage::FitSubject::kChannel, channels[p].id, "temperature_c", "degC");
-    // Probe times onto the host clock of the thermocouples.
     const auto cal = calibration.find(channels[p].id);
     const double offset_s = cal != calibration.end() ? cal->second.camera_offset_s : config.camera_offset_s;
-    std::vector<double> t, y;
-    bool all_have_temperature = true;
-    for (const auto& s : probe_data[p].samples) {
-      if (s.valid) all_have_temperature = all_have_temperature && s.temperature_c.has_value();
-    }
-    for (const auto& s : probe_data[p].samples) {
-      if (!s.valid) continue;
-      t.push_back(seconds_between(frames.origin_ns, s.t_ns) + offset_s);
-      y.push_back(all_have_temperature ? *s.temperature_c : s.shift_px);
-    }
-    probe_data[p].quantity = all_have_temperature ? "temperature_c" : "shift_px";
-    pair.probe_clean = fitting::clean_series(t, y, 0.0);
-    pair.probe_fit = fitting::fit_newton(pair.probe_clean);
+    pair.probe_series = probe_fit_series(probe_data[p], frames.origin_ns, offset_s);
+    pair.probe_fit = fitting::fit_newton(pair.probe_series);
     text += fmt::format("{}: thermocouple k = {:.4g} 1/s, BOS probe ({}) k = {:.4g} 1/s\n", channels[p].name,
                         pair.tc_fit.k_per_s.value, probe_data[p].quantity, pair.probe_fit.k_per_s.value);
     pairs.push_back(std::move(pair));
@@ -426,13 +466,7 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
       const std::string& quantity = probe_data[pair.channel_index].quantity;
       record_fit(pair.probe_fit, storage::FitSubject::kProbe, probe_id, quantity,
                  quantity == "shift_px" ? "px" : "degC");
-      fitting::AgreementOptions agreement_options;
-      agreement_options.label_a = "thermocouple " + c.name;
-      agreement_options.label_b = "BOS probe at " + c.name;
-      // A shift series is not a temperature: only the two k are comparable.
-      const auto agreement =
-          fitting::compare_fits(pair.tc_fit, pair.probe_fit, pair.tc_clean,
-                                quantity == "shift_px" ? fitting::CleanSeries{} : pair.probe_clean, agreement_options);
+      const auto agreement = agree(pair, c.name, quantity);
       json j = agreement_json(agreement);
       j["probe_quantity"] = quantity;
       agreement_rows.push_back({0, c.id, probe_id, j.dump()});
@@ -441,7 +475,7 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
     // Channel fits were counted when made; their rows are written here.
     for (const auto& f : fit_rows) results.add_fit(f);
     for (const auto& a : agreement_rows) results.add_agreement(a);
-    for (const auto& f : field_rows) results.add_field(f);
+    for (const auto& f : evaluated.fields) results.add_field(f);
   });
   report.agreements = agreement_rows.size();
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
