@@ -488,6 +488,71 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   return report;
 }
 
+namespace {
+
+// The probe's valid samples on the fits' time axis (frame clock) and their shift.
+struct ProbeShifts {
+  std::vector<double> frame_t_s, shift_px;
+};
+
+ProbeShifts valid_shifts(const std::vector<storage::ProbeSampleRecord>& samples, std::int64_t origin_ns) {
+  ProbeShifts out;
+  for (const auto& s : samples) {
+    if (!s.valid) continue;
+    out.frame_t_s.push_back(seconds_between(origin_ns, s.t_ns));
+    out.shift_px.push_back(s.shift_px);
+  }
+  return out;
+}
+
+// The configured offset, or the estimate when asked for and identifiable.
+double camera_offset_for(const Series& tc, const ProbeShifts& probe, double configured_s, double search_s, json& record,
+                         std::string& text) {
+  if (search_s <= 0) return configured_s;
+  fusion::OffsetSearchOptions search;
+  search.max_offset_s = search_s;
+  const auto estimate = fusion::estimate_clock_offset(tc.t_s, tc.value, probe.frame_t_s, probe.shift_px, search);
+  record["offset_estimate"] = {
+      {"ok", estimate.ok}, {"offset_s", estimate.offset_s}, {"r2", estimate.r2}, {"message", estimate.message}};
+  text += fmt::format("{}: clock offset {}\n", record["name"].get<std::string>(),
+                      estimate.ok ? fmt::format("estimated {:.3f} s (r2 {:.4f})", estimate.offset_s, estimate.r2)
+                                  : "not estimated: " + estimate.message);
+  return estimate.ok ? estimate.offset_s : configured_s;
+}
+
+// ΔT of the thermocouple above its reading at the reference frame against
+// the shift; fills `record` and returns whether a calibration was made.
+bool calibrate_channel(const Series& tc, const ProbeShifts& probe, double reference_t_s, double offset_s, json& record,
+                       std::string& text) {
+  const std::string name = record["name"].get<std::string>();
+  record["camera_offset_s"] = offset_s;
+  const std::vector<double> at_reference{reference_t_s};
+  const auto reference_tc = fusion::align_to_frames(tc.t_s, tc.value, at_reference, offset_s);
+  if (!reference_tc.ok(0)) {
+    record["ok"] = false;
+    record["message"] = "the thermocouple has no reading at the reference frame's time";
+    text += name + ": " + record["message"].get<std::string>() + "\n";
+    return false;
+  }
+  const auto aligned = fusion::align_to_frames(tc.t_s, tc.value, probe.frame_t_s, offset_s);
+  std::vector<double> rise;
+  for (double v : aligned.value) rise.push_back(v - reference_tc.value[0]);  // NaN outside: dropped by the fit
+  const auto fit = fusion::fit_linear_calibration(probe.shift_px, rise);
+  record["ok"] = fit.ok;
+  record["message"] = fit.message;
+  record["reference_temperature_c"] = reference_tc.value[0];
+  record["slope_c_per_px"] = fit.slope;
+  record["slope_std_error_c_per_px"] = fit.slope_std_error;
+  record["residual_rms_c"] = fit.residual_rms;
+  record["points"] = fit.points;
+  record["frames_outside_thermocouple_record"] = aligned.outside;
+  record["shift_range_px"] = {fit.x_min, fit.x_max};
+  text += name + ": " + fit.brief_report() + " (per px of shift)\n";
+  return fit.ok;
+}
+
+}  // namespace
+
 std::string calibrate_run(const fs::path& run_dir, const CalibrateOptions& options) {
   storage::ProcessingStore results(run_dir, true);
   const auto store = storage::RunStore::open(run_dir);
@@ -502,52 +567,13 @@ std::string calibrate_run(const fs::path& run_dir, const CalibrateOptions& optio
   std::size_t calibrated = 0;
   for (const auto& probe : probes) {
     if (!probe.channel_id) continue;
-    json c = {{"channel_id", *probe.channel_id}, {"probe_id", probe.id}, {"name", probe.name}};
+    json record = {{"channel_id", *probe.channel_id}, {"probe_id", probe.id}, {"name", probe.name}};
     const Series tc = channel_series(store, *probe.channel_id, frames.origin_ns);
-    std::vector<double> frame_t, shift;
-    for (const auto& s : results.probe_samples(probe.id)) {
-      if (!s.valid) continue;
-      frame_t.push_back(seconds_between(frames.origin_ns, s.t_ns));
-      shift.push_back(s.shift_px);
-    }
-    double offset_s = configured_offset_s;
-    if (options.estimate_offset_max_s > 0) {
-      fusion::OffsetSearchOptions search;
-      search.max_offset_s = options.estimate_offset_max_s;
-      const auto estimate = fusion::estimate_clock_offset(tc.t_s, tc.value, frame_t, shift, search);
-      c["offset_estimate"] = {
-          {"ok", estimate.ok}, {"offset_s", estimate.offset_s}, {"r2", estimate.r2}, {"message", estimate.message}};
-      if (estimate.ok) offset_s = estimate.offset_s;
-      text += fmt::format("{}: clock offset {}\n", probe.name,
-                          estimate.ok ? fmt::format("estimated {:.3f} s (r2 {:.4f})", estimate.offset_s, estimate.r2)
-                                      : "not estimated: " + estimate.message);
-    }
-    c["camera_offset_s"] = offset_s;
-    const auto aligned = fusion::align_to_frames(tc.t_s, tc.value, frame_t, offset_s);
-    const std::vector<double> at_reference{reference_t_s};
-    const auto reference_tc = fusion::align_to_frames(tc.t_s, tc.value, at_reference, offset_s);
-    if (!reference_tc.ok(0)) {
-      c["ok"] = false;
-      c["message"] = "the thermocouple has no reading at the reference frame's time";
-      text += probe.name + ": " + c["message"].get<std::string>() + "\n";
-      channels.push_back(c);
-      continue;
-    }
-    std::vector<double> rise;
-    for (double v : aligned.value) rise.push_back(v - reference_tc.value[0]);
-    const auto fit = fusion::fit_linear_calibration(shift, rise);
-    c["ok"] = fit.ok;
-    c["message"] = fit.message;
-    c["reference_temperature_c"] = reference_tc.value[0];
-    c["slope_c_per_px"] = fit.slope;
-    c["slope_std_error_c_per_px"] = fit.slope_std_error;
-    c["residual_rms_c"] = fit.residual_rms;
-    c["points"] = fit.points;
-    c["frames_outside_thermocouple_record"] = aligned.outside;
-    c["shift_range_px"] = {fit.x_min, fit.x_max};
-    text += probe.name + ": " + fit.brief_report() + " (per px of shift)\n";
-    calibrated += fit.ok ? 1 : 0;
-    channels.push_back(c);
+    const ProbeShifts shifts = valid_shifts(results.probe_samples(probe.id), frames.origin_ns);
+    const double offset_s =
+        camera_offset_for(tc, shifts, configured_offset_s, options.estimate_offset_max_s, record, text);
+    calibrated += calibrate_channel(tc, shifts, reference_t_s, offset_s, record, text) ? 1 : 0;
+    channels.push_back(record);
   }
   if (calibrated == 0) throw std::runtime_error("no thermocouple could be calibrated:\n" + text);
   const json j = {{"kind", "celsius_per_px_shift"},
