@@ -37,7 +37,8 @@ struct DisplacementModel {
   static DisplacementModel uniform(double u_px, double v_px);
   static DisplacementModel step(double step_x_px, double u_px, double v_px);
   static DisplacementModel sinusoid(double amplitude_px, double wavelength_px);
-  // The gradient of a Gaussian bump (a hot spot seen in BOS), pointing outwards.
+  // The gradient of a Gaussian bump, pointing outwards (what BOS sees of a cold
+  // spot; a hot spot pulls the background inwards: give a negative peak).
   static DisplacementModel bump_gradient(double centre_x_px, double centre_y_px, double radius_px, double peak_px);
 
   cv::Point2d at(double x_px, double y_px) const;

@@ -78,7 +78,63 @@ CREATE TABLE events (
 CREATE INDEX events_by_time ON events (t_ns);
 )sql";
 
-constexpr std::array<Migration, 1> kMigrations = {{{1, kSchemaV1}}};
+// Version 2: results of `bosfuse process` and `bosfuse calibrate`. Numbers,
+// JSON text and paths only; fields themselves are files under RUN/fields/.
+constexpr std::string_view kSchemaV2 = R"sql(
+CREATE TABLE probe_series (
+  id         INTEGER PRIMARY KEY,
+  run_id     INTEGER NOT NULL REFERENCES runs(id),
+  channel_id INTEGER REFERENCES channels(id),
+  name       TEXT    NOT NULL,
+  x_px       REAL    NOT NULL,
+  y_px       REAL    NOT NULL,
+  UNIQUE (run_id, name)
+);
+CREATE TABLE probe_samples (
+  probe_id      INTEGER NOT NULL REFERENCES probe_series(id) ON DELETE CASCADE,
+  frame_id      INTEGER NOT NULL REFERENCES frames(id),
+  t_ns          INTEGER NOT NULL,
+  u_px          REAL    NOT NULL,
+  v_px          REAL    NOT NULL,
+  shift_px      REAL    NOT NULL,
+  temperature_c REAL,
+  valid         INTEGER NOT NULL CHECK (valid IN (0, 1)),
+  PRIMARY KEY (probe_id, frame_id)
+);
+CREATE TABLE fits (
+  id           INTEGER PRIMARY KEY,
+  run_id       INTEGER NOT NULL REFERENCES runs(id),
+  subject_kind TEXT    NOT NULL CHECK (subject_kind IN ('channel', 'probe')),
+  subject_id   INTEGER NOT NULL,
+  origin_t_ns  INTEGER NOT NULL,
+  ok           INTEGER NOT NULL CHECK (ok IN (0, 1)),
+  json         TEXT    NOT NULL
+);
+CREATE TABLE agreements (
+  id         INTEGER PRIMARY KEY,
+  run_id     INTEGER NOT NULL REFERENCES runs(id),
+  channel_id INTEGER NOT NULL REFERENCES channels(id),
+  probe_id   INTEGER NOT NULL REFERENCES probe_series(id) ON DELETE CASCADE,
+  json       TEXT    NOT NULL
+);
+CREATE TABLE calibrations (
+  id         INTEGER PRIMARY KEY,
+  run_id     INTEGER NOT NULL REFERENCES runs(id),
+  created_ns INTEGER NOT NULL,
+  json       TEXT    NOT NULL
+);
+CREATE TABLE fields (
+  id       INTEGER PRIMARY KEY,
+  run_id   INTEGER NOT NULL REFERENCES runs(id),
+  frame_id INTEGER NOT NULL REFERENCES frames(id),
+  kind     TEXT    NOT NULL CHECK (kind IN ('displacement', 'temperature')),
+  path     TEXT    NOT NULL,
+  json     TEXT    NOT NULL,
+  UNIQUE (frame_id, kind)
+);
+)sql";
+
+constexpr std::array<Migration, 2> kMigrations = {{{1, kSchemaV1}, {2, kSchemaV2}}};
 static_assert(kMigrations.back().version == kSchemaVersion);
 static_assert(kSampleStatusCount == 7, "update the sample_status rows of the schema");
 

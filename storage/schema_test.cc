@@ -26,8 +26,9 @@ TEST(Schema, EmptyFileIsMigratedToTheCurrentVersion) {
   EXPECT_EQ(schema_version(db), 0);
   EXPECT_EQ(migrate(db), 0);
   EXPECT_EQ(schema_version(db), kSchemaVersion);
-  EXPECT_EQ(table_names(db), (std::vector<std::string>{"channels", "devices", "events", "frames", "runs",
-                                                       "sample_status", "samples", "schema_version"}));
+  EXPECT_EQ(table_names(db), (std::vector<std::string>{"agreements", "calibrations", "channels", "devices", "events",
+                                                       "fields", "fits", "frames", "probe_samples", "probe_series",
+                                                       "runs", "sample_status", "samples", "schema_version"}));
 }
 
 TEST(Schema, MigratingTwiceChangesNothing) {
@@ -37,7 +38,7 @@ TEST(Schema, MigratingTwiceChangesNothing) {
   EXPECT_EQ(migrate(db), kSchemaVersion);
   auto stmt = db.prepare("SELECT COUNT(*) FROM schema_version");
   stmt.step();
-  EXPECT_EQ(stmt.column_int64(0), 1);
+  EXPECT_EQ(stmt.column_int64(0), kSchemaVersion);
 }
 
 TEST(Schema, SampleStatusNamesMatchTheEnum) {
@@ -57,10 +58,11 @@ TEST(Schema, ForwardMigrationAppliesOnlyNewerSteps) {
   testing::TempDir dir;
   Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
   migrate(db);
-  const std::array<Migration, 2> future = {
-      {schema_migrations()[0], {2, "ALTER TABLE runs ADD COLUMN operator TEXT NOT NULL DEFAULT ''"}}};
-  EXPECT_EQ(migrate(db, future), 1);
-  EXPECT_EQ(schema_version(db), 2);
+  const std::array<Migration, 3> future = {{schema_migrations()[0],
+                                            schema_migrations()[1],
+                                            {3, "ALTER TABLE runs ADD COLUMN operator TEXT NOT NULL DEFAULT ''"}}};
+  EXPECT_EQ(migrate(db, future), 2);
+  EXPECT_EQ(schema_version(db), 3);
   EXPECT_NO_THROW(db.execute("SELECT operator FROM runs"));
 }
 
@@ -81,11 +83,40 @@ TEST(Schema, FailedMigrationLeavesTheStoreAsItWas) {
   testing::TempDir dir;
   Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
   migrate(db);
-  const std::array<Migration, 2> broken = {{schema_migrations()[0], {2, "CREATE TABLE extra (x); THIS IS NOT SQL"}}};
+  const std::array<Migration, 3> broken = {
+      {schema_migrations()[0], schema_migrations()[1], {3, "CREATE TABLE extra (x); THIS IS NOT SQL"}}};
   EXPECT_THROW(migrate(db, broken), StorageError);
-  EXPECT_EQ(schema_version(db), 1);
+  EXPECT_EQ(schema_version(db), 2);
   auto stmt = db.prepare("SELECT 1 FROM sqlite_master WHERE name = 'extra'");
   EXPECT_FALSE(stmt.step()) << "a failed migration left a table behind";
+}
+
+TEST(Schema, VersionOneStoreIsMigratedToVersionTwoKeepingItsData) {
+  testing::TempDir dir;
+  Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
+  migrate(db, schema_migrations().first(1));
+  db.execute("INSERT INTO runs (name, started_ns, config_toml, status) VALUES ('old', 5, '', 'complete')");
+  ASSERT_EQ(schema_version(db), 1);
+  EXPECT_EQ(migrate(db), 1);
+  EXPECT_EQ(schema_version(db), 2);
+  auto stmt = db.prepare("SELECT name FROM runs");
+  ASSERT_TRUE(stmt.step());
+  EXPECT_EQ(stmt.column_text(0), "old");
+  EXPECT_NO_THROW(db.execute("SELECT probe_id, frame_id, shift_px, temperature_c FROM probe_samples"));
+}
+
+TEST(Schema, ProcessingTablesRejectWhatTheyDoNotMean) {
+  testing::TempDir dir;
+  Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
+  migrate(db);
+  db.execute("INSERT INTO runs (name, started_ns, config_toml, status) VALUES ('r', 5, '', 'complete')");
+  EXPECT_THROW(db.execute("INSERT INTO fits (run_id, subject_kind, subject_id, origin_t_ns, ok, json) "
+                          "VALUES (1, 'camera', 1, 0, 1, '{}')"),
+               StorageError);
+  EXPECT_THROW(db.execute("INSERT INTO fields (run_id, frame_id, kind, path, json) VALUES (1, 99, 'displacement', "
+                          "'f.csv', '{}')"),
+               StorageError)
+      << "a field of a frame that does not exist";
 }
 
 }  // namespace

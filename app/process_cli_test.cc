@@ -1,0 +1,291 @@
+// bosfuse process / calibrate on a small synthetic run: frames rendered with
+// a known hot-spot displacement whose amplitude follows Newton's law, and two
+// thermocouples on the same law at known image positions.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+
+#include "sim/synthetic_pair.h"
+#include "storage/processing_store.h"
+#include "storage/run_store.h"
+#include "tests/support/subprocess.h"
+#include "tests/support/temp_dir.h"
+
+namespace bosfuse {
+namespace {
+
+const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+constexpr std::int64_t kOriginNs = 1'800'000'000'000'000'000;
+constexpr double kRate = 0.05;         // k, 1/s
+constexpr double kRise = 30;           // °C at t = 0
+constexpr double kPxPerDegree = 0.02;  // peak shift per °C of rise
+constexpr double kCentreX = 127.5, kCentreY = 95.5, kRadius = 40;
+
+double rise_c(double t_s) { return t_s < 0 ? 0 : kRise * std::exp(-kRate * t_s); }
+
+std::int64_t at_ns(double t_s) { return kOriginNs + static_cast<std::int64_t>(std::llround(t_s * 1e9)); }
+
+sim::DisplacementModel hot_spot(double t_s) {
+  // Negative peak: features move towards the centre, as a hot spot makes them (bos_geometry.h).
+  return sim::DisplacementModel::bump_gradient(kCentreX, kCentreY, kRadius, -kPxPerDegree * rise_c(t_s));
+}
+
+class ProcessCli : public ::testing::Test {
+ protected:
+  void SetUp() override { make_run(true); }
+
+  void make_run(bool with_reference) {
+    auto store = storage::RunStore::create(run_dir(), {0, "synthetic", kOriginNs, std::nullopt, "", {}},
+                                           storage::RunStore::CreateMode::kNew);
+    const auto device = store.add_device({0, "daq", "modbus-tcp", "generic", "sim"});
+    for (const auto& [name, x, y] :
+         {std::tuple{"tc1", kCentreX + kRadius, kCentreY}, std::tuple{"tc2", kCentreX, kCentreY - kRadius}}) {
+      channels_.push_back(store.add_channel({0, device, name, "thermocouple", "degC", "K", x, y}));
+      points_.emplace_back(x, y);
+    }
+    std::mt19937 random(11);
+    std::normal_distribution<double> noise(0, 0.05);
+    std::vector<storage::Sample> samples;
+    for (int i = -15; i <= 40; ++i) {
+      for (const auto channel : channels_) {
+        samples.push_back({channel, at_ns(i), std::nullopt, 20 + rise_c(i) + noise(random), std::nullopt, {}});
+      }
+    }
+    store.write_samples(samples);
+    std::filesystem::create_directories(run_dir() / "frames");
+    auto add = [&](double t_s, bool reference, int index) {
+      sim::PairOptions pair;
+      pair.pattern.width_px = 256;
+      pair.pattern.height_px = 192;
+      pair.field = hot_spot(t_s);
+      pair.noise_seed = static_cast<std::uint64_t>(100 + index);
+      const auto images = sim::render_pair(pair);
+      const std::string path = "frames/f" + std::to_string(index) + ".png";
+      cv::imwrite((run_dir() / path).string(), reference ? images.reference : images.measurement);
+      store.add_frame({0, std::nullopt, at_ns(t_s), std::nullopt, path, 256, 192, 8, reference});
+    };
+    add(-10, with_reference, 0);
+    for (int i = 0; i < 8; ++i) add(5.0 * i, false, i + 1);
+    store.finish(storage::RunStatus::kComplete, at_ns(41));
+  }
+
+  std::filesystem::path run_dir() const { return dir_.path() / "run"; }
+  testing::CommandResult bosfuse(const std::string& args) {
+    return testing::run_command(kBosfuse + " " + args + " " + run_dir().string(), 120);
+  }
+  static double json_k(const std::string& text) {
+    return nlohmann::json::parse(text).at("parameters").at("k_per_s").at("value").get<double>();
+  }
+
+  testing::TempDir dir_;
+  std::vector<std::int64_t> channels_;
+  std::vector<cv::Point2d> points_;
+  const std::string grid_ = "--window 16 --step 8 --passes 2";
+};
+
+TEST_F(ProcessCli, ProbesOnlyStoresShiftsFitsAndAgreement) {
+  const auto run = bosfuse("process --probes-only " + grid_);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("frame 8/8"), std::string::npos) << "progress on stderr: " << run.output;
+  const storage::ProcessingStore results(run_dir());
+  const auto probes = results.probes();
+  ASSERT_EQ(probes.size(), 2u);
+  for (std::size_t p = 0; p < probes.size(); ++p) {
+    EXPECT_EQ(probes[p].channel_id, channels_[p]);
+    const auto samples = results.probe_samples(probes[p].id);
+    ASSERT_EQ(samples.size(), 8u);
+    for (const auto& s : samples) {
+      ASSERT_TRUE(s.valid);
+      const double t_s = static_cast<double>(s.t_ns - kOriginNs) * 1e-9;
+      const cv::Point2d truth = hot_spot(t_s).window_mean(points_[p].x, points_[p].y, 16);
+      EXPECT_NEAR(s.shift_px, std::hypot(truth.x, truth.y), 0.03) << "t = " << t_s;
+      EXPECT_FALSE(s.temperature_c.has_value()) << "no calibration, no field: no temperature";
+    }
+  }
+  const auto fits = results.fits();
+  ASSERT_EQ(fits.size(), 4u);
+  for (const auto& fit : fits) {
+    ASSERT_TRUE(fit.ok) << fit.json;
+    EXPECT_NEAR(json_k(fit.json), kRate, (fit.subject == storage::FitSubject::kChannel ? 0.05 : 0.15) * kRate)
+        << fit.json;
+    EXPECT_EQ(fit.origin_t_ns, kOriginNs);
+  }
+  ASSERT_EQ(results.agreements().size(), 2u);
+  const auto agreement = nlohmann::json::parse(results.agreements()[0].json);
+  EXPECT_FALSE(agreement.at("k").is_null());
+  EXPECT_EQ(agreement.at("probe_quantity"), "shift_px");
+  EXPECT_TRUE(results.fields().empty());
+}
+
+TEST_F(ProcessCli, FullFieldsEqualProbesAtTheProbePointsAndWriteFieldFiles) {
+  auto probe_samples = [&](const std::string& args) {
+    EXPECT_EQ(bosfuse("process --probes-only " + args).exit_code, 0);
+    std::vector<std::vector<storage::ProbeSampleRecord>> samples;
+    const storage::ProcessingStore results(run_dir());
+    for (const auto& p : results.probes()) samples.push_back(results.probe_samples(p.id));
+    return samples;
+  };
+  const auto probe_mode = probe_samples(grid_ + " --probe-context -1");
+  const auto fast_probe_mode = probe_samples(grid_);
+  const auto run = bosfuse("process " + grid_);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("degC per px"), std::string::npos) << "the set-up's sensitivity is printed";
+  const storage::ProcessingStore results(run_dir());
+  const auto probes = results.probes();
+  ASSERT_EQ(probes.size(), probe_mode.size());
+  for (std::size_t p = 0; p < probes.size(); ++p) {
+    const auto full = results.probe_samples(probes[p].id);
+    ASSERT_EQ(full.size(), probe_mode[p].size());
+    for (std::size_t i = 0; i < full.size(); ++i) {
+      EXPECT_NEAR(full[i].u_px, probe_mode[p][i].u_px, 1e-4);
+      EXPECT_NEAR(full[i].v_px, probe_mode[p][i].v_px, 1e-4);
+      // Measured: up to 0.011 px at 0.6 px shifts (window 16, step 8, 2 passes).
+      EXPECT_NEAR(full[i].u_px, fast_probe_mode[p][i].u_px, 0.02) << "one node of context";
+      EXPECT_NEAR(full[i].v_px, fast_probe_mode[p][i].v_px, 0.02) << "one node of context";
+      ASSERT_TRUE(full[i].temperature_c.has_value()) << "full fields give the model's temperature";
+      EXPECT_GT(*full[i].temperature_c, 20) << "a hot spot";
+    }
+  }
+  const auto fields = results.fields();
+  ASSERT_EQ(fields.size(), 16u);
+  for (const auto& f : fields) EXPECT_TRUE(std::filesystem::exists(run_dir() / f.path)) << f.path;
+}
+
+TEST_F(ProcessCli, AMaskedHolderIsNotEvaluatedAndTheTemperatureFieldIsFilledThere) {
+  cv::Mat mask(192, 256, CV_8U, cv::Scalar(0));
+  mask(cv::Rect(112, 104, 32, 40)).setTo(255);  // a holder below the hot spot's centre
+  cv::imwrite((run_dir() / "mask.png").string(), mask);
+  const auto run = bosfuse("process " + grid_ + " --mask mask.png");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const storage::ProcessingStore results(run_dir());
+  std::size_t temperature_files = 0;
+  for (const auto& f : results.fields()) {
+    const auto summary = nlohmann::json::parse(f.json);
+    if (f.kind == "displacement") {
+      EXPECT_GT(summary.at("masked").get<int>(), 0) << f.json;
+    }
+    if (f.kind != "temperature") continue;
+    ++temperature_files;
+    EXPECT_GT(summary.at("unmeasured_nodes").get<int>(), 0) << f.json;
+    std::ifstream csv(run_dir() / f.path);
+    std::string header;
+    std::getline(csv, header);
+    EXPECT_EQ(header, "x,y,temperature_c,measured");
+  }
+  EXPECT_EQ(temperature_files, 8u);
+  for (const auto& p : results.probes()) {
+    for (const auto& s : results.probe_samples(p.id)) EXPECT_GT(s.temperature_c.value_or(0), 20);
+  }
+  const auto missing = bosfuse("process " + grid_ + " --mask nope.png");
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.output.find("nope.png: no such file"), std::string::npos) << missing.output;
+}
+
+TEST_F(ProcessCli, CalibrationGivesDegreesPerPixelAndProbeTemperatures) {
+  ASSERT_EQ(bosfuse("process --probes-only " + grid_).exit_code, 0);
+  const auto calibrate = bosfuse("calibrate");
+  ASSERT_EQ(calibrate.exit_code, 0) << calibrate.output;
+  double slope = 0;
+  {
+    const storage::ProcessingStore results(run_dir());
+    const auto record = results.latest_calibration();
+    ASSERT_TRUE(record.has_value());
+    const auto j = nlohmann::json::parse(record->json);
+    ASSERT_EQ(j.at("channels").size(), 2u);
+    for (const auto& c : j.at("channels")) {
+      ASSERT_TRUE(c.at("ok").get<bool>()) << c;
+      slope = c.at("slope_c_per_px").get<double>();
+      // The window mean of the bump is a little below its peak, so the slope a little above 1/0.02.
+      EXPECT_NEAR(slope, 1 / kPxPerDegree, 0.1 / kPxPerDegree) << c;
+      EXPECT_GT(c.at("slope_std_error_c_per_px").get<double>(), 0);
+      EXPECT_NEAR(c.at("reference_temperature_c").get<double>(), 20, 0.2);
+    }
+  }
+  const auto again = bosfuse("process --probes-only " + grid_);
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  RecordProperty("calibrate_output", calibrate.output);  // readable with --gtest_output=xml
+  RecordProperty("process_output", again.output);
+  const storage::ProcessingStore results(run_dir());
+  for (const auto& p : results.probes()) {
+    for (const auto& s : results.probe_samples(p.id)) {
+      ASSERT_TRUE(s.temperature_c.has_value());
+      EXPECT_NEAR(*s.temperature_c, 20 + rise_c(static_cast<double>(s.t_ns - kOriginNs) * 1e-9), 1.5);
+    }
+  }
+  for (const auto& fit : results.fits()) EXPECT_NEAR(json_k(fit.json), kRate, 0.15 * kRate) << fit.json;
+  const auto agreement = nlohmann::json::parse(results.agreements().at(0).json);
+  EXPECT_EQ(agreement.at("probe_quantity"), "temperature_c");
+  EXPECT_FALSE(agreement.at("series").is_null());
+}
+
+TEST_F(ProcessCli, AnOffsetThatTheRecordCannotFixIsNotEstimated) {
+  ASSERT_EQ(bosfuse("process --probes-only " + grid_).exit_code, 0);
+  // The frames see only the smooth decay: shifting it in time only rescales it.
+  const auto calibrate = bosfuse("calibrate --estimate-offset 2");
+  ASSERT_EQ(calibrate.exit_code, 0) << calibrate.output;
+  EXPECT_NE(calibrate.output.find("not estimated"), std::string::npos) << calibrate.output;
+  const storage::ProcessingStore results(run_dir());
+  const auto j = nlohmann::json::parse(results.latest_calibration()->json);
+  for (const auto& c : j.at("channels")) {
+    EXPECT_FALSE(c.at("offset_estimate").at("ok").get<bool>());
+    EXPECT_EQ(c.at("camera_offset_s").get<double>(), 0.0) << "the configured offset is kept";
+  }
+}
+
+TEST_F(ProcessCli, CalibrateBeforeProcessAndARunWithoutReferenceAreExplained) {
+  const auto calibrate = bosfuse("calibrate");
+  EXPECT_NE(calibrate.exit_code, 0);
+  EXPECT_NE(calibrate.output.find("run `bosfuse process RUN` first"), std::string::npos) << calibrate.output;
+  std::filesystem::remove_all(run_dir());
+  channels_.clear();
+  points_.clear();
+  make_run(false);
+  const auto run = bosfuse("process --probes-only");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.output.find("no reference frame"), std::string::npos) << run.output;
+}
+
+TEST_F(ProcessCli, TheCameraOffsetMovesProbeTimesOntoTheHostClock) {
+  auto probe_t0 = [&](const std::string& extra) {
+    EXPECT_EQ(bosfuse("process --probes-only " + grid_ + extra).exit_code, 0);
+    const storage::ProcessingStore results(run_dir());
+    for (const auto& fit : results.fits()) {
+      if (fit.subject == storage::FitSubject::kProbe) {
+        return nlohmann::json::parse(fit.json).at("parameters").at("T0_c").at("value").get<double>();
+      }
+    }
+    return 0.0;
+  };
+  const double t0 = probe_t0("");
+  const auto alignment = dir_.path() / "alignment.toml";
+  std::ofstream(alignment) << "[alignment]\ncamera_offset_s = 3.0\n";
+  // The same shifts 3 s later on the fits' time axis: extrapolated back to t = 0 they are e^(3k) larger.
+  EXPECT_NEAR(probe_t0(" --geometry " + alignment.string()), t0 * std::exp(3 * kRate), 0.03 * t0);
+}
+
+TEST_F(ProcessCli, GeometryFileIsUsedAndItsMistakesAreNamed) {
+  const std::string example = std::string(BOSFUSE_SOURCE_DIR) + "/examples/geometry.toml";
+  const auto run = bosfuse("process " + grid_ + " --geometry " + example);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("geometry from " + example), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("Z_D = 0.5 m"), std::string::npos) << run.output;
+  const auto bad = dir_.path() / "bad.toml";
+  std::ofstream(bad) << "[geometry]\nz_d_m = 0.5\ndepht_m = 0.1\n";
+  const auto typo = bosfuse("process " + grid_ + " --geometry " + bad.string());
+  EXPECT_NE(typo.exit_code, 0);
+  EXPECT_NE(typo.output.find("bad.toml:3"), std::string::npos) << typo.output;
+  EXPECT_NE(typo.output.find("depht_m"), std::string::npos) << typo.output;
+  std::ofstream(bad) << "[geometry]\nz_d_m = -1\n";
+  const auto negative = bosfuse("process " + grid_ + " --geometry " + bad.string());
+  EXPECT_NE(negative.exit_code, 0);
+  EXPECT_NE(negative.output.find("z_d_m"), std::string::npos) << negative.output;
+}
+
+}  // namespace
+}  // namespace bosfuse

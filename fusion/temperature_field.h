@@ -1,0 +1,92 @@
+#pragma once
+// The temperature field behind a displacement field. The displacement at
+// each grid node gives the refractive-index gradient there (bos_geometry.h);
+// integrating that gradient gives n, and Gladstone–Dale with the ideal gas
+// gives density and temperature.
+//
+// Integration is least squares over the grid's edges: for neighbouring nodes
+// i, j the difference n_j − n_i should equal the trapezoid estimate
+// h·(g_i + g_j)/2 of the gradient component along the edge (h the node
+// spacing at the flow plane). Its normal equations are the 5-point Poisson
+// equation ∇²n = ∂x(∂n/∂x) + ∂y(∂n/∂y), discretised so that a field that is
+// an exact gradient is recovered to the trapezoid rule's O(h²). The image
+// border is Dirichlet: its nodes are ambient air, n = n0 — so the hot region
+// must lie inside the evaluated area (a plume leaving through the border
+// violates this and lowers the recovered temperatures).
+//
+// Masked and unmeasured nodes (flag other than kOk; kOutlierReplaced counts
+// as measured unless excluded by the options) are interior unknowns with zero
+// source: every edge touching one asks n_j − n_i = 0, but with a small weight
+// (fill_weight), so the solve fills them harmonically from the measured
+// surroundings while the measured edges alone decide the measured nodes —
+// the gradient around a mask is not pulled flat by it, and no invented
+// gradient enters. They are reported as not measured in the result.
+//
+// The solve is done for δn = n − n0 in double precision (n − 1 is ~3e-4, so
+// solving for n itself would lose digits) with Eigen's SimplicialLDLT.
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fusion/bos_geometry.h"
+#include "fusion/displacement_field.h"
+
+namespace bosfuse::fusion {
+
+struct TemperatureFieldOptions {
+  bool use_replaced_outliers = true;  // kOutlierReplaced vectors (neighbour medians) count as measurements
+  int max_nodes = 4'000'000;          // bound on the linear system's size
+  double fill_weight = 1e-3;          // weight of the zero-gradient edges at unmeasured nodes (measured: 1)
+
+  std::string Validate() const;  // empty when valid
+};
+
+// Node values on the displacement field's grid, row-major.
+struct TemperatureField {
+  int rows = 0;
+  int cols = 0;
+  double x0_px = 0;  // centre of node (0, 0)
+  double y0_px = 0;
+  double step_px = 1;
+  std::vector<double> temperature_c;     // NaN only where n came out ≤ 1 (flagged by `physical`)
+  std::vector<double> refractive_index;  // n at each node
+  std::vector<std::uint8_t> measured;    // 1: the node's displacement was a measurement
+  std::vector<std::uint8_t> physical;    // 0: the solve gave n ≤ 1, no temperature
+
+  std::size_t index(int row, int col) const { return static_cast<std::size_t>(row) * cols + col; }
+  // Bilinear between nodes; nullopt outside the grid or next to an
+  // unphysical node.
+  std::optional<double> temperature_at(double x_px, double y_px) const;
+};
+
+struct TemperatureFieldSummary {
+  std::size_t nodes = 0;
+  std::size_t boundary_nodes = 0;
+  std::size_t unknowns = 0;
+  std::size_t unmeasured_nodes = 0;  // filled by the solve (masked, no texture, ...)
+  std::size_t unphysical_nodes = 0;  // n ≤ 1: temperature NaN
+  double min_c = 0;
+  double max_c = 0;
+  double seconds = 0;
+
+  std::string brief_report() const;
+};
+
+struct TemperatureFieldResult {
+  TemperatureField field;
+  TemperatureFieldSummary summary;
+};
+
+// `displacement` must be a regular grid of at least 3×3 nodes (not a probe
+// field): throws std::invalid_argument otherwise, or when the options are
+// invalid.
+TemperatureFieldResult recover_temperature_field(const DisplacementField& displacement, const BosGeometry& geometry,
+                                                 const TemperatureFieldOptions& options = {});
+
+// CSV with the header `x,y,temperature_c,measured`; NaN written as empty.
+void write_csv(const TemperatureField& field, const std::filesystem::path& path);
+
+}  // namespace bosfuse::fusion

@@ -1,0 +1,159 @@
+#include "storage/processing_store.h"
+
+#include "storage/run_store.h"
+#include "storage/schema.h"
+
+namespace bosfuse::storage {
+namespace {
+
+std::string database_path(const std::filesystem::path& dir) { return (dir / RunStore::kDatabaseFileName).string(); }
+
+const char* to_text(FitSubject subject) { return subject == FitSubject::kChannel ? "channel" : "probe"; }
+
+}  // namespace
+
+ProcessingStore::ProcessingStore(const std::filesystem::path& run_dir, bool writable)
+    : db_((RunStore::holds_run(run_dir) ? database_path(run_dir)
+                                        : throw StorageError("'" + run_dir.string() + "' holds no bosfuse run")),
+          writable ? Database::Mode::kReadWrite : Database::Mode::kReadOnly) {
+  if (writable) migrate(db_);
+  version_ = schema_version(db_);
+  auto stmt = db_.prepare("SELECT id FROM runs ORDER BY id LIMIT 1");
+  stmt.step();
+  run_id_ = stmt.column_int64(0);
+}
+
+void ProcessingStore::in_transaction(const std::function<void()>& work) {
+  Transaction transaction(db_);
+  work();
+  transaction.commit();
+}
+
+void ProcessingStore::clear_results() {
+  for (const char* sql : {"DELETE FROM agreements WHERE run_id = ?1", "DELETE FROM fits WHERE run_id = ?1",
+                          "DELETE FROM probe_samples WHERE probe_id IN (SELECT id FROM probe_series WHERE run_id = ?1)",
+                          "DELETE FROM probe_series WHERE run_id = ?1", "DELETE FROM fields WHERE run_id = ?1"}) {
+    db_.prepare(sql).bind(1, run_id_).run();
+  }
+}
+
+std::int64_t ProcessingStore::add_probe(const ProbeSeriesRecord& p) {
+  db_.prepare("INSERT INTO probe_series (run_id, channel_id, name, x_px, y_px) VALUES (?, ?, ?, ?, ?)")
+      .bind_all(run_id_, p.channel_id, p.name, p.x_px, p.y_px)
+      .run();
+  return db_.last_insert_rowid();
+}
+
+void ProcessingStore::write_probe_samples(std::span<const ProbeSampleRecord> samples) {
+  auto stmt = db_.prepare(
+      "INSERT INTO probe_samples (probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid) "
+      "VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
+  for (const ProbeSampleRecord& s : samples) {
+    stmt.bind_all(s.probe_id, s.frame_id, s.t_ns, s.u_px, s.v_px, s.shift_px, s.temperature_c, s.valid ? 1 : 0);
+    stmt.run();
+  }
+}
+
+std::int64_t ProcessingStore::add_fit(const FitRecord& f) {
+  db_.prepare("INSERT INTO fits (run_id, subject_kind, subject_id, origin_t_ns, ok, json) VALUES (?, ?, ?, ?, ?, ?)")
+      .bind_all(run_id_, to_text(f.subject), f.subject_id, f.origin_t_ns, f.ok ? 1 : 0, f.json)
+      .run();
+  return db_.last_insert_rowid();
+}
+
+std::int64_t ProcessingStore::add_agreement(const AgreementRecord& a) {
+  db_.prepare("INSERT INTO agreements (run_id, channel_id, probe_id, json) VALUES (?, ?, ?, ?)")
+      .bind_all(run_id_, a.channel_id, a.probe_id, a.json)
+      .run();
+  return db_.last_insert_rowid();
+}
+
+std::int64_t ProcessingStore::add_calibration(const CalibrationRecord& c) {
+  db_.prepare("INSERT INTO calibrations (run_id, created_ns, json) VALUES (?, ?, ?)")
+      .bind_all(run_id_, c.created_ns, c.json)
+      .run();
+  return db_.last_insert_rowid();
+}
+
+std::int64_t ProcessingStore::add_field(const FieldRecord& f) {
+  db_.prepare(
+         "INSERT INTO fields (run_id, frame_id, kind, path, json) VALUES (?, ?, ?, ?, ?) "
+         "ON CONFLICT (frame_id, kind) DO UPDATE SET path = excluded.path, json = excluded.json")
+      .bind_all(run_id_, f.frame_id, f.kind, f.path, f.json)
+      .run();
+  return db_.last_insert_rowid();
+}
+
+std::vector<ProbeSeriesRecord> ProcessingStore::probes() const {
+  if (!has_results_tables()) return {};
+  auto stmt = db_.prepare("SELECT id, channel_id, name, x_px, y_px FROM probe_series WHERE run_id = ? ORDER BY id");
+  stmt.bind(1, run_id_);
+  std::vector<ProbeSeriesRecord> out;
+  while (stmt.step()) {
+    out.push_back({stmt.column_int64(0), stmt.column_optional_int64(1), stmt.column_text(2), stmt.column_double(3),
+                   stmt.column_double(4)});
+  }
+  return out;
+}
+
+std::vector<ProbeSampleRecord> ProcessingStore::probe_samples(std::int64_t probe_id) const {
+  if (!has_results_tables()) return {};
+  auto stmt = db_.prepare(
+      "SELECT probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid FROM probe_samples "
+      "WHERE probe_id = ? ORDER BY t_ns, frame_id");
+  stmt.bind(1, probe_id);
+  std::vector<ProbeSampleRecord> out;
+  while (stmt.step()) {
+    out.push_back({stmt.column_int64(0), stmt.column_int64(1), stmt.column_int64(2), stmt.column_double(3),
+                   stmt.column_double(4), stmt.column_double(5), stmt.column_optional_double(6),
+                   stmt.column_int64(7) != 0});
+  }
+  return out;
+}
+
+std::vector<FitRecord> ProcessingStore::fits() const {
+  if (!has_results_tables()) return {};
+  auto stmt =
+      db_.prepare("SELECT id, subject_kind, subject_id, origin_t_ns, ok, json FROM fits WHERE run_id = ? ORDER BY id");
+  stmt.bind(1, run_id_);
+  std::vector<FitRecord> out;
+  while (stmt.step()) {
+    out.push_back({stmt.column_int64(0), stmt.column_text(1) == "channel" ? FitSubject::kChannel : FitSubject::kProbe,
+                   stmt.column_int64(2), stmt.column_int64(3), stmt.column_int64(4) != 0, stmt.column_text(5)});
+  }
+  return out;
+}
+
+std::vector<AgreementRecord> ProcessingStore::agreements() const {
+  if (!has_results_tables()) return {};
+  auto stmt = db_.prepare("SELECT id, channel_id, probe_id, json FROM agreements WHERE run_id = ? ORDER BY id");
+  stmt.bind(1, run_id_);
+  std::vector<AgreementRecord> out;
+  while (stmt.step()) {
+    out.push_back({stmt.column_int64(0), stmt.column_int64(1), stmt.column_int64(2), stmt.column_text(3)});
+  }
+  return out;
+}
+
+std::optional<CalibrationRecord> ProcessingStore::latest_calibration() const {
+  if (!has_results_tables()) return std::nullopt;
+  auto stmt = db_.prepare(
+      "SELECT id, created_ns, json FROM calibrations WHERE run_id = ? ORDER BY created_ns DESC, id DESC LIMIT 1");
+  stmt.bind(1, run_id_);
+  if (!stmt.step()) return std::nullopt;
+  return CalibrationRecord{stmt.column_int64(0), stmt.column_int64(1), stmt.column_text(2)};
+}
+
+std::vector<FieldRecord> ProcessingStore::fields() const {
+  if (!has_results_tables()) return {};
+  auto stmt = db_.prepare("SELECT id, frame_id, kind, path, json FROM fields WHERE run_id = ? ORDER BY frame_id, kind");
+  stmt.bind(1, run_id_);
+  std::vector<FieldRecord> out;
+  while (stmt.step()) {
+    out.push_back(
+        {stmt.column_int64(0), stmt.column_int64(1), stmt.column_text(2), stmt.column_text(3), stmt.column_text(4)});
+  }
+  return out;
+}
+
+}  // namespace bosfuse::storage

@@ -1,0 +1,110 @@
+#pragma once
+// ProcessingStore reads and writes what `bosfuse process` and `bosfuse
+// calibrate` derive from a run: BOS probe series at the thermocouples'
+// image positions, Newton fits, agreement statistics, calibrations and the
+// paths of field files (schema version 2, docs/SCHEMA.md). It opens its own
+// connection to the run's `run.sqlite`, so it can be used beside a RunStore.
+// Fits, agreements and calibrations are stored as JSON text (their
+// structure belongs to fitting/ and fusion/, which storage does not know);
+// fields as paths relative to the run folder.
+//
+// A store written before version 2 reads as having no results; opening it
+// writable migrates it.
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "storage/database.h"
+
+namespace bosfuse::storage {
+
+struct ProbeSeriesRecord {
+  std::int64_t id = 0;
+  std::optional<std::int64_t> channel_id;  // the thermocouple it sits on, if any
+  std::string name;
+  double x_px = 0;  // as requested (the evaluator may snap to a window centre)
+  double y_px = 0;
+};
+
+struct ProbeSampleRecord {
+  std::int64_t probe_id = 0;
+  std::int64_t frame_id = 0;
+  std::int64_t t_ns = 0;  // the frame's time
+  double u_px = 0;
+  double v_px = 0;
+  double shift_px = 0;                  // |(u, v)|
+  std::optional<double> temperature_c;  // when a calibration or the physical model gave one
+  bool valid = false;
+};
+
+enum class FitSubject { kChannel, kProbe };
+
+struct FitRecord {
+  std::int64_t id = 0;
+  FitSubject subject = FitSubject::kChannel;
+  std::int64_t subject_id = 0;   // channel id or probe id
+  std::int64_t origin_t_ns = 0;  // t = 0 of the fit
+  bool ok = false;
+  std::string json;
+};
+
+struct AgreementRecord {
+  std::int64_t id = 0;
+  std::int64_t channel_id = 0;
+  std::int64_t probe_id = 0;
+  std::string json;
+};
+
+struct CalibrationRecord {
+  std::int64_t id = 0;
+  std::int64_t created_ns = 0;
+  std::string json;
+};
+
+struct FieldRecord {
+  std::int64_t id = 0;
+  std::int64_t frame_id = 0;
+  std::string kind;  // displacement, temperature
+  std::string path;  // relative to the run folder
+  std::string json;  // summary
+};
+
+class ProcessingStore {
+ public:
+  // Throws StorageError when the folder holds no run.
+  explicit ProcessingStore(const std::filesystem::path& run_dir, bool writable = false);
+
+  // Runs `work` in one transaction: all of it is stored or none.
+  void in_transaction(const std::function<void()>& work);
+  // Removes earlier probe series, samples, fits, agreements and field rows
+  // (not calibrations, which are kept as a history).
+  void clear_results();
+
+  std::int64_t add_probe(const ProbeSeriesRecord& probe);
+  void write_probe_samples(std::span<const ProbeSampleRecord> samples);
+  std::int64_t add_fit(const FitRecord& fit);
+  std::int64_t add_agreement(const AgreementRecord& agreement);
+  std::int64_t add_calibration(const CalibrationRecord& calibration);
+  std::int64_t add_field(const FieldRecord& field);
+
+  std::vector<ProbeSeriesRecord> probes() const;
+  std::vector<ProbeSampleRecord> probe_samples(std::int64_t probe_id) const;  // in time order
+  std::vector<FitRecord> fits() const;
+  std::vector<AgreementRecord> agreements() const;
+  std::optional<CalibrationRecord> latest_calibration() const;
+  std::vector<FieldRecord> fields() const;
+
+ private:
+  bool has_results_tables() const { return version_ >= 2; }
+
+  mutable Database db_;
+  std::int64_t run_id_ = 0;
+  int version_ = 0;
+};
+
+}  // namespace bosfuse::storage

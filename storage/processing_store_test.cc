@@ -1,0 +1,93 @@
+#include "storage/processing_store.h"
+
+#include <gtest/gtest.h>
+
+#include "storage/run_store.h"
+#include "storage/schema.h"
+#include "tests/support/temp_dir.h"
+
+namespace bosfuse::storage {
+namespace {
+
+struct Fixture {
+  testing::TempDir dir;
+  std::filesystem::path run_dir = dir.path() / "run";
+  RunStore store =
+      RunStore::create(run_dir, {0, "r", 1'000, std::nullopt, "", RunStatus::kRunning}, RunStore::CreateMode::kNew);
+  std::int64_t device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", "127.0.0.1:502"});
+  std::int64_t channel = store.add_channel({0, device, "tc0", "thermocouple", "degC", "K", 120.5, 80.0});
+  std::int64_t reference = store.add_frame({0, std::nullopt, 1'000, std::nullopt, "frames/0.png", 64, 48, 8, true});
+  std::int64_t frame = store.add_frame({0, std::nullopt, 2'000, std::nullopt, "frames/1.png", 64, 48, 8, false});
+};
+
+TEST(ProcessingStore, WritesAndReadsEveryKindOfResult) {
+  Fixture f;
+  ProcessingStore results(f.run_dir, true);
+  std::int64_t probe = 0;
+  results.in_transaction([&] {
+    probe = results.add_probe({0, f.channel, "tc0", 120.5, 80.0});
+    const std::vector<ProbeSampleRecord> samples{{probe, f.frame, 2'000, 0.3, -0.4, 0.5, 31.5, true},
+                                                 {probe, f.reference, 1'000, 0, 0, 0, std::nullopt, false}};
+    results.write_probe_samples(samples);
+    results.add_fit({0, FitSubject::kProbe, probe, 1'000, true, R"({"k_per_s":0.01})"});
+    results.add_fit({0, FitSubject::kChannel, f.channel, 1'000, false, "{}"});
+    results.add_agreement({0, f.channel, probe, R"({"verdict":"agree"})"});
+    results.add_field({0, f.frame, "displacement", "fields/1_displacement.csv", "{}"});
+  });
+  results.add_calibration({0, 5, R"({"slope":20})"});
+  results.add_calibration({0, 9, R"({"slope":25})"});
+
+  ProcessingStore reader(f.run_dir);
+  ASSERT_EQ(reader.probes().size(), 1u);
+  EXPECT_EQ(reader.probes()[0].channel_id, f.channel);
+  const auto samples = reader.probe_samples(probe);
+  ASSERT_EQ(samples.size(), 2u);
+  EXPECT_EQ(samples[0].frame_id, f.reference) << "in time order";
+  EXPECT_FALSE(samples[0].temperature_c.has_value());
+  EXPECT_DOUBLE_EQ(*samples[1].temperature_c, 31.5);
+  EXPECT_TRUE(samples[1].valid);
+  ASSERT_EQ(reader.fits().size(), 2u);
+  EXPECT_EQ(reader.fits()[0].subject, FitSubject::kProbe);
+  EXPECT_FALSE(reader.fits()[1].ok);
+  EXPECT_EQ(reader.agreements().at(0).json, R"({"verdict":"agree"})");
+  EXPECT_EQ(reader.fields().at(0).path, "fields/1_displacement.csv");
+  EXPECT_EQ(reader.latest_calibration()->json, R"({"slope":25})");
+}
+
+TEST(ProcessingStore, ClearingKeepsCalibrationsAndAFailedTransactionStoresNothing) {
+  Fixture f;
+  ProcessingStore results(f.run_dir, true);
+  const auto probe = results.add_probe({0, std::nullopt, "p", 1, 2});
+  const std::vector<ProbeSampleRecord> samples{{probe, f.frame, 2'000, 0, 0, 0, std::nullopt, true}};
+  results.write_probe_samples(samples);
+  results.add_calibration({0, 5, "{}"});
+  results.clear_results();
+  EXPECT_TRUE(results.probes().empty());
+  EXPECT_TRUE(results.probe_samples(probe).empty());
+  EXPECT_TRUE(results.latest_calibration().has_value());
+  EXPECT_THROW(results.in_transaction([&] {
+    results.add_probe({0, std::nullopt, "q", 1, 2});
+    throw std::runtime_error("interrupted");
+  }),
+               std::runtime_error);
+  EXPECT_TRUE(results.probes().empty());
+}
+
+TEST(ProcessingStore, AVersionOneStoreReadsAsEmptyAndIsMigratedWhenWritten) {
+  Fixture f;
+  {
+    Database db((f.run_dir / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
+    for (const char* table : {"probe_samples", "agreements", "fits", "probe_series", "calibrations", "fields"}) {
+      db.execute(std::string("DROP TABLE ") + table);
+    }
+    db.execute("DELETE FROM schema_version WHERE version = 2");
+  }
+  EXPECT_TRUE(ProcessingStore(f.run_dir).probes().empty());
+  EXPECT_FALSE(ProcessingStore(f.run_dir).latest_calibration().has_value());
+  ProcessingStore writer(f.run_dir, true);
+  EXPECT_NO_THROW(writer.add_probe({0, std::nullopt, "p", 1, 2}));
+  EXPECT_THROW(ProcessingStore(f.dir.path() / "nothing"), StorageError);
+}
+
+}  // namespace
+}  // namespace bosfuse::storage
