@@ -204,6 +204,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
   summary.method = "xcorr";
   const std::vector<int> windows = options.window_px_per_pass();
   GridField predictor;
+  bool finish_now = false;
   for (int pass = 0; pass < static_cast<int>(windows.size()); ++pass) {
     PassInput in;
     in.window_px = windows[pass];
@@ -215,7 +216,12 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     const int reach_px = in.radius_px + (in.shift_whole_pixels ? max_abs_shift_px(predictor) : 0);
     in.region = pass_region(pair, field, in.window_px, reach_px);
     const bool warp = pass > 0 && options.deform;
-    in.warped = warp_region(pair.measurement, warp ? predictor : GridField{}, in.region, options.interpolator);
+    // Passes before the last only feed the next pass's predictor: the
+    // cheaper cubic kernel serves them as well; when they have converged, one
+    // pass with the accurate kernel finishes.
+    const bool last = pass + 1 == static_cast<int>(windows.size()) || finish_now;
+    const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
+    in.warped = warp_region(pair.measurement, warp ? predictor : GridField{}, in.region, interpolator);
     const DisplacementField before = field;
     run_pass(pair, in, options, field);
     if (options.replace_outliers) replace_outliers(field, options.outliers);
@@ -223,9 +229,11 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     summary.window_px_per_pass.push_back(in.window_px);
     if (pass > 0) summary.last_change_px = max_change_px(before, field);
     const bool same_window = pass > 0 && windows[pass] == windows[pass - 1];
+    if (finish_now) break;
     if (same_window && options.convergence_px > 0 && summary.last_change_px < options.convergence_px) {
       summary.converged = true;
-      break;
+      if (interpolator == options.interpolator) break;
+      finish_now = true;
     }
   }
   count_flags(field, summary);
