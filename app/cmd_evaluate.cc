@@ -63,8 +63,10 @@ fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
   options.xcorr.max_shift_px = args.max_shift_px;
   options.xcorr.subpixel = args.subpixel == "gauss3" ? fusion::SubpixelEstimator::kGaussian3Point
                                                      : fusion::SubpixelEstimator::kGaussian2dFit;
-  options.xcorr.interpolator =
-      args.interpolator == "cubic" ? fusion::Interpolator::kCubic : fusion::Interpolator::kLanczos3;
+  const std::map<std::string, fusion::Interpolator> interpolators{{"cubic", fusion::Interpolator::kCubic},
+                                                                  {"lanczos3", fusion::Interpolator::kLanczos3},
+                                                                  {"lanczos4", fusion::Interpolator::kLanczos4}};
+  options.xcorr.interpolator = interpolators.at(args.interpolator);
   const std::map<std::string, fusion::FlowAlgorithm> flows{{"dis", fusion::FlowAlgorithm::kDis},
                                                            {"farneback", fusion::FlowAlgorithm::kFarneback},
                                                            {"tvl1", fusion::FlowAlgorithm::kTvl1}};
@@ -121,8 +123,8 @@ void add_evaluate(CLI::App& root) {
   cmd->add_option("--subpixel", args->subpixel, "Peak estimator: gauss2d (least peak locking) or gauss3")
       ->check(CLI::IsMember({"gauss2d", "gauss3"}))
       ->capture_default_str();
-  cmd->add_option("--interpolator", args->interpolator, "Deformation interpolator: lanczos3 or cubic")
-      ->check(CLI::IsMember({"lanczos3", "cubic"}))
+  cmd->add_option("--interpolator", args->interpolator, "Deformation interpolator: lanczos3, lanczos4 or cubic")
+      ->check(CLI::IsMember({"lanczos3", "lanczos4", "cubic"}))
       ->capture_default_str();
   cmd->add_option("--mask", args->mask, "Mask image: non-zero pixels are not evaluated");
   cmd->add_option("--roi", args->roi, "Region of interest x,y,w,h in pixels");
