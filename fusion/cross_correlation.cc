@@ -65,6 +65,14 @@ bool window_masked(const PreparedPair& pair, cv::Rect window, double max_fractio
   return count > max_fraction * window.area();
 }
 
+// A header over part of an image that does not share its reference count:
+// taking ROIs of the same image from both threads for every window would
+// make them fight over one atomic counter.
+cv::Mat view(const cv::Mat& image, cv::Rect r) {
+  return cv::Mat(r.height, r.width, image.type(), const_cast<uchar*>(image.ptr(r.y) + r.x * image.elemSize()),
+                 image.step);
+}
+
 struct Peak {
   int dx = 0;
   int dy = 0;
@@ -126,7 +134,7 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
   // After deformation the remaining shift is near 0: equal windows give an
   // unbiased peak there (see window_correlator.h).
   const auto pairing = in.predictor && options.deform ? WindowPairing::kEqualWindows : WindowPairing::kSearchArea;
-  correlator.correlate(pair.reference(window), in.warped(search), r, options.correlation, plane, pairing);
+  correlator.correlate(view(pair.reference, window), view(in.warped, search), r, options.correlation, plane, pairing);
   if (plane.reference_std < options.min_texture_std) {
     vec.flag = VectorFlag::kNoTexture;
     return;

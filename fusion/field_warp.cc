@@ -137,6 +137,25 @@ class Sampler {
   int first_;
 };
 
+// Rows `rows` of the warped region; most of a deformation pass's cost, so
+// built for AVX2 besides the baseline.
+__attribute__((target_clones("avx2", "default"))) void warp_rows(const Sampler& sampler, const GridField& field,
+                                                                 cv::Rect region, cv::Range rows, cv::Mat& out) {
+  const auto& g = field.grid;
+  std::vector<AxisWeight> column_weights(static_cast<std::size_t>(region.width));
+  for (int x = 0; x < region.width; ++x) column_weights[x] = axis_weight(region.x + x, g.x0_px, g.step_px, g.cols);
+  for (int y = rows.start; y < rows.end; ++y) {
+    const double image_y = region.y + y;
+    const AxisWeight wy = axis_weight(image_y, g.y0_px, g.step_px, g.rows);
+    float* dst = out.ptr<float>(y);
+    for (int x = 0; x < region.width; ++x) {
+      const double u = bilinear(field.u_px, column_weights[x], wy);
+      const double v = bilinear(field.v_px, column_weights[x], wy);
+      dst[x] = sampler.sample(region.x + x + u, image_y + v);
+    }
+  }
+}
+
 cv::Mat copy_with_replicated_border(const cv::Mat& image, cv::Rect region) {
   cv::Mat out(region.size(), CV_32F);
   for (int y = 0; y < region.height; ++y) {
@@ -166,21 +185,8 @@ cv::Mat warp_region(const cv::Mat& image, const GridField& field, cv::Rect regio
                              : interpolator == Interpolator::kLanczos3 ? lanczos3
                                                                        : lanczos4;
   const Sampler sampler(image, table);
-  const auto& g = field.grid;
-  cv::parallel_for_(cv::Range(0, region.height), [&](const cv::Range& rows) {
-    std::vector<AxisWeight> column_weights(static_cast<std::size_t>(region.width));
-    for (int x = 0; x < region.width; ++x) column_weights[x] = axis_weight(region.x + x, g.x0_px, g.step_px, g.cols);
-    for (int y = rows.start; y < rows.end; ++y) {
-      const double image_y = region.y + y;
-      const AxisWeight wy = axis_weight(image_y, g.y0_px, g.step_px, g.rows);
-      float* dst = out.ptr<float>(y);
-      for (int x = 0; x < region.width; ++x) {
-        const double u = bilinear(field.u_px, column_weights[x], wy);
-        const double v = bilinear(field.v_px, column_weights[x], wy);
-        dst[x] = sampler.sample(region.x + x + u, image_y + v);
-      }
-    }
-  });
+  cv::parallel_for_(cv::Range(0, region.height),
+                    [&](const cv::Range& rows) { warp_rows(sampler, field, region, rows, out); });
   return out;
 }
 
