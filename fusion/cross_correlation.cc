@@ -21,6 +21,7 @@ struct PreparedPair {
   cv::Mat mask_integral;  // CV_32S integral of the 0/1 exclusion mask; empty without mask
   cv::Mat excluded;       // CV_8U, non-zero excluded; empty without mask
   cv::Rect roi;
+  cv::Point full_roi_origin;  // top-left of the whole ROI in these (possibly cropped) coordinates
 };
 
 void check_inputs(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
@@ -37,7 +38,9 @@ PreparedPair prepare(const cv::Mat& reference, const cv::Mat& measurement, const
   PreparedPair pair;
   pair.reference = to_grey_unit_float(reference(crop), "reference", warn_colour);
   pair.measurement = to_grey_unit_float(measurement(crop), "measurement", warn_colour);
-  pair.roi = (effective_roi(options.roi, reference.size()) & crop) - crop.tl();
+  const cv::Rect full_roi = effective_roi(options.roi, reference.size());
+  pair.roi = (full_roi & crop) - crop.tl();
+  pair.full_roi_origin = full_roi.tl() - crop.tl();
   if (!mask.empty()) pair.excluded = to_exclusion_mask(mask(crop));
   if (!pair.excluded.empty()) {
     cv::Mat ones;
@@ -205,6 +208,49 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
       std::max(1.0, node_count / 256.0));
 }
 
+// The first pass on every other node only, in x and y — a quarter of the
+// correlations, and the widest searches — when the coarse windows still
+// overlap; the rest of the field is interpolated for the next pass's
+// predictor. Nodes are chosen by their lattice index counted from the ROI,
+// so a probe's local grid picks the same nodes as the full field. False
+// when the grid is too small for it (then the pass runs on every node).
+bool run_coarse_first_pass(const PreparedPair& pair, const GridGeometry& fine, PassInput in,
+                           const XcorrOptions& options, DisplacementField& field) {
+  if (!options.coarse_first_pass || 2 * fine.step_px > in.window_px) return false;
+  const double half = (options.window_px - 1) / 2.0;
+  auto first_even = [&](double origin_px, int roi_origin_px) {
+    const long index = std::lround((origin_px - (roi_origin_px + half)) / fine.step_px);
+    return static_cast<int>(((index % 2) + 2) % 2);
+  };
+  const int col0 = first_even(fine.x0_px, pair.full_roi_origin.x);
+  const int row0 = first_even(fine.y0_px, pair.full_roi_origin.y);
+  GridGeometry coarse = fine;
+  coarse.x0_px += col0 * fine.step_px;
+  coarse.y0_px += row0 * fine.step_px;
+  coarse.step_px = 2 * fine.step_px;
+  coarse.cols = (fine.cols - col0 + 1) / 2;
+  coarse.rows = (fine.rows - row0 + 1) / 2;
+  if (coarse.rows < 2 || coarse.cols < 2) return false;
+  DisplacementField sparse = field_on_grid(coarse);
+  for (int r = 0; r < coarse.rows; ++r) {
+    for (int c = 0; c < coarse.cols; ++c) sparse.at(r, c).flag = field.at(row0 + 2 * r, col0 + 2 * c).flag;
+  }
+  in.region = pass_region(pair, sparse, in.window_px, in.radius_px);
+  in.warped = warp_region(pair.measurement, GridField{}, in.region, options.interpolator);
+  run_pass(pair, in, options, sparse);
+  if (options.replace_outliers) replace_outliers(sparse, options.outliers);
+  const GridField predictor = predictor_from(sparse, coarse);
+  for (auto& vec : field.vectors) {
+    if (vec.flag == VectorFlag::kOutOfRoi) continue;
+    const cv::Point2d p = interpolate_field(predictor, vec.x_px, vec.y_px);
+    vec.u_px = p.x;
+    vec.v_px = p.y;
+    vec.peak_ratio = 0;
+    vec.flag = VectorFlag::kOk;  // provisional: the next pass measures every node
+  }
+  return true;
+}
+
 // Runs every pass over `field` (centres set; kOutOfRoi nodes are left alone).
 EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid, const XcorrOptions& options,
                              DisplacementField& field) {
@@ -231,6 +277,11 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
     in.warped = warp_region(pair.measurement, warp ? predictor : GridField{}, in.region, interpolator);
     const DisplacementField before = field;
+    if (pass == 0 && windows.size() > 1 && run_coarse_first_pass(pair, grid, in, options, field)) {
+      summary.passes_run = 1;
+      summary.window_px_per_pass.push_back(in.window_px);
+      continue;
+    }
     run_pass(pair, in, options, field);
     if (options.replace_outliers) replace_outliers(field, options.outliers);
     summary.passes_run = pass + 1;
@@ -325,13 +376,16 @@ int XcorrOptions::search_radius_px(int pass) const {
 }
 
 int XcorrOptions::exact_probe_context_nodes() const {
-  // Per refinement pass a node's value depends on nodes within its window,
-  // search and interpolation kernel (+1 for the bilinear predictor) and on
-  // the outlier test's neighbours (+1); the first pass only on the latter.
+  // Per refinement pass a node's value depends on the nodes whose predictor
+  // reaches its window, search and interpolation kernel (+1 for the bilinear
+  // interpolation), on the outlier test's neighbours (+1) and on whether
+  // those were outliers themselves (+1), and on the predictor smoothing (+1).
+  // A coarse first pass reaches three coarse nodes, i.e. six grid nodes.
   const int first = window_px_per_pass().front();
-  const int reach_px = first / 2 + search_radius_px(1) + 3;
-  const int per_pass = (reach_px + step_px - 1) / step_px + 2 + (smooth_predictor ? 1 : 0);
-  return 1 + (passes - 1) * per_pass;
+  const int reach_px = first / 2 + search_radius_px(1) + 4;
+  const int per_pass = (reach_px + step_px - 1) / step_px + 3 + (smooth_predictor ? 1 : 0);
+  const int first_pass = coarse_first_pass && 2 * step_px <= first ? 7 : 3;
+  return first_pass + (passes - 1) * per_pass;
 }
 
 EvaluationResult evaluate_xcorr(const cv::Mat& reference, const cv::Mat& measurement, const XcorrOptions& options,

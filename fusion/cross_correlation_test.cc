@@ -153,14 +153,17 @@ TEST(CrossCorrelation, RoiLimitsTheGrid) {
 }
 
 TEST(CrossCorrelation, ProbeWithFullContextEqualsTheFullField) {
-  const auto pair = render(sim::DisplacementModel::sinusoid(1.2, 96));
+  const auto pair = render(sim::DisplacementModel::sinusoid(1.2, 96), 384);
   XcorrOptions options;
   options.convergence_px = 0;  // the same number of passes for both
   const auto full = evaluate_xcorr(pair.reference, pair.measurement, options);
   std::vector<cv::Point2d> points;
   std::vector<const DisplacementVector*> expected;
-  for (int row = 8; row < full.field.rows - 8; row += 5) {
-    for (int col = 9; col < full.field.cols - 8; col += 4) {
+  // Away from the edges by the exact context, so the probes' grids see the
+  // same neighbourhood as the full field's.
+  const int margin = options.exact_probe_context_nodes();
+  for (int row = margin; row < full.field.rows - margin; row += 5) {
+    for (int col = margin + 1; col < full.field.cols - margin; col += 4) {
       points.push_back({full.field.at(row, col).x_px, full.field.at(row, col).y_px});
       expected.push_back(&full.field.at(row, col));
     }

@@ -68,6 +68,8 @@ std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& opt
       for (int col = 0; col < field.cols; ++col) {
         const auto& vec = snapshot.at(row, col);
         if (!measured(vec)) continue;
+        const bool on_edge = row == 0 || col == 0 || row == field.rows - 1 || col == field.cols - 1;
+        if (on_edge && !options.test_grid_edges) continue;
         const Neighbours n = neighbours_of(snapshot, row, col, measured);
         if (n.count < options.min_neighbours) continue;
         const double ru = normalised_residual(vec.u_px, n.u, n.count, options.epsilon_px);
