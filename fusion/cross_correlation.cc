@@ -194,18 +194,21 @@ double max_change_px(const DisplacementField& before, const DisplacementField& a
 
 void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, DisplacementField& field) {
   const int node_count = static_cast<int>(field.vectors.size());
-  cv::parallel_for_(
-      cv::Range(0, node_count),
-      [&](const cv::Range& range) {
-        WindowCorrelator correlator;
-        CorrelationPlane plane;
-        for (int i = range.start; i < range.end; ++i) {
-          auto& vec = field.vectors[static_cast<std::size_t>(i)];
-          if (vec.flag == VectorFlag::kOutOfRoi) continue;
-          evaluate_node(pair, in, options, i / field.cols, i % field.cols, correlator, plane, vec);
-        }
-      },
-      std::max(1.0, node_count / 256.0));
+  auto evaluate_range = [&](const cv::Range& range) {
+    WindowCorrelator correlator;
+    CorrelationPlane plane;
+    for (int i = range.start; i < range.end; ++i) {
+      auto& vec = field.vectors[static_cast<std::size_t>(i)];
+      if (vec.flag == VectorFlag::kOutOfRoi) continue;
+      evaluate_node(pair, in, options, i / field.cols, i % field.cols, correlator, plane, vec);
+    }
+  };
+  // A probe's few windows cost less than waking the other thread.
+  if (node_count < 64) {
+    evaluate_range(cv::Range(0, node_count));
+    return;
+  }
+  cv::parallel_for_(cv::Range(0, node_count), evaluate_range, std::max(1.0, node_count / 256.0));
 }
 
 // The first pass on every other node only, in x and y — a quarter of the
@@ -338,6 +341,30 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// One probe: its local grid, evaluated on the part of the images it can
+// reach (the rest of a 16 MP frame is never converted or warped).
+DisplacementVector evaluate_probe(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
+                                  cv::Point2d point, const XcorrOptions& options, int context,
+                                  EvaluationSummary& summary) {
+  const GridGeometry grid = probe_grid(point, options, context);
+  const cv::Rect crop = probe_reach(grid, options, reference.size());
+  DisplacementVector vec{
+      grid.x0_px + context * grid.step_px, grid.y0_px + context * grid.step_px, 0, 0, 0, VectorFlag::kOutOfRoi};
+  if (crop.area() == 0) return vec;
+  const PreparedPair pair = prepare(reference, measurement, mask, options, crop, false);
+  GridGeometry local_grid = grid;
+  local_grid.x0_px -= crop.x;
+  local_grid.y0_px -= crop.y;
+  DisplacementField local = field_on_grid(local_grid);
+  flag_nodes_outside(pair, options.window_px, local);
+  if (local.at(context, context).flag == VectorFlag::kOutOfRoi) return vec;
+  summary = run_passes(pair, local_grid, options, local);
+  vec = local.at(context, context);
+  vec.x_px += crop.x;
+  vec.y_px += crop.y;
+  return vec;
+}
+
 }  // namespace
 
 std::string XcorrOptions::Validate() const {
@@ -414,30 +441,17 @@ EvaluationResult probe_xcorr(const cv::Mat& reference, const cv::Mat& measuremen
   result.summary.method = "xcorr-probe";
   result.field.rows = 1;
   result.field.cols = static_cast<int>(points.size());
-  for (const auto& point : points) {
-    // Only the part of the images this probe can reach is converted: the
-    // rest of a 16 MP frame is never touched.
-    const GridGeometry grid = probe_grid(point, options, context);
-    const cv::Rect crop = probe_reach(grid, options, reference.size());
-    DisplacementVector vec{
-        grid.x0_px + context * grid.step_px, grid.y0_px + context * grid.step_px, 0, 0, 0, VectorFlag::kOutOfRoi};
-    if (crop.area() > 0) {
-      const PreparedPair pair = prepare(reference, measurement, mask, options, crop, false);
-      GridGeometry local_grid = grid;
-      local_grid.x0_px -= crop.x;
-      local_grid.y0_px -= crop.y;
-      DisplacementField local = field_on_grid(local_grid);
-      flag_nodes_outside(pair, options.window_px, local);
-      if (local.at(context, context).flag != VectorFlag::kOutOfRoi) {
-        const EvaluationSummary local_summary = run_passes(pair, local_grid, options, local);
-        result.summary.passes_run = std::max(result.summary.passes_run, local_summary.passes_run);
-        result.summary.window_px_per_pass = local_summary.window_px_per_pass;
-        vec = local.at(context, context);
-        vec.x_px += crop.x;
-        vec.y_px += crop.y;
-      }
+  result.field.vectors.resize(points.size());
+  std::vector<EvaluationSummary> summaries(points.size());
+  // Probes are independent: one per task, on both cores.
+  cv::parallel_for_(cv::Range(0, static_cast<int>(points.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      result.field.vectors[i] = evaluate_probe(reference, measurement, mask, points[i], options, context, summaries[i]);
     }
-    result.field.vectors.push_back(vec);
+  });
+  for (const auto& s : summaries) {
+    result.summary.passes_run = std::max(result.summary.passes_run, s.passes_run);
+    if (!s.window_px_per_pass.empty()) result.summary.window_px_per_pass = s.window_px_per_pass;
   }
   count_flags(result.field, result.summary);
   result.summary.seconds = seconds_since(start);

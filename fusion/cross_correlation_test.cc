@@ -223,6 +223,22 @@ TEST(CrossCorrelation, ALargerFirstWindowFindsAShiftBeyondTheSmallSearch) {
   EXPECT_LT(e.rms, 0.05);
 }
 
+TEST(CrossCorrelation, ACoarseFirstPassEndsWhereAFullOneDoes) {
+  const auto pair = render(sim::DisplacementModel::bump_gradient(128, 128, 40, 2.0));
+  XcorrOptions options;
+  const auto coarse = evaluate_xcorr(pair.reference, pair.measurement, options);
+  options.coarse_first_pass = false;
+  const auto full = evaluate_xcorr(pair.reference, pair.measurement, options);
+  ASSERT_EQ(coarse.field.size(), full.field.size());
+  double sum_sq = 0;
+  for (std::size_t i = 0; i < full.field.size(); ++i) {
+    sum_sq += std::pow(coarse.field.vectors[i].u_px - full.field.vectors[i].u_px, 2) +
+              std::pow(coarse.field.vectors[i].v_px - full.field.vectors[i].v_px, 2);
+  }
+  EXPECT_LT(std::sqrt(sum_sq / full.field.size()), 0.005);
+  EXPECT_LT(errors(coarse.field, pair.truth, 16).rms, 0.05);
+}
+
 TEST(CrossCorrelation, ShiftsBeyondTheSearchAreFlaggedNoPeak) {
   const auto pair = render(sim::DisplacementModel::uniform(6.0, 0.0), 128);
   XcorrOptions options;

@@ -185,8 +185,13 @@ cv::Mat warp_region(const cv::Mat& image, const GridField& field, cv::Rect regio
                              : interpolator == Interpolator::kLanczos3 ? lanczos3
                                                                        : lanczos4;
   const Sampler sampler(image, table);
-  cv::parallel_for_(cv::Range(0, region.height),
-                    [&](const cv::Range& rows) { warp_rows(sampler, field, region, rows, out); });
+  // Small regions (probes) cost less than waking the other thread.
+  if (region.area() < 16384) {
+    warp_rows(sampler, field, region, cv::Range(0, region.height), out);
+  } else {
+    cv::parallel_for_(cv::Range(0, region.height),
+                      [&](const cv::Range& rows) { warp_rows(sampler, field, region, rows, out); });
+  }
   return out;
 }
 

@@ -63,7 +63,7 @@ std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& opt
   auto measured = [](const DisplacementVector& v) { return v.flag == VectorFlag::kOk; };
   // The test reads only the snapshot, so rows can be tested in parallel.
   std::vector<std::uint8_t> is_outlier(field.vectors.size(), 0);
-  cv::parallel_for_(cv::Range(0, field.rows), [&](const cv::Range& rows) {
+  auto test_rows = [&](const cv::Range& rows) {
     for (int row = rows.start; row < rows.end; ++row) {
       for (int col = 0; col < field.cols; ++col) {
         const auto& vec = snapshot.at(row, col);
@@ -77,7 +77,12 @@ std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& opt
         is_outlier[static_cast<std::size_t>(row) * field.cols + col] = std::hypot(ru, rv) > options.threshold;
       }
     }
-  });
+  };
+  if (field.size() < 4096) {
+    test_rows(cv::Range(0, field.rows));
+  } else {
+    cv::parallel_for_(cv::Range(0, field.rows), test_rows);
+  }
   std::vector<std::size_t> outliers;
   for (std::size_t i = 0; i < is_outlier.size(); ++i) {
     if (is_outlier[i]) outliers.push_back(i);
