@@ -111,6 +111,7 @@ struct PassInput {
   const GridField* predictor = nullptr;  // null in the first pass
   bool shift_whole_pixels = false;       // no deformation: offset each window by its rounded predictor
   cv::Mat warped;                        // measurement resampled over `region`
+  cv::Mat warped_reference;              // symmetric deformation: the reference, resampled the other way
   cv::Rect region;
 };
 
@@ -137,7 +138,9 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
   // After deformation the remaining shift is near 0: equal windows give an
   // unbiased peak there (see window_correlator.h).
   const auto pairing = in.predictor && options.deform ? WindowPairing::kEqualWindows : WindowPairing::kSearchArea;
-  correlator.correlate(view(pair.reference, window), view(in.warped, search), r, options.correlation, plane, pairing);
+  const cv::Mat reference_window =
+      in.warped_reference.empty() ? view(pair.reference, window) : view(in.warped_reference, window - in.region.tl());
+  correlator.correlate(reference_window, view(in.warped, search), r, options.correlation, plane, pairing);
   if (plane.reference_std < options.min_texture_std) {
     vec.flag = VectorFlag::kNoTexture;
     return;
@@ -171,6 +174,15 @@ cv::Rect pass_region(const PreparedPair& pair, const DisplacementField& field, i
   }
   if (x_max <= x_min || y_max <= y_min) return {0, 0, 1, 1};
   return {x_min - r, y_min - r, x_max - x_min + 2 * r, y_max - y_min + 2 * r};
+}
+
+// A copy with new node values (cv::Mat copies share data, so this must not
+// write into the original's).
+GridField scaled(const GridField& field, double factor) {
+  GridField out{field.grid, {}, {}};
+  field.u_px.convertTo(out.u_px, CV_64F, factor);
+  field.v_px.convertTo(out.v_px, CV_64F, factor);
+  return out;
 }
 
 int max_abs_shift_px(const GridField& field) {
@@ -278,7 +290,14 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     // pass with the accurate kernel finishes.
     const bool last = pass + 1 == static_cast<int>(windows.size()) || finish_now;
     const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
-    in.warped = warp_region(pair.measurement, warp ? predictor : GridField{}, in.region, interpolator);
+    if (warp && options.symmetric_deformation) {
+      // Each image moves half-way: both are interpolated at half the offset,
+      // and the interpolation errors of the two largely cancel.
+      in.warped = warp_region(pair.measurement, scaled(predictor, 0.5), in.region, interpolator);
+      in.warped_reference = warp_region(pair.reference, scaled(predictor, -0.5), in.region, interpolator);
+    } else {
+      in.warped = warp_region(pair.measurement, warp ? predictor : GridField{}, in.region, interpolator);
+    }
     const DisplacementField before = field;
     if (pass == 0 && windows.size() > 1 && run_coarse_first_pass(pair, grid, in, options, field)) {
       summary.passes_run = 1;

@@ -30,13 +30,17 @@
 namespace bosfuse::fusion {
 
 struct XcorrOptions {
-  int window_px = 16;             // final interrogation window (8..128)
-  int first_window_px = 0;        // first pass window; 0: the same as window_px
-  int step_px = 8;                // grid spacing (window_px/2 is 50% overlap)
-  int passes = 3;                 // at most; fewer when refinement converges
-  double max_shift_px = 4;        // largest displacement expected in the scene
-  double refine_shift_px = 1;     // largest residual searched after deformation
-  bool deform = true;             // window deformation in passes after the first
+  int window_px = 16;          // final interrogation window (8..128)
+  int first_window_px = 0;     // first pass window; 0: the same as window_px
+  int step_px = 8;             // grid spacing (window_px/2 is 50% overlap)
+  int passes = 3;              // at most; fewer when refinement converges
+  double max_shift_px = 4;     // largest displacement expected in the scene
+  double refine_shift_px = 1;  // largest residual searched after deformation
+  bool deform = true;          // window deformation in passes after the first
+  // Warp both images half-way instead of the measurement all the way. Costs
+  // a second warp per pass and, on uniform sub-pixel shifts of 3 px dots, is
+  // no better (bias 0.005 against 0.003 px at IW 16); kept for comparison.
+  bool symmetric_deformation = false;
   bool coarse_first_pass = true;  // first pass on every other node (when 2·step ≤ window)
   bool smooth_predictor = true;   // 3×3 binomial smoothing between passes; keeps deformation stable
   Interpolator interpolator = Interpolator::kLanczos3;

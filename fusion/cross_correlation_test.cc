@@ -239,6 +239,17 @@ TEST(CrossCorrelation, ACoarseFirstPassEndsWhereAFullOneDoes) {
   EXPECT_LT(errors(coarse.field, pair.truth, 16).rms, 0.05);
 }
 
+TEST(CrossCorrelation, SymmetricDeformationRecoversAGradient) {
+  const auto pair = render(sim::DisplacementModel::bump_gradient(128, 128, 40, 2.0));
+  XcorrOptions options;
+  options.symmetric_deformation = true;
+  const auto result = evaluate_xcorr(pair.reference, pair.measurement, options);
+  const auto e = errors(result.field, pair.truth, 16);
+  EXPECT_GT(e.compared, 0.95 * result.field.size());
+  EXPECT_LT(e.rms, 0.05);
+  EXPECT_LT(std::abs(e.mean_u), 0.01);
+}
+
 TEST(CrossCorrelation, ShiftsBeyondTheSearchAreFlaggedNoPeak) {
   const auto pair = render(sim::DisplacementModel::uniform(6.0, 0.0), 128);
   XcorrOptions options;
