@@ -154,7 +154,8 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
   for (int j = -1; j <= 1; ++j) {
     for (int i = -1; i <= 1; ++i) c[(j + 1) * 3 + i + 1] = plane.at(peak.dx + i, peak.dy + j);
   }
-  const SubpixelOffset offset = subpixel_offset(c, options.subpixel);
+  const SubpixelOffset offset =
+      subpixel_offset(c, pairing == WindowPairing::kEqualWindows ? options.refinement_subpixel : options.subpixel);
   vec.u_px = base_u + peak.dx + offset.dx_px;
   vec.v_px = base_v + peak.dy + offset.dy_px;
   vec.peak_ratio = peak.ratio;
