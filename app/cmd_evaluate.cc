@@ -17,7 +17,7 @@ namespace bosfuse::app {
 namespace {
 
 struct EvaluateArgs {
-  std::string reference, measurement, out, png, mask, roi, method = "xcorr", flow = "dis", subpixel = "gauss2d",
+  std::string reference, measurement, out, png, mask, roi, method = "xcorr", flow = "dis", subpixel = "auto",
                                                            interpolator = "lanczos3";
   std::vector<std::string> probes;
   int window_px = 16, first_window_px = 0, step_px = 8, passes = 3;
@@ -61,10 +61,16 @@ fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
   options.xcorr.first_window_px = args.first_window_px;
   options.xcorr.passes = args.passes;
   options.xcorr.max_shift_px = args.max_shift_px;
-  options.xcorr.subpixel = args.subpixel == "gauss3" ? fusion::SubpixelEstimator::kGaussian3Point
-                                                     : fusion::SubpixelEstimator::kGaussian2dFit;
-  options.xcorr.interpolator =
-      args.interpolator == "cubic" ? fusion::Interpolator::kCubic : fusion::Interpolator::kLanczos3;
+  // "auto": the 2-D fit where peaks lock (first pass), 3-point after deformation.
+  if (args.subpixel == "gauss3") {
+    options.xcorr.subpixel = options.xcorr.refinement_subpixel = fusion::SubpixelEstimator::kGaussian3Point;
+  } else if (args.subpixel == "gauss2d") {
+    options.xcorr.subpixel = options.xcorr.refinement_subpixel = fusion::SubpixelEstimator::kGaussian2dFit;
+  }
+  const std::map<std::string, fusion::Interpolator> interpolators{{"cubic", fusion::Interpolator::kCubic},
+                                                                  {"lanczos3", fusion::Interpolator::kLanczos3},
+                                                                  {"lanczos4", fusion::Interpolator::kLanczos4}};
+  options.xcorr.interpolator = interpolators.at(args.interpolator);
   const std::map<std::string, fusion::FlowAlgorithm> flows{{"dis", fusion::FlowAlgorithm::kDis},
                                                            {"farneback", fusion::FlowAlgorithm::kFarneback},
                                                            {"tvl1", fusion::FlowAlgorithm::kTvl1}};
@@ -118,11 +124,12 @@ void add_evaluate(CLI::App& root) {
   cmd->add_option("--flow", args->flow, "Optical flow algorithm: dis, farneback, tvl1")
       ->check(CLI::IsMember({"dis", "farneback", "tvl1"}))
       ->capture_default_str();
-  cmd->add_option("--subpixel", args->subpixel, "Peak estimator: gauss2d (least peak locking) or gauss3")
-      ->check(CLI::IsMember({"gauss2d", "gauss3"}))
+  cmd->add_option("--subpixel", args->subpixel,
+                  "Peak estimator: auto (2-D Gaussian fit, then 3-point after deformation), gauss2d or gauss3")
+      ->check(CLI::IsMember({"auto", "gauss2d", "gauss3"}))
       ->capture_default_str();
-  cmd->add_option("--interpolator", args->interpolator, "Deformation interpolator: lanczos3 or cubic")
-      ->check(CLI::IsMember({"lanczos3", "cubic"}))
+  cmd->add_option("--interpolator", args->interpolator, "Deformation interpolator: lanczos3, lanczos4 or cubic")
+      ->check(CLI::IsMember({"lanczos3", "lanczos4", "cubic"}))
       ->capture_default_str();
   cmd->add_option("--mask", args->mask, "Mask image: non-zero pixels are not evaluated");
   cmd->add_option("--roi", args->roi, "Region of interest x,y,w,h in pixels");

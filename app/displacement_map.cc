@@ -50,6 +50,34 @@ void draw_contours(cv::Mat& map, const cv::Mat& magnitude, double spacing, doubl
   }
 }
 
+// Gives nodes without a measurement the mean of their filled neighbours, so
+// that interpolating the map does not draw false rings around a mask.
+void fill_gaps(cv::Mat& magnitude, cv::Mat filled) {
+  for (int sweep = 0; sweep < 64 && cv::countNonZero(filled) < static_cast<int>(filled.total()); ++sweep) {
+    const cv::Mat before = filled.clone();
+    for (int r = 0; r < magnitude.rows; ++r) {
+      for (int c = 0; c < magnitude.cols; ++c) {
+        if (before.at<std::uint8_t>(r, c)) continue;
+        double sum = 0;
+        int count = 0;
+        for (int dr = -1; dr <= 1; ++dr) {
+          for (int dc = -1; dc <= 1; ++dc) {
+            const int rr = r + dr, cc = c + dc;
+            if (rr < 0 || cc < 0 || rr >= magnitude.rows || cc >= magnitude.cols || !before.at<std::uint8_t>(rr, cc)) {
+              continue;
+            }
+            sum += magnitude.at<float>(rr, cc);
+            ++count;
+          }
+        }
+        if (count == 0) continue;
+        magnitude.at<float>(r, c) = static_cast<float>(sum / count);
+        filled.at<std::uint8_t>(r, c) = 255;
+      }
+    }
+  }
+}
+
 }  // namespace
 
 cv::Mat draw_displacement_map(const fusion::DisplacementField& field, const MapOptions& options) {
@@ -66,14 +94,16 @@ cv::Mat draw_displacement_map(const fusion::DisplacementField& field, const MapO
     }
   }
   if (high <= 0) high = 1;
+  cv::Mat shown = 255 - invalid;
+  fill_gaps(magnitude, shown);
   const double scale = std::max(1.0, double(options.target_width_px) / field.cols);
   const cv::Size size(static_cast<int>(field.cols * scale), static_cast<int>(field.rows * scale));
   cv::Mat fine, fine_invalid;
   cv::resize(magnitude, fine, size, 0, 0, cv::INTER_LINEAR);
   cv::resize(invalid, fine_invalid, size, 0, 0, cv::INTER_NEAREST);
   cv::Mat map = colour(fine, 0, high);
-  map.setTo(cv::Scalar(160, 160, 160), fine_invalid);
   draw_contours(map, fine, options.contour_spacing_px, high);
+  map.setTo(cv::Scalar(160, 160, 160), fine_invalid);
   return with_colour_bar(map, 0, high, "|shift| px");
 }
 

@@ -21,6 +21,7 @@ struct PreparedPair {
   cv::Mat mask_integral;  // CV_32S integral of the 0/1 exclusion mask; empty without mask
   cv::Mat excluded;       // CV_8U, non-zero excluded; empty without mask
   cv::Rect roi;
+  cv::Point full_roi_origin;  // top-left of the whole ROI in these (possibly cropped) coordinates
 };
 
 void check_inputs(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
@@ -37,7 +38,9 @@ PreparedPair prepare(const cv::Mat& reference, const cv::Mat& measurement, const
   PreparedPair pair;
   pair.reference = to_grey_unit_float(reference(crop), "reference", warn_colour);
   pair.measurement = to_grey_unit_float(measurement(crop), "measurement", warn_colour);
-  pair.roi = (effective_roi(options.roi, reference.size()) & crop) - crop.tl();
+  const cv::Rect full_roi = effective_roi(options.roi, reference.size());
+  pair.roi = (full_roi & crop) - crop.tl();
+  pair.full_roi_origin = full_roi.tl() - crop.tl();
   if (!mask.empty()) pair.excluded = to_exclusion_mask(mask(crop));
   if (!pair.excluded.empty()) {
     cv::Mat ones;
@@ -63,6 +66,14 @@ bool window_masked(const PreparedPair& pair, cv::Rect window, double max_fractio
                     s.at<int>(window.y, window.x + window.width) - s.at<int>(window.y + window.height, window.x) +
                     s.at<int>(window.y, window.x);
   return count > max_fraction * window.area();
+}
+
+// A header over part of an image that does not share its reference count:
+// taking ROIs of the same image from both threads for every window would
+// make them fight over one atomic counter.
+cv::Mat view(const cv::Mat& image, cv::Rect r) {
+  return cv::Mat(r.height, r.width, image.type(), const_cast<uchar*>(image.ptr(r.y) + r.x * image.elemSize()),
+                 image.step);
 }
 
 struct Peak {
@@ -100,6 +111,7 @@ struct PassInput {
   const GridField* predictor = nullptr;  // null in the first pass
   bool shift_whole_pixels = false;       // no deformation: offset each window by its rounded predictor
   cv::Mat warped;                        // measurement resampled over `region`
+  cv::Mat warped_reference;              // symmetric deformation: the reference, resampled the other way
   cv::Rect region;
 };
 
@@ -126,7 +138,9 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
   // After deformation the remaining shift is near 0: equal windows give an
   // unbiased peak there (see window_correlator.h).
   const auto pairing = in.predictor && options.deform ? WindowPairing::kEqualWindows : WindowPairing::kSearchArea;
-  correlator.correlate(pair.reference(window), in.warped(search), r, options.correlation, plane, pairing);
+  const cv::Mat reference_window =
+      in.warped_reference.empty() ? view(pair.reference, window) : view(in.warped_reference, window - in.region.tl());
+  correlator.correlate(reference_window, view(in.warped, search), r, options.correlation, plane, pairing);
   if (plane.reference_std < options.min_texture_std) {
     vec.flag = VectorFlag::kNoTexture;
     return;
@@ -140,7 +154,8 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
   for (int j = -1; j <= 1; ++j) {
     for (int i = -1; i <= 1; ++i) c[(j + 1) * 3 + i + 1] = plane.at(peak.dx + i, peak.dy + j);
   }
-  const SubpixelOffset offset = subpixel_offset(c, options.subpixel);
+  const SubpixelOffset offset =
+      subpixel_offset(c, pairing == WindowPairing::kEqualWindows ? options.refinement_subpixel : options.subpixel);
   vec.u_px = base_u + peak.dx + offset.dx_px;
   vec.v_px = base_v + peak.dy + offset.dy_px;
   vec.peak_ratio = peak.ratio;
@@ -160,6 +175,15 @@ cv::Rect pass_region(const PreparedPair& pair, const DisplacementField& field, i
   }
   if (x_max <= x_min || y_max <= y_min) return {0, 0, 1, 1};
   return {x_min - r, y_min - r, x_max - x_min + 2 * r, y_max - y_min + 2 * r};
+}
+
+// A copy with new node values (cv::Mat copies share data, so this must not
+// write into the original's).
+GridField scaled(const GridField& field, double factor) {
+  GridField out{field.grid, {}, {}};
+  field.u_px.convertTo(out.u_px, CV_64F, factor);
+  field.v_px.convertTo(out.v_px, CV_64F, factor);
+  return out;
 }
 
 int max_abs_shift_px(const GridField& field) {
@@ -183,18 +207,64 @@ double max_change_px(const DisplacementField& before, const DisplacementField& a
 
 void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, DisplacementField& field) {
   const int node_count = static_cast<int>(field.vectors.size());
-  cv::parallel_for_(
-      cv::Range(0, node_count),
-      [&](const cv::Range& range) {
-        WindowCorrelator correlator;
-        CorrelationPlane plane;
-        for (int i = range.start; i < range.end; ++i) {
-          auto& vec = field.vectors[static_cast<std::size_t>(i)];
-          if (vec.flag == VectorFlag::kOutOfRoi) continue;
-          evaluate_node(pair, in, options, i / field.cols, i % field.cols, correlator, plane, vec);
-        }
-      },
-      std::max(1.0, node_count / 256.0));
+  auto evaluate_range = [&](const cv::Range& range) {
+    WindowCorrelator correlator;
+    CorrelationPlane plane;
+    for (int i = range.start; i < range.end; ++i) {
+      auto& vec = field.vectors[static_cast<std::size_t>(i)];
+      if (vec.flag == VectorFlag::kOutOfRoi) continue;
+      evaluate_node(pair, in, options, i / field.cols, i % field.cols, correlator, plane, vec);
+    }
+  };
+  // A probe's few windows cost less than waking the other thread.
+  if (node_count < 64) {
+    evaluate_range(cv::Range(0, node_count));
+    return;
+  }
+  cv::parallel_for_(cv::Range(0, node_count), evaluate_range, std::max(1.0, node_count / 256.0));
+}
+
+// The first pass on every other node only, in x and y — a quarter of the
+// correlations, and the widest searches — when the coarse windows still
+// overlap; the rest of the field is interpolated for the next pass's
+// predictor. Nodes are chosen by their lattice index counted from the ROI,
+// so a probe's local grid picks the same nodes as the full field. False
+// when the grid is too small for it (then the pass runs on every node).
+bool run_coarse_first_pass(const PreparedPair& pair, const GridGeometry& fine, PassInput in,
+                           const XcorrOptions& options, DisplacementField& field) {
+  if (!options.coarse_first_pass || 2 * fine.step_px > in.window_px) return false;
+  const double half = (options.window_px - 1) / 2.0;
+  auto first_even = [&](double origin_px, int roi_origin_px) {
+    const long index = std::lround((origin_px - (roi_origin_px + half)) / fine.step_px);
+    return static_cast<int>(((index % 2) + 2) % 2);
+  };
+  const int col0 = first_even(fine.x0_px, pair.full_roi_origin.x);
+  const int row0 = first_even(fine.y0_px, pair.full_roi_origin.y);
+  GridGeometry coarse = fine;
+  coarse.x0_px += col0 * fine.step_px;
+  coarse.y0_px += row0 * fine.step_px;
+  coarse.step_px = 2 * fine.step_px;
+  coarse.cols = (fine.cols - col0 + 1) / 2;
+  coarse.rows = (fine.rows - row0 + 1) / 2;
+  if (coarse.rows < 2 || coarse.cols < 2) return false;
+  DisplacementField sparse = field_on_grid(coarse);
+  for (int r = 0; r < coarse.rows; ++r) {
+    for (int c = 0; c < coarse.cols; ++c) sparse.at(r, c).flag = field.at(row0 + 2 * r, col0 + 2 * c).flag;
+  }
+  in.region = pass_region(pair, sparse, in.window_px, in.radius_px);
+  in.warped = warp_region(pair.measurement, GridField{}, in.region, options.interpolator);
+  run_pass(pair, in, options, sparse);
+  if (options.replace_outliers) replace_outliers(sparse, options.outliers);
+  const GridField predictor = predictor_from(sparse, coarse);
+  for (auto& vec : field.vectors) {
+    if (vec.flag == VectorFlag::kOutOfRoi) continue;
+    const cv::Point2d p = interpolate_field(predictor, vec.x_px, vec.y_px);
+    vec.u_px = p.x;
+    vec.v_px = p.y;
+    vec.peak_ratio = 0;
+    vec.flag = VectorFlag::kOk;  // provisional: the next pass measures every node
+  }
+  return true;
 }
 
 // Runs every pass over `field` (centres set; kOutOfRoi nodes are left alone).
@@ -204,6 +274,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
   summary.method = "xcorr";
   const std::vector<int> windows = options.window_px_per_pass();
   GridField predictor;
+  bool finish_now = false;
   for (int pass = 0; pass < static_cast<int>(windows.size()); ++pass) {
     PassInput in;
     in.window_px = windows[pass];
@@ -215,17 +286,36 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     const int reach_px = in.radius_px + (in.shift_whole_pixels ? max_abs_shift_px(predictor) : 0);
     in.region = pass_region(pair, field, in.window_px, reach_px);
     const bool warp = pass > 0 && options.deform;
-    in.warped = warp_region(pair.measurement, warp ? predictor : GridField{}, in.region, options.interpolator);
+    // Passes before the last only feed the next pass's predictor: the
+    // cheaper cubic kernel serves them as well; when they have converged, one
+    // pass with the accurate kernel finishes.
+    const bool last = pass + 1 == static_cast<int>(windows.size()) || finish_now;
+    const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
+    if (warp && options.symmetric_deformation) {
+      // Each image moves half-way: both are interpolated at half the offset,
+      // and the interpolation errors of the two largely cancel.
+      in.warped = warp_region(pair.measurement, scaled(predictor, 0.5), in.region, interpolator);
+      in.warped_reference = warp_region(pair.reference, scaled(predictor, -0.5), in.region, interpolator);
+    } else {
+      in.warped = warp_region(pair.measurement, warp ? predictor : GridField{}, in.region, interpolator);
+    }
     const DisplacementField before = field;
+    if (pass == 0 && windows.size() > 1 && run_coarse_first_pass(pair, grid, in, options, field)) {
+      summary.passes_run = 1;
+      summary.window_px_per_pass.push_back(in.window_px);
+      continue;
+    }
     run_pass(pair, in, options, field);
     if (options.replace_outliers) replace_outliers(field, options.outliers);
     summary.passes_run = pass + 1;
     summary.window_px_per_pass.push_back(in.window_px);
     if (pass > 0) summary.last_change_px = max_change_px(before, field);
     const bool same_window = pass > 0 && windows[pass] == windows[pass - 1];
+    if (finish_now) break;
     if (same_window && options.convergence_px > 0 && summary.last_change_px < options.convergence_px) {
       summary.converged = true;
-      break;
+      if (interpolator == options.interpolator) break;
+      finish_now = true;
     }
   }
   count_flags(field, summary);
@@ -271,6 +361,30 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// One probe: its local grid, evaluated on the part of the images it can
+// reach (the rest of a 16 MP frame is never converted or warped).
+DisplacementVector evaluate_probe(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
+                                  cv::Point2d point, const XcorrOptions& options, int context,
+                                  EvaluationSummary& summary) {
+  const GridGeometry grid = probe_grid(point, options, context);
+  const cv::Rect crop = probe_reach(grid, options, reference.size());
+  DisplacementVector vec{
+      grid.x0_px + context * grid.step_px, grid.y0_px + context * grid.step_px, 0, 0, 0, VectorFlag::kOutOfRoi};
+  if (crop.area() == 0) return vec;
+  const PreparedPair pair = prepare(reference, measurement, mask, options, crop, false);
+  GridGeometry local_grid = grid;
+  local_grid.x0_px -= crop.x;
+  local_grid.y0_px -= crop.y;
+  DisplacementField local = field_on_grid(local_grid);
+  flag_nodes_outside(pair, options.window_px, local);
+  if (local.at(context, context).flag == VectorFlag::kOutOfRoi) return vec;
+  summary = run_passes(pair, local_grid, options, local);
+  vec = local.at(context, context);
+  vec.x_px += crop.x;
+  vec.y_px += crop.y;
+  return vec;
+}
+
 }  // namespace
 
 std::string XcorrOptions::Validate() const {
@@ -309,13 +423,16 @@ int XcorrOptions::search_radius_px(int pass) const {
 }
 
 int XcorrOptions::exact_probe_context_nodes() const {
-  // Per refinement pass a node's value depends on nodes within its window,
-  // search and interpolation kernel (+1 for the bilinear predictor) and on
-  // the outlier test's neighbours (+1); the first pass only on the latter.
+  // Per refinement pass a node's value depends on the nodes whose predictor
+  // reaches its window, search and interpolation kernel (+1 for the bilinear
+  // interpolation), on the outlier test's neighbours (+1) and on whether
+  // those were outliers themselves (+1), and on the predictor smoothing (+1).
+  // A coarse first pass reaches three coarse nodes, i.e. six grid nodes.
   const int first = window_px_per_pass().front();
-  const int reach_px = first / 2 + search_radius_px(1) + 3;
-  const int per_pass = (reach_px + step_px - 1) / step_px + 2 + (smooth_predictor ? 1 : 0);
-  return 1 + (passes - 1) * per_pass;
+  const int reach_px = first / 2 + search_radius_px(1) + 4;
+  const int per_pass = (reach_px + step_px - 1) / step_px + 3 + (smooth_predictor ? 1 : 0);
+  const int first_pass = coarse_first_pass && 2 * step_px <= first ? 7 : 3;
+  return first_pass + (passes - 1) * per_pass;
 }
 
 EvaluationResult evaluate_xcorr(const cv::Mat& reference, const cv::Mat& measurement, const XcorrOptions& options,
@@ -344,30 +461,17 @@ EvaluationResult probe_xcorr(const cv::Mat& reference, const cv::Mat& measuremen
   result.summary.method = "xcorr-probe";
   result.field.rows = 1;
   result.field.cols = static_cast<int>(points.size());
-  for (const auto& point : points) {
-    // Only the part of the images this probe can reach is converted: the
-    // rest of a 16 MP frame is never touched.
-    const GridGeometry grid = probe_grid(point, options, context);
-    const cv::Rect crop = probe_reach(grid, options, reference.size());
-    DisplacementVector vec{
-        grid.x0_px + context * grid.step_px, grid.y0_px + context * grid.step_px, 0, 0, 0, VectorFlag::kOutOfRoi};
-    if (crop.area() > 0) {
-      const PreparedPair pair = prepare(reference, measurement, mask, options, crop, false);
-      GridGeometry local_grid = grid;
-      local_grid.x0_px -= crop.x;
-      local_grid.y0_px -= crop.y;
-      DisplacementField local = field_on_grid(local_grid);
-      flag_nodes_outside(pair, options.window_px, local);
-      if (local.at(context, context).flag != VectorFlag::kOutOfRoi) {
-        const EvaluationSummary local_summary = run_passes(pair, local_grid, options, local);
-        result.summary.passes_run = std::max(result.summary.passes_run, local_summary.passes_run);
-        result.summary.window_px_per_pass = local_summary.window_px_per_pass;
-        vec = local.at(context, context);
-        vec.x_px += crop.x;
-        vec.y_px += crop.y;
-      }
+  result.field.vectors.resize(points.size());
+  std::vector<EvaluationSummary> summaries(points.size());
+  // Probes are independent: one per task, on both cores.
+  cv::parallel_for_(cv::Range(0, static_cast<int>(points.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      result.field.vectors[i] = evaluate_probe(reference, measurement, mask, points[i], options, context, summaries[i]);
     }
-    result.field.vectors.push_back(vec);
+  });
+  for (const auto& s : summaries) {
+    result.summary.passes_run = std::max(result.summary.passes_run, s.passes_run);
+    if (!s.window_px_per_pass.empty()) result.summary.window_px_per_pass = s.window_px_per_pass;
   }
   count_flags(result.field, result.summary);
   result.summary.seconds = seconds_since(start);

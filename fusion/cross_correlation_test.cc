@@ -153,14 +153,17 @@ TEST(CrossCorrelation, RoiLimitsTheGrid) {
 }
 
 TEST(CrossCorrelation, ProbeWithFullContextEqualsTheFullField) {
-  const auto pair = render(sim::DisplacementModel::sinusoid(1.2, 96));
+  const auto pair = render(sim::DisplacementModel::sinusoid(1.2, 96), 384);
   XcorrOptions options;
   options.convergence_px = 0;  // the same number of passes for both
   const auto full = evaluate_xcorr(pair.reference, pair.measurement, options);
   std::vector<cv::Point2d> points;
   std::vector<const DisplacementVector*> expected;
-  for (int row = 8; row < full.field.rows - 8; row += 5) {
-    for (int col = 9; col < full.field.cols - 8; col += 4) {
+  // Away from the edges by the exact context, so the probes' grids see the
+  // same neighbourhood as the full field's.
+  const int margin = options.exact_probe_context_nodes();
+  for (int row = margin; row < full.field.rows - margin; row += 5) {
+    for (int col = margin + 1; col < full.field.cols - margin; col += 4) {
       points.push_back({full.field.at(row, col).x_px, full.field.at(row, col).y_px});
       expected.push_back(&full.field.at(row, col));
     }
@@ -218,6 +221,33 @@ TEST(CrossCorrelation, ALargerFirstWindowFindsAShiftBeyondTheSmallSearch) {
   const auto e = errors(result.field, pair.truth, 16);
   EXPECT_GT(e.compared, 0.95 * result.field.size());
   EXPECT_LT(e.rms, 0.05);
+}
+
+TEST(CrossCorrelation, ACoarseFirstPassEndsWhereAFullOneDoes) {
+  const auto pair = render(sim::DisplacementModel::bump_gradient(128, 128, 40, 2.0));
+  XcorrOptions options;
+  const auto coarse = evaluate_xcorr(pair.reference, pair.measurement, options);
+  options.coarse_first_pass = false;
+  const auto full = evaluate_xcorr(pair.reference, pair.measurement, options);
+  ASSERT_EQ(coarse.field.size(), full.field.size());
+  double sum_sq = 0;
+  for (std::size_t i = 0; i < full.field.size(); ++i) {
+    sum_sq += std::pow(coarse.field.vectors[i].u_px - full.field.vectors[i].u_px, 2) +
+              std::pow(coarse.field.vectors[i].v_px - full.field.vectors[i].v_px, 2);
+  }
+  EXPECT_LT(std::sqrt(sum_sq / full.field.size()), 0.005);
+  EXPECT_LT(errors(coarse.field, pair.truth, 16).rms, 0.05);
+}
+
+TEST(CrossCorrelation, SymmetricDeformationRecoversAGradient) {
+  const auto pair = render(sim::DisplacementModel::bump_gradient(128, 128, 40, 2.0));
+  XcorrOptions options;
+  options.symmetric_deformation = true;
+  const auto result = evaluate_xcorr(pair.reference, pair.measurement, options);
+  const auto e = errors(result.field, pair.truth, 16);
+  EXPECT_GT(e.compared, 0.95 * result.field.size());
+  EXPECT_LT(e.rms, 0.05);
+  EXPECT_LT(std::abs(e.mean_u), 0.01);
 }
 
 TEST(CrossCorrelation, ShiftsBeyondTheSearchAreFlaggedNoPeak) {

@@ -39,19 +39,32 @@ void keys_weights(double t, double* w) {
   w[3] = (0.5 * t - 0.5) * t * t;
 }
 
-void lanczos3_weights(double t, double* w) {
+// Windowed sinc with `a` lobes: taps at −(a−1)..a around floor(x).
+void lanczos_weights(double t, int a, double* w) {
   double total = 0;
-  for (int k = 0; k < 6; ++k) {
-    const double x = t - (k - 2);  // distance from tap k (taps at −2..3)
+  for (int k = 0; k < 2 * a; ++k) {
+    const double x = t - (k - (a - 1));
     double value = 1.0;
     if (std::abs(x) > 1e-12) {
       const double px = std::numbers::pi * x;
-      value = 3.0 * std::sin(px) * std::sin(px / 3.0) / (px * px);
+      value = a * std::sin(px) * std::sin(px / a) / (px * px);
     }
     w[k] = value;
     total += value;
   }
-  for (int k = 0; k < 6; ++k) w[k] /= total;  // exact reproduction of a constant
+  for (int k = 0; k < 2 * a; ++k) w[k] /= total;  // exact reproduction of a constant
+}
+
+int taps_of(Interpolator interpolator) {
+  switch (interpolator) {
+    case Interpolator::kCubic:
+      return 4;
+    case Interpolator::kLanczos3:
+      return 6;
+    case Interpolator::kLanczos4:
+      return 8;
+  }
+  return 4;
 }
 
 // Kernel weights tabulated over the sub-pixel position t ∈ [0, 1] and
@@ -62,14 +75,14 @@ class WeightTable {
  public:
   static constexpr int kSteps = 1024;
 
-  WeightTable(Interpolator interpolator) : taps_(interpolator == Interpolator::kCubic ? 4 : 6) {
+  explicit WeightTable(Interpolator interpolator) : taps_(taps_of(interpolator)) {
     table_.resize(static_cast<std::size_t>(kSteps + 1) * taps_);
     for (int i = 0; i <= kSteps; ++i) {
-      double w[6];
+      double w[8] = {};
       if (interpolator == Interpolator::kCubic) {
         keys_weights(double(i) / kSteps, w);
       } else {
-        lanczos3_weights(double(i) / kSteps, w);
+        lanczos_weights(double(i) / kSteps, taps_ / 2, w);
       }
       for (int k = 0; k < taps_; ++k) table_[static_cast<std::size_t>(i) * taps_ + k] = static_cast<float>(w[k]);
     }
@@ -94,11 +107,11 @@ class WeightTable {
 class Sampler {
  public:
   Sampler(const cv::Mat& image, const WeightTable& table)
-      : image_(image), table_(table), taps_(table.taps()), first_(table.taps() == 4 ? -1 : -2) {}
+      : image_(image), table_(table), taps_(table.taps()), first_(1 - table.taps() / 2) {}
 
   float sample(double x, double y) const {
     const double fx = std::floor(x), fy = std::floor(y);
-    float wx[6], wy[6];
+    float wx[8], wy[8];
     table_.weights(x - fx, wx);
     table_.weights(y - fy, wy);
     const int ix = static_cast<int>(fx) + first_, iy = static_cast<int>(fy) + first_;
@@ -124,6 +137,25 @@ class Sampler {
   int first_;
 };
 
+// Rows `rows` of the warped region; most of a deformation pass's cost, so
+// built for AVX2 besides the baseline.
+__attribute__((target_clones("avx2", "default"))) void warp_rows(const Sampler& sampler, const GridField& field,
+                                                                 cv::Rect region, cv::Range rows, cv::Mat& out) {
+  const auto& g = field.grid;
+  std::vector<AxisWeight> column_weights(static_cast<std::size_t>(region.width));
+  for (int x = 0; x < region.width; ++x) column_weights[x] = axis_weight(region.x + x, g.x0_px, g.step_px, g.cols);
+  for (int y = rows.start; y < rows.end; ++y) {
+    const double image_y = region.y + y;
+    const AxisWeight wy = axis_weight(image_y, g.y0_px, g.step_px, g.rows);
+    float* dst = out.ptr<float>(y);
+    for (int x = 0; x < region.width; ++x) {
+      const double u = bilinear(field.u_px, column_weights[x], wy);
+      const double v = bilinear(field.v_px, column_weights[x], wy);
+      dst[x] = sampler.sample(region.x + x + u, image_y + v);
+    }
+  }
+}
+
 cv::Mat copy_with_replicated_border(const cv::Mat& image, cv::Rect region) {
   cv::Mat out(region.size(), CV_32F);
   for (int y = 0; y < region.height; ++y) {
@@ -147,23 +179,19 @@ cv::Mat warp_region(const cv::Mat& image, const GridField& field, cv::Rect regio
   CV_Assert(image.type() == CV_32FC1);
   if (field.grid.rows == 0 || field.grid.cols == 0) return copy_with_replicated_border(image, region);
   cv::Mat out(region.size(), CV_32F);
-  static const WeightTable cubic(Interpolator::kCubic), lanczos(Interpolator::kLanczos3);
-  const Sampler sampler(image, interpolator == Interpolator::kCubic ? cubic : lanczos);
-  const auto& g = field.grid;
-  cv::parallel_for_(cv::Range(0, region.height), [&](const cv::Range& rows) {
-    std::vector<AxisWeight> column_weights(static_cast<std::size_t>(region.width));
-    for (int x = 0; x < region.width; ++x) column_weights[x] = axis_weight(region.x + x, g.x0_px, g.step_px, g.cols);
-    for (int y = rows.start; y < rows.end; ++y) {
-      const double image_y = region.y + y;
-      const AxisWeight wy = axis_weight(image_y, g.y0_px, g.step_px, g.rows);
-      float* dst = out.ptr<float>(y);
-      for (int x = 0; x < region.width; ++x) {
-        const double u = bilinear(field.u_px, column_weights[x], wy);
-        const double v = bilinear(field.v_px, column_weights[x], wy);
-        dst[x] = sampler.sample(region.x + x + u, image_y + v);
-      }
-    }
-  });
+  static const WeightTable cubic(Interpolator::kCubic), lanczos3(Interpolator::kLanczos3),
+      lanczos4(Interpolator::kLanczos4);
+  const WeightTable& table = interpolator == Interpolator::kCubic      ? cubic
+                             : interpolator == Interpolator::kLanczos3 ? lanczos3
+                                                                       : lanczos4;
+  const Sampler sampler(image, table);
+  // Small regions (probes) cost less than waking the other thread.
+  if (region.area() < 16384) {
+    warp_rows(sampler, field, region, cv::Range(0, region.height), out);
+  } else {
+    cv::parallel_for_(cv::Range(0, region.height),
+                      [&](const cv::Range& rows) { warp_rows(sampler, field, region, rows, out); });
+  }
   return out;
 }
 

@@ -18,6 +18,7 @@ namespace bosfuse::fusion {
 enum class Interpolator {
   kCubic,     // Keys cubic convolution (a = −0.5), 4×4 taps: fast, but biased by ~0.03 px on 3 px dots
   kLanczos3,  // windowed sinc, 6×6 taps: bias below 0.005 px on 3 px dots; the default
+  kLanczos4,  // windowed sinc, 8×8 taps: a little more accurate again, ~1.7× the cost
 };
 
 // Nodes at x = x0_px + col·step_px, y = y0_px + row·step_px.

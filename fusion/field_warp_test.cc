@@ -24,7 +24,7 @@ GridField uniform_field(double u, double v) {
 
 TEST(FieldWarp, ResamplesAtTheShiftedPositions) {
   const cv::Mat image = smooth_image(64);
-  for (const auto interpolator : {Interpolator::kCubic, Interpolator::kLanczos3}) {
+  for (const auto interpolator : {Interpolator::kCubic, Interpolator::kLanczos3, Interpolator::kLanczos4}) {
     const cv::Mat warped = warp_region(image, uniform_field(0.37, -1.21), cv::Rect(10, 12, 30, 20), interpolator);
     ASSERT_EQ(warped.size(), cv::Size(30, 20));
     for (int y = 0; y < 20; y += 3) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <opencv2/core/utility.hpp>
 
 namespace bosfuse::fusion {
 namespace {
@@ -60,17 +61,31 @@ std::string OutlierOptions::Validate() const {
 std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& options) {
   const DisplacementField snapshot = field;
   auto measured = [](const DisplacementVector& v) { return v.flag == VectorFlag::kOk; };
-  std::vector<std::size_t> outliers;
-  for (int row = 0; row < field.rows; ++row) {
-    for (int col = 0; col < field.cols; ++col) {
-      const auto& vec = snapshot.at(row, col);
-      if (!measured(vec)) continue;
-      const Neighbours n = neighbours_of(snapshot, row, col, measured);
-      if (n.count < options.min_neighbours) continue;
-      const double ru = normalised_residual(vec.u_px, n.u, n.count, options.epsilon_px);
-      const double rv = normalised_residual(vec.v_px, n.v, n.count, options.epsilon_px);
-      if (std::hypot(ru, rv) > options.threshold) outliers.push_back(static_cast<std::size_t>(row) * field.cols + col);
+  // The test reads only the snapshot, so rows can be tested in parallel.
+  std::vector<std::uint8_t> is_outlier(field.vectors.size(), 0);
+  auto test_rows = [&](const cv::Range& rows) {
+    for (int row = rows.start; row < rows.end; ++row) {
+      for (int col = 0; col < field.cols; ++col) {
+        const auto& vec = snapshot.at(row, col);
+        if (!measured(vec)) continue;
+        const bool on_edge = row == 0 || col == 0 || row == field.rows - 1 || col == field.cols - 1;
+        if (on_edge && !options.test_grid_edges) continue;
+        const Neighbours n = neighbours_of(snapshot, row, col, measured);
+        if (n.count < options.min_neighbours) continue;
+        const double ru = normalised_residual(vec.u_px, n.u, n.count, options.epsilon_px);
+        const double rv = normalised_residual(vec.v_px, n.v, n.count, options.epsilon_px);
+        is_outlier[static_cast<std::size_t>(row) * field.cols + col] = std::hypot(ru, rv) > options.threshold;
+      }
     }
+  };
+  if (field.size() < 4096) {
+    test_rows(cv::Range(0, field.rows));
+  } else {
+    cv::parallel_for_(cv::Range(0, field.rows), test_rows);
+  }
+  std::vector<std::size_t> outliers;
+  for (std::size_t i = 0; i < is_outlier.size(); ++i) {
+    if (is_outlier[i]) outliers.push_back(i);
   }
   for (const std::size_t i : outliers) {
     const int row = static_cast<int>(i / field.cols), col = static_cast<int>(i % field.cols);

@@ -30,6 +30,19 @@ TEST(OutlierFilter, ReplacesASpuriousVectorWithItsNeighboursMedian) {
   EXPECT_EQ(field.count(VectorFlag::kOk), 48u);
 }
 
+TEST(OutlierFilter, TheGridEdgeIsTestedOnlyOnRequest) {
+  DisplacementField field = smooth_field(7, 7);
+  field.at(0, 3).u_px = 4.0;
+  DisplacementField untouched = field;
+  EXPECT_EQ(replace_outliers(untouched, OutlierOptions{}), 0u);
+  EXPECT_EQ(untouched.at(0, 3).u_px, 4.0);
+  OutlierOptions options;
+  options.test_grid_edges = true;
+  EXPECT_EQ(replace_outliers(field, options), 1u);
+  EXPECT_EQ(field.at(0, 3).flag, VectorFlag::kOutlierReplaced);
+  EXPECT_NEAR(field.at(0, 3).u_px, 0.53, 0.02);
+}
+
 TEST(OutlierFilter, LeavesASmoothFieldAlone) {
   DisplacementField field = smooth_field(6, 9);
   const DisplacementField before = field;

@@ -82,26 +82,35 @@ void WindowCorrelator::prepare_patch_sums(const cv::Mat& search_patch) {
   }
 }
 
-void WindowCorrelator::direct_products(const cv::Mat& search_patch, int radius_px, int n) {
-  const int side = 2 * radius_px + 1;
-  products_.assign(static_cast<std::size_t>(side) * side, 0.0);
-  // Column accumulators: each lane sums n products in float (exact enough for
-  // n ≤ 128 values in [0,1]); the lanes are then summed in double. Written so
-  // the inner loop vectorises.
+// Σ a·b for every shift of an n×n window over the patch. Column
+// accumulators: each lane sums n products in float (exact enough for n ≤ 128
+// values in [0,1]); the lanes are then summed in double. Written so the inner
+// loop vectorises, and built for AVX2 besides the baseline (the loader
+// picks what the CPU has): this loop is most of a correlation's cost.
+__attribute__((target_clones("avx2", "default"))) void accumulate_products(const float* reference, const float* patch,
+                                                                           std::size_t patch_stride, int n, int side,
+                                                                           double* products) {
   float column[128];
   for (int dy = 0; dy < side; ++dy) {
     for (int dx = 0; dx < side; ++dx) {
       for (int i = 0; i < n; ++i) column[i] = 0.f;
       for (int y = 0; y < n; ++y) {
-        const float* __restrict a = centred_reference_.data() + static_cast<std::size_t>(y) * n;
-        const float* __restrict b = search_patch.ptr<float>(y + dy) + dx;
+        const float* __restrict a = reference + static_cast<std::size_t>(y) * n;
+        const float* __restrict b = patch + (y + dy) * patch_stride + dx;
         for (int i = 0; i < n; ++i) column[i] += a[i] * b[i];
       }
       double total = 0;
       for (int i = 0; i < n; ++i) total += column[i];
-      products_[static_cast<std::size_t>(dy) * side + dx] = total;
+      products[static_cast<std::size_t>(dy) * side + dx] = total;
     }
   }
+}
+
+void WindowCorrelator::direct_products(const cv::Mat& search_patch, int radius_px, int n) {
+  const int side = 2 * radius_px + 1;
+  products_.assign(static_cast<std::size_t>(side) * side, 0.0);
+  accumulate_products(centred_reference_.data(), search_patch.ptr<float>(0), search_patch.step1(), n, side,
+                      products_.data());
 }
 
 void WindowCorrelator::fft_products(const cv::Mat& search_patch, int radius_px, int n) {

@@ -56,6 +56,7 @@ StudyResult run_uniform_study(const StudyCase& study) {
     result.vectors += evaluated.field.size();
     double sum_u = 0, sum_v = 0;
     std::size_t counted = 0;
+    result.valid += evaluated.field.count_valid();
     for (const auto& v : evaluated.field.vectors) {
       const bool inner =
           v.x_px >= window && v.y_px >= window && v.x_px <= study.size_px - window && v.y_px <= study.size_px - window;
@@ -67,7 +68,7 @@ StudyResult run_uniform_study(const StudyCase& study) {
       magnitudes.push_back(std::hypot(du, dv));
       ++counted;
     }
-    result.valid += counted;
+    result.compared += counted;
     if (counted) {
       result.max_abs_bias_px = std::max({result.max_abs_bias_px, std::abs(sum_u / counted), std::abs(sum_v / counted)});
     }

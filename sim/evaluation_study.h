@@ -28,9 +28,10 @@ struct StudyCase {
 };
 
 struct StudyResult {
-  std::size_t vectors = 0;  // over all shifts
-  std::size_t valid = 0;
-  double seconds = 0;  // evaluation only, rendering excluded
+  std::size_t vectors = 0;   // over all shifts
+  std::size_t valid = 0;     // flagged ok, whole field
+  std::size_t compared = 0;  // valid and a window away from the edge: the errors are over these
+  double seconds = 0;        // evaluation only, rendering excluded
   double vectors_per_s = 0;
   double max_abs_bias_px = 0;  // the worst |mean error| of u or v over the shifts
   double rms_px = 0;           // of the error magnitude, all valid vectors
