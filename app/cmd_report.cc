@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "app/command.h"
+#include "app/image_io.h"
 #include "report/report.h"
 #include "report/run_input.h"
 #include "storage/run_store.h"
@@ -23,6 +24,7 @@ struct ReportArgs {
   std::string out;
   std::string map_times = "10,60";
   std::string title;
+  std::string mask;
   double contour_px = 0.05;
   double contour_c = 1.0;
   double px_per_mm = 0;
@@ -58,6 +60,7 @@ void make_report(const ReportArgs& args) {
   if (args.px_per_mm > 0) input_options.px_per_mm = args.px_per_mm;
   input_options.evaluator.set_grid(args.window_px, args.step_px);
   if (const auto problem = input_options.evaluator.Validate(); !problem.empty()) throw std::runtime_error(problem);
+  if (!args.mask.empty()) input_options.mask = read_image(args.mask, "mask");
   std::cerr << "fitting the thermocouples and evaluating the frames of " << args.run << " ...\n";
   const auto input = report::build_report_input(store, input_options);
 
@@ -99,6 +102,9 @@ void add_report(CLI::App& root) {
   cmd->add_option("--window", args->window_px, "Interrogation window of the displacement maps, px")
       ->capture_default_str();
   cmd->add_option("--step", args->step_px, "Grid spacing of the displacement maps, px")->capture_default_str();
+  cmd->add_option("--mask", args->mask,
+                  "Mask image of the frames' size: non-zero pixels (e.g. the heater's holder) are not evaluated")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--title", args->title, "Title of the report (default: Cooling report — <run name>)");
   cmd->callback([args] { make_report(*args); });
 }

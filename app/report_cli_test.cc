@@ -9,8 +9,10 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "report/html.h"
 #include "report/test_run.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
@@ -83,15 +85,79 @@ class ReportCli : public ::testing::Test {
         kBrowserTimeoutS);
   }
 
+  struct RenderedImage {
+    bool complete = false;
+    std::string size;  // natural size WxH as decoded by the browser; 0x0 when it could not decode it
+    int spread = -1;   // max − min of the decoded pixel values; 0 for a blank image
+  };
+
+  // Opens a copy of `html` with kRenderCheckScript added in headless
+  // chromium and reads back, from the dumped DOM, what it found per <img>.
+  std::vector<RenderedImage> render_check(std::string html, const fs::path& copy) {
+    const auto body_end = html.rfind("</body>");
+    if (body_end == std::string::npos) {
+      ADD_FAILURE() << "no </body>";
+      return {};
+    }
+    html.insert(body_end, kRenderCheckScript);
+    std::ofstream(copy) << html;
+    const auto dom =
+        chromium("--virtual-time-budget=15000 --dump-dom " + shell_quote(fs::path("file://" + copy.string())));
+    EXPECT_EQ(dom.exit_code, 0) << dom.output.substr(0, 2000);
+    const std::string tag = "<pre id=\"render-check\">";
+    const auto start = dom.output.find(tag);
+    if (start == std::string::npos) {
+      ADD_FAILURE() << "the check script did not run:\n" << dom.output.substr(0, 2000);
+      return {};
+    }
+    const auto text_start = start + tag.size();
+    std::stringstream items(dom.output.substr(text_start, dom.output.find("</pre>", text_start) - text_start));
+    std::vector<RenderedImage> images;
+    for (std::string item; std::getline(items, item, ';') && images.size() < 1000;) {
+      std::stringstream fields(item);
+      std::string complete;
+      RenderedImage image;
+      fields >> complete >> image.size >> image.spread;
+      image.complete = complete == "true";
+      images.push_back(image);
+    }
+    return images;
+  }
+
   testing::TempDir dir_;
 };
+
+// The render check itself tells a figure from a broken or a blank one.
+TEST_F(ReportCli, BrowserCheckTellsRenderedFromBrokenAndBlankImages) {
+  if (!have_chromium()) GTEST_FAIL() << "chromium is not installed (scripts/debian-packages.txt lists it)";
+  cv::Mat drawn(60, 80, CV_8UC3, cv::Scalar(255, 255, 255));
+  cv::circle(drawn, {40, 30}, 20, cv::Scalar(200, 30, 30), cv::FILLED);
+  const cv::Mat blank(60, 80, CV_8UC3, cv::Scalar(255, 255, 255));
+  auto uri = [](const cv::Mat& image) {
+    std::vector<std::uint8_t> png;
+    cv::imencode(".png", image, png);
+    return "data:image/png;base64," + report::base64_encode(png);
+  };
+  const std::string good = uri(drawn);
+  const std::string html = "<!DOCTYPE html><html><body><img src=\"" + good + "\"><img src=\"" +
+                           "data:image/png;base64,QUJDRA==" + "\"><img src=\"" + uri(blank) + "\"></body></html>";
+  const auto images = render_check(html, dir_ / "control.html");
+  ASSERT_EQ(images.size(), 3u);
+  EXPECT_EQ(images[0].size, "80x60");
+  EXPECT_GT(images[0].spread, 100);
+  EXPECT_EQ(images[1].size, "0x0") << "bytes that are not a PNG cannot decode";
+  EXPECT_EQ(images[2].size, "80x60");
+  EXPECT_EQ(images[2].spread, 0) << "a blank image has no spread";
+}
 
 TEST_F(ReportCli, MakesAReportThatABrowserRendersCompletely) {
   const report::testrun::Truth truth;
   report::testrun::create_run(dir_ / "run", true, truth);
   const fs::path out = dir_ / "out";
+  ASSERT_TRUE(cv::imwrite((dir_ / "holder-mask.png").string(), report::testrun::holder_mask(truth)));
   const auto made = testing::run_command(kBosfuse + " report " + shell_quote(dir_ / "run") + " -o " + shell_quote(out) +
-                                             " --map-times 10,60 --contour 0.05 --px-per-mm 30",
+                                             " --map-times 10,60 --contour 0.05 --px-per-mm 30 --mask " +
+                                             shell_quote(dir_ / "holder-mask.png"),
                                          120);
   ASSERT_EQ(made.exit_code, 0) << made.output;
   EXPECT_NE(made.output.find("report.html"), std::string::npos) << made.output;
@@ -113,6 +179,7 @@ TEST_F(ReportCli, MakesAReportThatABrowserRendersCompletely) {
   }
   ASSERT_EQ(json["maps"].size(), 2u);
   EXPECT_NEAR(json["maps"][0]["max"].get<double>(), truth.frame_peak_px[0], 0.2 * truth.frame_peak_px[0]);
+  EXPECT_GT(json["maps"][0]["masked_cells"].get<int>(), 10) << "the holder's region is masked";
   EXPECT_GT(json["image_quality"]["q_mod"].get<double>(), 0.9);
   const std::string html = read_text(out / "report.html");
   EXPECT_EQ(html.find("http://"), std::string::npos);
@@ -124,30 +191,13 @@ TEST_F(ReportCli, MakesAReportThatABrowserRendersCompletely) {
   if (!have_chromium()) GTEST_FAIL() << "chromium is not installed (scripts/debian-packages.txt lists it)";
 
   // 1. Every <img> of the page decoded by the browser, at its size, not blank.
-  std::string checked = html;
-  const auto body_end = checked.rfind("</body>");
-  ASSERT_NE(body_end, std::string::npos);
-  checked.insert(body_end, kRenderCheckScript);
-  std::ofstream(out / "check.html") << checked;
-  const auto dom = chromium("--virtual-time-budget=15000 --dump-dom " +
-                            shell_quote(fs::path("file://" + (out / "check.html").string())));
-  ASSERT_EQ(dom.exit_code, 0) << dom.output.substr(0, 2000);
-  const auto start = dom.output.find("<pre id=\"render-check\">");
-  ASSERT_NE(start, std::string::npos) << "the check script did not run:\n" << dom.output.substr(0, 2000);
-  const auto text_start = start + std::strlen("<pre id=\"render-check\">");
-  const std::string result = dom.output.substr(text_start, dom.output.find("</pre>", text_start) - text_start);
-  std::vector<std::string> images;
-  std::stringstream items(result);
-  for (std::string item; std::getline(items, item, ';');) images.push_back(item);
-  ASSERT_EQ(images.size(), figures) << result;
+  const auto images = render_check(html, out / "check.html");
+  ASSERT_EQ(images.size(), figures);
   for (std::size_t i = 0; i < images.size(); ++i) {
-    std::stringstream fields(images[i]);
-    std::string complete, size;
-    int spread = 0;
-    fields >> complete >> size >> spread;
-    EXPECT_EQ(complete, "true") << "image " << i << ": " << images[i];
-    EXPECT_TRUE(size == "900x600" || size == "900x650") << "image " << i << " decoded as " << size;
-    EXPECT_GT(spread, 100) << "image " << i << " is blank: " << images[i];
+    EXPECT_TRUE(images[i].complete) << "image " << i;
+    EXPECT_TRUE(images[i].size == "900x600" || images[i].size == "900x650")
+        << "image " << i << " decoded as " << images[i].size;
+    EXPECT_GT(images[i].spread, 100) << "image " << i << " is blank";
   }
 
   // 2. A screenshot of the unmodified page shows the figures: not blank, and

@@ -166,7 +166,7 @@ std::string format_estimate(const fitting::Estimate& e, const char* unit) {
 void draw_points(const std::vector<PLFLT>& x, const std::vector<PLFLT>& y, int colour) {
   if (x.empty()) return;
   plcol0(colour);
-  plssym(0, x.size() > 600 ? 0.35 : 0.6);
+  plssym(0, x.size() > 600 ? 0.35 : (x.size() > 100 ? 0.6 : 1.0));
   plpoin(static_cast<PLINT>(x.size()), x.data(), y.data(), 17);  // 17: small filled dot
   plssym(0, 1);
 }
@@ -271,6 +271,15 @@ FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size
       draw_points(t, residual, kFirstSeries);
       plcol0(kInk);
       plmtex("l", 4.5, 0.5, 0.5, "residual (°C)");
+    }
+    if (!has_fit) {
+      const std::string why =
+          pl_text("no Newton fit: " +
+                  (series.fit ? std::string(fitting::to_string(series.fit->summary.status)) : "not fitted"));
+      plcol0(kFirstSeries + 1);
+      plschr(0, 0.8);
+      plmtex("t", -1.5, 0.97, 1.0, why.c_str());
+      plschr(0, 1);
     }
     plcol0(kInk);
     plmtex("b", 3.0, 0.5, 0.5, "time since the run's first sample (s)");

@@ -145,6 +145,11 @@ ReportInput build_report_input(const storage::RunStore& store, const RunReportOp
     return input;
   }
 
+  if (!options.mask.empty() && options.mask.size() != reference_image.size()) {
+    input.displacement_maps_note = fmt::format("the mask is {}×{} px but the frames are {}×{} px", options.mask.cols,
+                                               options.mask.rows, reference_image.cols, reference_image.rows);
+    return input;
+  }
   std::set<std::int64_t> done;
   for (double t : options.map_times_s) {
     const auto nearest = std::min_element(measurements.begin(), measurements.end(), [&](const auto& a, const auto& b) {
@@ -154,7 +159,7 @@ ReportInput build_report_input(const storage::RunStore& store, const RunReportOp
     const double frame_t = seconds_since(nearest->t_ns, origin_ns);
     try {
       const cv::Mat image = read_frame(store, *nearest);
-      const auto result = fusion::evaluate_displacement(reference_image, image, options.evaluator);
+      const auto result = fusion::evaluate_displacement(reference_image, image, options.evaluator, options.mask);
       MapField map = displacement_magnitude_map(result.field, reference_image.size());
       map.time_s = frame_t;
       map.source = fmt::format("frame {} ({}) against reference frame {}, nearest to the requested t = {:g} s; {}",

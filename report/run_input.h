@@ -24,7 +24,8 @@ struct RunReportOptions {
   std::vector<double> map_times_s{10, 60};  // since the run's first sample; the nearest frame is used
   std::optional<double> px_per_mm;          // map axes in mm when given
   fusion::EvaluatorOptions evaluator;       // default: cross-correlation, window 16 px, step 8 px
-  fitting::NewtonFitOptions fit;            // origin: the run's first sample unless set
+  cv::Mat mask;  // the frames' size, non-zero: not evaluated (e.g. the heater's holder); shown hatched in the maps
+  fitting::NewtonFitOptions fit;  // origin: the run's first sample unless set
 };
 
 ReportInput build_report_input(const storage::RunStore& store, const RunReportOptions& options = {});

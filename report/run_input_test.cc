@@ -71,6 +71,34 @@ TEST(RunInput, FramesGiveDisplacementMapsNearTheChosenTimesAndAQualityIndex) {
   EXPECT_EQ(input.px_per_mm, 30.0);
 }
 
+TEST(RunInput, TheHolderMaskIsNotEvaluatedAndShowsAsMaskedCells) {
+  testing::TempDir dir;
+  const testrun::Truth truth;
+  testrun::create_run(dir / "run", true, truth);
+  RunReportOptions options;
+  options.map_times_s = {10};
+  options.mask = testrun::holder_mask(truth);
+  const auto input = build_report_input(storage::RunStore::open(dir / "run"), options);
+  ASSERT_EQ(input.displacement_maps.size(), 1u);
+  const auto& map = input.displacement_maps[0];
+  int masked_inside = 0, masked_outside = 0;
+  for (int r = 0; r < map.values.rows; ++r) {
+    for (int c = 0; c < map.values.cols; ++c) {
+      const cv::Point centre(static_cast<int>(map.x0_px + c * map.step_px),
+                             static_cast<int>(map.y0_px + r * map.step_px));
+      const bool masked = map.mask.at<std::uint8_t>(r, c) != 0;
+      (truth.holder_px.contains(centre) ? masked_inside : masked_outside) += masked;
+    }
+  }
+  EXPECT_GT(masked_inside, 10);
+  EXPECT_EQ(masked_outside, 0) << "only the holder is masked on this textured pattern";
+
+  options.mask = cv::Mat::zeros(10, 10, CV_8U);
+  const auto wrong = build_report_input(storage::RunStore::open(dir / "run"), options);
+  EXPECT_TRUE(wrong.displacement_maps.empty());
+  EXPECT_NE(wrong.displacement_maps_note.find("mask is 10×10 px"), std::string::npos) << wrong.displacement_maps_note;
+}
+
 TEST(RunInput, DisplacementMagnitudeMapMasksWhatWasNotMeasured) {
   fusion::DisplacementField field;
   field.rows = 2;

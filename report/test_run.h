@@ -31,7 +31,15 @@ struct Truth {
   double bump_radius_px = 36;
   double frame_times_s[2] = {10, 60};
   double frame_peak_px[2] = {1.0, 0.5};
+  cv::Rect holder_px{104, 150, 48, 42};  // the heater's holder, hidden by the mask (as in the paper)
 };
+
+// The holder mask as an 8-bit PNG of the frames' size: 255 under the holder.
+inline cv::Mat holder_mask(const Truth& truth = {}) {
+  cv::Mat mask = cv::Mat::zeros(truth.image, CV_8U);
+  mask(truth.holder_px).setTo(255);
+  return mask;
+}
 
 inline void create_run(const std::filesystem::path& dir, bool with_frames, const Truth& truth = {}) {
   storage::RunInfo info{0, "synthetic cooling", truth.start_ns, std::nullopt, "", storage::RunStatus::kRunning};
