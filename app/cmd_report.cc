@@ -61,13 +61,14 @@ void make_report(const ReportArgs& args) {
   input_options.evaluator.set_grid(args.window_px, args.step_px);
   if (const auto problem = input_options.evaluator.Validate(); !problem.empty()) throw std::runtime_error(problem);
   if (!args.mask.empty()) input_options.mask = read_image(args.mask, "mask");
-  std::cerr << "fitting the thermocouples and evaluating the frames of " << args.run << " ...\n";
+  input_options.on_progress = [](const std::string& line) { std::cerr << line << " ...\n"; };
   const auto input = report::build_report_input(store, input_options);
 
   report::ReportOptions options;
   options.title = args.title;
   options.displacement_contour_px = args.contour_px;
   options.temperature_contour_c = args.contour_c;
+  std::cerr << "drawing the figures and writing " << args.out << " ...\n";
   const auto files = report::write_report(input, options, args.out);
   for (const auto& s : input.series) {
     if (s.fit && s.fit->ok()) {

@@ -58,7 +58,11 @@ std::string figure_html(const FigureFiles& f, const FigureSize& size) {
       esc(f.png.filename().string()), esc(f.svg.filename().string()));
 }
 
-std::string fits_table(const ReportInput& input, double confidence) {
+std::string fits_table(const ReportInput& input) {
+  double confidence = 0.95;  // the fits' own, as they were made
+  for (const auto& s : input.series) {
+    if (s.fit) confidence = s.fit->summary.confidence;
+  }
   std::ostringstream h;
   h << "<table class=\"fits\"><tr><th class=\"text\">series</th><th class=\"text\">kind</th><th>points</th>"
     << fmt::format("<th>k (1/s)<br><small>{:.0f}% interval</small></th>", confidence * 100)
@@ -244,7 +248,7 @@ ReportFiles write_report(const ReportInput& input, const ReportOptions& options,
   if (overview) h << figure_html(*overview, options.curve_size);
   for (const auto& f : curve_figures) h << figure_html(f, options.curve_size);
 
-  h << "<h2 id=\"fits\">Fitted parameters</h2>\n" << fits_table(input, options.confidence);
+  h << "<h2 id=\"fits\">Fitted parameters</h2>\n" << fits_table(input);
 
   h << "<h2 id=\"agreement\">Agreement of thermocouples and BOS probes</h2>\n";
   if (!input.agreements.empty()) {

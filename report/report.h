@@ -28,7 +28,6 @@ struct ReportOptions {
   FigureSize map_size{900, 650};
   double displacement_contour_px = 0.05;  // contour spacing of displacement maps, px
   double temperature_contour_c = 1.0;     // contour spacing of temperature maps, °C
-  double confidence = 0.95;               // of the fits' intervals, as labelled in the tables
 };
 
 struct ReportFiles {

@@ -97,6 +97,9 @@ ReportInput build_report_input(const storage::RunStore& store, const RunReportOp
     origin_ns = frames.front().t_ns;
   }
 
+  auto progress = [&](const std::string& line) {
+    if (options.on_progress) options.on_progress(line);
+  };
   // Thermocouples.
   for (const auto& channel : store.channels()) {
     if (channel.kind != "thermocouple") continue;
@@ -115,6 +118,7 @@ ReportInput build_report_input(const storage::RunStore& store, const RunReportOp
     input.series.push_back(std::move(s));
   }
   if (input.series.empty()) input.notes.push_back("The run has no thermocouple channels.");
+  progress(fmt::format("fitting {} thermocouple series", input.series.size()));
   fit_missing(input, options.fit);
 
   // Frames: reference, measurements nearest the chosen times, quality of the last one.
@@ -157,6 +161,8 @@ ReportInput build_report_input(const storage::RunStore& store, const RunReportOp
     });
     if (!done.insert(nearest->id).second) continue;  // two times chose the same frame
     const double frame_t = seconds_since(nearest->t_ns, origin_ns);
+    progress(fmt::format("evaluating frame {} (t = {:.1f} s) against reference frame {}", nearest->id, frame_t,
+                         reference.id));
     try {
       const cv::Mat image = read_frame(store, *nearest);
       const auto result = fusion::evaluate_displacement(reference_image, image, options.evaluator, options.mask);

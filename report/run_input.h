@@ -8,6 +8,7 @@
 // temperature maps come from `bosfuse process`; until a run has them, the
 // report says they are not processed yet (it never invents them).
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,7 +26,8 @@ struct RunReportOptions {
   std::optional<double> px_per_mm;          // map axes in mm when given
   fusion::EvaluatorOptions evaluator;       // default: cross-correlation, window 16 px, step 8 px
   cv::Mat mask;  // the frames' size, non-zero: not evaluated (e.g. the heater's holder); shown hatched in the maps
-  fitting::NewtonFitOptions fit;  // origin: the run's first sample unless set
+  fitting::NewtonFitOptions fit;                        // origin: the run's first sample unless set
+  std::function<void(const std::string&)> on_progress;  // one line per step of the long work, when set
 };
 
 ReportInput build_report_input(const storage::RunStore& store, const RunReportOptions& options = {});

@@ -54,8 +54,12 @@ TEST(RunInput, FramesGiveDisplacementMapsNearTheChosenTimesAndAQualityIndex) {
   RunReportOptions options;
   options.map_times_s = {12, 50, 1000};  // 50 and 1000 both pick the frame at 60 s: one map
   options.px_per_mm = 30;
+  std::vector<std::string> progress;
+  options.on_progress = [&](const std::string& line) { progress.push_back(line); };
   const auto input = build_report_input(storage::RunStore::open(dir / "run"), options);
   ASSERT_EQ(input.displacement_maps.size(), 2u);
+  ASSERT_EQ(progress.size(), 3u) << "fitting, then one line per evaluated frame";
+  EXPECT_NE(progress[1].find("evaluating frame"), std::string::npos) << progress[1];
   for (int f = 0; f < 2; ++f) {
     const auto& map = input.displacement_maps[f];
     EXPECT_NEAR(map.time_s, truth.frame_times_s[f], 0.01);
