@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <opencv2/imgproc.hpp>
@@ -100,6 +101,8 @@ void render_png_and_svg(const FigureFiles& files, const FigureSize& size, const 
     throw std::runtime_error("PLplot has no pngcairo/svgcairo device: install the Debian package plplot-driver-cairo");
   }
   for (const auto& [device, path] : {std::pair{"pngcairo", files.png}, std::pair{"svgcairo", files.svg}}) {
+    // PLplot ends the process when it cannot open its output: find out first.
+    if (!std::ofstream(path, std::ios::binary)) throw std::runtime_error("cannot write '" + path.string() + "'");
     {
       PlotStream stream(device, path, size);
       draw();
@@ -367,6 +370,71 @@ FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const 
              styles.data(), widths.data(), colours.data(), symbol_scales.data(), symbol_numbers.data(),
              symbol_ptrs.data());
     plschr(0, 1);
+  });
+  return files;
+}
+
+FigureFiles write_agreement_figure(const CurveSeries& a, const CurveSeries& b, const fitting::Agreement& agreement,
+                                   const FigureSize& size, const fs::path& base) {
+  const auto sa = fitting::clean_series(a.time_s, a.temperature_c, 0.0);
+  const auto sb = fitting::clean_series(b.time_s, b.temperature_c, 0.0);
+  std::vector<PLFLT> mean, difference;
+  Range mr, dr;
+  for (std::size_t i = 0; i < sa.size() && mean.size() < kMaxPlottedPoints; ++i) {
+    const auto other = fitting::interpolate(sb, sa.time_s[i]);
+    if (!other) continue;
+    mean.push_back(0.5 * (sa.temperature_c[i] + *other));
+    difference.push_back(sa.temperature_c[i] - *other);
+    mr.add(mean.back());
+    dr.add(difference.back());
+  }
+  if (mean.size() < 2) {
+    throw std::invalid_argument(a.name + " and " + b.name + " share fewer than two times: nothing to compare");
+  }
+  const auto& stats = agreement.series;
+  if (stats) {
+    dr.add(stats->limits_of_agreement_low_c);
+    dr.add(stats->limits_of_agreement_high_c);
+  }
+  dr.add(0);
+  FigureFiles files = files_for(base);
+  files.title = fmt::format("Agreement of {} and {}", a.name, b.name);
+  files.caption = fmt::format("Bland–Altman plot: {} − {} against their mean at {} common times ({} interpolated)",
+                              a.name, b.name, mean.size(), b.name);
+  if (stats) {
+    files.caption += fmt::format("; red: bias {:.3g} °C, dashed: limits of agreement [{:.3g}, {:.3g}] °C",
+                                 stats->bias_c, stats->limits_of_agreement_low_c, stats->limits_of_agreement_high_c);
+  }
+  files.caption += ". " + agreement.verdict;
+  const Range x = mr.padded(0.03), y = dr.padded(0.1);
+  render_png_and_svg(files, size, [&] {
+    plvpor(0.1, 0.95, 0.12, 0.92);
+    plwind(x.low, x.high, y.low, y.high);
+    plcol0(kGrid);
+    plbox("g", 0, 0, "g", 0, 0);
+    plcol0(kInk);
+    plbox("bcnst", 0, 0, "bcnstv", 0, 0);
+    const std::string xl = pl_text(fmt::format("mean of {} and {} (°C)", a.name, b.name));
+    const std::string yl = pl_text(fmt::format("{} − {} (°C)", a.name, b.name));
+    const std::string title = pl_text(files.title);
+    pllab(xl.c_str(), yl.c_str(), title.c_str());
+    draw_points(mean, difference, kFirstSeries);
+    const std::array<PLFLT, 2> lx{x.low, x.high};
+    auto hline = [&](double value, int colour, int style) {
+      const std::array<PLFLT, 2> ly{value, value};
+      plcol0(colour);
+      pllsty(style);
+      plwidth(2);
+      plline(2, lx.data(), ly.data());
+      plwidth(1);
+      pllsty(1);
+    };
+    hline(0, kMaskHatch, 1);
+    if (stats) {
+      hline(stats->bias_c, kFirstSeries + 1, 1);
+      hline(stats->limits_of_agreement_low_c, kFirstSeries + 1, 2);
+      hline(stats->limits_of_agreement_high_c, kFirstSeries + 1, 2);
+    }
   });
   return files;
 }

@@ -42,6 +42,14 @@ FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size
 FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const FigureSize& size,
                                   const std::filesystem::path& base);
 
+// Bland–Altman plot of a thermocouple (a) against its BOS probe (b): the
+// difference a − b against the mean of the two, on a's times where both
+// exist (b interpolated linearly), with the bias and the limits of agreement
+// of `agreement` when it has series statistics. Throws
+// std::invalid_argument when the two share fewer than two times.
+FigureFiles write_agreement_figure(const CurveSeries& a, const CurveSeries& b, const fitting::Agreement& agreement,
+                                   const FigureSize& size, const std::filesystem::path& base);
+
 struct MapMarker {
   std::string name;
   cv::Point2d image_px;

@@ -143,5 +143,36 @@ TEST(Figures, BadInputIsRefused) {
                std::invalid_argument);
 }
 
+TEST(Figures, AgreementFigureIsABlandAltmanPlot) {
+  testing::TempDir dir;
+  auto a = testdata::cooling_series("tc0", 0.01, 80, 22, 200, 2.0, 0.1, 1);
+  auto b = testdata::cooling_series("probe", 0.01, 80.5, 22, 40, 10.0, 0.3, 2);
+  b.kind = SeriesKind::kBosProbe;
+  fitting::NewtonFitOptions from_zero;
+  from_zero.origin_s = 0.0;
+  a.fit = fitting::fit_newton(a.time_s, a.temperature_c, from_zero);
+  b.fit = fitting::fit_newton(b.time_s, b.temperature_c, from_zero);
+  const auto agreement = fitting::compare_fits(*a.fit, *b.fit, fitting::clean_series(a.time_s, a.temperature_c, 0.0),
+                                               fitting::clean_series(b.time_s, b.temperature_c, 0.0));
+  ASSERT_TRUE(agreement.series);
+  const FigureSize size{800, 500};
+  const auto files = write_agreement_figure(a, b, agreement, size, dir / "agreement");
+  expect_png(files.png, size);
+  expect_svg(files.svg, size);
+  EXPECT_NE(files.caption.find("bias"), std::string::npos) << files.caption;
+  EXPECT_NE(files.caption.find(agreement.verdict), std::string::npos);
+
+  auto later = b;
+  for (auto& t : later.time_s) t += 10000;
+  EXPECT_THROW(write_agreement_figure(a, later, agreement, size, dir / "none"), std::invalid_argument);
+}
+
+TEST(Figures, AnUnwritableFileIsAnErrorNotAnExit) {
+  testing::TempDir dir;
+  std::filesystem::create_directory(dir / "taken.png");  // a folder where the PNG should go
+  EXPECT_THROW(write_curve_figure(testdata::cooling_series("a", 0.01, 80, 20, 10, 1, 0.1, 1), {}, dir / "taken"),
+               std::runtime_error);
+}
+
 }  // namespace
 }  // namespace bosfuse::report

@@ -211,6 +211,31 @@ ReportFiles write_report(const ReportInput& input, const ReportOptions& options,
     }
     return out;
   };
+  std::vector<FigureFiles> agreement_figures;
+  std::vector<std::string> agreement_notes;
+  auto find_series = [&](const std::string& name) -> const CurveSeries* {
+    for (const auto& s : input.series) {
+      if (s.name == name) return &s;
+    }
+    return nullptr;
+  };
+  for (const auto& e : input.agreements) {
+    const auto* a = find_series(e.thermocouple);
+    const auto* b = find_series(e.probe);
+    if (!a || !b) {
+      agreement_notes.push_back(
+          fmt::format("No plot of {} against {}: the report holds no series named so.", e.thermocouple, e.probe));
+      continue;
+    }
+    try {
+      agreement_figures.push_back(write_agreement_figure(
+          *a, *b, e.agreement, options.curve_size,
+          unique_base(out_dir, "agreement_" + slug(e.thermocouple) + "_" + slug(e.probe), used)));
+      files.figures.push_back(agreement_figures.back());
+    } catch (const std::invalid_argument& error) {
+      agreement_notes.push_back(error.what());
+    }
+  }
   const auto displacement_figures = draw_maps(input.displacement_maps, "displacement", options.displacement_contour_px);
   const auto temperature_figures = draw_maps(input.temperature_maps, "temperature", options.temperature_contour_c);
 
@@ -253,6 +278,8 @@ ReportFiles write_report(const ReportInput& input, const ReportOptions& options,
   h << "<h2 id=\"agreement\">Agreement of thermocouples and BOS probes</h2>\n";
   if (!input.agreements.empty()) {
     h << agreement_table(input);
+    for (const auto& note : agreement_notes) h << "<p class=\"note\">" << esc(note) << "</p>\n";
+    for (const auto& f : agreement_figures) h << figure_html(f, options.curve_size);
   } else if (!input.has_probes()) {
     h << "<p class=\"note\">" << kNotProcessed << "</p>\n";
   } else {

@@ -208,6 +208,8 @@ TEST_F(Report, ProbesAgreementAndTemperatureMapsAppearWhenProvided) {
   EXPECT_NE(html.find(html_escape(input.agreements[0].agreement.verdict)), std::string::npos);
   EXPECT_TRUE(fs::exists(dir_ / "out" / "map_temperature_t10s.png"));
   EXPECT_TRUE(fs::exists(dir_ / "out" / "curve_probe_tc0_probe.svg"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "agreement_tc0_tc0_probe.png")) << "Bland–Altman plot";
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "agreement_tc0_tc0_probe.svg"));
   const auto json = nlohmann::json::parse(read_text(files.json));
   ASSERT_EQ(json["agreements"].size(), 1u);
   EXPECT_TRUE(json["agreements"][0]["k"].contains("z"));
