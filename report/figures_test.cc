@@ -2,10 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
-#include <regex>
 #include <sstream>
+#include <vector>
 
 #include "report/test_data.h"
 #include "tests/support/temp_dir.h"
@@ -20,26 +21,122 @@ std::string read_text(const std::filesystem::path& path) {
   return text.str();
 }
 
-// The SVG is XML with an <svg> root whose viewBox is the figure's size.
+// A well-formedness check of XML, enough for the files cairo writes:
+// elements nest and close in order, attributes are name="value" (or with
+// single quotes), one root element, and declarations, comments and CDATA
+// are skipped. `error` is empty when the text is well formed.
+struct XmlCheck {
+  std::string error;
+  std::string root_name;
+  std::string root_tag;  // the root's start tag, attributes included
+};
+
+XmlCheck check_xml(const std::string& text) {
+  XmlCheck out;
+  std::vector<std::string> open;
+  bool root_closed = false;
+  const auto blank = [&](std::size_t from, std::size_t to) { return text.find_first_not_of(" \t\r\n", from) >= to; };
+  std::size_t i = 0;
+  for (std::size_t steps = 0; i < text.size() && steps < 10'000'000; ++steps) {
+    const std::size_t lt = text.find('<', i);
+    if (open.empty() && !blank(i, lt == std::string::npos ? text.size() : lt)) {
+      return {"text outside the root element", out.root_name, out.root_tag};
+    }
+    if (lt == std::string::npos) break;
+    const auto skip_to = [&](const char* end) {
+      const auto e = text.find(end, lt);
+      return e == std::string::npos ? std::string::npos : e + std::strlen(end);
+    };
+    std::size_t next = std::string::npos;
+    if (text.compare(lt, 2, "<?") == 0) {
+      next = skip_to("?>");
+    } else if (text.compare(lt, 4, "<!--") == 0) {
+      next = skip_to("-->");
+    } else if (text.compare(lt, 9, "<![CDATA[") == 0) {
+      next = skip_to("]]>");
+    } else if (text.compare(lt, 2, "<!") == 0) {
+      next = skip_to(">");
+    }
+    if (text.compare(lt, 2, "<?") == 0 || text.compare(lt, 2, "<!") == 0) {
+      if (next == std::string::npos) return {"unterminated declaration or comment", out.root_name, out.root_tag};
+      i = next;
+      continue;
+    }
+    // A tag: find its end outside quoted attribute values.
+    std::size_t gt = lt + 1;
+    char quote = 0;
+    for (; gt < text.size(); ++gt) {
+      if (quote) {
+        if (text[gt] == quote) quote = 0;
+      } else if (text[gt] == '"' || text[gt] == '\'') {
+        quote = text[gt];
+      } else if (text[gt] == '>') {
+        break;
+      }
+    }
+    if (gt >= text.size()) return {"unterminated tag", out.root_name, out.root_tag};
+    std::string tag = text.substr(lt + 1, gt - lt - 1);
+    if (!tag.empty() && tag[0] == '/') {
+      const std::string name = tag.substr(1, tag.find_last_not_of(" \t\r\n"));
+      if (open.empty() || open.back() != name)
+        return {"</" + name + "> closes nothing open", out.root_name, out.root_tag};
+      open.pop_back();
+      root_closed = open.empty();
+    } else {
+      const bool self_closing = !tag.empty() && tag.back() == '/';
+      if (self_closing) tag.pop_back();
+      const auto name_end = tag.find_first_of(" \t\r\n");
+      const std::string name = tag.substr(0, name_end);
+      if (name.empty()) return {"empty tag name", out.root_name, out.root_tag};
+      for (std::size_t p = name_end; p != std::string::npos && p < tag.size();) {
+        p = tag.find_first_not_of(" \t\r\n", p);
+        if (p == std::string::npos) break;
+        const auto eq = tag.find('=', p);
+        if (eq == std::string::npos) return {"attribute without value in <" + name + ">", out.root_name, out.root_tag};
+        const auto value = tag.find_first_not_of(" \t\r\n", eq + 1);
+        if (value == std::string::npos || (tag[value] != '"' && tag[value] != '\'')) {
+          return {"unquoted attribute in <" + name + ">", out.root_name, out.root_tag};
+        }
+        const auto close = tag.find(tag[value], value + 1);
+        if (close == std::string::npos) return {"unclosed attribute in <" + name + ">", out.root_name, out.root_tag};
+        p = close + 1;
+      }
+      if (open.empty()) {
+        if (root_closed || !out.root_name.empty())
+          return {"a second root element <" + name + ">", out.root_name, out.root_tag};
+        out.root_name = name;
+        out.root_tag = text.substr(lt, gt - lt + 1);
+      }
+      if (!self_closing) {
+        open.push_back(name);
+      } else if (open.empty()) {
+        root_closed = true;
+      }
+    }
+    i = gt + 1;
+  }
+  if (!open.empty()) return {"<" + open.back() + "> is never closed", out.root_name, out.root_tag};
+  if (out.root_name.empty()) return {"no element", out.root_name, out.root_tag};
+  return out;
+}
+
+// The SVG is well-formed XML with an <svg> root whose viewBox is the figure's size.
 void expect_svg(const std::filesystem::path& path, const FigureSize& size) {
-  const std::string text = read_text(path);
-  ASSERT_FALSE(text.empty()) << path;
-  std::smatch root;
-  ASSERT_TRUE(std::regex_search(text, root, std::regex(R"(<svg\b[^>]*>)"))) << "no <svg> element in " << path;
-  const auto prolog = text.substr(0, root.position(0));
-  EXPECT_EQ(prolog.find('<', prolog.find("?>") == std::string::npos ? 0 : prolog.find("?>") + 2), std::string::npos)
-      << "<svg> must be the root element";
-  EXPECT_NE(root.str().find("viewBox=\"0 0 " + std::to_string(size.width_px) + " " + std::to_string(size.height_px)),
+  const auto xml = check_xml(read_text(path));
+  ASSERT_EQ(xml.error, "") << path;
+  EXPECT_EQ(xml.root_name, "svg") << path;
+  EXPECT_NE(xml.root_tag.find("viewBox=\"0 0 " + std::to_string(size.width_px) + " " + std::to_string(size.height_px)),
             std::string::npos)
-      << root.str();
-  EXPECT_NE(text.rfind("</svg>"), std::string::npos) << "SVG not closed";
-  // Balanced: as many opening <g as closing </g>.
-  const auto count = [&](const std::string& what) {
-    std::size_t n = 0;
-    for (auto p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) ++n;
-    return n;
-  };
-  EXPECT_EQ(count("<g>") + count("<g "), count("</g>"));
+      << xml.root_tag;
+}
+
+TEST(XmlCheck, TellsWellFormedFromBroken) {
+  EXPECT_EQ(check_xml("<?xml version=\"1.0\"?>\n<svg a=\"1\"><g><path d='M 0 0'/></g><!-- c --></svg>\n").error, "");
+  EXPECT_EQ(check_xml("<svg><g></svg>").error, "</svg> closes nothing open");
+  EXPECT_EQ(check_xml("<svg><g>").error, "<g> is never closed");
+  EXPECT_EQ(check_xml("<svg a=1></svg>").error, "unquoted attribute in <svg>");
+  EXPECT_EQ(check_xml("<svg></svg><svg></svg>").error, "a second root element <svg>");
+  EXPECT_EQ(check_xml("<svg></svg> trailing").error, "text outside the root element");
 }
 
 void expect_png(const std::filesystem::path& path, const FigureSize& size) {
