@@ -10,6 +10,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <mutex>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
@@ -100,6 +101,9 @@ void render_png_and_svg(const FigureFiles& files, const FigureSize& size, const 
   if (!cairo_devices_available()) {
     throw std::runtime_error("PLplot has no pngcairo/svgcairo device: install the Debian package plplot-driver-cairo");
   }
+  // PLplot's state is global: one figure at a time in this process.
+  static std::mutex plplot_mutex;
+  const std::lock_guard lock(plplot_mutex);
   for (const auto& [device, path] : {std::pair{"pngcairo", files.png}, std::pair{"svgcairo", files.svg}}) {
     // PLplot ends the process when it cannot open its output: find out first.
     if (!std::ofstream(path, std::ios::binary)) throw std::runtime_error("cannot write '" + path.string() + "'");

@@ -5,8 +5,9 @@
 // ".png" and ".svg". A PNG is exactly width_px × height_px; an SVG's
 // viewBox is the same size (its width and height are in points).
 //
-// PLplot keeps global state: these functions are not thread-safe (each one
-// creates its own PLplot stream and ends it before returning). They throw
+// PLplot keeps global state: these functions draw one figure at a time
+// (a process-wide lock), each in its own PLplot stream ended before they
+// return; other PLplot users in the process must not run meanwhile. They throw
 // std::runtime_error when the cairo devices are missing (Debian package
 // plplot-driver-cairo) or the input has nothing to draw.
 

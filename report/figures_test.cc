@@ -264,6 +264,18 @@ TEST(Figures, AgreementFigureIsABlandAltmanPlot) {
   EXPECT_THROW(write_agreement_figure(a, later, agreement, size, dir / "none"), std::invalid_argument);
 }
 
+TEST(Figures, ALongRecordIsThinnedForDrawingOnly) {
+  testing::TempDir dir;
+  CurveSeries long_record = testdata::cooling_series("long", 0.001, 80, 22, 200'000, 0.01, 0.2, 5);
+  long_record.fit = fitting::fit_newton(long_record.time_s, long_record.temperature_c);
+  ASSERT_TRUE(long_record.fit->ok());
+  const auto files = write_curve_figure(long_record, {}, dir / "long");
+  expect_png(files.png, {});
+  expect_svg(files.svg, {});
+  EXPECT_LT(std::filesystem::file_size(files.svg), 8'000'000u) << "the SVG must stay openable";
+  EXPECT_NE(files.caption.find("200000 points"), std::string::npos) << files.caption;
+}
+
 TEST(Figures, AnUnwritableFileIsAnErrorNotAnExit) {
   testing::TempDir dir;
   std::filesystem::create_directory(dir / "taken.png");  // a folder where the PNG should go

@@ -29,6 +29,10 @@ double seconds_since(std::int64_t t_ns, std::int64_t origin_ns) { return static_
 
 cv::Mat read_frame(const storage::RunStore& store, const storage::FrameRecord& frame) {
   const fs::path path = store.dir() / frame.path;
+  if (!fs::is_regular_file(path)) {
+    throw std::runtime_error("cannot read frame " + std::to_string(frame.id) + " ('" + path.string() +
+                             "'): no such file");
+  }
   cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
   if (image.empty())
     throw std::runtime_error("cannot read frame " + std::to_string(frame.id) + " ('" + path.string() + "')");

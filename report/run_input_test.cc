@@ -103,6 +103,19 @@ TEST(RunInput, TheHolderMaskIsNotEvaluatedAndShowsAsMaskedCells) {
   EXPECT_NE(wrong.displacement_maps_note.find("mask is 10×10 px"), std::string::npos) << wrong.displacement_maps_note;
 }
 
+TEST(RunInput, AMissingFrameFileIsANoteNotAFailure) {
+  testing::TempDir dir;
+  testrun::create_run(dir / "run", true);
+  std::filesystem::remove(dir / "run" / "frames" / "frame1.png");  // the frame at 60 s, also the last one
+  const auto input = build_report_input(storage::RunStore::open(dir / "run"));
+  ASSERT_EQ(input.displacement_maps.size(), 1u);
+  std::string notes;
+  for (const auto& n : input.notes) notes += n + "\n";
+  EXPECT_NE(notes.find("No displacement map at t = 60.0 s: cannot read frame"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("No image quality index: cannot read frame"), std::string::npos) << notes;
+  EXPECT_FALSE(input.quality);
+}
+
 TEST(RunInput, DisplacementMagnitudeMapMasksWhatWasNotMeasured) {
   fusion::DisplacementField field;
   field.rows = 2;
