@@ -360,6 +360,7 @@ FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const 
     std::vector<const char*> text_ptrs(n), symbol_ptrs(n);
     for (PLINT s = 0; s < n; ++s) {
       colours[s] = series_colour(s);
+      if (fts[s].empty()) opts[s] = PL_LEGEND_SYMBOL;  // no fitted curve to show
       texts[s] = pl_text(series[s].name);
       symbols[s] = series[s].kind == SeriesKind::kBosProbe ? "×" : "•";
       text_ptrs[s] = texts[s].c_str();
