@@ -38,7 +38,9 @@ constexpr std::array<std::array<int, 3>, 15> kPalette{{{255, 255, 255},
                                                        {188, 189, 34},
                                                        {23, 190, 207}}};
 constexpr int kSeriesColours = static_cast<int>(kPalette.size()) - kFirstSeries;
-constexpr std::size_t kMaxPlottedPoints = 4000;  // per series; longer records are decimated for drawing only
+constexpr std::size_t kMaxPlottedPoints = 4000;
+constexpr int kMaxDrawnCells = 250;  // per map side; finer grids are block-averaged for drawing  // per series; longer
+                                     // records are decimated for drawing only
 
 int series_colour(std::size_t i) { return kFirstSeries + static_cast<int>(i % kSeriesColours); }
 
@@ -516,6 +518,39 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
       if (!std::isfinite(values.at<double>(r, c))) masked.at<std::uint8_t>(r, c) = 255;
     }
   }
+  // A fine grid (a per-pixel temperature field) is averaged over blocks for
+  // drawing, so the figure stays light; the CSV keeps every cell.
+  double x0 = map.x0_px, y0 = map.y0_px, step = map.step_px;
+  const int block = (std::max(values.rows, values.cols) + kMaxDrawnCells - 1) / kMaxDrawnCells;
+  if (block > 1) {
+    const int rows = (values.rows + block - 1) / block, cols = (values.cols + block - 1) / block;
+    cv::Mat coarse(rows, cols, CV_64F, cv::Scalar(0)), coarse_masked(rows, cols, CV_8U, cv::Scalar(0));
+    for (int R = 0; R < rows; ++R) {
+      for (int C = 0; C < cols; ++C) {
+        double sum = 0;
+        int known = 0, total = 0;
+        for (int r = R * block; r < std::min(values.rows, (R + 1) * block); ++r) {
+          for (int c = C * block; c < std::min(values.cols, (C + 1) * block); ++c) {
+            ++total;
+            if (masked.at<std::uint8_t>(r, c)) continue;
+            sum += values.at<double>(r, c);
+            ++known;
+          }
+        }
+        // A block is data when at least half of it is.
+        if (2 * known >= total && known > 0) {
+          coarse.at<double>(R, C) = sum / known;
+        } else {
+          coarse_masked.at<std::uint8_t>(R, C) = 255;
+        }
+      }
+    }
+    values = coarse;
+    masked = coarse_masked;
+    x0 += 0.5 * (block - 1) * step;
+    y0 += 0.5 * (block - 1) * step;
+    step *= block;
+  }
   Range range;
   for (int r = 0; r < values.rows; ++r) {
     for (int c = 0; c < values.cols; ++c) {
@@ -551,12 +586,12 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
   const double scale = px_per_mm ? 1.0 / *px_per_mm : 1.0;
   const char* unit_axis = px_per_mm ? "mm" : "px";
   const cv::Size extent = map.image_size_px.empty()
-                              ? cv::Size(static_cast<int>(std::ceil(map.x0_px + map.step_px * values.cols)),
-                                         static_cast<int>(std::ceil(map.y0_px + map.step_px * values.rows)))
+                              ? cv::Size(static_cast<int>(std::ceil(map.x0_px + map.step_px * map.values.cols)),
+                                         static_cast<int>(std::ceil(map.y0_px + map.step_px * map.values.rows)))
                               : map.image_size_px;
   const double wx0 = -0.5 * scale, wx1 = (extent.width - 0.5) * scale;
   const double wy0 = -0.5 * scale, wy1 = (extent.height - 0.5) * scale;
-  GridTransform transform{map.x0_px, map.y0_px, map.step_px, scale};
+  GridTransform transform{x0, y0, step, scale};
 
   // PLplot grids are indexed [x][y].
   const int nx = values.cols, ny = values.rows;
@@ -577,6 +612,10 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
       widened ? " (widened from the requested spacing to keep the map readable)" : "", cv::countNonZero(masked),
       values.total(), unit_axis);
   if (!any_data) files.caption += " Every cell is masked: nothing was measured.";
+  if (block > 1) {
+    files.caption += fmt::format(" Drawn averaged over {0}×{0} cells of the {1}×{2} grid (the CSV holds every cell).",
+                                 block, map.values.cols, map.values.rows);
+  }
 
   render_png_and_svg(files, size, [&] {
     const double aspect = (wy1 - wy0) / (wx1 - wx0);
@@ -587,8 +626,8 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
     const std::array<PLFLT, 4> bx{wx0, wx1, wx1, wx0}, by{wy0, wy0, wy1, wy1};
     plfill(4, bx.data(), by.data());
     if (nx >= 2 && ny >= 2) {
-      const double gx0 = map.x0_px * scale, gx1 = (map.x0_px + map.step_px * (nx - 1)) * scale;
-      const double gy0 = map.y0_px * scale, gy1 = (map.y0_px + map.step_px * (ny - 1)) * scale;
+      const double gx0 = x0 * scale, gx1 = (x0 + step * (nx - 1)) * scale;
+      const double gy0 = y0 * scale, gy1 = (y0 + step * (ny - 1)) * scale;
       plpsty(0);
       plshades(z_rows.data(), nx, ny, nullptr, gx0, gx1, gy0, gy1, edges.data(), kBands + 1, 0, 0, 0, plfill, 1,
                nullptr, nullptr);
@@ -599,9 +638,9 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
                &transform);
       }
     }
-    const double half = 0.5 * map.step_px * scale;
+    const double half = 0.5 * step * scale;
     auto cell = [&](int r, int c, std::array<PLFLT, 4>& x, std::array<PLFLT, 4>& y) {
-      const double cx = (map.x0_px + c * map.step_px) * scale, cy = (map.y0_px + r * map.step_px) * scale;
+      const double cx = (x0 + c * step) * scale, cy = (y0 + r * step) * scale;
       x = {cx - half, cx + half, cx + half, cx - half};
       y = {cy - half, cy - half, cy + half, cy + half};
     };

@@ -218,6 +218,29 @@ TEST(Figures, MapWithoutScaleUsesPixelsAndATooFineSpacingIsWidened) {
   EXPECT_NE(files.caption.find("widened"), std::string::npos) << files.caption;
 }
 
+TEST(Figures, APerPixelFieldIsAveragedForDrawing) {
+  testing::TempDir dir;
+  MapField field;
+  field.quantity = "temperature";
+  field.unit = "°C";
+  field.values = cv::Mat(600, 800, CV_32F);
+  field.mask = cv::Mat::zeros(600, 800, CV_8U);
+  for (int r = 0; r < 600; ++r) {
+    for (int c = 0; c < 800; ++c)
+      field.values.at<float>(r, c) = 22 + 40 * std::exp(-((c - 400) * (c - 400) + (r - 200) * (r - 200)) / 2e4);
+  }
+  field.mask(cv::Rect(350, 450, 100, 150)).setTo(255);
+  field.x0_px = 0;
+  field.y0_px = 0;
+  field.step_px = 1;
+  const FigureSize size{900, 650};
+  const auto files = write_map_figure(field, 5.0, {{"tc0", {300, 150}}}, 30.0, size, dir / "temperature");
+  expect_png(files.png, size);
+  expect_svg(files.svg, size);
+  EXPECT_NE(files.caption.find("averaged over 4×4 cells of the 800×600 grid"), std::string::npos) << files.caption;
+  EXPECT_LT(std::filesystem::file_size(files.svg), 8'000'000u);
+}
+
 TEST(Figures, FullyMaskedAndSingleRowMapsStillDraw) {
   testing::TempDir dir;
   MapField masked = testdata::bump_map(4, 5);
