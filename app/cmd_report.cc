@@ -1,0 +1,116 @@
+// bosfuse report: the cooling-curve report of a run — one self-contained
+// HTML page plus every figure as PNG and SVG and the data as CSV and JSON
+// (report/report.h). Today it fits the run's thermocouples and draws the
+// displacement maps of its frames; BOS probes, agreement and temperature
+// maps appear once `bosfuse process` has stored them.
+
+#include <fmt/format.h>
+
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "app/command.h"
+#include "app/image_io.h"
+#include "report/report.h"
+#include "report/run_input.h"
+#include "storage/run_store.h"
+
+namespace bosfuse::app {
+namespace {
+
+struct ReportArgs {
+  std::string run;
+  std::string out;
+  std::string map_times = "10,60";
+  std::string title;
+  std::string mask;
+  double contour_px = 0.05;
+  double contour_c = 1.0;
+  double px_per_mm = 0;
+  int window_px = 16;
+  int step_px = 8;
+};
+
+std::vector<double> parse_times(const std::string& text) {
+  std::vector<double> times;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (item.empty()) continue;
+    std::size_t used = 0;
+    double t = 0;
+    try {
+      t = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != item.size() || !std::isfinite(t)) {
+      throw std::runtime_error(fmt::format("--map-times '{}': '{}' is not a time in seconds", text, item));
+    }
+    times.push_back(t);
+  }
+  return times;
+}
+
+void make_report(const ReportArgs& args) {
+  const auto store = storage::RunStore::open(args.run);
+  report::RunReportOptions input_options;
+  input_options.map_times_s = parse_times(args.map_times);
+  if (args.px_per_mm > 0) input_options.px_per_mm = args.px_per_mm;
+  input_options.evaluator.set_grid(args.window_px, args.step_px);
+  if (const auto problem = input_options.evaluator.Validate(); !problem.empty()) throw std::runtime_error(problem);
+  if (!args.mask.empty()) input_options.mask = read_image(args.mask, "mask");
+  input_options.on_progress = [](const std::string& line) { std::cerr << line << " ...\n"; };
+  const auto input = report::build_report_input(store, input_options);
+
+  report::ReportOptions options;
+  options.title = args.title;
+  options.displacement_contour_px = args.contour_px;
+  options.temperature_contour_c = args.contour_c;
+  std::cerr << "drawing the figures and writing " << args.out << " ...\n";
+  const auto files = report::write_report(input, options, args.out);
+  for (const auto& s : input.series) {
+    if (s.fit && s.fit->ok()) {
+      std::cout << fmt::format("{}: k = {:.5g} 1/s [{:.5g}, {:.5g}], tau = {:.4g} s\n", s.name, s.fit->k_per_s.value,
+                               s.fit->k_per_s.low, s.fit->k_per_s.high, s.fit->tau_s.value);
+    } else {
+      std::cout << fmt::format("{}: no fit ({})\n", s.name, s.fit ? s.fit->summary.message : "not fitted");
+    }
+  }
+  std::cout << fmt::format("wrote {} figures (PNG and SVG), {} CSV files and {}\n", files.figures.size(),
+                           files.csv.size(), files.json.string());
+  std::cout << "report: " << files.html.string() << "\n";
+}
+
+void add_report(CLI::App& root) {
+  auto args = std::make_shared<ReportArgs>();
+  CLI::App* cmd = root.add_subcommand(
+      "report", "Cooling-curve report of a run: self-contained HTML, figures as PNG/SVG, data as CSV/JSON");
+  cmd->add_option("run", args->run, "Run folder (holding run.sqlite)")->required()->check(CLI::ExistingDirectory);
+  cmd->add_option("--out,-o", args->out, "Folder to write the report into (created if needed)")->required();
+  cmd->add_option("--map-times", args->map_times,
+                  "Times of the maps, s since the run's first sample, comma-separated (nearest frame)")
+      ->capture_default_str();
+  cmd->add_option("--contour", args->contour_px, "Contour spacing of displacement maps, px (0: none)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--temperature-contour", args->contour_c, "Contour spacing of temperature maps, °C (0: none)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--px-per-mm", args->px_per_mm, "Image scale, px per mm: map axes in mm (default: axes in px)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--window", args->window_px, "Interrogation window of the displacement maps, px")
+      ->capture_default_str();
+  cmd->add_option("--step", args->step_px, "Grid spacing of the displacement maps, px")->capture_default_str();
+  cmd->add_option("--mask", args->mask,
+                  "Mask image of the frames' size: non-zero pixels (e.g. the heater's holder) are not evaluated")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--title", args->title, "Title of the report (default: Cooling report — <run name>)");
+  cmd->callback([args] { make_report(*args); });
+}
+
+BOSFUSE_COMMAND(add_report);
+
+}  // namespace
+}  // namespace bosfuse::app

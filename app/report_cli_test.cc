@@ -1,0 +1,251 @@
+// `bosfuse report` end to end: a small synthetic run on disk (two
+// thermocouples on known Newton curves, a reference and two measurement
+// frames with a known displacement), the report made by the executable, its
+// files checked, and the page opened in a real headless browser (Debian's
+// chromium) to check that every figure renders.
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "report/html.h"
+#include "report/test_run.h"
+#include "tests/support/subprocess.h"
+#include "tests/support/temp_dir.h"
+
+namespace bosfuse {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+constexpr int kBrowserTimeoutS = 120;
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// A path in single quotes for /bin/sh (the test's temporary paths hold no quote).
+std::string shell_quote(const fs::path& path) {
+  std::string out = "'";
+  out += path.string();
+  out += '\'';
+  return out;
+}
+
+// For each <img> of the page, once loaded: "complete WxH spread", where
+// spread is max − min of the channel values the browser decoded (drawn on a
+// canvas; data: URIs do not taint it), so a blank image shows as spread 0.
+constexpr const char* kRenderCheckScript = R"js(<script>
+window.addEventListener('load', () => {
+  const out = [];
+  for (const img of document.images) {
+    let spread = -1;
+    try {
+      const canvas = document.createElement('canvas');
+      canvas.width = img.naturalWidth;
+      canvas.height = img.naturalHeight;
+      const g = canvas.getContext('2d');
+      g.drawImage(img, 0, 0);
+      const d = g.getImageData(0, 0, canvas.width, canvas.height).data;
+      let lo = 255, hi = 0;
+      for (let i = 0; i < d.length; i += 4 * 7) {
+        lo = Math.min(lo, d[i], d[i + 1], d[i + 2]);
+        hi = Math.max(hi, d[i], d[i + 1], d[i + 2]);
+      }
+      spread = hi - lo;
+    } catch (e) {
+      spread = -2;
+    }
+    out.push(img.complete + ' ' + img.naturalWidth + 'x' + img.naturalHeight + ' ' + spread);
+  }
+  const pre = document.createElement('pre');
+  pre.id = 'render-check';
+  pre.textContent = out.join(';');
+  document.body.appendChild(pre);
+});
+</script>)js";
+
+class ReportCli : public ::testing::Test {
+ protected:
+  static bool have_chromium() { return testing::run_command("which chromium", 10).exit_code == 0; }
+
+  testing::CommandResult chromium(const std::string& args) {
+    return testing::run_command(
+        "chromium --headless --no-sandbox --disable-gpu --disable-dev-shm-usage --no-first-run "
+        "--hide-scrollbars --user-data-dir=" +
+            shell_quote(dir_ / "chromium-profile") + " " + args,
+        kBrowserTimeoutS);
+  }
+
+  struct RenderedImage {
+    bool complete = false;
+    std::string size;  // natural size WxH as decoded by the browser; 0x0 when it could not decode it
+    int spread = -1;   // max − min of the decoded pixel values; 0 for a blank image
+  };
+
+  // Opens a copy of `html` with kRenderCheckScript added in headless
+  // chromium and reads back, from the dumped DOM, what it found per <img>.
+  std::vector<RenderedImage> render_check(std::string html, const fs::path& copy) {
+    const auto body_end = html.rfind("</body>");
+    if (body_end == std::string::npos) {
+      ADD_FAILURE() << "no </body>";
+      return {};
+    }
+    html.insert(body_end, kRenderCheckScript);
+    std::ofstream(copy) << html;
+    const auto dom =
+        chromium("--virtual-time-budget=15000 --dump-dom " + shell_quote(fs::path("file://" + copy.string())));
+    EXPECT_EQ(dom.exit_code, 0) << dom.output.substr(0, 2000);
+    const std::string tag = "<pre id=\"render-check\">";
+    const auto start = dom.output.find(tag);
+    if (start == std::string::npos) {
+      ADD_FAILURE() << "the check script did not run:\n" << dom.output.substr(0, 2000);
+      return {};
+    }
+    const auto text_start = start + tag.size();
+    std::stringstream items(dom.output.substr(text_start, dom.output.find("</pre>", text_start) - text_start));
+    std::vector<RenderedImage> images;
+    for (std::string item; std::getline(items, item, ';') && images.size() < 1000;) {
+      std::stringstream fields(item);
+      std::string complete;
+      RenderedImage image;
+      fields >> complete >> image.size >> image.spread;
+      image.complete = complete == "true";
+      images.push_back(image);
+    }
+    return images;
+  }
+
+  testing::TempDir dir_;
+};
+
+// The render check itself tells a figure from a broken or a blank one.
+TEST_F(ReportCli, BrowserCheckTellsRenderedFromBrokenAndBlankImages) {
+  if (!have_chromium()) GTEST_FAIL() << "chromium is not installed (scripts/debian-packages.txt lists it)";
+  cv::Mat drawn(60, 80, CV_8UC3, cv::Scalar(255, 255, 255));
+  cv::circle(drawn, {40, 30}, 20, cv::Scalar(200, 30, 30), cv::FILLED);
+  const cv::Mat blank(60, 80, CV_8UC3, cv::Scalar(255, 255, 255));
+  auto uri = [](const cv::Mat& image) {
+    std::vector<std::uint8_t> png;
+    cv::imencode(".png", image, png);
+    return "data:image/png;base64," + report::base64_encode(png);
+  };
+  const std::string good = uri(drawn);
+  const std::string html = "<!DOCTYPE html><html><body><img src=\"" + good + "\"><img src=\"" +
+                           "data:image/png;base64,QUJDRA==" + "\"><img src=\"" + uri(blank) + "\"></body></html>";
+  const auto images = render_check(html, dir_ / "control.html");
+  ASSERT_EQ(images.size(), 3u);
+  EXPECT_EQ(images[0].size, "80x60");
+  EXPECT_GT(images[0].spread, 100);
+  EXPECT_EQ(images[1].size, "0x0") << "bytes that are not a PNG cannot decode";
+  EXPECT_EQ(images[2].size, "80x60");
+  EXPECT_EQ(images[2].spread, 0) << "a blank image has no spread";
+}
+
+TEST_F(ReportCli, MakesAReportThatABrowserRendersCompletely) {
+  const report::testrun::Truth truth;
+  report::testrun::create_run(dir_ / "run", true, truth);
+  const fs::path out = dir_ / "out";
+  ASSERT_TRUE(cv::imwrite((dir_ / "holder-mask.png").string(), report::testrun::holder_mask(truth)));
+  const auto made = testing::run_command(kBosfuse + " report " + shell_quote(dir_ / "run") + " -o " + shell_quote(out) +
+                                             " --map-times 10,60 --contour 0.05 --px-per-mm 30 --mask " +
+                                             shell_quote(dir_ / "holder-mask.png"),
+                                         120);
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  EXPECT_NE(made.output.find("report.html"), std::string::npos) << made.output;
+
+  // Files: every figure as PNG and SVG, data as CSV and JSON.
+  for (const char* name : {"report.html", "report.json", "series.csv", "fits.csv", "curves_all.png", "curves_all.svg",
+                           "curve_tc0.png", "curve_tc0.svg", "curve_tc1.png", "curve_tc1.svg",
+                           "map_displacement_t10s.png", "map_displacement_t10s.svg", "map_displacement_t10s.csv",
+                           "map_displacement_t60s.png", "map_displacement_t60s.svg", "map_displacement_t60s.csv"}) {
+    EXPECT_TRUE(fs::exists(out / name)) << name;
+  }
+  const auto json = nlohmann::json::parse(read_text(out / "report.json"));
+  ASSERT_EQ(json["series"].size(), 2u);
+  for (int c = 0; c < 2; ++c) {
+    const auto& k = json["series"][c]["fit"]["parameters"]["k_per_s"];
+    EXPECT_NEAR(k["value"].get<double>(), truth.k_per_s[c], 0.02 * truth.k_per_s[c]) << "tc" << c;
+    EXPECT_LT(k["interval"]["low"].get<double>(), k["interval"]["high"].get<double>());
+    EXPECT_EQ(json["series"][c]["samples"].get<int>(), truth.samples - truth.bad_samples);
+  }
+  ASSERT_EQ(json["maps"].size(), 2u);
+  EXPECT_NEAR(json["maps"][0]["max"].get<double>(), truth.frame_peak_px[0], 0.2 * truth.frame_peak_px[0]);
+  EXPECT_GT(json["maps"][0]["masked_cells"].get<int>(), 10) << "the holder's region is masked";
+  EXPECT_GT(json["image_quality"]["q_mod"].get<double>(), 0.9);
+  const std::string html = read_text(out / "report.html");
+  EXPECT_EQ(html.find("http://"), std::string::npos);
+  EXPECT_EQ(html.find("https://"), std::string::npos);
+  EXPECT_NE(html.find("Not processed yet"), std::string::npos) << "no BOS probes yet: the report must say so";
+  const std::size_t figures = json["figures"].size();
+  EXPECT_EQ(figures, 5u);  // overview, two curves, two maps
+
+  if (!have_chromium()) GTEST_FAIL() << "chromium is not installed (scripts/debian-packages.txt lists it)";
+
+  // 1. Every <img> of the page decoded by the browser, at its size, not blank.
+  const auto images = render_check(html, out / "check.html");
+  ASSERT_EQ(images.size(), figures);
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    EXPECT_TRUE(images[i].complete) << "image " << i;
+    EXPECT_TRUE(images[i].size == "900x600" || images[i].size == "900x650")
+        << "image " << i << " decoded as " << images[i].size;
+    EXPECT_GT(images[i].spread, 100) << "image " << i << " is blank";
+  }
+
+  // 2. A screenshot of the unmodified page shows the figures: not blank, and
+  //    with the maps' colours (the page's own styles are grey and yellow only).
+  const fs::path shot = dir_ / "shot.png";
+  const auto screenshot =
+      chromium("--window-size=1100,7000 --virtual-time-budget=15000 --screenshot=" + shell_quote(shot) + " " +
+               shell_quote(fs::path("file://" + (out / "report.html").string())));
+  ASSERT_EQ(screenshot.exit_code, 0) << screenshot.output.substr(0, 2000);
+  const cv::Mat page = cv::imread(shot.string(), cv::IMREAD_COLOR);
+  ASSERT_FALSE(page.empty()) << "no screenshot";
+  EXPECT_EQ(page.cols, 1100);
+  std::size_t blue = 0, red = 0;
+  for (int r = 0; r < page.rows; ++r) {
+    for (int c = 0; c < page.cols; ++c) {
+      const auto p = page.at<cv::Vec3b>(r, c);  // BGR
+      if (p[0] > 150 && p[2] < 60 && p[1] < 80) ++blue;
+      if (p[2] > 180 && p[0] < 60 && p[1] < 80) ++red;
+    }
+  }
+  EXPECT_GT(blue, 2000u) << "the maps' blue is not on the page";
+  EXPECT_GT(red, 500u) << "the fits' and maps' red is not on the page";
+}
+
+TEST_F(ReportCli, RunWithoutFramesGetsAReportWithoutMapsAndANote) {
+  report::testrun::create_run(dir_ / "run", false);
+  const auto made =
+      testing::run_command(kBosfuse + " report " + shell_quote(dir_ / "run") + " -o " + shell_quote(dir_ / "out"), 120);
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  const std::string html = read_text(dir_ / "out" / "report.html");
+  EXPECT_NE(html.find("No displacement maps: the run has no frames."), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "map_displacement_t10s.png"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "curve_tc0.svg"));
+}
+
+TEST_F(ReportCli, BadArgumentsAreRefusedWithAReason) {
+  report::testrun::create_run(dir_ / "run", false);
+  const auto no_out = testing::run_command(kBosfuse + " report " + shell_quote(dir_ / "run"));
+  EXPECT_NE(no_out.exit_code, 0);
+  EXPECT_NE(no_out.output.find("--out"), std::string::npos) << no_out.output;
+  const auto bad_times = testing::run_command(kBosfuse + " report " + shell_quote(dir_ / "run") + " -o " +
+                                              shell_quote(dir_ / "o") + " --map-times 10,x");
+  EXPECT_NE(bad_times.exit_code, 0);
+  EXPECT_NE(bad_times.output.find("'x' is not a time"), std::string::npos) << bad_times.output;
+  const auto no_run =
+      testing::run_command(kBosfuse + " report " + shell_quote(dir_ / "nothing") + " -o " + shell_quote(dir_ / "o"));
+  EXPECT_NE(no_run.exit_code, 0);
+}
+
+}  // namespace
+}  // namespace bosfuse

@@ -1,0 +1,712 @@
+#include "report/figures.h"
+
+#include <fmt/format.h>
+#include <plplot.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <mutex>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+namespace bosfuse::report {
+namespace {
+
+namespace fs = std::filesystem;
+
+// cmap0 of every figure: 0 background, 1 foreground, 2 grid, 3 mask grey,
+// 4 mask hatch, then series colours (Tableau 10).
+constexpr int kBackground = 0, kInk = 1, kGrid = 2, kMaskFill = 3, kMaskHatch = 4, kFirstSeries = 5;
+constexpr std::array<std::array<int, 3>, 15> kPalette{{{255, 255, 255},
+                                                       {0, 0, 0},
+                                                       {200, 200, 200},
+                                                       {190, 190, 190},
+                                                       {110, 110, 110},
+                                                       {31, 119, 180},
+                                                       {214, 39, 40},
+                                                       {44, 160, 44},
+                                                       {255, 127, 14},
+                                                       {148, 103, 189},
+                                                       {140, 86, 75},
+                                                       {227, 119, 194},
+                                                       {127, 127, 127},
+                                                       {188, 189, 34},
+                                                       {23, 190, 207}}};
+constexpr int kSeriesColours = static_cast<int>(kPalette.size()) - kFirstSeries;
+constexpr std::size_t kMaxPlottedPoints = 4000;
+constexpr int kMaxDrawnCells = 250;  // per map side; finer grids are block-averaged for drawing  // per series; longer
+                                     // records are decimated for drawing only
+
+int series_colour(std::size_t i) { return kFirstSeries + static_cast<int>(i % kSeriesColours); }
+
+void load_palette() {
+  std::array<PLINT, kPalette.size()> r, g, b;
+  for (std::size_t i = 0; i < kPalette.size(); ++i) {
+    r[i] = kPalette[i][0];
+    g[i] = kPalette[i][1];
+    b[i] = kPalette[i][2];
+  }
+  plscmap0(r.data(), g.data(), b.data(), static_cast<PLINT>(kPalette.size()));
+  // cmap1 for maps: dark blue → blue → cyan → yellow → red → dark red (jet-like, as in the paper's figures).
+  const std::array<PLFLT, 6> pos{0.0, 0.15, 0.4, 0.6, 0.85, 1.0};
+  const std::array<PLFLT, 6> red{0.0, 0.0, 0.0, 1.0, 1.0, 0.5};
+  const std::array<PLFLT, 6> green{0.0, 0.2, 1.0, 1.0, 0.1, 0.0};
+  const std::array<PLFLT, 6> blue{0.5, 1.0, 1.0, 0.0, 0.0, 0.0};
+  plscmap1n(256);
+  plscmap1l(1, static_cast<PLINT>(pos.size()), pos.data(), red.data(), green.data(), blue.data(), nullptr);
+}
+
+// PLplot interprets '#' as the start of an escape sequence; "##" is a literal '#'.
+std::string pl_text(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    out += c;
+    if (c == '#') out += '#';
+  }
+  return out;
+}
+
+// One PLplot stream on one device and file, ended when it goes out of scope.
+class PlotStream {
+ public:
+  PlotStream(const char* device, const fs::path& file, const FigureSize& size) {
+    plmkstrm(&stream_);
+    plsdev(device);
+    plsfnam(file.c_str());
+    plspage(0, 0, size.width_px, size.height_px, 0, 0);
+    load_palette();
+    plinit();
+    pladv(0);
+    plcol0(kInk);
+  }
+  ~PlotStream() {
+    plsstrm(stream_);
+    plend1();
+  }
+  PlotStream(const PlotStream&) = delete;
+  PlotStream& operator=(const PlotStream&) = delete;
+
+ private:
+  PLINT stream_ = 0;
+};
+
+void render_png_and_svg(const FigureFiles& files, const FigureSize& size, const std::function<void()>& draw) {
+  if (size.width_px < 100 || size.height_px < 100 || size.width_px > 10000 || size.height_px > 10000) {
+    throw std::invalid_argument(
+        fmt::format("figure size {}×{} px is outside 100..10000", size.width_px, size.height_px));
+  }
+  if (!cairo_devices_available()) {
+    throw std::runtime_error("PLplot has no pngcairo/svgcairo device: install the Debian package plplot-driver-cairo");
+  }
+  // PLplot's state is global: one figure at a time in this process.
+  static std::mutex plplot_mutex;
+  const std::lock_guard lock(plplot_mutex);
+  for (const auto& [device, path] : {std::pair{"pngcairo", files.png}, std::pair{"svgcairo", files.svg}}) {
+    // PLplot ends the process when it cannot open its output: find out first.
+    if (!std::ofstream(path, std::ios::binary)) throw std::runtime_error("cannot write '" + path.string() + "'");
+    {
+      PlotStream stream(device, path, size);
+      draw();
+    }
+    if (!fs::exists(path) || fs::file_size(path) == 0) {
+      throw std::runtime_error("PLplot wrote nothing to " + path.string());
+    }
+  }
+}
+
+FigureFiles files_for(const fs::path& base) {
+  FigureFiles files;
+  files.png = base;
+  files.png += ".png";
+  files.svg = base;
+  files.svg += ".svg";
+  return files;
+}
+
+struct Range {
+  double low = std::numeric_limits<double>::infinity();
+  double high = -std::numeric_limits<double>::infinity();
+  void add(double v) {
+    if (!std::isfinite(v)) return;
+    low = std::min(low, v);
+    high = std::max(high, v);
+  }
+  bool empty() const { return !(low <= high); }
+  // Widened by a margin on both sides, never zero width.
+  Range padded(double fraction) const {
+    if (empty()) return {0, 1};
+    const double span = high - low;
+    const double pad = span > 0 ? span * fraction : std::max(std::abs(high) * 0.05, 0.5);
+    return {low - pad, high + pad};
+  }
+};
+
+std::vector<std::size_t> plotted_indices(std::size_t n) {
+  std::vector<std::size_t> idx;
+  const std::size_t stride = std::max<std::size_t>(1, (n + kMaxPlottedPoints - 1) / kMaxPlottedPoints);
+  for (std::size_t i = 0; i < n; i += stride) idx.push_back(i);
+  return idx;
+}
+
+bool fitted(const CurveSeries& s) { return s.fit && s.fit->ok(); }
+
+// The fitted curve on [t_low, t_high].
+void fit_curve(const fitting::NewtonFit& fit, double t_low, double t_high, std::vector<PLFLT>& t,
+               std::vector<PLFLT>& temp) {
+  constexpr int kPoints = 400;
+  t.resize(kPoints);
+  temp.resize(kPoints);
+  for (int i = 0; i < kPoints; ++i) {
+    t[i] = t_low + (t_high - t_low) * i / (kPoints - 1);
+    temp[i] = fit.temperature_at(t[i]);
+  }
+}
+
+std::string format_estimate(const fitting::Estimate& e, const char* unit) {
+  if (e.fixed) return fmt::format("{:.4g} {} (fixed)", e.value, unit);
+  return fmt::format("{:.4g} {} [{:.4g}, {:.4g}]", e.value, unit, e.low, e.high);
+}
+
+void draw_points(const std::vector<PLFLT>& x, const std::vector<PLFLT>& y, int colour) {
+  if (x.empty()) return;
+  plcol0(colour);
+  plssym(0, x.size() > 600 ? 0.35 : (x.size() > 100 ? 0.6 : 1.0));
+  plpoin(static_cast<PLINT>(x.size()), x.data(), y.data(), 17);  // 17: small filled dot
+  plssym(0, 1);
+}
+
+}  // namespace
+
+bool cairo_devices_available() {
+  static const bool available = [] {
+    // plgDevs fills at most `count` entries (the last one a null terminator).
+    static const char* menus[256];
+    static const char* names[256];
+    const char** menu_ptr = menus;
+    const char** name_ptr = names;
+    int count = 256;
+    plgDevs(&menu_ptr, &name_ptr, &count);
+    bool png = false, svg = false;
+    for (int i = 0; i < count; ++i) {
+      if (names[i] && std::strcmp(names[i], "pngcairo") == 0) png = true;
+      if (names[i] && std::strcmp(names[i], "svgcairo") == 0) svg = true;
+    }
+    return png && svg;
+  }();
+  return available;
+}
+
+FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size, const fs::path& base) {
+  if (series.time_s.size() != series.temperature_c.size()) {
+    throw std::invalid_argument("series '" + series.name + "': times and temperatures differ in length");
+  }
+  if (series.time_s.empty()) throw std::invalid_argument("series '" + series.name + "' has no samples to draw");
+  FigureFiles files = files_for(base);
+  const bool has_fit = fitted(series);
+  files.title = fmt::format("{} {}", to_string(series.kind), series.name);
+  files.caption = has_fit
+                      ? fmt::format(
+                            "Samples of {} ({} points) with the fitted Newton curve (red); below, the residuals "
+                            "(data − fit). k = {}, τ = {}.",
+                            series.name, series.time_s.size(), format_estimate(series.fit->k_per_s, "1/s"),
+                            format_estimate(series.fit->tau_s, "s"))
+                      : fmt::format("Samples of {} ({} points). No Newton fit: {}.", series.name, series.time_s.size(),
+                                    series.fit ? series.fit->summary.message : std::string("not fitted"));
+
+  std::vector<PLFLT> t, temp, residual;
+  Range t_range, temp_range, residual_range;
+  for (std::size_t i : plotted_indices(series.time_s.size())) {
+    if (!std::isfinite(series.time_s[i]) || !std::isfinite(series.temperature_c[i])) continue;
+    t.push_back(series.time_s[i]);
+    temp.push_back(series.temperature_c[i]);
+    t_range.add(t.back());
+    temp_range.add(temp.back());
+    if (has_fit) {
+      residual.push_back(temp.back() - series.fit->temperature_at(t.back()));
+      residual_range.add(residual.back());
+    }
+  }
+  if (t.empty()) throw std::invalid_argument("series '" + series.name + "' has no finite samples to draw");
+  std::vector<PLFLT> fit_t, fit_temp;
+  if (has_fit) {
+    fit_curve(*series.fit, t_range.low, t_range.high, fit_t, fit_temp);
+    for (double v : fit_temp) temp_range.add(v);
+  }
+  const Range tr = t_range.padded(0.02), yr = temp_range.padded(0.05);
+  // Residual axis symmetric about zero.
+  const double rmax = residual_range.empty()
+                          ? 1.0
+                          : std::max({std::abs(residual_range.low), std::abs(residual_range.high), 1e-6}) * 1.1;
+
+  render_png_and_svg(files, size, [&] {
+    const std::string title = pl_text(files.title);
+    plvpor(0.1, 0.95, has_fit ? 0.40 : 0.12, 0.92);
+    plwind(tr.low, tr.high, yr.low, yr.high);
+    plcol0(kGrid);
+    plbox("g", 0, 0, "g", 0, 0);
+    plcol0(kInk);
+    plbox(has_fit ? "bcst" : "bcnst", 0, 0, "bcnstv", 0, 0);
+    plmtex("l", 4.5, 0.5, 0.5, "temperature (°C)");
+    plmtex("t", 1.5, 0.5, 0.5, title.c_str());
+    draw_points(t, temp, kFirstSeries);
+    if (has_fit) {
+      plcol0(kFirstSeries + 1);
+      plwidth(2);
+      plline(static_cast<PLINT>(fit_t.size()), fit_t.data(), fit_temp.data());
+      plwidth(1);
+      const auto& f = *series.fit;
+      const std::string fit_text =
+          pl_text(fmt::format("k = {:.4g} 1/s [{:.4g}, {:.4g}]   T0 = {:.2f} °C   T_amb = {:.2f} °C", f.k_per_s.value,
+                              f.k_per_s.low, f.k_per_s.high, f.t0_c.value, f.ambient_c.value));
+      plcol0(kInk);
+      plschr(0, 0.8);
+      plmtex("t", -1.5, 0.97, 1.0, fit_text.c_str());
+      plschr(0, 1);
+
+      plvpor(0.1, 0.95, 0.10, 0.34);
+      plwind(tr.low, tr.high, -rmax, rmax);
+      plcol0(kGrid);
+      plbox("g", 0, 0, "g", 0, 0);
+      plcol0(kInk);
+      plbox("bcnst", 0, 0, "bcnstv", 0, 3);
+      const std::array<PLFLT, 2> zx{tr.low, tr.high}, zy{0, 0};
+      plcol0(kFirstSeries + 1);
+      plline(2, zx.data(), zy.data());
+      draw_points(t, residual, kFirstSeries);
+      plcol0(kInk);
+      plmtex("l", 4.5, 0.5, 0.5, "residual (°C)");
+    }
+    if (!has_fit) {
+      const std::string why =
+          pl_text("no Newton fit: " +
+                  (series.fit ? std::string(fitting::to_string(series.fit->summary.status)) : "not fitted"));
+      plcol0(kFirstSeries + 1);
+      plschr(0, 0.8);
+      plmtex("t", -1.5, 0.97, 1.0, why.c_str());
+      plschr(0, 1);
+    }
+    plcol0(kInk);
+    plmtex("b", 3.0, 0.5, 0.5, "time since the run's first sample (s)");
+  });
+  return files;
+}
+
+FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const FigureSize& size,
+                                  const fs::path& base) {
+  if (series.empty()) throw std::invalid_argument("no series to draw");
+  FigureFiles files = files_for(base);
+  files.title = "All cooling curves";
+  files.caption =
+      "Every series (points) with its fitted Newton curve (line of the same colour); thermocouples as dots, BOS "
+      "probes as crosses.";
+  Range tr, yr;
+  std::vector<std::vector<PLFLT>> ts(series.size()), ys(series.size()), fts(series.size()), fys(series.size());
+  for (std::size_t s = 0; s < series.size(); ++s) {
+    const auto& cs = series[s];
+    if (cs.time_s.size() != cs.temperature_c.size()) {
+      throw std::invalid_argument("series '" + cs.name + "': times and temperatures differ in length");
+    }
+    Range own;
+    for (std::size_t i : plotted_indices(cs.time_s.size())) {
+      if (!std::isfinite(cs.time_s[i]) || !std::isfinite(cs.temperature_c[i])) continue;
+      ts[s].push_back(cs.time_s[i]);
+      ys[s].push_back(cs.temperature_c[i]);
+      tr.add(cs.time_s[i]);
+      own.add(cs.time_s[i]);
+      yr.add(cs.temperature_c[i]);
+    }
+    if (fitted(cs) && !own.empty()) {
+      fit_curve(*cs.fit, own.low, own.high, fts[s], fys[s]);
+      for (double v : fys[s]) yr.add(v);
+    }
+  }
+  if (tr.empty()) throw std::invalid_argument("no finite samples to draw");
+  const Range t_range = tr.padded(0.02), y_range = yr.padded(0.05);
+
+  render_png_and_svg(files, size, [&] {
+    plvpor(0.1, 0.95, 0.12, 0.92);
+    plwind(t_range.low, t_range.high, y_range.low, y_range.high);
+    plcol0(kGrid);
+    plbox("g", 0, 0, "g", 0, 0);
+    plcol0(kInk);
+    plbox("bcnst", 0, 0, "bcnstv", 0, 0);
+    pllab("time since the run's first sample (s)", "temperature (°C)", "All cooling curves");
+    for (std::size_t s = 0; s < series.size(); ++s) {
+      const int colour = series_colour(s);
+      if (series[s].kind == SeriesKind::kBosProbe) {
+        plcol0(colour);
+        plssym(0, 0.5);
+        plpoin(static_cast<PLINT>(ts[s].size()), ts[s].data(), ys[s].data(), 5);  // 5: ×
+        plssym(0, 1);
+      } else {
+        draw_points(ts[s], ys[s], colour);
+      }
+      if (!fts[s].empty()) {
+        plcol0(colour);
+        plwidth(2);
+        plline(static_cast<PLINT>(fts[s].size()), fts[s].data(), fys[s].data());
+        plwidth(1);
+      }
+    }
+    // Legend to the right of the plot.
+    const auto n = static_cast<PLINT>(series.size());
+    std::vector<PLINT> opts(n, PL_LEGEND_LINE | PL_LEGEND_SYMBOL), colours(n), styles(n, 1), symbol_numbers(n, 3),
+        text_colours(n, kInk), box_colours(n, 0), box_patterns(n, 0);
+    std::vector<PLFLT> widths(n, 2.0), symbol_scales(n, 0.8), box_scales(n, 0.8), box_widths(n, 1.0);
+    std::vector<std::string> texts(n), symbols(n);
+    std::vector<const char*> text_ptrs(n), symbol_ptrs(n);
+    for (PLINT s = 0; s < n; ++s) {
+      colours[s] = series_colour(s);
+      if (fts[s].empty()) opts[s] = PL_LEGEND_SYMBOL;  // no fitted curve to show
+      texts[s] = pl_text(series[s].name);
+      symbols[s] = series[s].kind == SeriesKind::kBosProbe ? "×" : "•";
+      text_ptrs[s] = texts[s].c_str();
+      symbol_ptrs[s] = symbols[s].c_str();
+    }
+    PLFLT legend_width = 0, legend_height = 0;
+    plschr(0, 0.85);
+    pllegend(&legend_width, &legend_height, PL_LEGEND_BACKGROUND | PL_LEGEND_BOUNDING_BOX,
+             PL_POSITION_RIGHT | PL_POSITION_TOP | PL_POSITION_INSIDE | PL_POSITION_VIEWPORT, 0.02, 0.02, 0.06,
+             kBackground, kInk, 1, 0, 0, n, opts.data(), 1.0, 0.85, 2.0, 0.0, text_colours.data(), text_ptrs.data(),
+             box_colours.data(), box_patterns.data(), box_scales.data(), box_widths.data(), colours.data(),
+             styles.data(), widths.data(), colours.data(), symbol_scales.data(), symbol_numbers.data(),
+             symbol_ptrs.data());
+    plschr(0, 1);
+  });
+  return files;
+}
+
+FigureFiles write_agreement_figure(const CurveSeries& a, const CurveSeries& b, const fitting::Agreement& agreement,
+                                   const FigureSize& size, const fs::path& base) {
+  const auto sa = fitting::clean_series(a.time_s, a.temperature_c, 0.0);
+  const auto sb = fitting::clean_series(b.time_s, b.temperature_c, 0.0);
+  std::vector<PLFLT> mean, difference;
+  Range mr, dr;
+  for (std::size_t i = 0; i < sa.size() && mean.size() < kMaxPlottedPoints; ++i) {
+    const auto other = fitting::interpolate(sb, sa.time_s[i]);
+    if (!other) continue;
+    mean.push_back(0.5 * (sa.temperature_c[i] + *other));
+    difference.push_back(sa.temperature_c[i] - *other);
+    mr.add(mean.back());
+    dr.add(difference.back());
+  }
+  if (mean.size() < 2) {
+    throw std::invalid_argument(a.name + " and " + b.name + " share fewer than two times: nothing to compare");
+  }
+  const auto& stats = agreement.series;
+  if (stats) {
+    dr.add(stats->limits_of_agreement_low_c);
+    dr.add(stats->limits_of_agreement_high_c);
+  }
+  dr.add(0);
+  FigureFiles files = files_for(base);
+  files.title = fmt::format("Agreement of {} and {}", a.name, b.name);
+  files.caption = fmt::format("Bland–Altman plot: {} − {} against their mean at {} common times ({} interpolated)",
+                              a.name, b.name, mean.size(), b.name);
+  if (stats) {
+    files.caption += fmt::format("; red: bias {:.3g} °C, dashed: limits of agreement [{:.3g}, {:.3g}] °C",
+                                 stats->bias_c, stats->limits_of_agreement_low_c, stats->limits_of_agreement_high_c);
+  }
+  files.caption += ". " + agreement.verdict;
+  const Range x = mr.padded(0.03), y = dr.padded(0.1);
+  render_png_and_svg(files, size, [&] {
+    plvpor(0.1, 0.95, 0.12, 0.92);
+    plwind(x.low, x.high, y.low, y.high);
+    plcol0(kGrid);
+    plbox("g", 0, 0, "g", 0, 0);
+    plcol0(kInk);
+    plbox("bcnst", 0, 0, "bcnstv", 0, 0);
+    const std::string xl = pl_text(fmt::format("mean of {} and {} (°C)", a.name, b.name));
+    const std::string yl = pl_text(fmt::format("{} − {} (°C)", a.name, b.name));
+    const std::string title = pl_text(files.title);
+    pllab(xl.c_str(), yl.c_str(), title.c_str());
+    draw_points(mean, difference, kFirstSeries);
+    const std::array<PLFLT, 2> lx{x.low, x.high};
+    auto hline = [&](double value, int colour, int style) {
+      const std::array<PLFLT, 2> ly{value, value};
+      plcol0(colour);
+      pllsty(style);
+      plwidth(2);
+      plline(2, lx.data(), ly.data());
+      plwidth(1);
+      pllsty(1);
+    };
+    hline(0, kMaskHatch, 1);
+    if (stats) {
+      hline(stats->bias_c, kFirstSeries + 1, 1);
+      hline(stats->limits_of_agreement_low_c, kFirstSeries + 1, 2);
+      hline(stats->limits_of_agreement_high_c, kFirstSeries + 1, 2);
+    }
+  });
+  return files;
+}
+
+namespace {
+
+// Masked cells take the mean of their unmasked neighbours, repeatedly, so
+// that shading and contours do not dive to 0 at a masked region's edge (the
+// masked cells are painted over afterwards).
+cv::Mat fill_masked(const cv::Mat& values, const cv::Mat& masked) {
+  cv::Mat out = values.clone(), known = (masked == 0);
+  const int max_rounds = values.rows + values.cols;  // enough to reach every cell
+  for (int round = 0; round < max_rounds && cv::countNonZero(known) < static_cast<int>(known.total()); ++round) {
+    if (cv::countNonZero(known) == 0) {
+      out.setTo(0);
+      break;
+    }
+    cv::Mat next = out.clone(), next_known = known.clone();
+    for (int r = 0; r < out.rows; ++r) {
+      for (int c = 0; c < out.cols; ++c) {
+        if (known.at<std::uint8_t>(r, c)) continue;
+        double sum = 0;
+        int n = 0;
+        for (int dr = -1; dr <= 1; ++dr) {
+          for (int dc = -1; dc <= 1; ++dc) {
+            const int rr = r + dr, cc = c + dc;
+            if (rr < 0 || cc < 0 || rr >= out.rows || cc >= out.cols || !known.at<std::uint8_t>(rr, cc)) continue;
+            sum += out.at<double>(rr, cc);
+            ++n;
+          }
+        }
+        if (n > 0) {
+          next.at<double>(r, c) = sum / n;
+          next_known.at<std::uint8_t>(r, c) = 255;
+        }
+      }
+    }
+    out = next;
+    known = next_known;
+  }
+  return out;
+}
+
+struct GridTransform {
+  double x0, y0, step, scale;  // world = (x0 + i·step)·scale
+};
+
+void grid_to_world(PLFLT i, PLFLT j, PLFLT* x, PLFLT* y, PLPointer data) {
+  const auto* g = static_cast<const GridTransform*>(data);
+  *x = (g->x0 + i * g->step) * g->scale;
+  *y = (g->y0 + j * g->step) * g->scale;
+}
+
+}  // namespace
+
+FigureFiles write_map_figure(const MapField& map, double contour_spacing, const std::vector<MapMarker>& markers,
+                             std::optional<double> px_per_mm, const FigureSize& size, const fs::path& base) {
+  if (map.values.empty() || map.values.channels() != 1) {
+    throw std::invalid_argument("map '" + map.quantity + "' has no single-channel values to draw");
+  }
+  if (!(map.step_px > 0)) throw std::invalid_argument("map '" + map.quantity + "': step_px must be positive");
+  if (px_per_mm && !(*px_per_mm > 0)) throw std::invalid_argument("px per mm must be positive");
+  cv::Mat values;
+  map.values.convertTo(values, CV_64F);
+  cv::Mat masked = cv::Mat::zeros(values.size(), CV_8U);
+  if (!map.mask.empty()) {
+    if (map.mask.size() != values.size()) throw std::invalid_argument("map mask and values differ in size");
+    cv::Mat m;
+    map.mask.convertTo(m, CV_8U);
+    masked = m != 0;
+  }
+  for (int r = 0; r < values.rows; ++r) {
+    for (int c = 0; c < values.cols; ++c) {
+      if (!std::isfinite(values.at<double>(r, c))) masked.at<std::uint8_t>(r, c) = 255;
+    }
+  }
+  // A fine grid (a per-pixel temperature field) is averaged over blocks for
+  // drawing, so the figure stays light; the CSV keeps every cell.
+  double x0 = map.x0_px, y0 = map.y0_px, step = map.step_px;
+  const int block = (std::max(values.rows, values.cols) + kMaxDrawnCells - 1) / kMaxDrawnCells;
+  if (block > 1) {
+    const int rows = (values.rows + block - 1) / block, cols = (values.cols + block - 1) / block;
+    cv::Mat coarse(rows, cols, CV_64F, cv::Scalar(0)), coarse_masked(rows, cols, CV_8U, cv::Scalar(0));
+    for (int R = 0; R < rows; ++R) {
+      for (int C = 0; C < cols; ++C) {
+        double sum = 0;
+        int known = 0, total = 0;
+        for (int r = R * block; r < std::min(values.rows, (R + 1) * block); ++r) {
+          for (int c = C * block; c < std::min(values.cols, (C + 1) * block); ++c) {
+            ++total;
+            if (masked.at<std::uint8_t>(r, c)) continue;
+            sum += values.at<double>(r, c);
+            ++known;
+          }
+        }
+        // A block is data when at least half of it is.
+        if (2 * known >= total && known > 0) {
+          coarse.at<double>(R, C) = sum / known;
+        } else {
+          coarse_masked.at<std::uint8_t>(R, C) = 255;
+        }
+      }
+    }
+    values = coarse;
+    masked = coarse_masked;
+    x0 += 0.5 * (block - 1) * step;
+    y0 += 0.5 * (block - 1) * step;
+    step *= block;
+  }
+  Range range;
+  for (int r = 0; r < values.rows; ++r) {
+    for (int c = 0; c < values.cols; ++c) {
+      if (!masked.at<std::uint8_t>(r, c)) range.add(values.at<double>(r, c));
+    }
+  }
+  const bool any_data = !range.empty();
+  if (!any_data) range = {0, 1};
+  if (range.high - range.low < 1e-9)
+    range = {range.low - 0.5 * std::max(1e-3, std::abs(range.low) * 0.01),
+             range.high + 0.5 * std::max(1e-3, std::abs(range.high) * 0.01)};
+  const cv::Mat filled = fill_masked(values, masked);
+
+  // Contour levels at multiples of the spacing; widened when there would be too many.
+  constexpr int kMaxContours = 60;
+  double spacing = contour_spacing > 0 ? contour_spacing : 0;
+  std::vector<PLFLT> contours;
+  bool widened = false;
+  if (spacing > 0 && any_data) {
+    while ((range.high - range.low) / spacing > kMaxContours) {
+      spacing *= 2;
+      widened = true;
+    }
+    for (double level = std::ceil(range.low / spacing) * spacing; level <= range.high && contours.size() < 200;
+         level += spacing) {
+      contours.push_back(level);
+    }
+  }
+  constexpr int kBands = 24;
+  std::vector<PLFLT> edges(kBands + 1);
+  for (int i = 0; i <= kBands; ++i) edges[i] = range.low + (range.high - range.low) * i / kBands;
+
+  const double scale = px_per_mm ? 1.0 / *px_per_mm : 1.0;
+  const char* unit_axis = px_per_mm ? "mm" : "px";
+  const cv::Size extent = map.image_size_px.empty()
+                              ? cv::Size(static_cast<int>(std::ceil(map.x0_px + map.step_px * map.values.cols)),
+                                         static_cast<int>(std::ceil(map.y0_px + map.step_px * map.values.rows)))
+                              : map.image_size_px;
+  const double wx0 = -0.5 * scale, wx1 = (extent.width - 0.5) * scale;
+  const double wy0 = -0.5 * scale, wy1 = (extent.height - 0.5) * scale;
+  GridTransform transform{x0, y0, step, scale};
+
+  // PLplot grids are indexed [x][y].
+  const int nx = values.cols, ny = values.rows;
+  std::vector<std::vector<PLFLT>> z(nx, std::vector<PLFLT>(ny));
+  for (int c = 0; c < nx; ++c) {
+    for (int r = 0; r < ny; ++r) z[c][r] = filled.at<double>(r, c);
+  }
+  std::vector<const PLFLT*> z_rows(nx);
+  for (int c = 0; c < nx; ++c) z_rows[c] = z[c].data();
+
+  FigureFiles files = files_for(base);
+  files.title = fmt::format("{} at t = {:.1f} s", map.quantity, map.time_s);
+  files.caption = fmt::format(
+      "{} ({}) at t = {:.1f} s{}. Colour: value (bar on the right); black lines: contours every {:.3g} {}{}; hatched "
+      "grey: masked or not measured ({} of {} cells); markers: thermocouple positions. Axes in {} from the image's "
+      "top-left pixel, y pointing down.",
+      map.quantity, map.unit, map.time_s, map.source.empty() ? "" : ", " + map.source, spacing, map.unit,
+      widened ? " (widened from the requested spacing to keep the map readable)" : "", cv::countNonZero(masked),
+      values.total(), unit_axis);
+  if (!any_data) files.caption += " Every cell is masked: nothing was measured.";
+  if (block > 1) {
+    files.caption += fmt::format(" Drawn averaged over {0}×{0} cells of the {1}×{2} grid (the CSV holds every cell).",
+                                 block, map.values.cols, map.values.rows);
+  }
+
+  render_png_and_svg(files, size, [&] {
+    const double aspect = (wy1 - wy0) / (wx1 - wx0);
+    plvpas(0.11, 0.80, 0.10, 0.92, aspect);
+    plwind(wx0, wx1, wy1, wy0);  // y down, as in the image
+    // Outside the grid nothing was evaluated: grey background first.
+    plcol0(kMaskFill);
+    const std::array<PLFLT, 4> bx{wx0, wx1, wx1, wx0}, by{wy0, wy0, wy1, wy1};
+    plfill(4, bx.data(), by.data());
+    if (nx >= 2 && ny >= 2) {
+      const double gx0 = x0 * scale, gx1 = (x0 + step * (nx - 1)) * scale;
+      const double gy0 = y0 * scale, gy1 = (y0 + step * (ny - 1)) * scale;
+      plpsty(0);
+      plshades(z_rows.data(), nx, ny, nullptr, gx0, gx1, gy0, gy1, edges.data(), kBands + 1, 0, 0, 0, plfill, 1,
+               nullptr, nullptr);
+      if (!contours.empty()) {
+        plcol0(kInk);
+        plwidth(1);
+        plcont(z_rows.data(), nx, ny, 1, nx, 1, ny, contours.data(), static_cast<PLINT>(contours.size()), grid_to_world,
+               &transform);
+      }
+    }
+    const double half = 0.5 * step * scale;
+    auto cell = [&](int r, int c, std::array<PLFLT, 4>& x, std::array<PLFLT, 4>& y) {
+      const double cx = (x0 + c * step) * scale, cy = (y0 + r * step) * scale;
+      x = {cx - half, cx + half, cx + half, cx - half};
+      y = {cy - half, cy - half, cy + half, cy + half};
+    };
+    std::array<PLFLT, 4> x, y;
+    if (nx < 2 || ny < 2) {  // too thin to shade: one coloured rectangle per cell
+      for (int r = 0; r < ny; ++r) {
+        for (int c = 0; c < nx; ++c) {
+          if (masked.at<std::uint8_t>(r, c)) continue;
+          cell(r, c, x, y);
+          plcol1((values.at<double>(r, c) - range.low) / (range.high - range.low));
+          plfill(4, x.data(), y.data());
+        }
+      }
+    }
+    // Masked cells: grey, hatched.
+    for (int r = 0; r < ny; ++r) {
+      for (int c = 0; c < nx; ++c) {
+        if (!masked.at<std::uint8_t>(r, c)) continue;
+        cell(r, c, x, y);
+        plpsty(0);
+        plcol0(kMaskFill);
+        plfill(4, x.data(), y.data());
+        plpsty(3);
+        plcol0(kMaskHatch);
+        plfill(4, x.data(), y.data());
+      }
+    }
+    plpsty(0);
+    // Thermocouple markers.
+    plschr(0, 0.8);
+    for (const auto& m : markers) {
+      const PLFLT x = m.image_px.x * scale, y = m.image_px.y * scale;
+      if (x < wx0 || x > wx1 || y < wy0 || y > wy1) continue;
+      plcol0(kBackground);
+      plssym(0, 1.6);
+      plpoin(1, &x, &y, 17);
+      plcol0(kInk);
+      plssym(0, 1.2);
+      plpoin(1, &x, &y, 17);
+      const std::string label = pl_text(m.name);
+      plptex(x + 0.02 * (wx1 - wx0), y, 1, 0, 0, label.c_str());
+    }
+    plssym(0, 1);
+    plschr(0, 1);
+    plcol0(kInk);
+    plbox("bcnst", 0, 0, "bcnstv", 0, 0);
+    const std::string x_label = fmt::format("x ({})", unit_axis), y_label = fmt::format("y ({}, down)", unit_axis);
+    const std::string title = pl_text(files.title);
+    pllab(x_label.c_str(), y_label.c_str(), title.c_str());
+    // Colour bar.
+    const std::string bar_label = pl_text(fmt::format("{} ({})", map.quantity, map.unit));
+    const PLINT label_opts[] = {PL_COLORBAR_LABEL_RIGHT};
+    const char* labels[] = {bar_label.c_str()};
+    const char* axis_opts[] = {"bcvtm"};
+    const PLFLT ticks[] = {0};
+    const PLINT sub_ticks[] = {0};
+    const PLINT n_values[] = {kBands + 1};
+    const PLFLT* value_rows[] = {edges.data()};
+    PLFLT bar_width = 0, bar_height = 0;
+    plschr(0, 0.8);
+    plcolorbar(&bar_width, &bar_height, PL_COLORBAR_SHADE,
+               PL_POSITION_RIGHT | PL_POSITION_OUTSIDE | PL_POSITION_VIEWPORT, 0.02, 0, 0.04, 1.0, kBackground, kInk, 1,
+               0, 0, 0, 0, 1, label_opts, labels, 1, axis_opts, ticks, sub_ticks, n_values, value_rows);
+    plschr(0, 1);
+  });
+  return files;
+}
+
+}  // namespace bosfuse::report

@@ -1,0 +1,67 @@
+#pragma once
+// The report's figures, drawn with PLplot and written twice: as PNG (device
+// pngcairo) and as SVG (device svgcairo), from one drawing routine so both
+// show the same thing. `base` is a path without extension; the writers add
+// ".png" and ".svg". A PNG is exactly width_px × height_px; an SVG's
+// viewBox is the same size (its width and height are in points).
+//
+// PLplot keeps global state: these functions draw one figure at a time
+// (a process-wide lock), each in its own PLplot stream ended before they
+// return; other PLplot users in the process must not run meanwhile. They throw
+// std::runtime_error when the cairo devices are missing (Debian package
+// plplot-driver-cairo) or the input has nothing to draw.
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "report/report_input.h"
+
+namespace bosfuse::report {
+
+struct FigureSize {
+  int width_px = 900;
+  int height_px = 600;
+};
+
+struct FigureFiles {
+  std::filesystem::path png;
+  std::filesystem::path svg;
+  std::string title;    // short, for the HTML
+  std::string caption;  // a sentence or two saying what is drawn
+};
+
+// True when PLplot has both the pngcairo and the svgcairo device.
+bool cairo_devices_available();
+
+// One series: its samples, the fitted Newton curve (when fitted) and, below,
+// the residuals (data − fit).
+FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size, const std::filesystem::path& base);
+
+// Every series on one plot with its fitted curve, for comparison.
+FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const FigureSize& size,
+                                  const std::filesystem::path& base);
+
+// Bland–Altman plot of a thermocouple (a) against its BOS probe (b): the
+// difference a − b against the mean of the two, on a's times where both
+// exist (b interpolated linearly), with the bias and the limits of agreement
+// of `agreement` when it has series statistics. Throws
+// std::invalid_argument when the two share fewer than two times.
+FigureFiles write_agreement_figure(const CurveSeries& a, const CurveSeries& b, const fitting::Agreement& agreement,
+                                   const FigureSize& size, const std::filesystem::path& base);
+
+struct MapMarker {
+  std::string name;
+  cv::Point2d image_px;
+};
+
+// A map like the paper's figures: colour-filled bands, contour lines every
+// `contour_spacing` (in the map's unit; 0: none), a colour bar, masked cells
+// hatched grey, thermocouple markers, and axes in mm when px_per_mm is
+// given (else in px), y pointing down as in the image.
+FigureFiles write_map_figure(const MapField& map, double contour_spacing, const std::vector<MapMarker>& markers,
+                             std::optional<double> px_per_mm, const FigureSize& size,
+                             const std::filesystem::path& base);
+
+}  // namespace bosfuse::report

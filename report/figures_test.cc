@@ -1,0 +1,310 @@
+#include "report/figures.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <vector>
+
+#include "report/test_data.h"
+#include "tests/support/temp_dir.h"
+
+namespace bosfuse::report {
+namespace {
+
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// A well-formedness check of XML, enough for the files cairo writes:
+// elements nest and close in order, attributes are name="value" (or with
+// single quotes), one root element, and declarations, comments and CDATA
+// are skipped. `error` is empty when the text is well formed.
+struct XmlCheck {
+  std::string error;
+  std::string root_name;
+  std::string root_tag;  // the root's start tag, attributes included
+};
+
+XmlCheck check_xml(const std::string& text) {
+  XmlCheck out;
+  std::vector<std::string> open;
+  bool root_closed = false;
+  const auto blank = [&](std::size_t from, std::size_t to) { return text.find_first_not_of(" \t\r\n", from) >= to; };
+  std::size_t i = 0;
+  for (std::size_t steps = 0; i < text.size() && steps < 10'000'000; ++steps) {
+    const std::size_t lt = text.find('<', i);
+    if (open.empty() && !blank(i, lt == std::string::npos ? text.size() : lt)) {
+      return {"text outside the root element", out.root_name, out.root_tag};
+    }
+    if (lt == std::string::npos) break;
+    const auto skip_to = [&](const char* end) {
+      const auto e = text.find(end, lt);
+      return e == std::string::npos ? std::string::npos : e + std::strlen(end);
+    };
+    std::size_t next = std::string::npos;
+    if (text.compare(lt, 2, "<?") == 0) {
+      next = skip_to("?>");
+    } else if (text.compare(lt, 4, "<!--") == 0) {
+      next = skip_to("-->");
+    } else if (text.compare(lt, 9, "<![CDATA[") == 0) {
+      next = skip_to("]]>");
+    } else if (text.compare(lt, 2, "<!") == 0) {
+      next = skip_to(">");
+    }
+    if (text.compare(lt, 2, "<?") == 0 || text.compare(lt, 2, "<!") == 0) {
+      if (next == std::string::npos) return {"unterminated declaration or comment", out.root_name, out.root_tag};
+      i = next;
+      continue;
+    }
+    // A tag: find its end outside quoted attribute values.
+    std::size_t gt = lt + 1;
+    char quote = 0;
+    for (; gt < text.size(); ++gt) {
+      if (quote) {
+        if (text[gt] == quote) quote = 0;
+      } else if (text[gt] == '"' || text[gt] == '\'') {
+        quote = text[gt];
+      } else if (text[gt] == '>') {
+        break;
+      }
+    }
+    if (gt >= text.size()) return {"unterminated tag", out.root_name, out.root_tag};
+    std::string tag = text.substr(lt + 1, gt - lt - 1);
+    if (!tag.empty() && tag[0] == '/') {
+      const std::string name = tag.substr(1, tag.find_last_not_of(" \t\r\n"));
+      if (open.empty() || open.back() != name)
+        return {"</" + name + "> closes nothing open", out.root_name, out.root_tag};
+      open.pop_back();
+      root_closed = open.empty();
+    } else {
+      const bool self_closing = !tag.empty() && tag.back() == '/';
+      if (self_closing) tag.pop_back();
+      const auto name_end = tag.find_first_of(" \t\r\n");
+      const std::string name = tag.substr(0, name_end);
+      if (name.empty()) return {"empty tag name", out.root_name, out.root_tag};
+      for (std::size_t p = name_end; p != std::string::npos && p < tag.size();) {
+        p = tag.find_first_not_of(" \t\r\n", p);
+        if (p == std::string::npos) break;
+        const auto eq = tag.find('=', p);
+        if (eq == std::string::npos) return {"attribute without value in <" + name + ">", out.root_name, out.root_tag};
+        const auto value = tag.find_first_not_of(" \t\r\n", eq + 1);
+        if (value == std::string::npos || (tag[value] != '"' && tag[value] != '\'')) {
+          return {"unquoted attribute in <" + name + ">", out.root_name, out.root_tag};
+        }
+        const auto close = tag.find(tag[value], value + 1);
+        if (close == std::string::npos) return {"unclosed attribute in <" + name + ">", out.root_name, out.root_tag};
+        p = close + 1;
+      }
+      if (open.empty()) {
+        if (root_closed || !out.root_name.empty())
+          return {"a second root element <" + name + ">", out.root_name, out.root_tag};
+        out.root_name = name;
+        out.root_tag = text.substr(lt, gt - lt + 1);
+      }
+      if (!self_closing) {
+        open.push_back(name);
+      } else if (open.empty()) {
+        root_closed = true;
+      }
+    }
+    i = gt + 1;
+  }
+  if (!open.empty()) return {"<" + open.back() + "> is never closed", out.root_name, out.root_tag};
+  if (out.root_name.empty()) return {"no element", out.root_name, out.root_tag};
+  return out;
+}
+
+// The SVG is well-formed XML with an <svg> root whose viewBox is the figure's size.
+void expect_svg(const std::filesystem::path& path, const FigureSize& size) {
+  const auto xml = check_xml(read_text(path));
+  ASSERT_EQ(xml.error, "") << path;
+  EXPECT_EQ(xml.root_name, "svg") << path;
+  EXPECT_NE(xml.root_tag.find("viewBox=\"0 0 " + std::to_string(size.width_px) + " " + std::to_string(size.height_px)),
+            std::string::npos)
+      << xml.root_tag;
+}
+
+TEST(XmlCheck, TellsWellFormedFromBroken) {
+  EXPECT_EQ(check_xml("<?xml version=\"1.0\"?>\n<svg a=\"1\"><g><path d='M 0 0'/></g><!-- c --></svg>\n").error, "");
+  EXPECT_EQ(check_xml("<svg><g></svg>").error, "</svg> closes nothing open");
+  EXPECT_EQ(check_xml("<svg><g>").error, "<g> is never closed");
+  EXPECT_EQ(check_xml("<svg a=1></svg>").error, "unquoted attribute in <svg>");
+  EXPECT_EQ(check_xml("<svg></svg><svg></svg>").error, "a second root element <svg>");
+  EXPECT_EQ(check_xml("<svg></svg> trailing").error, "text outside the root element");
+}
+
+void expect_png(const std::filesystem::path& path, const FigureSize& size) {
+  const cv::Mat png = cv::imread(path.string(), cv::IMREAD_COLOR);
+  ASSERT_FALSE(png.empty()) << path << " does not decode";
+  EXPECT_EQ(png.cols, size.width_px);
+  EXPECT_EQ(png.rows, size.height_px);
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(png, mean, stddev);
+  EXPECT_GT(stddev[0] + stddev[1] + stddev[2], 5.0) << "blank figure " << path;
+}
+
+TEST(Figures, CairoDevicesAreThere) { EXPECT_TRUE(cairo_devices_available()); }
+
+TEST(Figures, CurveFigureWritesPngAndSvgOfTheRequestedSize) {
+  testing::TempDir dir;
+  ReportInput input = testdata::sample_input(false);
+  fit_missing(input);
+  const FigureSize size{700, 500};
+  const auto files = write_curve_figure(input.series[0], size, dir / "curve_tc0");
+  EXPECT_EQ(files.png, dir / "curve_tc0.png");
+  EXPECT_EQ(files.svg, dir / "curve_tc0.svg");
+  expect_png(files.png, size);
+  expect_svg(files.svg, size);
+  EXPECT_NE(files.caption.find("k ="), std::string::npos) << files.caption;
+}
+
+TEST(Figures, UnfittedSeriesIsDrawnWithoutAFitAndSaysWhy) {
+  testing::TempDir dir;
+  CurveSeries flat = testdata::cooling_series("flat#1", 0.0, 22, 22, 50, 1.0, 0.0, 3);
+  flat.fit = fitting::fit_newton(flat.time_s, flat.temperature_c);
+  ASSERT_FALSE(flat.fit->ok());
+  const auto files = write_curve_figure(flat, {}, dir / "flat");
+  expect_png(files.png, {});
+  EXPECT_NE(files.caption.find("No Newton fit"), std::string::npos) << files.caption;
+}
+
+TEST(Figures, OverviewFigureHoldsEverySeries) {
+  testing::TempDir dir;
+  ReportInput input = testdata::sample_input(false);
+  input.series.push_back(testdata::cooling_series("probe tc0", 0.01, 79, 22, 30, 13.0, 0.5, 4));
+  input.series.back().kind = SeriesKind::kBosProbe;
+  fit_missing(input);
+  const FigureSize size{800, 500};
+  const auto files = write_overview_figure(input.series, size, dir / "all");
+  expect_png(files.png, size);
+  expect_svg(files.svg, size);
+}
+
+TEST(Figures, MapFigureHasColourMaskContoursAndMarkers) {
+  testing::TempDir dir;
+  const MapField map = testdata::bump_map();
+  const FigureSize size{900, 650};
+  const auto files = write_map_figure(map, 0.05, {{"tc0", {136, 72}}}, 30.0, size, dir / "map");
+  expect_png(files.png, size);
+  expect_svg(files.svg, size);
+  EXPECT_NE(files.caption.find("contours every 0.05 px"), std::string::npos) << files.caption;
+  EXPECT_NE(files.caption.find("Axes in mm"), std::string::npos) << files.caption;
+  // Colour and the mask's grey are both in the PNG.
+  const cv::Mat png = cv::imread(files.png.string(), cv::IMREAD_COLOR);
+  int saturated = 0, grey = 0;
+  for (int r = 0; r < png.rows; ++r) {
+    for (int c = 0; c < png.cols; ++c) {
+      const auto p = png.at<cv::Vec3b>(r, c);
+      const int spread = std::max({p[0], p[1], p[2]}) - std::min({p[0], p[1], p[2]});
+      if (spread > 120) ++saturated;
+      if (spread < 8 && p[0] > 170 && p[0] < 200) ++grey;  // the mask fill (190)
+    }
+  }
+  EXPECT_GT(saturated, 5000) << "the map has no colour";
+  EXPECT_GT(grey, 200) << "the masked region is not shown";
+}
+
+TEST(Figures, MapWithoutScaleUsesPixelsAndATooFineSpacingIsWidened) {
+  testing::TempDir dir;
+  const auto files = write_map_figure(testdata::bump_map(), 1e-5, {}, std::nullopt, {600, 400}, dir / "map");
+  expect_png(files.png, {600, 400});
+  EXPECT_NE(files.caption.find("Axes in px"), std::string::npos) << files.caption;
+  EXPECT_NE(files.caption.find("widened"), std::string::npos) << files.caption;
+}
+
+TEST(Figures, APerPixelFieldIsAveragedForDrawing) {
+  testing::TempDir dir;
+  MapField field;
+  field.quantity = "temperature";
+  field.unit = "°C";
+  field.values = cv::Mat(600, 800, CV_32F);
+  field.mask = cv::Mat::zeros(600, 800, CV_8U);
+  for (int r = 0; r < 600; ++r) {
+    for (int c = 0; c < 800; ++c)
+      field.values.at<float>(r, c) = 22 + 40 * std::exp(-((c - 400) * (c - 400) + (r - 200) * (r - 200)) / 2e4);
+  }
+  field.mask(cv::Rect(350, 450, 100, 150)).setTo(255);
+  field.x0_px = 0;
+  field.y0_px = 0;
+  field.step_px = 1;
+  const FigureSize size{900, 650};
+  const auto files = write_map_figure(field, 5.0, {{"tc0", {300, 150}}}, 30.0, size, dir / "temperature");
+  expect_png(files.png, size);
+  expect_svg(files.svg, size);
+  EXPECT_NE(files.caption.find("averaged over 4×4 cells of the 800×600 grid"), std::string::npos) << files.caption;
+  EXPECT_LT(std::filesystem::file_size(files.svg), 8'000'000u);
+}
+
+TEST(Figures, FullyMaskedAndSingleRowMapsStillDraw) {
+  testing::TempDir dir;
+  MapField masked = testdata::bump_map(4, 5);
+  masked.mask.setTo(255);
+  const auto a = write_map_figure(masked, 0.1, {}, 30.0, {600, 400}, dir / "masked");
+  expect_png(a.png, {600, 400});
+  EXPECT_NE(a.caption.find("Every cell is masked"), std::string::npos);
+  MapField row = testdata::bump_map(1, 6);
+  const auto b = write_map_figure(row, 0.1, {}, std::nullopt, {600, 400}, dir / "row");
+  expect_png(b.png, {600, 400});
+}
+
+TEST(Figures, BadInputIsRefused) {
+  testing::TempDir dir;
+  CurveSeries empty;
+  empty.name = "empty";
+  EXPECT_THROW(write_curve_figure(empty, {}, dir / "x"), std::invalid_argument);
+  EXPECT_THROW(write_map_figure(MapField{}, 0.1, {}, std::nullopt, {}, dir / "y"), std::invalid_argument);
+  EXPECT_THROW(write_curve_figure(testdata::cooling_series("a", 0.01, 80, 20, 10, 1, 0.1, 1), {10, 10}, dir / "z"),
+               std::invalid_argument);
+}
+
+TEST(Figures, AgreementFigureIsABlandAltmanPlot) {
+  testing::TempDir dir;
+  auto a = testdata::cooling_series("tc0", 0.01, 80, 22, 200, 2.0, 0.1, 1);
+  auto b = testdata::cooling_series("probe", 0.01, 80.5, 22, 40, 10.0, 0.3, 2);
+  b.kind = SeriesKind::kBosProbe;
+  fitting::NewtonFitOptions from_zero;
+  from_zero.origin_s = 0.0;
+  a.fit = fitting::fit_newton(a.time_s, a.temperature_c, from_zero);
+  b.fit = fitting::fit_newton(b.time_s, b.temperature_c, from_zero);
+  const auto agreement = fitting::compare_fits(*a.fit, *b.fit, fitting::clean_series(a.time_s, a.temperature_c, 0.0),
+                                               fitting::clean_series(b.time_s, b.temperature_c, 0.0));
+  ASSERT_TRUE(agreement.series);
+  const FigureSize size{800, 500};
+  const auto files = write_agreement_figure(a, b, agreement, size, dir / "agreement");
+  expect_png(files.png, size);
+  expect_svg(files.svg, size);
+  EXPECT_NE(files.caption.find("bias"), std::string::npos) << files.caption;
+  EXPECT_NE(files.caption.find(agreement.verdict), std::string::npos);
+
+  auto later = b;
+  for (auto& t : later.time_s) t += 10000;
+  EXPECT_THROW(write_agreement_figure(a, later, agreement, size, dir / "none"), std::invalid_argument);
+}
+
+TEST(Figures, ALongRecordIsThinnedForDrawingOnly) {
+  testing::TempDir dir;
+  CurveSeries long_record = testdata::cooling_series("long", 0.001, 80, 22, 200'000, 0.01, 0.2, 5);
+  long_record.fit = fitting::fit_newton(long_record.time_s, long_record.temperature_c);
+  ASSERT_TRUE(long_record.fit->ok());
+  const auto files = write_curve_figure(long_record, {}, dir / "long");
+  expect_png(files.png, {});
+  expect_svg(files.svg, {});
+  EXPECT_LT(std::filesystem::file_size(files.svg), 8'000'000u) << "the SVG must stay openable";
+  EXPECT_NE(files.caption.find("200000 points"), std::string::npos) << files.caption;
+}
+
+TEST(Figures, AnUnwritableFileIsAnErrorNotAnExit) {
+  testing::TempDir dir;
+  std::filesystem::create_directory(dir / "taken.png");  // a folder where the PNG should go
+  EXPECT_THROW(write_curve_figure(testdata::cooling_series("a", 0.01, 80, 20, 10, 1, 0.1, 1), {}, dir / "taken"),
+               std::runtime_error);
+}
+
+}  // namespace
+}  // namespace bosfuse::report

@@ -1,0 +1,228 @@
+#include "report/report.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+
+#include "report/export.h"
+#include "report/html.h"
+#include "report/test_data.h"
+#include "tests/support/temp_dir.h"
+
+namespace bosfuse::report {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::stringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+// Every src= and href= value in the page (a plain scan: std::regex overflows
+// its stack on megabytes of base64).
+std::vector<std::string> references(const std::string& html) {
+  std::vector<std::string> out;
+  std::string lower = html;
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  for (const std::string attr : {"src", "href"}) {
+    for (auto p = lower.find(attr); p != std::string::npos; p = lower.find(attr, p + 1)) {
+      if (p > 0 && std::isalnum(static_cast<unsigned char>(lower[p - 1]))) continue;
+      auto q = p + attr.size();
+      while (q < lower.size() && lower[q] == ' ') ++q;
+      if (q >= lower.size() || lower[q] != '=') continue;
+      ++q;
+      while (q < lower.size() && lower[q] == ' ') ++q;
+      const char quote = q < lower.size() && (lower[q] == '"' || lower[q] == '\'') ? lower[q] : 0;
+      if (quote) ++q;
+      const auto end = quote ? html.find(quote, q) : html.find_first_of(" >", q);
+      out.push_back(html.substr(q, end == std::string::npos ? std::string::npos : end - q));
+    }
+  }
+  return out;
+}
+
+void expect_self_contained(const std::string& html) {
+  EXPECT_EQ(html.find("http://"), std::string::npos);
+  EXPECT_EQ(html.find("https://"), std::string::npos);
+  EXPECT_EQ(html.find("<script"), std::string::npos) << "the report needs no script";
+  EXPECT_EQ(html.find("<link"), std::string::npos) << "styles are inline";
+  EXPECT_EQ(html.find("@import"), std::string::npos);
+  EXPECT_EQ(html.find("url("), std::string::npos);
+  for (const auto& ref : references(html)) {
+    EXPECT_EQ(ref.rfind("data:image/png;base64,", 0), 0u) << "external reference: " << ref.substr(0, 80);
+  }
+}
+
+TEST(Html, EscapesAndEncodes) {
+  EXPECT_EQ(html_escape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&#39;");
+  const std::string text = "Man";
+  EXPECT_EQ(base64_encode({reinterpret_cast<const std::uint8_t*>(text.data()), 3}), "TWFu");
+  EXPECT_EQ(base64_encode({reinterpret_cast<const std::uint8_t*>(text.data()), 2}), "TWE=");
+  EXPECT_EQ(base64_encode({reinterpret_cast<const std::uint8_t*>(text.data()), 1}), "TQ==");
+  EXPECT_EQ(base64_encode({}), "");
+  EXPECT_EQ(slug("tc 0/ä#"), "tc_0____");
+}
+
+class Report : public ::testing::Test {
+ protected:
+  ReportFiles write(ReportInput input) {
+    fit_missing(input);
+    input_ = input;
+    return write_report(input_, {}, dir_ / "out");
+  }
+  testing::TempDir dir_;
+  ReportInput input_;
+};
+
+TEST_F(Report, WritesOneSelfContainedPageWithEveryFigureEmbedded) {
+  const auto files = write(testdata::sample_input(true));
+  EXPECT_EQ(files.html, dir_ / "out" / "report.html");
+  const std::string html = read_text(files.html);
+  expect_self_contained(html);
+  // overview + two curves + one map
+  ASSERT_EQ(files.figures.size(), 4u);
+  std::size_t images = 0;
+  for (const auto& ref : references(html)) images += ref.rfind("data:image/png;base64,", 0) == 0;
+  EXPECT_EQ(images, files.figures.size());
+  for (const auto& f : files.figures) {
+    EXPECT_TRUE(fs::exists(f.png)) << f.png;
+    EXPECT_TRUE(fs::exists(f.svg)) << f.svg;
+    EXPECT_NE(html.find(f.png.filename().string()), std::string::npos) << "the page lists " << f.png.filename();
+  }
+  // The embedded data is the PNG file itself.
+  const auto first = html.find("data:image/png;base64,") + std::strlen("data:image/png;base64,");
+  const std::string png = read_text(files.figures[0].png);
+  const std::string encoded = base64_encode({reinterpret_cast<const std::uint8_t*>(png.data()), png.size()});
+  EXPECT_EQ(html.compare(first, encoded.size(), encoded), 0);
+  EXPECT_NE(html.find("unit &lt;run&gt; &amp; co"), std::string::npos) << "the run name is escaped";
+  EXPECT_NE(html.find("Displacement maps"), std::string::npos);
+  EXPECT_NE(html.find("Q_mod"), std::string::npos);
+}
+
+TEST_F(Report, RunWithoutFramesHasNoMapsButSaysWhy) {
+  const auto files = write(testdata::sample_input(false));
+  const std::string html = read_text(files.html);
+  expect_self_contained(html);
+  for (const auto& f : files.figures) EXPECT_EQ(f.png.filename().string().rfind("map_", 0), std::string::npos);
+  EXPECT_NE(html.find("No displacement maps: the run has no frames."), std::string::npos);
+  EXPECT_NE(html.find("Not processed yet"), std::string::npos);
+  EXPECT_NE(html.find("bosfuse process"), std::string::npos);
+  EXPECT_NE(html.find("No image quality index"), std::string::npos);
+  const auto json = nlohmann::json::parse(read_text(files.json));
+  EXPECT_TRUE(json["maps"].empty());
+  EXPECT_TRUE(json["image_quality"].is_null());
+}
+
+TEST_F(Report, CsvAndJsonHoldEveryChannelsDataAndTheFitsWithIntervals) {
+  const auto files = write(testdata::sample_input(true));
+  const auto series = lines_of(read_text(dir_ / "out" / "series.csv"));
+  ASSERT_FALSE(series.empty());
+  EXPECT_EQ(series[0], "series,kind,t_s,temperature_c,fit_c,residual_c");
+  std::map<std::string, std::size_t> rows;
+  for (std::size_t i = 1; i < series.size(); ++i) ++rows[series[i].substr(0, series[i].find(','))];
+  EXPECT_EQ(rows["tc0"], input_.series[0].time_s.size());
+  EXPECT_EQ(rows["tc1"], input_.series[1].time_s.size());
+  // The second row is the first sample of tc0, exactly.
+  std::stringstream row(series[1]);
+  std::string name, kind, t, temp;
+  std::getline(row, name, ',');
+  std::getline(row, kind, ',');
+  std::getline(row, t, ',');
+  std::getline(row, temp, ',');
+  EXPECT_EQ(kind, "thermocouple");
+  EXPECT_DOUBLE_EQ(std::stod(temp), input_.series[0].temperature_c[0]);
+
+  const auto fits = lines_of(read_text(dir_ / "out" / "fits.csv"));
+  ASSERT_EQ(fits.size(), 3u);
+  EXPECT_NE(fits[0].find("k_per_s,k_low,k_high"), std::string::npos);
+  EXPECT_EQ(fits[1].rfind("tc0,thermocouple,true,ok,0.95,200,", 0), 0u) << fits[1];
+
+  const auto json = nlohmann::json::parse(read_text(files.json));
+  ASSERT_EQ(json["series"].size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const auto& s = json["series"][i];
+    EXPECT_EQ(s["name"], input_.series[i].name);
+    EXPECT_EQ(s["time_s"].size(), input_.series[i].time_s.size());
+    EXPECT_EQ(s["temperature_c"].size(), input_.series[i].temperature_c.size());
+    const auto& k = s["fit"]["parameters"]["k_per_s"];
+    EXPECT_DOUBLE_EQ(k["value"].get<double>(), input_.series[i].fit->k_per_s.value);
+    EXPECT_LT(k["interval"]["low"].get<double>(), k["value"].get<double>());
+    EXPECT_GT(k["interval"]["high"].get<double>(), k["value"].get<double>());
+    EXPECT_EQ(k["interval"]["confidence"].get<double>(), 0.95);
+    for (const char* p : {"tau_s", "T0_c", "T_amb_c"}) {
+      EXPECT_TRUE(s["fit"]["parameters"][p]["interval"].contains("low")) << p;
+    }
+  }
+  EXPECT_NEAR(json["series"][0]["fit"]["parameters"]["k_per_s"]["value"].get<double>(), 0.01, 0.0005);
+  ASSERT_EQ(json["maps"].size(), 1u);
+  EXPECT_EQ(json["maps"][0]["px_per_mm"].get<double>(), 30.0);
+  EXPECT_GT(json["maps"][0]["masked_cells"].get<int>(), 0);
+  EXPECT_EQ(json["figures"].size(), files.figures.size());
+
+  // The map's CSV: one row per cell, masked cells flagged with no value.
+  const fs::path map_csv = dir_ / "out" / "map_displacement_t10s.csv";
+  const auto map_rows = lines_of(read_text(map_csv));
+  ASSERT_EQ(map_rows.size(), 1u + 24 * 32);
+  EXPECT_EQ(map_rows[0], "x_px,y_px,x_mm,y_mm,value,masked");
+  EXPECT_EQ(std::count_if(map_rows.begin(), map_rows.end(), [](const auto& l) { return l.ends_with(",,1"); }),
+            json["maps"][0]["masked_cells"].get<long>());
+}
+
+TEST_F(Report, ProbesAgreementAndTemperatureMapsAppearWhenProvided) {
+  ReportInput input = testdata::sample_input(true);
+  CurveSeries probe = testdata::cooling_series("tc0 probe", 0.0102, 80, 22, 40, 10.0, 0.4, 9);
+  probe.kind = SeriesKind::kBosProbe;
+  input.series.push_back(probe);
+  MapField temperature = testdata::bump_map();
+  temperature.quantity = "temperature";
+  temperature.unit = "°C";
+  temperature.values = temperature.values * 100 + 22;
+  input.temperature_maps.push_back(temperature);
+  fit_missing(input);
+  const auto a = fitting::clean_series(input.series[0].time_s, input.series[0].temperature_c, 0.0);
+  const auto b = fitting::clean_series(input.series[2].time_s, input.series[2].temperature_c, 0.0);
+  input.agreements.push_back(
+      {"tc0", "tc0 probe", fitting::compare_fits(*input.series[0].fit, *input.series[2].fit, a, b)});
+  const auto files = write_report(input, {}, dir_ / "out");
+  const std::string html = read_text(files.html);
+  expect_self_contained(html);
+  EXPECT_EQ(html.find("Not processed yet"), std::string::npos) << "everything was processed";
+  EXPECT_NE(html.find("class=\"agreement\""), std::string::npos);
+  EXPECT_NE(html.find(html_escape(input.agreements[0].agreement.verdict)), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "map_temperature_t10s.png"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "curve_probe_tc0_probe.svg"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "agreement_tc0_tc0_probe.png")) << "Bland–Altman plot";
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "agreement_tc0_tc0_probe.svg"));
+  const auto json = nlohmann::json::parse(read_text(files.json));
+  ASSERT_EQ(json["agreements"].size(), 1u);
+  EXPECT_TRUE(json["agreements"][0]["k"].contains("z"));
+  EXPECT_EQ(json["series"][2]["kind"], "BOS probe");
+}
+
+TEST_F(Report, UnwritableFolderIsAnError) {
+  const fs::path file = dir_ / "a_file";
+  std::ofstream(file) << "x";
+  ReportInput input = testdata::sample_input(false);
+  fit_missing(input);
+  EXPECT_THROW(write_report(input, {}, file / "sub"), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace bosfuse::report
