@@ -2,19 +2,30 @@
 // convection experiment (sim/convection_scene.h) is recorded through the real
 // device paths — its thermocouples served by a Modbus module on loopback, its
 // frames by the virtual camera — into a new run folder, a few minutes of
-// cooling in a few seconds.
+// cooling in a few seconds; then the run is processed as a user would (BOS
+// fields, temperatures, Newton fits, agreement) and the cooling-curve report
+// written. It ends with the report's path and the fitted cooling rates
+// beside the scene's true one.
 
 #include <fmt/format.h>
 
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "acquisition/clock.h"
 #include "acquisition/experiment_config.h"
 #include "acquisition/logger.h"
 #include "app/command.h"
 #include "app/run_control.h"
+#include "app/run_processing.h"
+#include "report/report.h"
+#include "report/run_input.h"
 #include "sim/virtual_devices.h"
+#include "storage/processing_store.h"
 #include "storage/run_store.h"
 
 namespace bosfuse::app {
@@ -31,7 +42,7 @@ struct DemoArgs {
 
 // The paper's experiment at a scale that runs in seconds: a 20 mm heater
 // tube cooling from 120 °C, the plume seen at 8 px/mm, two thermocouples
-// 35 mm above the cylinder, one on the plume's axis and one beside it.
+// 35 and 45 mm above the cylinder on the plume's axis.
 struct DemoSetup {
   sim::SceneOptions scene;
   std::vector<sim::SceneThermocouple> thermocouples;
@@ -49,7 +60,8 @@ DemoSetup demo_setup(double experiment_s) {
   s.cylinder_x_px = 240;
   s.cylinder_y_px = 420;
   s.z_d_m = 0.5;
-  setup.thermocouples = {{"tc-axis", 0.0, 0.035, 0.5, 0.05}, {"tc-side", 0.002, 0.035, 0.5, 0.05}};
+  // Both on the plume's axis, like the paper's pair along the heater, at two heights.
+  setup.thermocouples = {{"tc-35mm", 0.0, 0.035, 0.5, 0.05}, {"tc-45mm", 0.0, 0.045, 0.5, 0.05}};
   return setup;
 }
 
@@ -60,11 +72,12 @@ std::string demo_experiment(const DemoSetup& setup, int port, double poll_period
       "# served by a simulated ADAM-6018 on loopback and its frames by a virtual camera.\n"
       "[run]\nname = \"demo\"\ndescription = \"simulated cylinder cooling (pure exponential), {} s\"\n\n"
       "[geometry]\nz_d_m = {}\ndepth_m = {}\nmagnification = {}\npixel_pitch_um = {}\n"
-      "ambient_pressure_pa = {}\n\n"
+      "ambient_pressure_pa = {}\nambient_temperature_c = {}  # the room, read before the run\nopen_edges = [\"top\"]  "
+      "# the plume rises out of the image\n\n"
       "[[devices]]\nname = \"sim-adam\"\nprofile = \"adam-6018\"\nhost = \"127.0.0.1\"\nport = {}\n"
       "poll_period_s = {}\ntimeout_s = 0.5\n",
       s.duration_s, s.z_d_m, s.depth_m, s.px_per_mm * setup.pixel_pitch_um * 1e-3, setup.pixel_pitch_um, s.pressure_pa,
-      port, poll_period_s);
+      s.ambient_c, port, poll_period_s);
   const sim::ConvectionScene scene(s);
   for (std::size_t i = 0; i < setup.thermocouples.size(); ++i) {
     const auto& tc = setup.thermocouples[i];
@@ -121,16 +134,83 @@ Recording record_demo(const DemoArgs& args, const DemoSetup& setup, const std::f
   return recording;
 }
 
+// The cooling rate a plume thermocouple sees: with h constant the line heat
+// Q' decays like the cylinder's excess, and the plume's excess like Q'^(4/5).
+double true_plume_cooling_rate(const DemoSetup& setup) {
+  return 0.8 * sim::ConvectionScene(setup.scene).initial_cooling_rate_per_s();
+}
+
+std::filesystem::path process_and_report(const DemoSetup& setup, const std::filesystem::path& run_dir) {
+  const auto progress = [](const std::string& line) { std::cout << "  " << line << "\n"; };
+  cv::imwrite((run_dir / "holder-mask.png").string(), sim::ConvectionScene(setup.scene).holder_mask());
+  ProcessOptions process;
+  process.evaluator.set_grid(16, 8);
+  process.mask_file = "holder-mask.png";
+  process.progress = progress;
+  std::cout << "processing (full displacement and temperature fields) ...\n";
+  std::cout << process_run(run_dir, process).text << "\n";
+
+  const storage::RunStore store = storage::RunStore::open(run_dir);
+  report::RunReportOptions input_options;
+  input_options.px_per_mm = setup.scene.px_per_mm;
+  input_options.mask = cv::imread((run_dir / "holder-mask.png").string(), cv::IMREAD_GRAYSCALE);
+  input_options.map_times_s = {20, 120};
+  input_options.on_progress = progress;
+  std::cout << "writing the report ...\n";
+  const auto files = report::write_report(report::build_report_input(store, input_options), {}, run_dir / "report");
+  return files.html;
+}
+
+// Fitted rates in experiment time (host time × speed-up) beside the truth.
+void print_rates(const std::filesystem::path& run_dir, double speed, double true_k_per_s) {
+  const storage::RunStore store = storage::RunStore::open(run_dir);
+  const storage::ProcessingStore results(run_dir);
+  std::map<std::int64_t, std::string> channel_names, probe_names;
+  for (const auto& c : store.channels()) channel_names[c.id] = c.name;
+  for (const auto& p : results.probes()) probe_names[p.id] = p.name;
+  std::cout << fmt::format("cooling rate of the plume at the thermocouples, true: k = {:.5f} 1/s\n", true_k_per_s);
+  for (const auto& fit : results.fits()) {
+    const auto k = nlohmann::json::parse(fit.json)["parameters"]["k_per_s"];
+    const bool thermocouple = fit.subject == storage::FitSubject::kChannel;
+    const std::string name = thermocouple ? channel_names[fit.subject_id] : probe_names[fit.subject_id];
+    if (k.is_null()) {
+      std::cout << fmt::format("  {:<28} no fit\n", name);
+      continue;
+    }
+    const double k_experiment = k["value"].get<double>() / speed;
+    std::cout << fmt::format("  {:<28} k = {:.5f} ± {:.5f} 1/s ({:+.1f}% from the truth)\n",
+                             (thermocouple ? "thermocouple " : "BOS ") + name, k_experiment,
+                             k["std_error"].get<double>() / speed, 100 * (k_experiment / true_k_per_s - 1));
+  }
+  for (const auto& agreement : results.agreements()) {
+    std::cout << "  " << nlohmann::json::parse(agreement.json)["verdict"].get<std::string>() << "\n";
+  }
+}
+
+// What the simulation knows and the measurement must find, for whoever
+// checks the demo (its end-to-end test does).
+void write_truth(const std::filesystem::path& run_dir, const DemoArgs& args, const DemoSetup& setup) {
+  const sim::ConvectionScene scene(setup.scene);
+  nlohmann::json truth = {{"speed", args.speed},
+                          {"cylinder_k_per_s", scene.initial_cooling_rate_per_s()},
+                          {"plume_k_per_s", true_plume_cooling_rate(setup)},
+                          {"note", "k in 1/s of experiment time; fits in the run are in host time (divide by speed)"}};
+  std::ofstream(run_dir / "demo-truth.json") << truth.dump(2) << "\n";
+}
+
 void run_demo(const DemoArgs& args) {
   // A new folder per demo, so running it again never touches an earlier run.
   const std::filesystem::path run_dir =
       std::filesystem::path(args.out) / acquisition::format_compact_utc(acquisition::utc_now_ns());
   const DemoSetup setup = demo_setup(args.experiment_s);
   const Recording recording = record_demo(args, setup, run_dir);
-  std::cout << recording.summary.BriefReport() << "\n\n"
-            << "data:    " << (run_dir / storage::RunStore::kDatabaseFileName).string() << "\n"
-            << "inspect: bosfuse runs " << run_dir.string() << "\n"
-            << "export:  bosfuse export " << run_dir.string() << " --csv -o demo.csv\n";
+  std::cout << recording.summary.BriefReport() << "\n";
+  write_truth(run_dir, args, setup);
+  const std::filesystem::path report = process_and_report(setup, run_dir);
+  std::cout << "\n";
+  print_rates(run_dir, args.speed, true_plume_cooling_rate(setup));
+  std::cout << "\nrun:     " << run_dir.string() << "\n"
+            << "report:  " << report.string() << "\n";
 }
 
 void add_demo(CLI::App& root) {

@@ -10,6 +10,25 @@ namespace {
 
 using acquisition::TomlReader;
 
+// open_edges = ["top"]: image edges the heated air leaves through.
+void read_open_edges(const TomlReader& r, fusion::TemperatureFieldOptions& field) {
+  const toml::node* node = r.node("open_edges");
+  if (!node) return;
+  const toml::array* edges = node->as_array();
+  if (!edges) r.fail("open_edges", "expected an array of \"top\", \"bottom\", \"left\", \"right\"");
+  for (const auto& edge : *edges) {
+    const auto name = edge.value<std::string>().value_or("");
+    bool* flag = name == "top"      ? &field.open_top
+                 : name == "bottom" ? &field.open_bottom
+                 : name == "left"   ? &field.open_left
+                 : name == "right"  ? &field.open_right
+                                    : nullptr;
+    if (!flag) r.fail("open_edges", "expected \"top\", \"bottom\", \"left\" or \"right\", not \"" + name + "\"");
+    *flag = true;
+  }
+  if (const auto problem = field.Validate(); !problem.empty()) r.fail("open_edges", problem);
+}
+
 void read_geometry(const TomlReader& r, GeometryConfig& config) {
   auto& g = config.geometry;
   g.wavelength_nm = r.optional_number("wavelength_nm").value_or(g.wavelength_nm);
@@ -23,6 +42,7 @@ void read_geometry(const TomlReader& r, GeometryConfig& config) {
   g.magnification = r.optional_number("magnification").value_or(g.magnification);
   g.pixel_pitch_um = r.optional_number("pixel_pitch_um").value_or(g.pixel_pitch_um);
   g.px_per_mm_flow = r.optional_number("px_per_mm_flow").value_or(g.px_per_mm_flow);
+  read_open_edges(r, config.temperature_field);
   r.reject_unknown_keys();
   if (const auto problem = g.Validate(); !problem.empty()) r.fail("", problem);
 }

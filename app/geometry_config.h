@@ -10,14 +10,16 @@
 #include <string>
 
 #include "fusion/bos_geometry.h"
+#include "fusion/temperature_field.h"
 
 namespace bosfuse::app {
 
 struct GeometryConfig {
   fusion::BosGeometryOptions geometry;
-  bool ambient_given = false;  // ambient_temperature_c was in the file
-  double camera_offset_s = 0;  // frame stamped t happened at host time t + offset
-  std::string source;          // where it came from: a path, "run config" or "defaults"
+  fusion::TemperatureFieldOptions temperature_field;  // open_edges: where the flow leaves the image
+  bool ambient_given = false;                         // ambient_temperature_c was in the file
+  double camera_offset_s = 0;                         // frame stamped t happened at host time t + offset
+  std::string source;                                 // where it came from: a path, "run config" or "defaults"
 };
 
 // `text` is a whole TOML document; nullopt when it has neither table.

@@ -234,9 +234,19 @@ struct FrameResult {
   std::vector<storage::FieldRecord> fields;
 };
 
+std::string boundary_text(const fusion::TemperatureFieldOptions& o) {
+  std::string open;
+  for (const auto& [flag, name] :
+       {std::pair{o.open_top, "top"}, {o.open_bottom, "bottom"}, {o.open_left, "left"}, {o.open_right, "right"}}) {
+    if (flag) open += std::string(open.empty() ? "" : ", ") + name;
+  }
+  return open.empty() ? "ambient air on the field's border" : "ambient air on the border except the open " + open;
+}
+
 FrameResult evaluate_full(const fs::path& run_dir, const FrameRecord& frame, const cv::Mat& reference,
                           const cv::Mat& measurement, const cv::Mat& mask, const std::vector<cv::Point2d>& points,
-                          const ProcessOptions& options, const fusion::BosGeometry& geometry) {
+                          const ProcessOptions& options, const fusion::BosGeometry& geometry,
+                          const fusion::TemperatureFieldOptions& field_options) {
   FrameResult out;
   const auto evaluated = fusion::evaluate_displacement(reference, measurement, options.evaluator, mask);
   const std::string stem = fmt::format("fields/frame_{:06d}", frame.id);
@@ -245,7 +255,7 @@ FrameResult evaluate_full(const fs::path& run_dir, const FrameRecord& frame, con
       {0, frame.id, "displacement", stem + "_displacement.csv", evaluation_json(evaluated.summary).dump()});
   std::optional<fusion::TemperatureFieldResult> temperature;
   if (evaluated.field.rows >= 3 && evaluated.field.cols >= 3) {
-    temperature = fusion::recover_temperature_field(evaluated.field, geometry);
+    temperature = fusion::recover_temperature_field(evaluated.field, geometry, field_options);
     fusion::write_csv(temperature->field, run_dir / (stem + "_temperature.csv"));
     const auto& s = temperature->summary;
     out.fields.push_back({0, frame.id, "temperature", stem + "_temperature.csv",
@@ -253,7 +263,7 @@ FrameResult evaluate_full(const fs::path& run_dir, const FrameRecord& frame, con
                                {"max_c", number_or_null(s.max_c)},
                                {"unmeasured_nodes", s.unmeasured_nodes},
                                {"unphysical_nodes", s.unphysical_nodes},
-                               {"boundary", "ambient air on the field's border"}}
+                               {"boundary", boundary_text(field_options)}}
                               .dump()});
   }
   for (const auto& p : points) {
@@ -308,6 +318,7 @@ struct FrameContext {
   const cv::Mat& reference;
   const cv::Mat& mask;
   const fusion::BosGeometry& geometry;
+  const fusion::TemperatureFieldOptions& field_options;
   const std::map<std::int64_t, ChannelCalibration>& calibration;
 };
 
@@ -325,7 +336,7 @@ EvaluatedFrames evaluate_frames(const FrameContext& ctx, const RunFrames& frames
     const FrameResult r = options.probes_only
                               ? evaluate_probes(ctx.reference, measurement, ctx.mask, ctx.points, options)
                               : evaluate_full(ctx.run_dir, frame, ctx.reference, measurement, ctx.mask, ctx.points,
-                                              options, ctx.geometry);
+                                              options, ctx.geometry, ctx.field_options);
     out.fields.insert(out.fields.end(), r.fields.begin(), r.fields.end());
     for (std::size_t p = 0; p < ctx.channels.size(); ++p) {
       const PointShift& s = r.shifts[p];
@@ -422,8 +433,8 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
         fs::path(options.mask_file).is_absolute() ? fs::path(options.mask_file) : run_dir / options.mask_file;
     mask = read_image(path.string(), "mask");
   }
-  EvaluatedFrames evaluated =
-      evaluate_frames({run_dir, channels, points, reference, mask, geometry, calibration}, frames, options);
+  EvaluatedFrames evaluated = evaluate_frames(
+      {run_dir, channels, points, reference, mask, geometry, config.temperature_field, calibration}, frames, options);
   auto& probe_data = evaluated.probes;
   report.temperature_source = !calibration.empty()   ? "calibration"
                               : !options.probes_only ? "physical model"

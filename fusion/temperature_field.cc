@@ -35,8 +35,10 @@ bool is_measured(const DisplacementVector& v, const TemperatureFieldOptions& opt
   return v.valid() || (options.use_replaced_outliers && v.flag == VectorFlag::kOutlierReplaced);
 }
 
-bool on_border(const DisplacementField& f, int row, int col) {
-  return row == 0 || col == 0 || row == f.rows - 1 || col == f.cols - 1;
+// A node on an edge held at ambient air.
+bool on_ambient_border(const DisplacementField& f, int row, int col, const TemperatureFieldOptions& o) {
+  return (row == 0 && !o.open_top) || (row == f.rows - 1 && !o.open_bottom) || (col == 0 && !o.open_left) ||
+         (col == f.cols - 1 && !o.open_right);
 }
 
 // The least-squares system for δn at interior nodes: each edge i→j asks
@@ -88,6 +90,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 std::string TemperatureFieldOptions::Validate() const {
   if (max_nodes < 9) return "max_nodes must be at least 9";
   if (!(fill_weight > 0 && fill_weight <= 1)) return "fill_weight must lie in (0, 1]";
+  if (open_top && open_bottom && open_left && open_right) return "at least one image edge must be ambient air";
   return {};
 }
 
@@ -124,7 +127,7 @@ TemperatureFieldResult recover_temperature_field(const DisplacementField& displa
   int unknowns = 0;
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
-      if (!on_border(displacement, r, c)) unknown[static_cast<std::size_t>(r) * cols + c] = unknowns++;
+      if (!on_ambient_border(displacement, r, c, options)) unknown[static_cast<std::size_t>(r) * cols + c] = unknowns++;
     }
   }
   const double step_m = layout.step_px / geometry.px_per_m_flow();

@@ -11,8 +11,10 @@
 // equation ∇²n = ∂x(∂n/∂x) + ∂y(∂n/∂y), discretised so that a field that is
 // an exact gradient is recovered to the trapezoid rule's O(h²). The image
 // border is Dirichlet: its nodes are ambient air, n = n0 — so the hot region
-// must lie inside the evaluated area (a plume leaving through the border
-// violates this and lowers the recovered temperatures).
+// must lie inside the evaluated area, except through edges declared open: a
+// plume rising out of the top of the image leaves through it, and an open
+// edge's nodes are unknowns held only by the measured gradients (the least-
+// squares natural, Neumann, condition) instead of being forced to ambient.
 //
 // Masked and unmeasured nodes (flag other than kOk; kOutlierReplaced counts
 // as measured unless excluded by the options) are interior unknowns with zero
@@ -40,6 +42,8 @@ struct TemperatureFieldOptions {
   bool use_replaced_outliers = true;  // kOutlierReplaced vectors (neighbour medians) count as measurements
   int max_nodes = 4'000'000;          // bound on the linear system's size
   double fill_weight = 1e-3;          // weight of the zero-gradient edges at unmeasured nodes (measured: 1)
+  // Image edges the heated air leaves through (not ambient); at least one edge must stay ambient.
+  bool open_top = false, open_bottom = false, open_left = false, open_right = false;
 
   std::string Validate() const;  // empty when valid
 };

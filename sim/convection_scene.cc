@@ -108,9 +108,12 @@ double ConvectionScene::excess_c(double t_s) const {
 
 double ConvectionScene::cylinder_temperature_c(double t_s) const { return options_.ambient_c + excess_c(t_s); }
 
+// What the cylinder loses is what the plume carries: the same h as the cooling.
 double ConvectionScene::line_heat_w_m(double t_s) const {
   const double excess = excess_c(t_s);
-  return heat_transfer_coefficient_w_m2k(options_.ambient_c + excess) * M_PI * options_.diameter_m * excess;
+  const double h = heat_transfer_coefficient_w_m2k(options_.pure_exponential ? options_.initial_c
+                                                                             : options_.ambient_c + excess);
+  return h * M_PI * options_.diameter_m * excess;
 }
 
 double ConvectionScene::centreline_excess_c(double z_m, double t_s) const {
