@@ -192,3 +192,38 @@ TEST(TemperatureField, InwardDisplacementFromImagesIsAHotSpot) {
 
 }  // namespace
 }  // namespace bosfuse::fusion
+
+namespace bosfuse::fusion {
+namespace {
+
+// Heated air leaving through the top of the image (a plume rising out of
+// view): held at ambient there the field comes out too cold; declared open,
+// the top edge follows the measured gradients.
+TEST(TemperatureField, OpenEdgeLetsTheHeatedRegionLeaveTheImage) {
+  const BosGeometry g(paper_like_setup());
+  const HotSpot spot{160, -10, 40, 20};  // centred just above the image
+  const DisplacementField shifts = analytic_displacement(spot, g, 30, 40, 8);
+  const auto worst_error = [&](const TemperatureFieldOptions& options) {
+    const auto recovered = recover_temperature_field(shifts, g, options);
+    double worst = 0;
+    for (int r = 0; r < shifts.rows; ++r) {
+      for (int c = 0; c < shifts.cols; ++c) {
+        const auto& v = shifts.at(r, c);
+        const double truth = spot.temperature_c(g, v.x_px, v.y_px);
+        worst = std::max(worst, std::abs(recovered.field.temperature_c[recovered.field.index(r, c)] - truth));
+      }
+    }
+    return worst;
+  };
+  TemperatureFieldOptions open;
+  open.open_top = true;
+  const double closed_error = worst_error({}), open_error = worst_error(open);
+  EXPECT_GT(closed_error, 10.0);  // the top row forced to ambient, though it is ~19 °C warmer
+  EXPECT_LT(open_error, 0.5);
+  TemperatureFieldOptions all_open = open;
+  all_open.open_bottom = all_open.open_left = all_open.open_right = true;
+  EXPECT_NE(all_open.Validate().find("ambient"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace bosfuse::fusion
