@@ -19,6 +19,7 @@
 
 #include "acquisition/clock.h"
 #include "app/command.h"
+#include "fitting/fit_json.h"
 #include "fitting/newton_fit.h"
 
 namespace bosfuse::app {
@@ -235,50 +236,12 @@ RobustLoss parse_loss(const std::string& text) {
   throw std::runtime_error("--loss '" + text + "': expected none, huber:SCALE or cauchy:SCALE (°C)");
 }
 
-nlohmann::ordered_json estimate_json(const fitting::Estimate& e, double confidence) {
-  if (!std::isfinite(e.value)) return nullptr;
-  nlohmann::ordered_json j = {{"value", e.value}, {"std_error", e.std_error}, {"fixed", e.fixed}};
-  j["interval"] = {{"confidence", confidence}, {"low", e.low}, {"high", e.high}};
-  return j;
-}
-
-nlohmann::ordered_json optional_number(double value) {
-  return std::isfinite(value) ? nlohmann::ordered_json(value) : nullptr;
-}
-
-nlohmann::ordered_json fit_json(const NewtonFit& fit, const CsvSeries& series, const std::string& file,
-                                const NewtonFitOptions& options) {
-  const auto& s = fit.summary;
-  nlohmann::ordered_json j;
-  j["model"] = "T(t) = T_amb + (T0 - T_amb) * exp(-k * t), t in s from the origin";
+// The shared fit layout plus where the data came from.
+nlohmann::ordered_json fit_json(const NewtonFit& fit, const CsvSeries& series, const std::string& file) {
+  nlohmann::ordered_json j = fitting::to_json(fit);
   j["input"] = {{"file", file}, {"time_column", series.time_name}, {"temperature_column", series.temperature_name}};
-  j["origin"] = {{"t_s", fit.origin_s}};
-  if (series.iso_origin_ns) j["origin"]["time_utc"] = acquisition::format_iso8601_utc(*series.iso_origin_ns, 6);
-  j["ok"] = fit.ok();
-  j["status"] = fitting::to_string(s.status);
-  if (!fit.ok()) j["error"] = s.message;
-  j["parameters"] = {{"k_per_s", estimate_json(fit.k_per_s, options.confidence)},
-                     {"tau_s", estimate_json(fit.tau_s, options.confidence)},
-                     {"T0_c", estimate_json(fit.t0_c, options.confidence)},
-                     {"T_amb_c", estimate_json(fit.ambient_c, options.confidence)}};
-  j["uncertainty"] = s.absolute_sigma ? "absolute, from the given measurement sigma"
-                                      : "scaled by the residual variance s^2 = SSR/dof (scipy curve_fit default)";
-  j["diagnostics"] = {
-      {"points_used", s.points_used},
-      {"rejected_non_finite", s.rejected_non_finite},
-      {"empty_rows_skipped", series.empty_rows},
-      {"duplicate_times_kept", s.duplicate_times},
-      {"parameters", s.parameters},
-      {"dof", s.dof},
-      {"iterations", s.iterations},
-      {"duration_s", fit.duration_s},
-      {"residual_rms_c", optional_number(fit.ok() ? s.residual_rms_c : NAN)},
-      {"residual_std_c", optional_number(fit.ok() ? s.residual_std_c : NAN)},
-      {"reduced_chi_square", s.reduced_chi_square ? nlohmann::ordered_json(*s.reduced_chi_square) : nullptr},
-      {"lag1_autocorrelation", optional_number(fit.ok() ? s.lag1_autocorrelation : NAN)},
-      {"record_time_constants", optional_number(fit.ok() ? s.record_time_constants : NAN)},
-      {"outliers", s.outliers}};
-  j["warnings"] = s.warnings;
+  if (series.iso_origin_ns) j["origin_time_utc"] = acquisition::format_iso8601_utc(*series.iso_origin_ns, 6);
+  j["diagnostics"]["empty_rows_skipped"] = series.empty_rows;
   return j;
 }
 
@@ -327,7 +290,7 @@ void run_fit(const FitArgs& args) {
   if (!args.json.empty()) {
     std::ofstream out(args.json);
     if (!out) throw std::runtime_error("cannot write '" + args.json + "'");
-    out << fit_json(fit, series, args.file, options).dump(2) << "\n";
+    out << fit_json(fit, series, args.file).dump(2) << "\n";
     std::cout << "wrote " << args.json << "\n";
   }
   std::cout.flush();

@@ -75,7 +75,7 @@ TEST_F(FitCli, FitsAnExportedRunByIsoTimeOrBySeconds) {
               path("iso.json"));
   ASSERT_EQ(by_iso.exit_code, 0) << by_iso.output;
   const auto iso = read_json("iso.json");
-  EXPECT_EQ(iso.at("origin").at("time_utc"), acquisition::format_iso8601_utc(start_ns, 6));
+  EXPECT_EQ(iso.at("origin_time_utc"), acquisition::format_iso8601_utc(start_ns, 6));
   const double k_iso = iso.at("parameters").at("k_per_s").at("value");
   EXPECT_NEAR(k_iso, curve.k_per_s, 4 * iso.at("parameters").at("k_per_s").at("std_error").get<double>());
 

@@ -10,6 +10,7 @@
 
 #include "app/image_io.h"
 #include "fitting/agreement.h"
+#include "fitting/fit_json.h"
 #include "fitting/newton_fit.h"
 #include "fusion/bos_geometry.h"
 #include "fusion/calibration.h"
@@ -106,65 +107,15 @@ Series within(const Series& s, double from_s, double to_s) {
 
 json number_or_null(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
 
-json estimate_json(const fitting::Estimate& e, double confidence) {
-  if (!std::isfinite(e.value)) return nullptr;
-  return {{"value", e.value},
-          {"std_error", e.std_error},
-          {"fixed", e.fixed},
-          {"interval", {{"confidence", confidence}, {"low", e.low}, {"high", e.high}}}};
-}
-
-// The layout of `bosfuse fit --json`, plus what the fitted quantity was.
+// The shared fit layout plus what was fitted.
 json fit_json(const fitting::NewtonFit& fit, const std::string& quantity, const std::string& unit) {
-  const auto& s = fit.summary;
-  json j;
-  j["model"] = "T(t) = T_amb + (T0 - T_amb) * exp(-k * t), t in s from the origin";
+  json j = json::parse(fitting::to_json(fit).dump());
   j["quantity"] = quantity;
   j["unit"] = unit;
-  j["ok"] = fit.ok();
-  j["status"] = fitting::to_string(s.status);
-  if (!fit.ok()) j["error"] = s.message;
-  j["parameters"] = {{"k_per_s", estimate_json(fit.k_per_s, s.confidence)},
-                     {"tau_s", estimate_json(fit.tau_s, s.confidence)},
-                     {"T0_c", estimate_json(fit.t0_c, s.confidence)},
-                     {"T_amb_c", estimate_json(fit.ambient_c, s.confidence)}};
-  j["diagnostics"] = {{"points_used", s.points_used},
-                      {"rejected_non_finite", s.rejected_non_finite},
-                      {"dof", s.dof},
-                      {"duration_s", fit.duration_s},
-                      {"residual_rms", number_or_null(fit.ok() ? s.residual_rms_c : NAN)},
-                      {"lag1_autocorrelation", number_or_null(fit.ok() ? s.lag1_autocorrelation : NAN)},
-                      {"record_time_constants", number_or_null(fit.ok() ? s.record_time_constants : NAN)},
-                      {"outliers", s.outliers}};
-  j["warnings"] = s.warnings;
   return j;
 }
 
-json agreement_json(const fitting::Agreement& a) {
-  json j;
-  j["verdict"] = a.verdict;
-  if (a.k) {
-    j["k"] = {{"difference_per_s", a.k->difference_per_s},
-              {"std_error_per_s", a.k->std_error_per_s},
-              {"z", a.k->z},
-              {"relative_difference", a.k->relative_difference},
-              {"agree", a.k->agree}};
-  } else {
-    j["k"] = nullptr;
-  }
-  if (a.series) {
-    const auto& s = *a.series;
-    j["series"] = {{"common_points", s.common_points},
-                   {"rms_difference_c", s.rms_difference_c},
-                   {"bias_c", s.bias_c},
-                   {"difference_std_c", s.difference_std_c},
-                   {"loa_low_c", s.limits_of_agreement_low_c},
-                   {"loa_high_c", s.limits_of_agreement_high_c}};
-  } else {
-    j["series"] = nullptr;
-  }
-  return j;
-}
+json agreement_json(const fitting::Agreement& a) { return json::parse(fitting::to_json(a).dump()); }
 
 // °C per px of shift for a channel, from the run's newest calibration.
 struct ChannelCalibration {

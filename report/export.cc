@@ -6,6 +6,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "fitting/fit_json.h"
+
 namespace bosfuse::report {
 namespace {
 
@@ -40,13 +42,6 @@ std::string field(const std::string& text) {
 }
 
 bool fit_ok(const CurveSeries& s) { return s.fit && s.fit->ok(); }
-
-ordered_json estimate_json(const fitting::Estimate& e, double confidence) {
-  if (!std::isfinite(e.value)) return nullptr;
-  ordered_json j = {{"value", e.value}, {"std_error", json_num(e.std_error)}, {"fixed", e.fixed}};
-  j["interval"] = {{"confidence", confidence}, {"low", json_num(e.low)}, {"high", json_num(e.high)}};
-  return j;
-}
 
 }  // namespace
 
@@ -110,61 +105,12 @@ void write_map_csv(const MapField& map, std::optional<double> px_per_mm, const f
   check_written(out, path);
 }
 
-ordered_json fit_json(const fitting::NewtonFit& fit) {
-  const auto& s = fit.summary;
-  ordered_json j;
-  j["model"] = "T(t) = T_amb + (T0 - T_amb) * exp(-k * t), t in s from the origin";
-  j["origin_s"] = fit.origin_s;
-  j["ok"] = fit.ok();
-  j["status"] = fitting::to_string(s.status);
-  if (!fit.ok()) j["error"] = s.message;
-  j["parameters"] = {{"k_per_s", estimate_json(fit.k_per_s, s.confidence)},
-                     {"tau_s", estimate_json(fit.tau_s, s.confidence)},
-                     {"T0_c", estimate_json(fit.t0_c, s.confidence)},
-                     {"T_amb_c", estimate_json(fit.ambient_c, s.confidence)}};
-  j["uncertainty"] = s.absolute_sigma ? "absolute, from the given measurement sigma"
-                                      : "scaled by the residual variance s^2 = SSR/dof (scipy curve_fit default)";
-  const bool ok = fit.ok();
-  j["diagnostics"] = {{"points_used", s.points_used},
-                      {"rejected_non_finite", s.rejected_non_finite},
-                      {"duplicate_times_kept", s.duplicate_times},
-                      {"dof", s.dof},
-                      {"duration_s", json_num(fit.duration_s)},
-                      {"residual_rms_c", json_num(ok ? s.residual_rms_c : NAN)},
-                      {"residual_std_c", json_num(ok ? s.residual_std_c : NAN)},
-                      {"reduced_chi_square", json_num(s.reduced_chi_square.value_or(NAN))},
-                      {"lag1_autocorrelation", json_num(ok ? s.lag1_autocorrelation : NAN)},
-                      {"record_time_constants", json_num(ok ? s.record_time_constants : NAN)},
-                      {"outliers", s.outliers}};
-  j["warnings"] = s.warnings;
-  return j;
-}
+ordered_json fit_json(const fitting::NewtonFit& fit) { return fitting::to_json(fit); }
 
 ordered_json agreement_json(const AgreementEntry& entry) {
-  const auto& a = entry.agreement;
-  ordered_json j = {{"thermocouple", entry.thermocouple}, {"probe", entry.probe}, {"verdict", a.verdict}};
-  if (a.k) {
-    j["k"] = {{"difference_per_s", a.k->difference_per_s},
-              {"std_error_per_s", json_num(a.k->std_error_per_s)},
-              {"z", json_num(a.k->z)},
-              {"relative_difference", json_num(a.k->relative_difference)},
-              {"agree", a.k->agree}};
-  } else {
-    j["k"] = nullptr;
-  }
-  if (a.series) {
-    const auto& s = *a.series;
-    j["series"] = {{"common_points", s.common_points},
-                   {"overlap_start_s", s.overlap_start_s},
-                   {"overlap_end_s", s.overlap_end_s},
-                   {"rms_difference_c", json_num(s.rms_difference_c)},
-                   {"bias_c", json_num(s.bias_c)},
-                   {"difference_std_c", json_num(s.difference_std_c)},
-                   {"limits_of_agreement_low_c", json_num(s.limits_of_agreement_low_c)},
-                   {"limits_of_agreement_high_c", json_num(s.limits_of_agreement_high_c)}};
-  } else {
-    j["series"] = nullptr;
-  }
+  ordered_json j = {{"thermocouple", entry.thermocouple}, {"probe", entry.probe}};
+  const ordered_json agreement = fitting::to_json(entry.agreement);
+  for (auto it = agreement.begin(); it != agreement.end(); ++it) j[it.key()] = it.value();
   return j;
 }
 
