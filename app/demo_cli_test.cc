@@ -10,6 +10,7 @@
 
 #include "storage/processing_store.h"
 #include "storage/run_store.h"
+#include "tests/support/browser.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
 
@@ -52,6 +53,15 @@ TEST(DemoCli, RecoversTheTrueCoolingRateFromThermocouplesAndBos) {
     ++figures;
   }
   EXPECT_GE(figures, 4u);
+  // And a real browser draws every one of them.
+  ASSERT_TRUE(testing::have_chromium()) << "chromium is not installed (scripts/debian-packages.txt lists it)";
+  const auto images = testing::render_check(page, run / "report/render-check.html", dir.path());
+  EXPECT_EQ(images.size(), figures);
+  for (const auto& image : images) {
+    EXPECT_TRUE(image.complete);
+    EXPECT_NE(image.size, "0x0");
+    EXPECT_GT(image.spread, 100);
+  }
   EXPECT_EQ(storage::RunStore::open(run).run().status, storage::RunStatus::kComplete);
 }
 
