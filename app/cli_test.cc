@@ -98,7 +98,8 @@ TEST_F(Cli, MalformedExperimentNamesTheKeyAndLine) {
 }
 
 TEST_F(Cli, EverySubcommandHasHelp) {
-  for (const char* sub : {"acquire", "runs", "export", "demo", "sim modbus"}) {
+  for (const char* sub : {"acquire", "runs", "export", "demo", "sim modbus", "replay", "evaluate", "quality",
+                          "background", "bench", "fit", "process", "calibrate", "report"}) {
     const auto help = bosfuse(std::string(sub) + " --help");
     EXPECT_EQ(help.exit_code, 0) << sub;
     EXPECT_NE(help.output.find("Usage"), std::string::npos) << sub;
