@@ -261,6 +261,14 @@ TEST_F(ReportCli, AProcessedRunGetsProbesAgreementAndTemperatureMaps) {
   const std::string html = read_text(out / "report.html");
   EXPECT_EQ(html.find("Not processed yet"), std::string::npos);
   EXPECT_NE(html.find("tc0 (BOS)"), std::string::npos);
+  std::size_t agreement_figures = 0, temperature_figures = 0;
+  for (const auto& f : json["figures"]) {
+    const std::string name = f.dump();
+    agreement_figures += name.find("agreement_") != std::string::npos ? 1 : 0;
+    temperature_figures += name.find("map_temperature_") != std::string::npos ? 1 : 0;
+  }
+  EXPECT_EQ(agreement_figures, 2u) << json["figures"].dump() << "\n" << json["notes"].dump();
+  EXPECT_EQ(temperature_figures, 2u) << json["figures"].dump();
 }
 
 TEST_F(ReportCli, RunWithoutFramesGetsAReportWithoutMapsAndANote) {
