@@ -1,8 +1,10 @@
 // bosfuse report: the cooling-curve report of a run — one self-contained
 // HTML page plus every figure as PNG and SVG and the data as CSV and JSON
-// (report/report.h). Today it fits the run's thermocouples and draws the
+// (report/report.h). It fits the run's thermocouples and draws the
 // displacement maps of its frames; BOS probes, agreement and temperature
-// maps appear once `bosfuse process` has stored them.
+// maps come from what `bosfuse process` stored (report/run_input.h). The
+// image scale is --px-per-mm, else the [geometry] table of the run's stored
+// experiment config (px_per_mm_flow, or magnification / pixel_pitch_um).
 
 #include <fmt/format.h>
 
@@ -11,6 +13,7 @@
 #include <sstream>
 
 #include "app/command.h"
+#include "app/geometry_config.h"
 #include "app/image_io.h"
 #include "report/report.h"
 #include "report/run_input.h"
@@ -57,7 +60,17 @@ void make_report(const ReportArgs& args) {
   const auto store = storage::RunStore::open(args.run);
   report::RunReportOptions input_options;
   input_options.map_times_s = parse_times(args.map_times);
-  if (args.px_per_mm > 0) input_options.px_per_mm = args.px_per_mm;
+  if (args.px_per_mm > 0) {
+    input_options.px_per_mm = args.px_per_mm;
+  } else if (const std::string& toml = store.run().config_toml; toml.find("[geometry]") != std::string::npos) {
+    try {
+      if (const auto config = parse_geometry_config(toml, "run config")) {
+        input_options.px_per_mm = fusion::BosGeometry(config->geometry).px_per_m_flow() * 1e-3;
+      }
+    } catch (const std::exception& e) {
+      std::cerr << "warning: map axes in px, the run config's [geometry] could not be read: " << e.what() << "\n";
+    }
+  }
   input_options.evaluator.set_grid(args.window_px, args.step_px);
   if (const auto problem = input_options.evaluator.Validate(); !problem.empty()) throw std::runtime_error(problem);
   if (!args.mask.empty()) input_options.mask = read_image(args.mask, "mask");
@@ -98,7 +111,8 @@ void add_report(CLI::App& root) {
   cmd->add_option("--temperature-contour", args->contour_c, "Contour spacing of temperature maps, °C (0: none)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->add_option("--px-per-mm", args->px_per_mm, "Image scale, px per mm: map axes in mm (default: axes in px)")
+  cmd->add_option("--px-per-mm", args->px_per_mm,
+                  "Image scale, px per mm: map axes in mm (default: the run config's [geometry], else axes in px)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--window", args->window_px, "Interrogation window of the displacement maps, px")
       ->capture_default_str();

@@ -222,6 +222,55 @@ TEST_F(ReportCli, MakesAReportThatABrowserRendersCompletely) {
   EXPECT_GT(red, 500u) << "the fits' and maps' red is not on the page";
 }
 
+// After `bosfuse process`, the report shows what it stored: BOS probe
+// series, the agreement table, temperature maps; the map axes take the
+// image scale from the run's [geometry].
+TEST_F(ReportCli, AProcessedRunGetsProbesAgreementAndTemperatureMaps) {
+  report::testrun::Truth truth;
+  truth.config_toml = "[geometry]\npx_per_mm_flow = 25\n";
+  report::testrun::create_run(dir_ / "run", true, truth);
+  const auto processed = testing::run_command(kBosfuse + " process " + shell_quote(dir_ / "run"), 120);
+  ASSERT_EQ(processed.exit_code, 0) << processed.output;
+  const fs::path out = dir_ / "out";
+  const auto made = testing::run_command(
+      kBosfuse + " report " + shell_quote(dir_ / "run") + " -o " + shell_quote(out) + " --map-times 10,60", 120);
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  const auto json = nlohmann::json::parse(read_text(out / "report.json"));
+  std::size_t probes = 0;
+  for (const auto& s : json["series"]) {
+    if (s["kind"] != "BOS probe") continue;
+    ++probes;
+    EXPECT_EQ(s["samples"].get<int>(), 2) << s["name"];
+    EXPECT_FALSE(s["fit"].is_null()) << s["name"];
+    EXPECT_GT(s["time_s"][0].get<double>(), 9.0) << "relative to the thermocouples' origin";
+  }
+  EXPECT_EQ(probes, 2u);
+  ASSERT_EQ(json["agreements"].size(), 2u);
+  EXPECT_EQ(json["agreements"][0]["thermocouple"], "tc0");
+  std::size_t temperature_maps = 0, displacement_maps = 0;
+  for (const auto& m : json["maps"]) {
+    EXPECT_DOUBLE_EQ(m["px_per_mm"].get<double>(), 25.0) << "from the run's [geometry]";
+    if (m["unit"] == "°C") ++temperature_maps;
+    if (m["unit"] == "px") {
+      ++displacement_maps;
+      EXPECT_NE(m["source"].get<std::string>().find("stored"), std::string::npos) << "not evaluated again";
+    }
+  }
+  EXPECT_EQ(temperature_maps, 2u);
+  EXPECT_EQ(displacement_maps, 2u);
+  const std::string html = read_text(out / "report.html");
+  EXPECT_EQ(html.find("Not processed yet"), std::string::npos);
+  EXPECT_NE(html.find("tc0 (BOS)"), std::string::npos);
+  std::size_t agreement_figures = 0, temperature_figures = 0;
+  for (const auto& f : json["figures"]) {
+    const std::string name = f.dump();
+    agreement_figures += name.find("agreement_") != std::string::npos ? 1 : 0;
+    temperature_figures += name.find("map_temperature_") != std::string::npos ? 1 : 0;
+  }
+  EXPECT_EQ(agreement_figures, 2u) << json["figures"].dump() << "\n" << json["notes"].dump();
+  EXPECT_EQ(temperature_figures, 2u) << json["figures"].dump();
+}
+
 TEST_F(ReportCli, RunWithoutFramesGetsAReportWithoutMapsAndANote) {
   report::testrun::create_run(dir_ / "run", false);
   const auto made =

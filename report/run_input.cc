@@ -6,11 +6,16 @@
 #include <algorithm>
 #include <cmath>
 #include <ctime>
+#include <fstream>
 #include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
+#include <sstream>
 
 #include "fusion/image_quality.h"
+#include "storage/processing_store.h"
 
 namespace bosfuse::report {
 namespace {
@@ -37,6 +42,277 @@ cv::Mat read_frame(const storage::RunStore& store, const storage::FrameRecord& f
   if (image.empty())
     throw std::runtime_error("cannot read frame " + std::to_string(frame.id) + " ('" + path.string() + "')");
   return image;
+}
+
+using json = nlohmann::json;
+
+double number_or_nan(const json& j, const char* key) {
+  const auto it = j.find(key);
+  return it != j.end() && it->is_number() ? it->get<double>() : std::numeric_limits<double>::quiet_NaN();
+}
+
+fitting::Estimate estimate_from_json(const json& j) {
+  fitting::Estimate e;
+  e.value = e.std_error = e.low = e.high = std::numeric_limits<double>::quiet_NaN();
+  if (!j.is_object()) return e;
+  e.value = number_or_nan(j, "value");
+  e.std_error = number_or_nan(j, "std_error");
+  e.fixed = j.value("fixed", false);
+  if (const auto it = j.find("interval"); it != j.end() && it->is_object()) {
+    e.low = number_or_nan(*it, "low");
+    e.high = number_or_nan(*it, "high");
+  }
+  return e;
+}
+
+// A fit stored by `bosfuse process` (the layout of `bosfuse fit --json`),
+// its origin moved to the report's time base. No residuals are stored.
+fitting::NewtonFit fit_from_json(const storage::FitRecord& record, std::int64_t origin_ns) {
+  const json j = json::parse(record.json);
+  fitting::NewtonFit fit;
+  fit.origin_s = seconds_since(record.origin_t_ns, origin_ns);
+  const json& p = j.at("parameters");
+  fit.k_per_s = estimate_from_json(p.value("k_per_s", json()));
+  fit.tau_s = estimate_from_json(p.value("tau_s", json()));
+  fit.t0_c = estimate_from_json(p.value("T0_c", json()));
+  fit.ambient_c = estimate_from_json(p.value("T_amb_c", json()));
+  auto& s = fit.summary;
+  s.status = fitting::FitStatus::kNotConverged;
+  const std::string status = j.value("status", std::string());
+  for (int i = 0; i <= static_cast<int>(fitting::FitStatus::kNotConverged); ++i) {
+    if (status == fitting::to_string(static_cast<fitting::FitStatus>(i))) s.status = static_cast<fitting::FitStatus>(i);
+  }
+  if (record.ok && j.value("ok", false)) s.status = fitting::FitStatus::kOk;
+  s.message = j.value("error", std::string());
+  if (const auto it = j.find("parameters"); it != j.end()) {
+    if (const auto k = it->find("k_per_s"); k != it->end() && k->is_object() && k->contains("interval")) {
+      s.confidence = k->at("interval").value("confidence", 0.95);
+    }
+  }
+  if (const auto d = j.find("diagnostics"); d != j.end() && d->is_object()) {
+    s.points_used = d->value("points_used", std::size_t{0});
+    s.rejected_non_finite = d->value("rejected_non_finite", std::size_t{0});
+    s.dof = d->value("dof", 0.0);
+    fit.duration_s = d->value("duration_s", 0.0);
+    s.residual_rms_c = number_or_nan(*d, "residual_rms");
+    s.lag1_autocorrelation = number_or_nan(*d, "lag1_autocorrelation");
+    s.record_time_constants = number_or_nan(*d, "record_time_constants");
+    s.outliers = d->value("outliers", std::size_t{0});
+  }
+  if (const auto w = j.find("warnings"); w != j.end() && w->is_array()) s.warnings = w->get<std::vector<std::string>>();
+  return fit;
+}
+
+fitting::Agreement agreement_from_json(const std::string& text) {
+  const json j = json::parse(text);
+  fitting::Agreement a;
+  a.verdict = j.value("verdict", std::string());
+  if (const auto k = j.find("k"); k != j.end() && k->is_object()) {
+    fitting::KAgreement ka;
+    ka.difference_per_s = number_or_nan(*k, "difference_per_s");
+    ka.std_error_per_s = number_or_nan(*k, "std_error_per_s");
+    ka.z = number_or_nan(*k, "z");
+    ka.relative_difference = number_or_nan(*k, "relative_difference");
+    ka.agree = k->value("agree", false);
+    a.k = ka;
+  }
+  if (const auto s = j.find("series"); s != j.end() && s->is_object()) {
+    fitting::SeriesAgreement sa;
+    sa.common_points = s->value("common_points", std::size_t{0});
+    sa.rms_difference_c = number_or_nan(*s, "rms_difference_c");
+    sa.bias_c = number_or_nan(*s, "bias_c");
+    sa.difference_std_c = number_or_nan(*s, "difference_std_c");
+    sa.limits_of_agreement_low_c = number_or_nan(*s, "loa_low_c");
+    sa.limits_of_agreement_high_c = number_or_nan(*s, "loa_high_c");
+    a.series = sa;
+  }
+  return a;
+}
+
+// A field CSV written by `bosfuse process` (header x,y,...) as a map on its
+// regular grid: `value` gives a node's value and whether it is shown.
+MapField read_field_csv(const fs::path& path,
+                        const std::function<std::pair<double, bool>(const std::vector<std::string>&)>& value,
+                        std::size_t columns) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read '" + path.string() + "'");
+  std::string line;
+  std::getline(in, line);  // header
+  struct Node {
+    double x, y, value;
+    bool shown;
+  };
+  std::vector<Node> nodes;
+  std::set<double> xs, ys;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    std::vector<std::string> cells;
+    std::stringstream cells_in(line);
+    std::string cell;
+    while (cells.size() <= columns && std::getline(cells_in, cell, ',')) cells.push_back(cell);
+    if (line.back() == ',') cells.emplace_back();
+    if (cells.size() < columns) throw std::runtime_error("'" + path.string() + "': short line '" + line + "'");
+    const auto [v, shown] = value(cells);
+    nodes.push_back({std::stod(cells[0]), std::stod(cells[1]), v, shown});
+    xs.insert(nodes.back().x);
+    ys.insert(nodes.back().y);
+  }
+  if (nodes.empty()) throw std::runtime_error("'" + path.string() + "' holds no grid");
+  MapField map;
+  map.values = cv::Mat::zeros(static_cast<int>(ys.size()), static_cast<int>(xs.size()), CV_64F);
+  map.mask = cv::Mat(map.values.rows, map.values.cols, CV_8U, cv::Scalar(255));
+  const std::vector<double> xv(xs.begin(), xs.end()), yv(ys.begin(), ys.end());
+  map.x0_px = xv.front();
+  map.y0_px = yv.front();
+  map.step_px = xv.size() > 1 ? xv[1] - xv[0] : (yv.size() > 1 ? yv[1] - yv[0] : 1.0);
+  for (const auto& n : nodes) {
+    const int c = static_cast<int>(std::lower_bound(xv.begin(), xv.end(), n.x) - xv.begin());
+    const int r = static_cast<int>(std::lower_bound(yv.begin(), yv.end(), n.y) - yv.begin());
+    const bool shown = n.shown && std::isfinite(n.value);
+    map.values.at<double>(r, c) = shown ? n.value : 0.0;
+    map.mask.at<std::uint8_t>(r, c) = shown ? 0 : 255;
+  }
+  return map;
+}
+
+MapField read_temperature_csv(const fs::path& path) {
+  MapField map = read_field_csv(
+      path,
+      [](const std::vector<std::string>& cells) {
+        return std::pair{cells[2].empty() ? std::numeric_limits<double>::quiet_NaN() : std::stod(cells[2]), true};
+      },
+      4);
+  map.quantity = "temperature";
+  map.unit = "°C";
+  return map;
+}
+
+MapField read_displacement_csv(const fs::path& path) {
+  MapField map = read_field_csv(
+      path,
+      [](const std::vector<std::string>& cells) {
+        return std::pair{std::hypot(std::stod(cells[2]), std::stod(cells[3])), cells[4] == "1"};
+      },
+      6);
+  map.quantity = "|displacement|";
+  map.unit = "px";
+  return map;
+}
+
+// What `bosfuse process` stored, for the report.
+struct StoredResults {
+  bool probes = false;
+  bool temperature_maps = false;
+  bool displacement_maps = false;
+};
+
+// Adds the stored probe series (with their fits), agreements and, at the
+// requested times, the stored field files as maps.
+StoredResults load_stored_results(const storage::RunStore& store, std::int64_t origin_ns,
+                                  const std::vector<storage::FrameRecord>& frames, const RunReportOptions& options,
+                                  ReportInput& input) {
+  StoredResults loaded;
+  std::optional<storage::ProcessingStore> results;
+  try {
+    results.emplace(store.dir());
+  } catch (const std::exception& e) {
+    input.notes.push_back(std::string("Stored processing results could not be read: ") + e.what());
+    return loaded;
+  }
+  std::map<std::int64_t, std::string> channel_names;
+  for (const auto& c : store.channels()) channel_names[c.id] = c.name;
+  std::map<std::int64_t, storage::FitRecord> probe_fits;
+  for (const auto& f : results->fits()) {
+    if (f.subject == storage::FitSubject::kProbe) probe_fits[f.subject_id] = f;
+  }
+  std::map<std::int64_t, std::string> probe_names;
+  bool any_shift = false;
+  for (const auto& probe : results->probes()) {
+    CurveSeries s;
+    s.name = probe.name + " (BOS)";
+    probe_names[probe.id] = s.name;
+    s.kind = SeriesKind::kBosProbe;
+    s.image_px = cv::Point2d(probe.x_px, probe.y_px);
+    const auto samples = results->probe_samples(probe.id);
+    const bool has_temperature =
+        std::any_of(samples.begin(), samples.end(), [](const auto& p) { return p.valid && p.temperature_c; });
+    any_shift = any_shift || !has_temperature;
+    for (const auto& p : samples) {
+      const std::optional<double> value = has_temperature ? p.temperature_c : std::optional<double>(p.shift_px);
+      if (!p.valid || !value || !std::isfinite(*value)) {
+        ++s.excluded_samples;
+        continue;
+      }
+      s.time_s.push_back(seconds_since(p.t_ns, origin_ns));
+      s.temperature_c.push_back(*value);
+    }
+    if (const auto f = probe_fits.find(probe.id); f != probe_fits.end()) {
+      try {
+        s.fit = fit_from_json(f->second, origin_ns);
+      } catch (const std::exception& e) {
+        input.notes.push_back(
+            fmt::format("The stored fit of probe {} could not be read ({}); it is refitted.", probe.name, e.what()));
+      }
+    }
+    input.series.push_back(std::move(s));
+    loaded.probes = true;
+  }
+  if (any_shift) {
+    input.notes.push_back(
+        "Some BOS probes have no temperature (no calibration): their series are the shift magnitude in px, not °C "
+        "(run bosfuse calibrate, then bosfuse process).");
+  }
+  for (const auto& a : results->agreements()) {
+    try {
+      AgreementEntry entry;
+      const auto tc = channel_names.find(a.channel_id);
+      const auto probe = probe_names.find(a.probe_id);
+      entry.thermocouple = tc != channel_names.end() ? tc->second : fmt::format("channel {}", a.channel_id);
+      entry.probe = probe != probe_names.end() ? probe->second : fmt::format("probe {}", a.probe_id);
+      entry.agreement = agreement_from_json(a.json);
+      input.agreements.push_back(std::move(entry));
+    } catch (const std::exception& e) {
+      input.notes.push_back(fmt::format("A stored agreement could not be read: {}", e.what()));
+    }
+  }
+
+  // Field files at the requested times: the nearest frame that has one.
+  std::map<std::int64_t, storage::FrameRecord> frame_by_id;
+  for (const auto& f : frames) frame_by_id[f.id] = f;
+  cv::Size image_size;
+  if (!frames.empty()) image_size = cv::Size(frames.front().width_px, frames.front().height_px);
+  const auto fields = results->fields();
+  auto add_maps = [&](const std::string& kind, std::vector<MapField>& maps) {
+    std::vector<std::pair<storage::FieldRecord, std::int64_t>> candidates;  // field, frame time
+    for (const auto& f : fields) {
+      const auto frame = frame_by_id.find(f.frame_id);
+      if (f.kind == kind && frame != frame_by_id.end()) candidates.emplace_back(f, frame->second.t_ns);
+    }
+    if (candidates.empty()) return false;
+    std::set<std::int64_t> done;
+    for (double t : options.map_times_s) {
+      const auto nearest = std::min_element(candidates.begin(), candidates.end(), [&](const auto& a, const auto& b) {
+        return std::abs(seconds_since(a.second, origin_ns) - t) < std::abs(seconds_since(b.second, origin_ns) - t);
+      });
+      if (!done.insert(nearest->first.frame_id).second) continue;
+      const double frame_t = seconds_since(nearest->second, origin_ns);
+      try {
+        const fs::path path = store.dir() / nearest->first.path;
+        MapField map = kind == "temperature" ? read_temperature_csv(path) : read_displacement_csv(path);
+        map.time_s = frame_t;
+        map.image_size_px = image_size;
+        map.source = fmt::format("stored {} field of frame {} ({}), nearest to the requested t = {:g} s", kind,
+                                 nearest->first.frame_id, nearest->first.path, t);
+        maps.push_back(std::move(map));
+      } catch (const std::exception& e) {
+        input.notes.push_back(fmt::format("No stored {} map at t = {:.1f} s: {}", kind, frame_t, e.what()));
+      }
+    }
+    return !maps.empty();
+  };
+  loaded.temperature_maps = add_maps("temperature", input.temperature_maps);
+  loaded.displacement_maps = add_maps("displacement", input.displacement_maps);
+  return loaded;
 }
 
 }  // namespace
@@ -122,7 +398,8 @@ ReportInput build_report_input(const storage::RunStore& store, const RunReportOp
     input.series.push_back(std::move(s));
   }
   if (input.series.empty()) input.notes.push_back("The run has no thermocouple channels.");
-  progress(fmt::format("fitting {} thermocouple series", input.series.size()));
+  const StoredResults stored = load_stored_results(store, origin_ns, frames, options, input);
+  progress(fmt::format("fitting {} series", input.series.size()));
   fit_missing(input, options.fit);
 
   // Frames: reference, measurements nearest the chosen times, quality of the last one.
@@ -159,7 +436,7 @@ ReportInput build_report_input(const storage::RunStore& store, const RunReportOp
     return input;
   }
   std::set<std::int64_t> done;
-  for (double t : options.map_times_s) {
+  for (double t : stored.displacement_maps ? std::vector<double>{} : options.map_times_s) {
     const auto nearest = std::min_element(measurements.begin(), measurements.end(), [&](const auto& a, const auto& b) {
       return std::abs(seconds_since(a.t_ns, origin_ns) - t) < std::abs(seconds_since(b.t_ns, origin_ns) - t);
     });

@@ -4,9 +4,12 @@
 // fitted with Newton's law; and, when the run has frames, the displacement
 // magnitude maps of the frames nearest the chosen times against the
 // reference frame, and the image quality index of the last frame against the
-// reference. BOS probe series, their agreement with the thermocouples and
-// temperature maps come from `bosfuse process`; until a run has them, the
-// report says they are not processed yet (it never invents them).
+// reference. BOS probe series (with their fits), their agreement with the
+// thermocouples, temperature maps and displacement fields come from what
+// `bosfuse process` stored (storage/processing_store.h, docs/REPORT.md
+// "Stored results"); stored displacement fields replace evaluating the
+// frames. Until a run has them, the report says they are not processed yet
+// (it never invents them).
 
 #include <functional>
 #include <optional>

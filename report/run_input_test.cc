@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "report/report.h"
 #include "report/test_run.h"
+#include "storage/processing_store.h"
 #include "tests/support/temp_dir.h"
 
 namespace bosfuse::report {
@@ -137,6 +140,97 @@ TEST(RunInput, DisplacementMagnitudeMapMasksWhatWasNotMeasured) {
   EXPECT_DOUBLE_EQ(map.x0_px, 8);
   EXPECT_DOUBLE_EQ(map.step_px, 8);
   EXPECT_THROW(displacement_magnitude_map(fusion::DisplacementField{}, {}), std::invalid_argument);
+}
+
+// What `bosfuse process` stores, written here by hand so that every field is known.
+TEST(RunInput, StoredProbesFitsAgreementsAndFieldsAreUsed) {
+  testing::TempDir dir;
+  const testrun::Truth truth;
+  testrun::create_run(dir / "run", true, truth);
+  const auto frames = storage::RunStore::open(dir / "run").frames();
+  ASSERT_EQ(frames.size(), 3u);
+  const auto channels = storage::RunStore::open(dir / "run").channels();
+  ASSERT_EQ(channels.size(), 2u);
+  {
+    storage::ProcessingStore results(dir / "run", true);
+    std::filesystem::create_directories(dir / "run/fields");
+    const auto with_t = results.add_probe({0, channels[0].id, "tc0", 96, 64});
+    const auto shift_only = results.add_probe({0, channels[1].id, "tc1", 176, 64});
+    results.write_probe_samples(std::vector<storage::ProbeSampleRecord>{
+        {with_t, frames[1].id, frames[1].t_ns, 0.3, 0.4, 0.5, 50.0, true},
+        {with_t, frames[2].id, frames[2].t_ns, 0.3, 0.0, 0.3, 40.0, true},
+        {shift_only, frames[1].id, frames[1].t_ns, 0.6, 0.8, 1.0, std::nullopt, true},
+        {shift_only, frames[2].id, frames[2].t_ns, 0.0, 0.0, 0.0, std::nullopt, false}});
+    // Fit origin at the 10 s frame: k = 0.02, T0 = 50 there, ambient 22.
+    results.add_fit({0, storage::FitSubject::kProbe, with_t, frames[1].t_ns, true,
+                     R"({"ok": true, "status": "ok", "parameters": {
+                          "k_per_s": {"value": 0.02, "std_error": 0.001, "fixed": false,
+                                      "interval": {"confidence": 0.95, "low": 0.018, "high": 0.022}},
+                          "tau_s": {"value": 50, "std_error": 2.5, "fixed": false,
+                                    "interval": {"confidence": 0.95, "low": 45, "high": 55}},
+                          "T0_c": {"value": 50, "std_error": 0.1, "fixed": false,
+                                   "interval": {"confidence": 0.95, "low": 49.8, "high": 50.2}},
+                          "T_amb_c": {"value": 22, "std_error": 0, "fixed": true,
+                                      "interval": {"confidence": 0.95, "low": 22, "high": 22}}},
+                          "diagnostics": {"points_used": 2, "dof": 0}, "warnings": ["stored"]})"});
+    results.add_agreement({0, channels[0].id, with_t,
+                           R"({"verdict": "They agree.", "k": {"difference_per_s": -0.01, "std_error_per_s": 0.002,
+                                "z": -5, "relative_difference": -0.5, "agree": false},
+                               "series": {"common_points": 2, "rms_difference_c": 1.5, "bias_c": 1.0,
+                                          "difference_std_c": 0.5, "loa_low_c": 0.02, "loa_high_c": 1.98}})"});
+    std::ofstream(dir / "run/fields/t.csv") << "x,y,temperature_c,measured\n8.0,8.0,30.5,1\n16.0,8.0,,0\n"
+                                            << "8.0,16.0,25.0,1\n16.0,16.0,22.0,0\n";
+    std::ofstream(dir / "run/fields/d.csv") << "x,y,u,v,valid,peak_ratio\n8.0,8.0,0.30000,0.40000,1,3.0\n"
+                                            << "16.0,8.0,9.0,9.0,0,1.0\n";
+    results.add_field({0, frames[2].id, "temperature", "fields/t.csv", "{}"});
+    results.add_field({0, frames[2].id, "displacement", "fields/d.csv", "{}"});
+  }
+  RunReportOptions options;
+  options.map_times_s = {55};
+  const auto input = build_report_input(storage::RunStore::open(dir / "run"), options);
+  ASSERT_EQ(input.series.size(), 4u);
+  EXPECT_TRUE(input.has_probes());
+  const auto& probe = input.series[2];
+  EXPECT_EQ(probe.kind, SeriesKind::kBosProbe);
+  ASSERT_EQ(probe.time_s.size(), 2u);
+  EXPECT_NEAR(probe.time_s[0], truth.frame_times_s[0] + 0.003, 1e-9) << "same origin as the thermocouples";
+  EXPECT_DOUBLE_EQ(probe.temperature_c[1], 40.0);
+  ASSERT_TRUE(probe.fit && probe.fit->ok());
+  EXPECT_DOUBLE_EQ(probe.fit->k_per_s.value, 0.02);
+  EXPECT_NEAR(probe.fit->origin_s, truth.frame_times_s[0] + 0.003, 1e-9);
+  EXPECT_NEAR(probe.fit->temperature_at(probe.fit->origin_s), 50.0, 1e-9);
+  EXPECT_EQ(probe.fit->summary.warnings, std::vector<std::string>{"stored"});
+  const auto& shift = input.series[3];
+  ASSERT_EQ(shift.time_s.size(), 1u) << "the invalid sample is left out";
+  EXPECT_EQ(shift.excluded_samples, 1u);
+  EXPECT_DOUBLE_EQ(shift.temperature_c[0], 1.0) << "no temperature stored: the shift";
+  EXPECT_TRUE(shift.fit) << "no stored fit: fitted here";
+  ASSERT_EQ(input.agreements.size(), 1u);
+  EXPECT_EQ(input.agreements[0].thermocouple, "tc0");
+  EXPECT_EQ(input.agreements[0].probe, probe.name);
+  ASSERT_TRUE(input.agreements[0].agreement.k && input.agreements[0].agreement.series);
+  EXPECT_DOUBLE_EQ(input.agreements[0].agreement.series->bias_c, 1.0);
+  EXPECT_FALSE(input.agreements[0].agreement.k->agree);
+  ASSERT_EQ(input.temperature_maps.size(), 1u);
+  const auto& t = input.temperature_maps[0];
+  EXPECT_EQ(t.unit, "°C");
+  EXPECT_NEAR(t.time_s, truth.frame_times_s[1] + 0.003, 1e-9);
+  ASSERT_EQ(t.values.size(), cv::Size(2, 2));
+  EXPECT_DOUBLE_EQ(t.x0_px, 8.0);
+  EXPECT_DOUBLE_EQ(t.step_px, 8.0);
+  EXPECT_DOUBLE_EQ(t.values.at<double>(1, 0), 25.0);
+  EXPECT_TRUE(t.mask.at<std::uint8_t>(0, 1)) << "no temperature: masked";
+  EXPECT_FALSE(t.mask.at<std::uint8_t>(1, 1));
+  ASSERT_EQ(input.displacement_maps.size(), 1u) << "the stored field, not a new evaluation";
+  EXPECT_DOUBLE_EQ(input.displacement_maps[0].values.at<double>(0, 0), 0.5);
+  EXPECT_TRUE(input.displacement_maps[0].mask.at<std::uint8_t>(0, 1));
+  EXPECT_NE(input.displacement_maps[0].source.find("stored"), std::string::npos);
+
+  // The whole report: no "not processed" note, probes, agreement and a temperature map in the JSON.
+  write_report(input, {}, dir / "out");
+  std::ifstream html_in(dir / "out/report.html");
+  const std::string html((std::istreambuf_iterator<char>(html_in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(html.find("Not processed yet"), std::string::npos);
 }
 
 TEST(RunInput, IsoTimes) {

@@ -32,6 +32,7 @@ struct Truth {
   double frame_times_s[2] = {10, 60};
   double frame_peak_px[2] = {1.0, 0.5};
   cv::Rect holder_px{104, 150, 48, 42};  // the heater's holder, hidden by the mask (as in the paper)
+  std::string config_toml;               // the run's stored experiment config
 };
 
 // The holder mask as an 8-bit PNG of the frames' size: 255 under the holder.
@@ -42,7 +43,8 @@ inline cv::Mat holder_mask(const Truth& truth = {}) {
 }
 
 inline void create_run(const std::filesystem::path& dir, bool with_frames, const Truth& truth = {}) {
-  storage::RunInfo info{0, "synthetic cooling", truth.start_ns, std::nullopt, "", storage::RunStatus::kRunning};
+  storage::RunInfo info{
+      0, "synthetic cooling", truth.start_ns, std::nullopt, truth.config_toml, storage::RunStatus::kRunning};
   auto store = storage::RunStore::create(dir, info, storage::RunStore::CreateMode::kNew);
   const auto device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", "127.0.0.1:502"});
   std::mt19937 random(11);
