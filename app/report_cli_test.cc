@@ -14,6 +14,7 @@
 
 #include "report/html.h"
 #include "report/test_run.h"
+#include "tests/support/browser.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
 
@@ -21,9 +22,9 @@ namespace bosfuse {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::shell_quote;
 
 const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
-constexpr int kBrowserTimeoutS = 120;
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -32,96 +33,11 @@ std::string read_text(const fs::path& path) {
   return text.str();
 }
 
-// A path in single quotes for /bin/sh (the test's temporary paths hold no quote).
-std::string shell_quote(const fs::path& path) {
-  std::string out = "'";
-  out += path.string();
-  out += '\'';
-  return out;
-}
-
-// For each <img> of the page, once loaded: "complete WxH spread", where
-// spread is max − min of the channel values the browser decoded (drawn on a
-// canvas; data: URIs do not taint it), so a blank image shows as spread 0.
-constexpr const char* kRenderCheckScript = R"js(<script>
-window.addEventListener('load', () => {
-  const out = [];
-  for (const img of document.images) {
-    let spread = -1;
-    try {
-      const canvas = document.createElement('canvas');
-      canvas.width = img.naturalWidth;
-      canvas.height = img.naturalHeight;
-      const g = canvas.getContext('2d');
-      g.drawImage(img, 0, 0);
-      const d = g.getImageData(0, 0, canvas.width, canvas.height).data;
-      let lo = 255, hi = 0;
-      for (let i = 0; i < d.length; i += 4 * 7) {
-        lo = Math.min(lo, d[i], d[i + 1], d[i + 2]);
-        hi = Math.max(hi, d[i], d[i + 1], d[i + 2]);
-      }
-      spread = hi - lo;
-    } catch (e) {
-      spread = -2;
-    }
-    out.push(img.complete + ' ' + img.naturalWidth + 'x' + img.naturalHeight + ' ' + spread);
-  }
-  const pre = document.createElement('pre');
-  pre.id = 'render-check';
-  pre.textContent = out.join(';');
-  document.body.appendChild(pre);
-});
-</script>)js";
-
 class ReportCli : public ::testing::Test {
  protected:
-  static bool have_chromium() { return testing::run_command("which chromium", 10).exit_code == 0; }
-
-  testing::CommandResult chromium(const std::string& args) {
-    return testing::run_command(
-        "chromium --headless --no-sandbox --disable-gpu --disable-dev-shm-usage --no-first-run "
-        "--hide-scrollbars --user-data-dir=" +
-            shell_quote(dir_ / "chromium-profile") + " " + args,
-        kBrowserTimeoutS);
-  }
-
-  struct RenderedImage {
-    bool complete = false;
-    std::string size;  // natural size WxH as decoded by the browser; 0x0 when it could not decode it
-    int spread = -1;   // max − min of the decoded pixel values; 0 for a blank image
-  };
-
-  // Opens a copy of `html` with kRenderCheckScript added in headless
-  // chromium and reads back, from the dumped DOM, what it found per <img>.
-  std::vector<RenderedImage> render_check(std::string html, const fs::path& copy) {
-    const auto body_end = html.rfind("</body>");
-    if (body_end == std::string::npos) {
-      ADD_FAILURE() << "no </body>";
-      return {};
-    }
-    html.insert(body_end, kRenderCheckScript);
-    std::ofstream(copy) << html;
-    const auto dom =
-        chromium("--virtual-time-budget=15000 --dump-dom " + shell_quote(fs::path("file://" + copy.string())));
-    EXPECT_EQ(dom.exit_code, 0) << dom.output.substr(0, 2000);
-    const std::string tag = "<pre id=\"render-check\">";
-    const auto start = dom.output.find(tag);
-    if (start == std::string::npos) {
-      ADD_FAILURE() << "the check script did not run:\n" << dom.output.substr(0, 2000);
-      return {};
-    }
-    const auto text_start = start + tag.size();
-    std::stringstream items(dom.output.substr(text_start, dom.output.find("</pre>", text_start) - text_start));
-    std::vector<RenderedImage> images;
-    for (std::string item; std::getline(items, item, ';') && images.size() < 1000;) {
-      std::stringstream fields(item);
-      std::string complete;
-      RenderedImage image;
-      fields >> complete >> image.size >> image.spread;
-      image.complete = complete == "true";
-      images.push_back(image);
-    }
-    return images;
+  testing::CommandResult chromium(const std::string& args) { return testing::chromium(dir_.path(), args); }
+  std::vector<testing::RenderedImage> render_check(const std::string& html, const fs::path& copy) {
+    return testing::render_check(html, copy, dir_.path());
   }
 
   testing::TempDir dir_;
@@ -129,7 +45,7 @@ class ReportCli : public ::testing::Test {
 
 // The render check itself tells a figure from a broken or a blank one.
 TEST_F(ReportCli, BrowserCheckTellsRenderedFromBrokenAndBlankImages) {
-  if (!have_chromium()) GTEST_FAIL() << "chromium is not installed (scripts/debian-packages.txt lists it)";
+  if (!testing::have_chromium()) GTEST_FAIL() << "chromium is not installed (scripts/debian-packages.txt lists it)";
   cv::Mat drawn(60, 80, CV_8UC3, cv::Scalar(255, 255, 255));
   cv::circle(drawn, {40, 30}, 20, cv::Scalar(200, 30, 30), cv::FILLED);
   const cv::Mat blank(60, 80, CV_8UC3, cv::Scalar(255, 255, 255));
@@ -188,7 +104,7 @@ TEST_F(ReportCli, MakesAReportThatABrowserRendersCompletely) {
   const std::size_t figures = json["figures"].size();
   EXPECT_EQ(figures, 5u);  // overview, two curves, two maps
 
-  if (!have_chromium()) GTEST_FAIL() << "chromium is not installed (scripts/debian-packages.txt lists it)";
+  if (!testing::have_chromium()) GTEST_FAIL() << "chromium is not installed (scripts/debian-packages.txt lists it)";
 
   // 1. Every <img> of the page decoded by the browser, at its size, not blank.
   const auto images = render_check(html, out / "check.html");
