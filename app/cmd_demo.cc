@@ -140,7 +140,8 @@ double true_plume_cooling_rate(const DemoSetup& setup) {
   return 0.8 * sim::ConvectionScene(setup.scene).initial_cooling_rate_per_s();
 }
 
-std::filesystem::path process_and_report(const DemoSetup& setup, const std::filesystem::path& run_dir) {
+std::filesystem::path process_and_report(const DemoArgs& args, const DemoSetup& setup,
+                                         const std::filesystem::path& run_dir) {
   const auto progress = [](const std::string& line) { std::cout << "  " << line << "\n"; };
   cv::imwrite((run_dir / "holder-mask.png").string(), sim::ConvectionScene(setup.scene).holder_mask());
   ProcessOptions process;
@@ -154,7 +155,8 @@ std::filesystem::path process_and_report(const DemoSetup& setup, const std::file
   report::RunReportOptions input_options;
   input_options.px_per_mm = setup.scene.px_per_mm;
   input_options.mask = cv::imread((run_dir / "holder-mask.png").string(), cv::IMREAD_GRAYSCALE);
-  input_options.map_times_s = {20, 120};
+  // Maps early and late in the cooling; the run's times are host seconds.
+  input_options.map_times_s = {0.1 * args.experiment_s / args.speed, 0.6 * args.experiment_s / args.speed};
   input_options.on_progress = progress;
   std::cout << "writing the report ...\n";
   const auto files = report::write_report(report::build_report_input(store, input_options), {}, run_dir / "report");
@@ -206,7 +208,7 @@ void run_demo(const DemoArgs& args) {
   const Recording recording = record_demo(args, setup, run_dir);
   std::cout << recording.summary.BriefReport() << "\n";
   write_truth(run_dir, args, setup);
-  const std::filesystem::path report = process_and_report(setup, run_dir);
+  const std::filesystem::path report = process_and_report(args, setup, run_dir);
   std::cout << "\n";
   print_rates(run_dir, args.speed, true_plume_cooling_rate(setup));
   std::cout << "\nrun:     " << run_dir.string() << "\n"
