@@ -1,5 +1,7 @@
 #include "acquisition/connection_keeper.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cstdio>
 
@@ -16,6 +18,16 @@ std::string seconds_text(std::int64_t ns) {
 }
 
 }  // namespace
+
+void record_device_event(storage::RunWriter& writer, std::int64_t device_id, const std::string& device_name,
+                         const std::string& kind, const std::string& message) {
+  writer.push(storage::Event{0, device_id, utc_now_ns(), kind, message});
+  if (kind == "disconnect" || kind == "error") {
+    spdlog::warn("{}: {}", device_name, message);
+  } else {
+    spdlog::info("{}: {}", device_name, message);
+  }
+}
 
 std::string ConnectionKeeper::Backoff::Validate() const {
   if (initial.count() <= 0 || max < initial) return "backoff must be positive and its maximum at least its start";

@@ -11,7 +11,14 @@
 #include <functional>
 #include <string>
 
+#include "storage/run_writer.h"
+
 namespace bosfuse::acquisition {
+
+// Stores a device's event (connect, disconnect, hotplug, ...) in the run and
+// logs it, as a warning when something went wrong.
+void record_device_event(storage::RunWriter& writer, std::int64_t device_id, const std::string& device_name,
+                         const std::string& kind, const std::string& message);
 
 class ConnectionKeeper {
  public:

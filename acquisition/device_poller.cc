@@ -1,7 +1,5 @@
 #include "acquisition/device_poller.h"
 
-#include <spdlog/spdlog.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <stdexcept>
@@ -67,12 +65,7 @@ DevicePoller::SteadyTime DevicePoller::next_tick_after(SteadyTime now) const {
 }
 
 void DevicePoller::record_event(const std::string& kind, const std::string& message) {
-  writer_.push(storage::Event{0, device_id_, utc_now_ns(), kind, message});
-  if (kind == "disconnect" || kind == "error") {
-    spdlog::warn("{}: {}", name_, message);
-  } else {
-    spdlog::info("{}: {}", name_, message);
-  }
+  record_device_event(writer_, device_id_, name_, kind, message);
 }
 
 bool DevicePoller::ensure_connected() {

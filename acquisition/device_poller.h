@@ -78,7 +78,6 @@ class DevicePoller {
   Options options_;
 
   SteadyTime schedule_origin_;
-  std::int64_t tick_ = 0;
   ConnectionKeeper connection_;
 
   mutable std::mutex mutex_;

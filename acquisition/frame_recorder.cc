@@ -1,7 +1,5 @@
 #include "acquisition/frame_recorder.h"
 
-#include <spdlog/spdlog.h>
-
 #include <cstdio>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
@@ -81,12 +79,7 @@ bool FrameRecorder::wait_until(SteadyTime deadline) {
 }
 
 void FrameRecorder::record_event(const std::string& kind, const std::string& message) {
-  writer_.push(storage::Event{0, device_id_, utc_now_ns(), kind, message});
-  if (kind == "disconnect" || kind == "error") {
-    spdlog::warn("{}: {}", name_, message);
-  } else {
-    spdlog::info("{}: {}", name_, message);
-  }
+  record_device_event(writer_, device_id_, name_, kind, message);
 }
 
 bool FrameRecorder::ensure_connected() {

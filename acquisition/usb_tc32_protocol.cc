@@ -1,9 +1,10 @@
 #include "acquisition/usb_tc32_protocol.h"
 
-#include <bit>
 #include <cctype>
 #include <cmath>
 #include <string_view>
+
+#include "acquisition/hid_protocol.h"  // decode_hid_value: the same little-endian float32
 
 namespace bosfuse::acquisition {
 namespace {
@@ -19,9 +20,9 @@ constexpr std::uint8_t kUnitsCelsius = 0;
 constexpr std::uint8_t kNoWait = 0;
 constexpr std::size_t kConfigBytes = 64;
 
-constexpr float kCommonModeError = -777.0f;
-constexpr float kOpenThermocouple = -888.0f;
-constexpr float kDisabledChannel = -999.0f;
+constexpr double kCommonModeError = -777.0;
+constexpr double kOpenThermocouple = -888.0;
+constexpr double kDisabledChannel = -999.0;
 
 ControlRequest read_float(std::uint8_t request, int input) {
   return {kDeviceToHostVendor, request, static_cast<std::uint16_t>(input),
@@ -64,9 +65,7 @@ ControlRequest tc32_type_config_request(std::span<const std::pair<int, char>> in
 
 ChannelReading decode_tc32_reading(std::span<const std::uint8_t> reply) {
   if (reply.size() != 4) return {std::nullopt, std::nan(""), SampleStatus::kBadReply};
-  const auto bits = static_cast<std::uint32_t>(reply[0]) | static_cast<std::uint32_t>(reply[1]) << 8 |
-                    static_cast<std::uint32_t>(reply[2]) << 16 | static_cast<std::uint32_t>(reply[3]) << 24;
-  const float value = std::bit_cast<float>(bits);
+  const double value = *decode_hid_value(reply, 0, HidValueType::kFloat32, /*big_endian=*/false);
   if (!std::isfinite(value)) return {std::nullopt, value, SampleStatus::kInvalidValue};
   if (value == kOpenThermocouple) return {std::nullopt, value, SampleStatus::kOpenCircuit};
   if (value == kCommonModeError) return {std::nullopt, value, SampleStatus::kOutOfRange};

@@ -108,14 +108,12 @@ Series within(const Series& s, double from_s, double to_s) {
 json number_or_null(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
 
 // The shared fit layout plus what was fitted.
-json fit_json(const fitting::NewtonFit& fit, const std::string& quantity, const std::string& unit) {
-  json j = json::parse(fitting::to_json(fit).dump());
+nlohmann::ordered_json fit_json(const fitting::NewtonFit& fit, const std::string& quantity, const std::string& unit) {
+  nlohmann::ordered_json j = fitting::to_json(fit);
   j["quantity"] = quantity;
   j["unit"] = unit;
   return j;
 }
-
-json agreement_json(const fitting::Agreement& a) { return json::parse(fitting::to_json(a).dump()); }
 
 // °C per px of shift for a channel, from the run's newest calibration.
 struct ChannelCalibration {
@@ -429,7 +427,7 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
       record_fit(pair.probe_fit, storage::FitSubject::kProbe, probe_id, quantity,
                  quantity == "shift_px" ? "px" : "degC");
       const auto agreement = agree(pair, c.name, quantity);
-      json j = agreement_json(agreement);
+      nlohmann::ordered_json j = fitting::to_json(agreement);
       j["probe_quantity"] = quantity;
       agreement_rows.push_back({0, c.id, probe_id, j.dump()});
       text += agreement.brief_report();
