@@ -1,6 +1,5 @@
 #include "acquisition/usb_tc32_protocol.h"
 
-#include <cctype>
 #include <cmath>
 #include <string_view>
 
@@ -47,11 +46,11 @@ ControlRequest tc32_temperature_request(int input) { return read_float(kTin, inp
 
 ControlRequest tc32_cold_junction_request(int input) { return read_float(kCjc, input); }
 
+// The USB-TC's type order, shifted by one: 0 means disabled here.
 std::optional<std::uint8_t> tc32_type_code(char tc_type) {
-  static constexpr std::string_view kOrder = "JKTERSBN";
-  const auto at = kOrder.find(static_cast<char>(std::toupper(static_cast<unsigned char>(tc_type))));
-  if (at == std::string_view::npos) return std::nullopt;
-  return static_cast<std::uint8_t>(at + 1);
+  const auto code = mcc_tc_type_code(std::string_view(&tc_type, 1));
+  if (!code) return std::nullopt;
+  return static_cast<std::uint8_t>(*code + 1);
 }
 
 ControlRequest tc32_type_config_request(std::span<const std::pair<int, char>> input_types) {

@@ -45,6 +45,7 @@ struct DemoArgs {
 // 35 and 45 mm above the cylinder on the plume's axis.
 struct DemoSetup {
   sim::SceneOptions scene;
+  std::shared_ptr<const sim::ConvectionScene> model;  // the scene built once from `scene`
   std::vector<sim::SceneThermocouple> thermocouples;
   double pixel_pitch_um = 5;
 };
@@ -62,6 +63,7 @@ DemoSetup demo_setup(double experiment_s) {
   s.z_d_m = 0.5;
   // Both on the plume's axis, like the paper's pair along the heater, at two heights.
   setup.thermocouples = {{"tc-35mm", 0.0, 0.035, 0.5, 0.05}, {"tc-45mm", 0.0, 0.045, 0.5, 0.05}};
+  setup.model = std::make_shared<const sim::ConvectionScene>(s);
   return setup;
 }
 
@@ -78,7 +80,7 @@ std::string demo_experiment(const DemoSetup& setup, int port, double poll_period
       "poll_period_s = {}\ntimeout_s = 0.5\n",
       s.duration_s, s.z_d_m, s.depth_m, s.px_per_mm * setup.pixel_pitch_um * 1e-3, setup.pixel_pitch_um, s.pressure_pa,
       s.ambient_c, port, poll_period_s);
-  const sim::ConvectionScene scene(s);
+  const sim::ConvectionScene& scene = *setup.model;
   for (std::size_t i = 0; i < setup.thermocouples.size(); ++i) {
     const auto& tc = setup.thermocouples[i];
     const cv::Point2d at = scene.image_position_px(tc.x_m, tc.z_m);
@@ -98,7 +100,7 @@ struct Recording {
 // Simulates the experiment and logs it through the real paths.
 Recording record_demo(const DemoArgs& args, const DemoSetup& setup, const std::filesystem::path& run_dir) {
   const std::int64_t started_ns = acquisition::utc_now_ns();
-  const auto scene = std::make_shared<const sim::ConvectionScene>(setup.scene);
+  const auto& scene = setup.model;
   const auto table = std::make_shared<const sim::SceneThermocoupleTable>(*scene, setup.thermocouples, args.speed,
                                                                          static_cast<std::uint64_t>(started_ns));
   sim::ModbusSimServer server(sim::scene_module_options(table, "adam-6018", setup.scene.ambient_c, 0));
@@ -136,14 +138,12 @@ Recording record_demo(const DemoArgs& args, const DemoSetup& setup, const std::f
 
 // The cooling rate a plume thermocouple sees: with h constant the line heat
 // Q' decays like the cylinder's excess, and the plume's excess like Q'^(4/5).
-double true_plume_cooling_rate(const DemoSetup& setup) {
-  return 0.8 * sim::ConvectionScene(setup.scene).initial_cooling_rate_per_s();
-}
+double true_plume_cooling_rate(const DemoSetup& setup) { return 0.8 * setup.model->initial_cooling_rate_per_s(); }
 
 std::filesystem::path process_and_report(const DemoArgs& args, const DemoSetup& setup,
                                          const std::filesystem::path& run_dir) {
   const auto progress = [](const std::string& line) { std::cout << "  " << line << "\n"; };
-  cv::imwrite((run_dir / "holder-mask.png").string(), sim::ConvectionScene(setup.scene).holder_mask());
+  cv::imwrite((run_dir / "holder-mask.png").string(), setup.model->holder_mask());
   ProcessOptions process;
   process.evaluator.set_grid(16, 8);
   process.mask_file = "holder-mask.png";
@@ -192,7 +192,7 @@ void print_rates(const std::filesystem::path& run_dir, double speed, double true
 // What the simulation knows and the measurement must find, for whoever
 // checks the demo (its end-to-end test does).
 void write_truth(const std::filesystem::path& run_dir, const DemoArgs& args, const DemoSetup& setup) {
-  const sim::ConvectionScene scene(setup.scene);
+  const sim::ConvectionScene& scene = *setup.model;
   nlohmann::json truth = {{"speed", args.speed},
                           {"cylinder_k_per_s", scene.initial_cooling_rate_per_s()},
                           {"plume_k_per_s", true_plume_cooling_rate(setup)},
