@@ -24,12 +24,16 @@ DeviceWorker::DeviceWorker(std::string name, std::int64_t device_id, storage::Ru
 
 DeviceWorker::~DeviceWorker() {
   if (!thread_.joinable()) return;
-  // The thread holds a reference to its worker, so the last reference may
-  // be dropped on the thread itself, which cannot join itself.
-  if (thread_.get_id() == std::this_thread::get_id()) {
-    thread_.detach();
-  } else {
-    thread_.join();  // its function has returned: it released its reference
+  try {
+    // The thread holds a reference to its worker, so the last reference may
+    // be dropped on the thread itself, which cannot join itself.
+    if (thread_.get_id() == std::this_thread::get_id()) {
+      thread_.detach();
+    } else {
+      thread_.join();  // its function has returned: it released its reference
+    }
+  } catch (...) {
+    // join() only fails on a broken thread library; a destructor must not throw.
   }
 }
 
