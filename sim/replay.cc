@@ -73,7 +73,9 @@ RecordedRun inspect_recorded_run(const fs::path& dir) {
   const storage::RunStore store = storage::RunStore::open(dir);
   RecordedRun recorded{dir, store.run(), {}, {}, {}, 0};
   if (recorded.run.status == storage::RunStatus::kRunning) {
-    recorded.problems.push_back("the run was never closed (its logger stopped abruptly); replaying what it committed");
+    recorded.problems.push_back("the run is still being recorded; replaying what it has committed so far");
+  } else if (recorded.run.status == storage::RunStatus::kInterrupted) {
+    recorded.problems.push_back("the run was interrupted (see its events); replaying what it committed");
   }
   const auto channels = store.channels();
   for (const auto& device : store.devices()) {
