@@ -101,6 +101,27 @@ TEST_F(EvaluateCli, WindowLargerThanTheImageIsNamed) {
       << run.output;
 }
 
+// Both once reached int pixel arithmetic that overflowed (seen under UBSan);
+// the probe ran and printed an out-of-ROI row with exit code 0.
+TEST_F(EvaluateCli, ProbeOutsideTheImageIsAnError) {
+  for (const char* probe : {"-2147483648,0", "0,2147483647", "128,10", "nan,3"}) {
+    const auto run = bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " --probe " + probe);
+    EXPECT_NE(run.exit_code, 0) << probe;
+    EXPECT_NE(run.output.find("probe '" + std::string(probe) + "' lies outside the 128x96 image"), std::string::npos)
+        << run.output;
+  }
+}
+
+TEST_F(EvaluateCli, RoiOutsideTheImageIsAnError) {
+  for (const char* roi : {"2147483647,0,10,10", "2147483647,2147483647,2147483647,2147483647"}) {
+    const auto run = bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " --roi " + roi);
+    EXPECT_NE(run.exit_code, 0) << roi;
+    EXPECT_NE(run.output.find("region of interest " + std::string(roi) + " lies outside the 128x96 image"),
+              std::string::npos)
+        << run.output;
+  }
+}
+
 TEST_F(EvaluateCli, ColourImagesAreConvertedWithAWarning) {
   for (const char* name : {"ref", "meas"}) {
     cv::Mat colour;
