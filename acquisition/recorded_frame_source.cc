@@ -3,10 +3,11 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <opencv2/imgcodecs.hpp>
 #include <thread>
 
 #include "acquisition/clock.h"
+#include "acquisition/image_file.h"
+#include "storage/run_paths.h"
 #include "storage/run_store.h"
 
 namespace bosfuse::acquisition {
@@ -33,7 +34,13 @@ std::optional<CapturedFrame> RecordedFrameSource::next(std::chrono::milliseconds
     std::this_thread::sleep_until(due);
     ++next_;
     CapturedFrame frame;
-    frame.image = cv::imread((recorded_.run_dir / record.path).string(), cv::IMREAD_UNCHANGED);
+    try {
+      frame.image = read_image_file(storage::resolve_in_run(recorded_.run_dir, record.path));
+    } catch (const std::exception& e) {  // a path out of the run, or too many pixels
+      spdlog::warn("replay: frame {}: {}; skipped", record.id, e.what());
+      ++skipped_;
+      continue;
+    }
     if (frame.image.empty()) {
       spdlog::warn("replay: frame {} is missing or unreadable; skipped", record.path);
       ++skipped_;

@@ -6,10 +6,10 @@
 #include <array>
 #include <cmath>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
 #include <thread>
 
 #include "acquisition/exif_time.h"
+#include "acquisition/image_file.h"
 
 namespace bosfuse::acquisition {
 namespace fs = std::filesystem;
@@ -124,7 +124,13 @@ std::optional<CapturedFrame> WatchedFolderSource::try_read(const fs::path& path)
   std::error_code error;
   if (bytes.size() != fs::file_size(path, error) || error || !has_end_marker(path, bytes)) return std::nullopt;
   CapturedFrame frame;
-  frame.image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+  try {
+    frame.image = decode_image(bytes, path.filename().string());
+  } catch (const ImageTooLarge& e) {
+    spdlog::warn("{}: {}; skipped", describe(), e.what());
+    done_.insert(path);  // never a frame, however long it settles
+    return std::nullopt;
+  }
   if (frame.image.empty()) return std::nullopt;
   frame.origin = path.filename().string();
   if (const auto exif = exif_capture_time(bytes)) {

@@ -39,14 +39,21 @@ std::vector<int> parse_ints(const std::string& text, std::size_t count, const st
   return values;
 }
 
-cv::Point2d parse_point(const std::string& text) {
+// A point off the image is a typing error, not a probe to flag: say so.
+cv::Point2d parse_point(const std::string& text, cv::Size image_size) {
   const auto comma = text.find(',');
+  cv::Point2d point;
   try {
     if (comma == std::string::npos) throw std::invalid_argument("no comma");
-    return {std::stod(text.substr(0, comma)), std::stod(text.substr(comma + 1))};
+    point = {std::stod(text.substr(0, comma)), std::stod(text.substr(comma + 1))};
   } catch (const std::exception&) {
     throw std::runtime_error("probe '" + text + "' must be x,y in pixels");
   }
+  if (!(point.x >= 0 && point.y >= 0 && point.x <= image_size.width - 1 && point.y <= image_size.height - 1)) {
+    throw std::runtime_error(fmt::format("probe '{}' lies outside the {}x{} image", text, image_size.width,
+                                         image_size.height));
+  }
+  return point;
 }
 
 fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
@@ -89,7 +96,7 @@ void evaluate(const EvaluateArgs& args) {
     result = fusion::evaluate_displacement(reference, measurement, options, mask);
   } else {
     std::vector<cv::Point2d> points;
-    for (const auto& p : args.probes) points.push_back(parse_point(p));
+    for (const auto& p : args.probes) points.push_back(parse_point(p, reference.size()));
     result = fusion::probe_displacement(reference, measurement, points, options, mask);
   }
   if (args.out.empty() || args.out == "-") {

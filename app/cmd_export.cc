@@ -8,17 +8,11 @@
 
 #include "acquisition/clock.h"
 #include "app/command.h"
+#include "report/csv_cell.h"
 #include "storage/run_store.h"
 
 namespace bosfuse::app {
 namespace {
-
-std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return quoted + "\"";
-}
 
 // Samples sharing a timestamp (one poll of one device) share a row; a cell
 // is empty where a channel has no ok sample at that time.
@@ -28,7 +22,7 @@ void write_csv(const storage::RunStore& store, std::ostream& out) {
   out << "time_utc,t_s";
   for (const auto& c : channels) {
     column[c.id] = column.size();
-    out << "," << csv_field(c.name + " [" + c.unit + "]");
+    out << "," << report::csv_text_cell(c.name + " [" + c.unit + "]");
   }
   out << "\n";
   const std::int64_t origin_ns = store.run().started_ns;

@@ -21,6 +21,7 @@
 #include "app/command.h"
 #include "fitting/fit_json.h"
 #include "fitting/newton_fit.h"
+#include "report/csv_cell.h"
 
 namespace bosfuse::app {
 namespace {
@@ -171,7 +172,9 @@ CsvSeries read_series(std::istream& in, const std::string& time_column, const st
   std::string line;
   if (!std::getline(in, line)) throw std::runtime_error("the file is empty");
   if (line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // the UTF-8 byte order mark spreadsheets write
-  const auto header = split_csv_line(line);
+  // Names as written, without the quote that neutralised a formula-like one.
+  std::vector<std::string> header;
+  for (const auto& cell : split_csv_line(line)) header.push_back(report::csv_text_from_cell(cell));
   CsvSeries series;
   const Columns columns{choose_time_column(header, time_column),
                         choose_temperature_column(header, temperature_column, choose_time_column(header, time_column))};

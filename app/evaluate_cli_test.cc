@@ -10,6 +10,7 @@
 
 #include "sim/background_pattern.h"
 #include "sim/synthetic_pair.h"
+#include "tests/support/forged_image.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
 
@@ -99,6 +100,45 @@ TEST_F(EvaluateCli, WindowLargerThanTheImageIsNamed) {
   EXPECT_NE(run.exit_code, 0);
   EXPECT_NE(run.output.find("interrogation window 128 px is larger than the image (128x96)"), std::string::npos)
       << run.output;
+}
+
+// Both once reached int pixel arithmetic that overflowed (seen under UBSan);
+// the probe ran and printed an out-of-ROI row with exit code 0.
+TEST_F(EvaluateCli, ProbeOutsideTheImageIsAnError) {
+  for (const char* probe : {"-2147483648,0", "0,2147483647", "128,10", "nan,3"}) {
+    const auto run = bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " --probe " + probe);
+    EXPECT_NE(run.exit_code, 0) << probe;
+    EXPECT_NE(run.output.find("probe '" + std::string(probe) + "' lies outside the 128x96 image"), std::string::npos)
+        << run.output;
+  }
+}
+
+TEST_F(EvaluateCli, RoiOutsideTheImageIsAnError) {
+  for (const char* roi : {"2147483647,0,10,10", "2147483647,2147483647,2147483647,2147483647"}) {
+    const auto run = bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " --roi " + roi);
+    EXPECT_NE(run.exit_code, 0) << roi;
+    EXPECT_NE(run.output.find("region of interest " + std::string(roi) + " lies outside the 128x96 image"),
+              std::string::npos)
+        << run.output;
+  }
+}
+
+// A few hundred bytes declaring 20000x20000 px: once decoded in full (a
+// 388 KB one took 7.5 GB and 134 s evaluated against itself).
+TEST_F(EvaluateCli, AnImageDeclaringTooManyPixelsIsRefusedUnread) {
+  const auto bomb = testing::png_declaring(20000, 20000);
+  std::ofstream(path("bomb.png"), std::ios::binary).write(reinterpret_cast<const char*>(bomb.data()),
+                                                           static_cast<std::streamsize>(bomb.size()));
+  const auto run = bosfuse("evaluate " + path("bomb.png") + " " + path("bomb.png"));
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.output.find("bomb.png: the image declares 20000x20000 px (400.0 megapixels), over the limit"),
+            std::string::npos)
+      << run.output;
+  // The limit is the user's to set.
+  const auto limited = testing::run_command("env BOSFUSE_MAX_IMAGE_PIXELS=10000 " + kBosfuse + " evaluate " +
+                                            path("ref.png") + " " + path("meas.png"));
+  EXPECT_NE(limited.exit_code, 0);
+  EXPECT_NE(limited.output.find("declares 128x96 px"), std::string::npos) << limited.output;
 }
 
 TEST_F(EvaluateCli, ColourImagesAreConvertedWithAWarning) {

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "acquisition/clock.h"
+#include "storage/run_store.h"
 #include "tests/support/cooling_curve.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
@@ -92,6 +93,46 @@ TEST_F(FitCli, FitsAnExportedRunByIsoTimeOrBySeconds) {
   const auto other = bosfuse("fit " + path("export.csv") + " --temperature-column 'tc0 [degC]'");
   EXPECT_NE(other.exit_code, 0) << "a constant channel has no decay: " << other.output;
   EXPECT_NE(other.output.find("6 rows with an empty cell skipped"), std::string::npos) << other.output;
+}
+
+// A channel named like a formula went into the export as-is, so a
+// spreadsheet opening it ran the command.
+TEST_F(FitCli, AFormulaNamedChannelIsExportedInertAndFitsByItsName) {
+  const std::string name = "=cmd|' /C calc'!A0";
+  const testing::CoolingCurve curve{21.5, 64.0, 0.02};
+  const auto r = testing::sample_cooling(curve, 200, 1.0, 0.03, 5);
+  const std::int64_t start_ns = 1'795'000'000'000'000'000;
+  {
+    auto store = storage::RunStore::create(dir_ / "run", {0, "csv", start_ns, {}, "", storage::RunStatus::kRunning},
+                                           storage::RunStore::CreateMode::kNew);
+    const auto device = store.add_device({0, "adam", "modbus-tcp", "generic", "127.0.0.1:502"});
+    const auto formula = store.add_channel({0, device, name, "thermocouple", "degC", "K", {}, {}});
+    const auto cold = store.add_channel({0, device, "cold", "thermocouple", "degC", "K", {}, {}});
+    std::vector<storage::Sample> samples;
+    for (std::size_t i = 0; i < r.time_s.size(); ++i) {
+      const auto t_ns = start_ns + static_cast<std::int64_t>(std::llround(r.time_s[i] * 1e9));
+      samples.push_back({formula, t_ns, {}, r.temperature_c[i], {}, storage::SampleStatus::kOk});
+      samples.push_back({cold, t_ns, {}, -3.5, {}, storage::SampleStatus::kOk});
+    }
+    store.write_samples(samples);
+    store.finish(storage::RunStatus::kComplete, start_ns + 300'000'000'000);
+  }
+  const auto exported = bosfuse("export " + path("run") + " --csv -o " + path("export.csv"));
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  std::ifstream in(path("export.csv"));
+  std::string header, first;
+  std::getline(in, header);
+  std::getline(in, first);
+  EXPECT_EQ(header, "time_utc,t_s,\"'=cmd|' /C calc'!A0 [degC]\",cold [degC]");
+  EXPECT_TRUE(first.ends_with(",-3.5")) << "a negative number is a number, not a formula: " << first;
+
+  // Shell-quoted: the name holds single quotes, a pipe and an exclamation mark.
+  const auto fitted = bosfuse("fit " + path("export.csv") + " --temperature-column '=cmd|'\\'' /C calc'\\''!A0 [degC]' --json " +
+                              path("fit.json"));
+  ASSERT_EQ(fitted.exit_code, 0) << fitted.output;
+  const auto j = read_json("fit.json");
+  EXPECT_EQ(j.at("input").at("temperature_column"), name + " [degC]");
+  EXPECT_NEAR(j.at("parameters").at("k_per_s").at("value").get<double>(), curve.k_per_s, 0.002);
 }
 
 TEST_F(FitCli, AmbientLossAndSigmaOptionsReachTheFit) {

@@ -1,5 +1,7 @@
 #include "app/image_io.h"
 
+#include "acquisition/image_file.h"
+
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
@@ -8,7 +10,7 @@ namespace bosfuse::app {
 
 cv::Mat read_image(const std::string& path, const std::string& role) {
   if (!std::filesystem::exists(path)) throw std::runtime_error(role + " " + path + ": no such file");
-  cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  cv::Mat image = acquisition::read_image_file(path);  // throws when the header declares too many pixels
   if (image.empty())
     throw std::runtime_error(role + " " + path + ": unreadable image (not a format OpenCV can decode)");
   return image;

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "sim/synthetic_pair.h"
+#include "storage/database.h"
 #include "storage/processing_store.h"
 #include "storage/run_store.h"
 #include "tests/support/subprocess.h"
@@ -249,6 +250,35 @@ TEST_F(ProcessCli, CalibrateBeforeProcessAndARunWithoutReferenceAreExplained) {
   const auto run = bosfuse("process --probes-only");
   EXPECT_NE(run.exit_code, 0);
   EXPECT_NE(run.output.find("no reference frame"), std::string::npos) << run.output;
+}
+
+// Frame f3 (id 4) moved out of the run, a valid image still; its row names
+// it by `stored`, or a symlink in its place leads to it.
+void move_frame_out(const std::filesystem::path& run, const std::string& stored, bool symlink) {
+  std::filesystem::rename(run / "frames/f3.png", run.parent_path() / "outside.png");
+  if (symlink) {
+    std::filesystem::create_symlink(run.parent_path() / "outside.png", run / "frames/f3.png");
+    return;
+  }
+  storage::Database db((run / "run.sqlite").string(), storage::Database::Mode::kReadWrite);
+  db.prepare("UPDATE frames SET path = ? WHERE path = 'frames/f3.png'").bind_all(stored).run();
+}
+
+TEST_F(ProcessCli, AFramePathLeadingOutOfTheRunIsRefusedByName) {
+  for (const std::string stored : {"../outside.png", "/etc/passwd", ""}) {
+    std::filesystem::remove_all(dir_.path());
+    std::filesystem::create_directories(dir_.path());
+    channels_.clear();
+    points_.clear();
+    make_run(true);
+    move_frame_out(run_dir(), stored, stored.empty());
+    const auto run = bosfuse("process --probes-only " + grid_);
+    EXPECT_NE(run.exit_code, 0) << stored << ": " << run.output;
+    const std::string named = stored.empty() ? "frame 4: stored path 'frames/f3.png' refused: a symlink along it leads"
+                                             : "frame 4: stored path '" + stored + "' refused";
+    EXPECT_NE(run.output.find(named), std::string::npos) << run.output;
+    EXPECT_TRUE(storage::ProcessingStore(run_dir()).probes().empty()) << "nothing stored from a refused run";
+  }
 }
 
 TEST_F(ProcessCli, TheCameraOffsetMovesProbeTimesOntoTheHostClock) {

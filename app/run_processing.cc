@@ -17,6 +17,7 @@
 #include "fusion/temperature_field.h"
 #include "fusion/time_alignment.h"
 #include "storage/processing_store.h"
+#include "storage/run_paths.h"
 #include "storage/run_store.h"
 
 namespace bosfuse::app {
@@ -76,8 +77,15 @@ std::vector<ChannelInfo> positioned_channels(const std::vector<ChannelInfo>& cha
   return out;
 }
 
+// A frame the run cannot deliver (missing, unreadable, or a stored path that
+// leads outside the run) stops processing, naming the frame.
 cv::Mat load_frame(const fs::path& run_dir, const FrameRecord& frame) {
-  return read_image((run_dir / frame.path).string(), "frame " + std::to_string(frame.id));
+  const std::string role = "frame " + std::to_string(frame.id);
+  try {
+    return read_image(storage::resolve_in_run(run_dir, frame.path).string(), role);
+  } catch (const storage::StorageError& e) {
+    throw std::runtime_error(role + ": " + e.what());
+  }
 }
 
 struct Series {

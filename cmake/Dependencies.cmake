@@ -10,6 +10,12 @@ pkg_check_modules(UMOCKDEV REQUIRED IMPORTED_TARGET umockdev-1.0)
 # provides the pngcairo and svgcairo devices, loaded at run time.
 pkg_check_modules(PLPLOT REQUIRED IMPORTED_TARGET plplot)
 find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs videoio video)
+# The codecs' own libraries, to read an image's declared size from its header
+# before OpenCV decodes it (acquisition/image_file.h). libopencv-dev brings
+# their -dev packages.
+find_package(PNG REQUIRED)
+find_package(JPEG REQUIRED)
+find_package(TIFF REQUIRED)
 find_package(Eigen3 REQUIRED NO_MODULE)
 find_package(Ceres REQUIRED)
 find_package(CLI11 REQUIRED CONFIG)

@@ -336,15 +336,19 @@ GridGeometry probe_grid(cv::Point2d point, const XcorrOptions& options, int cont
 
 // The part of the image a probe's local grid can reach: its windows, the
 // search around them, and the deformation's shift plus interpolation kernel.
+// Computed in double and clipped before it becomes int: a probe point comes
+// from a user or a stored run and may lie anywhere (even at -2^31 or NaN),
+// where int pixel arithmetic would overflow.
 cv::Rect probe_reach(const GridGeometry& grid, const XcorrOptions& options, cv::Size image_size) {
   const int first = options.window_px_per_pass().front();
-  const int margin = first / 2 + 2 + std::max(options.search_radius_px(0), options.search_radius_px(1)) + 4 +
-                     static_cast<int>(std::ceil(options.max_shift_px));
-  const int x0 = static_cast<int>(std::floor(grid.x0_px)) - margin;
-  const int y0 = static_cast<int>(std::floor(grid.y0_px)) - margin;
-  const int x1 = static_cast<int>(std::ceil(grid.x0_px + (grid.cols - 1) * grid.step_px)) + margin;
-  const int y1 = static_cast<int>(std::ceil(grid.y0_px + (grid.rows - 1) * grid.step_px)) + margin;
-  return cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1) & cv::Rect({0, 0}, image_size);
+  const double margin = first / 2 + 2 + std::max(options.search_radius_px(0), options.search_radius_px(1)) + 4 +
+                        std::ceil(options.max_shift_px);
+  const double x0 = std::max(std::floor(grid.x0_px) - margin, 0.0);
+  const double y0 = std::max(std::floor(grid.y0_px) - margin, 0.0);
+  const double x1 = std::min(std::ceil(grid.x0_px + (grid.cols - 1) * grid.step_px) + margin, image_size.width - 1.0);
+  const double y1 = std::min(std::ceil(grid.y0_px + (grid.rows - 1) * grid.step_px) + margin, image_size.height - 1.0);
+  if (!(x1 >= x0 && y1 >= y0)) return {};  // outside the image, or not a number
+  return {static_cast<int>(x0), static_cast<int>(y0), static_cast<int>(x1 - x0) + 1, static_cast<int>(y1 - y0) + 1};
 }
 
 void flag_nodes_outside(const PreparedPair& pair, int window_px, DisplacementField& field) {

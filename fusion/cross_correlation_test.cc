@@ -195,6 +195,26 @@ TEST(CrossCorrelation, ProbeOutsideTheImageIsFlagged) {
   EXPECT_EQ(result.field.vectors[2].flag, VectorFlag::kOutOfRoi);
 }
 
+// Points at the ends of the int range (and beyond it) once overflowed the
+// reach's pixel arithmetic (seen under UBSan); they are flagged like any
+// probe outside the image.
+TEST(CrossCorrelation, ProbesFarOutsideTheImageAreFlaggedWithoutOverflow) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.5, 0.5), 64);
+  const std::vector<cv::Point2d> points = {{-2147483648.0, 0},   {2147483647.0, 10},   {2147483600.0, 10},
+                                           {10, -2147483648.0},  {1e300, -1e300},      {NAN, 10},
+                                           {31.5, 31.5}};
+  for (int context : {-1, 0, 1}) {
+    XcorrOptions options;
+    options.probe_context_nodes = context;
+    const auto result = probe_xcorr(pair.reference, pair.measurement, points, options);
+    ASSERT_EQ(result.field.size(), points.size());
+    for (std::size_t i = 0; i + 1 < points.size(); ++i) {
+      EXPECT_EQ(result.field.vectors[i].flag, VectorFlag::kOutOfRoi) << "point " << i << ", context " << context;
+    }
+    EXPECT_EQ(result.field.vectors.back().flag, VectorFlag::kOk);
+  }
+}
+
 TEST(CrossCorrelation, DirectAndFftCorrelationGiveTheSameField) {
   const auto pair = render(sim::DisplacementModel::bump_gradient(128, 128, 40, 2.0), 192);
   XcorrOptions options;

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <stdexcept>
 
 namespace bosfuse::fusion {
@@ -17,14 +19,19 @@ std::string EvaluationSummary::BriefReport() const {
 }
 
 cv::Rect effective_roi(cv::Rect roi, cv::Size image_size) {
-  const cv::Rect image(cv::Point(0, 0), image_size);
-  if (roi.area() == 0) return image;
-  const cv::Rect clipped = roi & image;
-  if (clipped.area() == 0) {
-    throw std::invalid_argument(fmt::format("region of interest {},{},{},{} lies outside the {}x{} image", roi.x, roi.y,
-                                            roi.width, roi.height, image_size.width, image_size.height));
+  if (roi.width == 0 || roi.height == 0) return {cv::Point(0, 0), image_size};
+  const std::string described = fmt::format("region of interest {},{},{},{}", roi.x, roi.y, roi.width, roi.height);
+  if (roi.width < 0 || roi.height < 0) throw std::invalid_argument(described + " has a negative size");
+  // 64-bit: x + width of a user's ROI need not fit an int (cv::Rect::area and
+  // operator& would overflow).
+  const std::int64_t x0 = std::max<std::int64_t>(roi.x, 0), y0 = std::max<std::int64_t>(roi.y, 0);
+  const std::int64_t x1 = std::min<std::int64_t>(std::int64_t{roi.x} + roi.width, image_size.width);
+  const std::int64_t y1 = std::min<std::int64_t>(std::int64_t{roi.y} + roi.height, image_size.height);
+  if (x1 <= x0 || y1 <= y0) {
+    throw std::invalid_argument(
+        fmt::format("{} lies outside the {}x{} image", described, image_size.width, image_size.height));
   }
-  return clipped;
+  return {static_cast<int>(x0), static_cast<int>(y0), static_cast<int>(x1 - x0), static_cast<int>(y1 - y0)};
 }
 
 GridGeometry evaluation_grid(cv::Rect roi, int window_px, int step_px) {

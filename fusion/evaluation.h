@@ -38,7 +38,8 @@ struct EvaluationResult {
 };
 
 // The region of interest clipped to the image; an empty `roi` means the whole
-// image. Throws std::invalid_argument if it lies outside the image.
+// image. Throws std::invalid_argument if it lies outside the image or has a
+// negative size. Any int rect is safe: the arithmetic is 64-bit.
 cv::Rect effective_roi(cv::Rect roi, cv::Size image_size);
 
 // Window centres for windows of `window_px` placed every `step_px` inside

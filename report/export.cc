@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "fitting/fit_json.h"
+#include "report/csv_cell.h"
 
 namespace bosfuse::report {
 namespace {
@@ -30,16 +31,7 @@ std::string num(double v) { return std::isfinite(v) ? fmt::format("{}", v) : std
 
 ordered_json json_num(double v) { return std::isfinite(v) ? ordered_json(v) : ordered_json(nullptr); }
 
-// A CSV field, quoted when it holds a comma, quote or line break.
-std::string field(const std::string& text) {
-  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"') out += '"';
-    out += c;
-  }
-  return out + "\"";
-}
+std::string field(const std::string& text) { return csv_text_cell(text); }
 
 bool fit_ok(const CurveSeries& s) { return s.fit && s.fit->ok(); }
 

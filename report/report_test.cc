@@ -185,6 +185,27 @@ TEST_F(Report, CsvAndJsonHoldEveryChannelsDataAndTheFitsWithIntervals) {
             json["maps"][0]["masked_cells"].get<long>());
 }
 
+// A channel's name went into the CSV as-is, so a spreadsheet ran it.
+TEST(ReportCsv, AFormulaLikeNameIsInertAndNumbersStayNumbers) {
+  testing::TempDir dir;
+  ReportInput input;
+  CurveSeries s;
+  s.name = "=cmd|' /C calc'!A0";
+  s.kind = SeriesKind::kThermocouple;
+  s.time_s = {0, 1.5};
+  s.temperature_c = {-3.5, -4};
+  input.series.push_back(s);
+  write_series_csv(input, dir / "series.csv");
+  write_fits_csv(input, dir / "fits.csv");
+  const auto series = lines_of(read_text(dir / "series.csv"));
+  ASSERT_EQ(series.size(), 3u);
+  EXPECT_EQ(series[1], "\"'=cmd|' /C calc'!A0\",thermocouple,0,-3.5,,");
+  EXPECT_EQ(series[2], "\"'=cmd|' /C calc'!A0\",thermocouple,1.5,-4,,");
+  const auto fits = lines_of(read_text(dir / "fits.csv"));
+  ASSERT_EQ(fits.size(), 2u);
+  EXPECT_EQ(fits[1].rfind("\"'=cmd|' /C calc'!A0\",thermocouple,false,", 0), 0u) << fits[1];
+}
+
 TEST_F(Report, ProbesAgreementAndTemperatureMapsAppearWhenProvided) {
   ReportInput input = testdata::sample_input(true);
   CurveSeries probe = testdata::cooling_series("tc0 probe", 0.0102, 80, 22, 40, 10.0, 0.4, 9);

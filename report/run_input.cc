@@ -14,8 +14,10 @@
 #include <set>
 #include <sstream>
 
+#include "acquisition/image_file.h"
 #include "fusion/image_quality.h"
 #include "storage/processing_store.h"
+#include "storage/run_paths.h"
 
 namespace bosfuse::report {
 namespace {
@@ -33,12 +35,17 @@ std::optional<std::int64_t> first_sample_ns(const storage::RunStore& store) {
 double seconds_since(std::int64_t t_ns, std::int64_t origin_ns) { return static_cast<double>(t_ns - origin_ns) * 1e-9; }
 
 cv::Mat read_frame(const storage::RunStore& store, const storage::FrameRecord& frame) {
-  const fs::path path = store.dir() / frame.path;
+  fs::path path;
+  try {
+    path = storage::resolve_in_run(store.dir(), frame.path);
+  } catch (const storage::StorageError& e) {
+    throw std::runtime_error("cannot read frame " + std::to_string(frame.id) + ": " + e.what());
+  }
   if (!fs::is_regular_file(path)) {
     throw std::runtime_error("cannot read frame " + std::to_string(frame.id) + " ('" + path.string() +
                              "'): no such file");
   }
-  cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  cv::Mat image = acquisition::read_image_file(path);
   if (image.empty())
     throw std::runtime_error("cannot read frame " + std::to_string(frame.id) + " ('" + path.string() + "')");
   return image;
@@ -297,7 +304,7 @@ StoredResults load_stored_results(const storage::RunStore& store, std::int64_t o
       if (!done.insert(nearest->first.frame_id).second) continue;
       const double frame_t = seconds_since(nearest->second, origin_ns);
       try {
-        const fs::path path = store.dir() / nearest->first.path;
+        const fs::path path = storage::resolve_in_run(store.dir(), nearest->first.path);
         MapField map = kind == "temperature" ? read_temperature_csv(path) : read_displacement_csv(path);
         map.time_s = frame_t;
         map.image_size_px = image_size;

@@ -6,6 +6,7 @@
 
 #include "report/report.h"
 #include "report/test_run.h"
+#include "storage/database.h"
 #include "storage/processing_store.h"
 #include "tests/support/temp_dir.h"
 
@@ -117,6 +118,68 @@ TEST(RunInput, AMissingFrameFileIsANoteNotAFailure) {
   EXPECT_NE(notes.find("No displacement map at t = 60.0 s: cannot read frame"), std::string::npos) << notes;
   EXPECT_NE(notes.find("No image quality index: cannot read frame"), std::string::npos) << notes;
   EXPECT_FALSE(input.quality);
+}
+
+// The frame at 60 s moved out of the run (a valid image still), its row
+// pointing at it by `stored`, or a symlink in its place leading to it.
+ReportInput input_with_frame_outside(const std::filesystem::path& dir, const std::string& stored, bool symlink) {
+  namespace fs = std::filesystem;
+  testrun::create_run(dir / "run", true);
+  fs::rename(dir / "run/frames/frame1.png", dir / "outside.png");
+  if (symlink) {
+    fs::create_symlink(dir / "outside.png", dir / "run/frames/frame1.png");
+  } else {
+    storage::Database db((dir / "run/run.sqlite").string(), storage::Database::Mode::kReadWrite);
+    db.prepare("UPDATE frames SET path = ? WHERE path = 'frames/frame1.png'").bind_all(stored).run();
+  }
+  return build_report_input(storage::RunStore::open(dir / "run"));
+}
+
+std::string all_notes(const ReportInput& input) {
+  std::string notes;
+  for (const auto& n : input.notes) notes += n + "\n";
+  return notes + input.displacement_maps_note;
+}
+
+TEST(RunInput, AFramePathLeadingOutOfTheRunIsRefusedByName) {
+  for (const std::string stored : {"../outside.png", "/etc/passwd"}) {
+    testing::TempDir dir;
+    const auto input = input_with_frame_outside(dir.path(), stored, false);
+    EXPECT_EQ(input.displacement_maps.size(), 1u) << "only the frame inside the run: " << stored;
+    const std::string notes = all_notes(input);
+    EXPECT_NE(notes.find("No displacement map at t = 60.0 s: cannot read frame 3: stored path '" + stored + "' refused"),
+              std::string::npos)
+        << notes;
+  }
+}
+
+TEST(RunInput, AFrameSymlinkOutOfTheRunIsRefusedByName) {
+  testing::TempDir dir;
+  const auto input = input_with_frame_outside(dir.path(), "", true);
+  EXPECT_EQ(input.displacement_maps.size(), 1u) << "the symlinked frame outside the run was read";
+  const std::string notes = all_notes(input);
+  EXPECT_NE(notes.find("stored path 'frames/frame1.png' refused: a symlink along it leads outside the run"),
+            std::string::npos)
+      << notes;
+}
+
+TEST(RunInput, AStoredFieldPathLeadingOutOfTheRunIsRefusedByName) {
+  testing::TempDir dir;
+  testrun::create_run(dir / "run", true);
+  std::ofstream(dir / "outside.csv") << "x,y,temperature_c,measured\n8.0,8.0,30.5,1\n16.0,8.0,25.0,1\n";
+  {
+    const auto frames = storage::RunStore::open(dir / "run").frames();
+    storage::ProcessingStore results(dir / "run", true);
+    results.add_field({0, frames[2].id, "temperature", "../outside.csv", "{}"});
+    results.add_field({0, frames[1].id, "temperature", "/etc/passwd", "{}"});
+  }
+  RunReportOptions options;
+  options.map_times_s = {10, 60};
+  const auto input = build_report_input(storage::RunStore::open(dir / "run"), options);
+  EXPECT_TRUE(input.temperature_maps.empty()) << "a field file outside the run was read";
+  const std::string notes = all_notes(input);
+  EXPECT_NE(notes.find("stored path '../outside.csv' refused: it has a '..' component"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("stored path '/etc/passwd' refused: it is absolute"), std::string::npos) << notes;
 }
 
 TEST(RunInput, DisplacementMagnitudeMapMasksWhatWasNotMeasured) {

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <toml++/toml.h>
 
+#include "storage/run_paths.h"
 #include "storage/run_store.h"
 
 namespace bosfuse::sim {
@@ -37,12 +39,6 @@ std::chrono::nanoseconds median_interval(const std::vector<storage::Sample>& sam
   return std::chrono::nanoseconds(std::max<std::int64_t>(gaps[gaps.size() / 2], 1'000'000));
 }
 
-std::string quoted(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) out += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
-  return out + "\"";
-}
-
 std::string number(double value) {
   std::ostringstream out;
   out.precision(17);
@@ -50,13 +46,52 @@ std::string number(double value) {
   return out.str();
 }
 
+toml::table channel_table(const storage::ChannelInfo& channel, std::size_t index) {
+  toml::table t{{"name", channel.name},
+                {"kind", channel.kind},
+                {"unit", channel.unit},
+                {"register", "holding"},
+                {"address", static_cast<std::int64_t>(2 * index)},
+                {"type", "float32"},
+                {"open_circuit_codes", toml::array{kOpenCircuitCode}},
+                {"out_of_range_codes", toml::array{kOutOfRangeCode}}};
+  if (channel.tc_type) t.insert("tc_type", *channel.tc_type);
+  if (channel.image_x_px && channel.image_y_px) {
+    t.insert("position_px", toml::array{*channel.image_x_px, *channel.image_y_px});
+  }
+  return t;
+}
+
+toml::table device_table(const ReplayDevice& device, int port, double speed) {
+  const double period_s = std::chrono::duration<double>(device.period).count() / speed;
+  toml::array channels;
+  for (std::size_t c = 0; c < device.channels.size(); ++c) channels.push_back(channel_table(device.channels[c], c));
+  return toml::table{{"name", device.name},
+                     {"profile", "generic"},
+                     {"transport", "tcp"},
+                     {"host", "127.0.0.1"},
+                     {"port", port},
+                     {"poll_period_s", std::max(period_s, 0.001)},
+                     {"timeout_s", 1.0},
+                     {"poll_count", static_cast<std::int64_t>(device.samples.front().size())},
+                     {"channels", std::move(channels)}};
+}
+
+// A frame whose stored path leads outside the run is refused by name and
+// skipped like a missing one: nothing outside the run is copied into the new one.
 void inspect_frames(const storage::RunStore& store, RecordedRun& recorded) {
   for (const auto& device : store.devices()) {
     if (device.kind != "camera") continue;
     std::size_t present = 0, missing = 0;
     for (const auto& frame : store.frames()) {
       if (frame.device_id != device.id) continue;
-      (fs::exists(recorded.dir / frame.path) ? present : missing) += 1;
+      try {
+        (fs::exists(storage::resolve_in_run(recorded.dir, frame.path)) ? present : missing) += 1;
+      } catch (const storage::StorageError& e) {
+        recorded.problems.push_back("camera " + device.name + ": frame " + std::to_string(frame.id) + ": " +
+                                    e.what() + "; it is skipped");
+        missing += 1;
+      }
       recorded.last_offset_ns = std::max(recorded.last_offset_ns, frame.t_ns - recorded.run.started_ns);
     }
     if (missing > 0) {
@@ -124,31 +159,21 @@ ModbusSimServer::Options replay_module_options(const ReplayDevice& device, int p
 }
 
 std::string replay_experiment_toml(const RecordedRun& run, const std::vector<int>& ports, double speed) {
-  std::ostringstream toml;
-  toml << "# Replay of " << run.dir.string() << " at " << number(speed) << "x, written by bosfuse replay.\n"
-       << "[run]\nname = " << quoted("replay of " + run.run.name) << "\n";
-  for (std::size_t d = 0; d < run.devices.size(); ++d) {
-    const ReplayDevice& device = run.devices[d];
-    const double period_s = std::chrono::duration<double>(device.period).count() / speed;
-    toml << "\n[[devices]]\nname = " << quoted(device.name) << "\nprofile = \"generic\"\ntransport = \"tcp\"\n"
-         << "host = \"127.0.0.1\"\nport = " << ports.at(d) << "\npoll_period_s = " << number(std::max(period_s, 0.001))
-         << "\ntimeout_s = 1.0\npoll_count = " << device.samples.front().size() << "\n";
-    for (std::size_t c = 0; c < device.channels.size(); ++c) {
-      const storage::ChannelInfo& channel = device.channels[c];
-      toml << "  [[devices.channels]]\n  name = " << quoted(channel.name) << "\n  kind = " << quoted(channel.kind)
-           << "\n  unit = " << quoted(channel.unit) << "\n  register = \"holding\"\n  address = " << 2 * c
-           << "\n  type = \"float32\"\n  open_circuit_codes = [" << number(kOpenCircuitCode)
-           << "]\n  out_of_range_codes = [" << number(kOutOfRangeCode) << "]\n";
-      if (channel.tc_type) toml << "  tc_type = " << quoted(*channel.tc_type) << "\n";
-      if (channel.image_x_px && channel.image_y_px) {
-        toml << "  position_px = [" << number(*channel.image_x_px) << ", " << number(*channel.image_y_px) << "]\n";
-      }
-    }
-  }
+  // Built as a toml++ table, not by hand: names come from a recorded run and
+  // may hold any character (control characters, quotes, non-ASCII), which
+  // toml++ escapes so the logger reads back exactly the same string.
+  toml::array devices;
+  for (std::size_t d = 0; d < run.devices.size(); ++d) devices.push_back(device_table(run.devices[d], ports.at(d), speed));
+  toml::array cameras;
   for (const std::string& camera : run.cameras) {
-    toml << "\n[[cameras]]\nname = " << quoted(camera) << "\nsource = \"replay\"\nrun = " << quoted(run.dir.string())
-         << "\ncamera = " << quoted(camera) << "\nspeed = " << number(speed) << "\nreference_frames = 0\n";
+    cameras.push_back(toml::table{{"name", camera},          {"source", "replay"}, {"run", run.dir.string()},
+                                  {"camera", camera},        {"speed", speed},     {"reference_frames", 0}});
   }
+  toml::table document{{"run", toml::table{{"name", "replay of " + run.run.name}}}};
+  if (!devices.empty()) document.insert("devices", std::move(devices));
+  if (!cameras.empty()) document.insert("cameras", std::move(cameras));
+  std::ostringstream toml;
+  toml << "# Replay of a recorded run at " << number(speed) << "x, written by bosfuse replay.\n" << document << "\n";
   return toml.str();
 }
 

@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "acquisition/clock.h"
+#include "storage/database.h"
 #include "storage/run_store.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
@@ -22,12 +23,12 @@ const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
 
 // A run as the logger leaves it: two thermocouples polled every 50 ms (with
 // an open input and an out-of-range reading among them) and three frames.
-void make_recorded_run(const fs::path& dir, bool close_it) {
+void make_recorded_run(const fs::path& dir, bool close_it, const std::string& tc0_name = "tc0") {
   const std::int64_t start = acquisition::utc_now_ns();
   auto store = storage::RunStore::create(dir, {0, "cooling", start, {}, "# recorded", storage::RunStatus::kRunning},
                                          storage::RunStore::CreateMode::kNew);
   const auto adam = store.add_device({0, "adam", "modbus-tcp", "adam-6018", "10.0.0.5:502"});
-  const auto tc0 = store.add_channel({0, adam, "tc0", "thermocouple", "degC", "K", 612.0, 388.0});
+  const auto tc0 = store.add_channel({0, adam, tc0_name, "thermocouple", "degC", "K", 612.0, 388.0});
   const auto tc1 = store.add_channel({0, adam, "tc1", "thermocouple", "degC", "K", {}, {}});
   std::vector<storage::Sample> samples;
   for (int i = 0; i < 30; ++i) {
@@ -114,6 +115,20 @@ TEST(Replay, RecordReplayRecordHoldsTheSameSamplesAndFrames) {
   EXPECT_EQ(tc0->tc_type, "K");
 }
 
+// Hand quoting escaped only " and \, so a control character made the
+// replay's experiment file unreadable and the replay failed.
+TEST(Replay, AChannelNameWithAnyCharacterIsReplayedUnchanged) {
+  const std::string name = "tc\x01 \"zero\"\t\\back\\slash\nnext line \u00b0C \u0394T";
+  testing::TempDir dir;
+  make_recorded_run(dir / "original", true, name);
+  const auto result = replay(dir / "original", dir / "replay");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const auto original = storage::RunStore::open(dir / "original");
+  const auto replayed = storage::RunStore::open(dir / "replay");
+  expect_same_samples(original, replayed);  // by channel name, so the name came back equal
+  EXPECT_EQ(samples_by_name(replayed).count(name), 1u);
+}
+
 TEST(Replay, DamagedRunSaysWhatIsMissingAndReplaysTheRest) {
   testing::TempDir dir;
   make_recorded_run(dir / "original", false);  // never closed: its logger died
@@ -127,6 +142,30 @@ TEST(Replay, DamagedRunSaysWhatIsMissingAndReplaysTheRest) {
   const auto replayed = storage::RunStore::open(dir / "replay");
   expect_same_samples(original, replayed);
   expect_same_frames(original, replayed, 1);
+}
+
+// Frame 000001 moved out of the run (a valid image still); its row names it
+// by `stored`, or a symlink in its place leads to it. Before, replay copied
+// it into the new run byte for byte.
+TEST(Replay, AFramePathLeadingOutOfTheRunIsRefusedByNameAndSkipped) {
+  for (const std::string stored : {"../outside.png", "/etc/passwd", ""}) {
+    testing::TempDir dir;
+    make_recorded_run(dir / "original", true);
+    fs::rename(dir / "original/frames/cam/000001.png", dir / "outside.png");
+    if (stored.empty()) {
+      fs::create_symlink(dir / "outside.png", dir / "original/frames/cam/000001.png");
+    } else {
+      storage::Database db((dir / "original/run.sqlite").string(), storage::Database::Mode::kReadWrite);
+      db.prepare("UPDATE frames SET path = ? WHERE path = 'frames/cam/000001.png'").bind_all(stored).run();
+    }
+    const auto result = replay(dir / "original", dir / "replay");
+    ASSERT_EQ(result.exit_code, 0) << result.output;
+    const std::string named = "stored path '" + (stored.empty() ? "frames/cam/000001.png" : stored) + "' refused";
+    EXPECT_NE(result.output.find(named), std::string::npos) << result.output;
+    const auto replayed = storage::RunStore::open(dir / "replay");
+    EXPECT_EQ(replayed.frames().size(), 2u) << "the frame outside the run was copied: " << stored;
+    expect_same_frames(storage::RunStore::open(dir / "original"), replayed, 1);
+  }
 }
 
 TEST(Replay, AFolderWithoutARunIsRefused) {

@@ -1,0 +1,85 @@
+#include "acquisition/image_file.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <opencv2/imgcodecs.hpp>
+
+#include "tests/support/forged_image.h"
+#include "tests/support/temp_dir.h"
+#include "tests/support/test_images.h"
+
+namespace bosfuse::acquisition {
+namespace {
+
+TEST(ImageFile, TheDeclaredSizeComesFromTheHeaderOfEachFormat) {
+  const cv::Mat image = testing::textured_frame(1, CV_8U, {40, 30});
+  for (const char* extension : {".png", ".jpg", ".tif"}) {
+    const auto size = declared_image_size(testing::encoded(image, extension));
+    ASSERT_TRUE(size) << extension;
+    EXPECT_EQ(size->width_px, 40) << extension;
+    EXPECT_EQ(size->height_px, 30) << extension;
+  }
+  const auto forged = declared_image_size(testing::png_declaring(20000, 20000));
+  ASSERT_TRUE(forged);
+  EXPECT_EQ(forged->width_px, 20000);
+  EXPECT_FALSE(declared_image_size(std::vector<std::uint8_t>{'n', 'o', 't'}));
+  EXPECT_FALSE(declared_image_size(testing::encoded(image, ".bmp"))) << "no header reader for BMP";
+}
+
+// The 388 KB PNG of 20000x20000 zeros once took 7.5 GB and 134 s; its
+// header alone now refuses it, with the file's name and declared size.
+TEST(ImageFile, AHugeDeclaredSizeIsRefusedBeforeDecoding) {
+  try {
+    decode_image(testing::png_declaring(20000, 20000), "bomb.png");
+    FAIL() << "decoded";
+  } catch (const ImageTooLarge& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("bomb.png: the image declares 20000x20000 px (400.0 megapixels), over", 0),
+              0u)
+        << e.what();
+  }
+  EXPECT_THROW(decode_image(testing::png_declaring(30001, 1), "wide.png"), ImageTooLarge) << "a side over 30000 px";
+  EXPECT_THROW(decode_image(testing::png_declaring(0x7fffffff, 0x7fffffff), "max.png"), ImageTooLarge);
+}
+
+TEST(ImageFile, TheLimitsApplyToEveryFormatWithAHeaderReader) {
+  const cv::Mat image = testing::textured_frame(2, CV_16U, {40, 30});
+  const ImageLimits small{1000, 30000};
+  for (const char* extension : {".png", ".tif"}) {
+    const auto bytes = testing::encoded(image, extension);
+    EXPECT_THROW(decode_image(bytes, extension, small), ImageTooLarge) << extension;
+    const cv::Mat decoded = decode_image(bytes, extension);
+    ASSERT_EQ(decoded.type(), CV_16U) << extension;
+    EXPECT_EQ(cv::norm(decoded, image, cv::NORM_INF), 0.0) << extension;
+  }
+  EXPECT_THROW(decode_image(testing::encoded(testing::textured_frame(3), ".jpg"), "j", {100, 30000}), ImageTooLarge);
+  EXPECT_THROW(decode_image(testing::encoded(image, ".png"), "side", {100'000, 39}), ImageTooLarge);
+}
+
+TEST(ImageFile, TheLimitsComeFromTheEnvironment) {
+  ::setenv("BOSFUSE_MAX_IMAGE_PIXELS", "1000", 1);
+  ::setenv("BOSFUSE_MAX_IMAGE_SIDE_PX", "50", 1);
+  const ImageLimits limits = ImageLimits::from_environment();
+  ::setenv("BOSFUSE_MAX_IMAGE_PIXELS", "lots", 1);
+  EXPECT_THROW(ImageLimits::from_environment(), std::invalid_argument);
+  ::unsetenv("BOSFUSE_MAX_IMAGE_PIXELS");
+  ::unsetenv("BOSFUSE_MAX_IMAGE_SIDE_PX");
+  EXPECT_EQ(limits.max_pixels, 1000);
+  EXPECT_EQ(limits.max_side_px, 50);
+  const ImageLimits defaults = ImageLimits::from_environment();
+  EXPECT_EQ(defaults.max_pixels, 100'000'000);
+  EXPECT_EQ(defaults.max_side_px, 30'000);
+}
+
+TEST(ImageFile, MissingOrUndecodableFilesAreEmpty) {
+  testing::TempDir dir;
+  EXPECT_TRUE(read_image_file(dir / "none.png").empty());
+  EXPECT_TRUE(read_image_file(dir.path()).empty()) << "a folder";
+  testing::write_file(dir / "junk.png", {'j', 'u', 'n', 'k'});
+  EXPECT_TRUE(read_image_file(dir / "junk.png").empty());
+  testing::write_file(dir / "ok.png", testing::encoded(testing::textured_frame(4), ".png"));
+  EXPECT_EQ(read_image_file(dir / "ok.png").size(), cv::Size(64, 48));
+}
+
+}  // namespace
+}  // namespace bosfuse::acquisition
