@@ -1,7 +1,5 @@
 #include "acquisition/connection_keeper.h"
 
-#include <spdlog/spdlog.h>
-
 #include <algorithm>
 #include <cstdio>
 
@@ -19,16 +17,6 @@ std::string seconds_text(std::int64_t ns) {
 
 }  // namespace
 
-void record_device_event(storage::RunWriter& writer, std::int64_t device_id, const std::string& device_name,
-                         const std::string& kind, const std::string& message) {
-  writer.push(storage::Event{0, device_id, utc_now_ns(), kind, message});
-  if (kind == "disconnect" || kind == "error") {
-    spdlog::warn("{}: {}", device_name, message);
-  } else {
-    spdlog::info("{}: {}", device_name, message);
-  }
-}
-
 std::string ConnectionKeeper::Backoff::Validate() const {
   if (initial.count() <= 0 || max < initial) return "backoff must be positive and its maximum at least its start";
   return {};
@@ -37,33 +25,51 @@ std::string ConnectionKeeper::Backoff::Validate() const {
 ConnectionKeeper::ConnectionKeeper(Backoff backoff, RecordEvent record)
     : limits_(backoff), record_(std::move(record)) {}
 
-ConnectionKeeper::Outcome ConnectionKeeper::connect(const std::function<void()>& connect, const std::string& address) {
+bool ConnectionKeeper::connect(const std::function<void()>& connect, const std::string& address) {
   try {
     connect();
   } catch (const DeviceError& e) {
-    const bool first_failure = backoff_.count() == 0;
-    if (first_failure) {
-      record_("error", std::string(e.what()) + "; retrying");
-      if (!ever_connected_) disconnected_since_ns_ = utc_now_ns();
-    }
-    backoff_ = first_failure ? limits_.initial : std::min(backoff_ * 2, limits_.max);
-    return Outcome::kFailed;
+    start_outage("error", std::string(e.what()) + "; retrying", utc_now_ns());
+    return false;
   }
-  backoff_ = std::chrono::milliseconds(0);
-  const bool after_gap = disconnected_since_ns_ != 0;
-  const bool reconnect = after_gap && ever_connected_;
-  if (after_gap) {
-    const std::int64_t gap_ns = utc_now_ns() - disconnected_since_ns_;
-    record_(reconnect ? "reconnect" : "connect",
-            (reconnect ? "reconnected after " : "connected after ") + seconds_text(gap_ns));
-  } else {
-    record_("connect", "connected to " + address);
-  }
-  ever_connected_ = true;
-  disconnected_since_ns_ = 0;
-  return reconnect ? Outcome::kReconnected : Outcome::kConnected;
+  if (!ever_read_ && !in_outage()) record_("connect", "connected to " + address);
+  return true;
 }
 
-void ConnectionKeeper::lost(std::int64_t since_ns) { disconnected_since_ns_ = since_ns; }
+void ConnectionKeeper::failed(const std::string& kind, const std::string& message, std::int64_t at_ns) {
+  start_outage(kind, message, at_ns);
+}
+
+void ConnectionKeeper::start_outage(const std::string& kind, const std::string& message, std::int64_t at_ns) {
+  if (!in_outage()) {
+    record_(kind, message);
+    outage_since_ns_ = at_ns;
+    outage_kind_ = kind;
+    backoff_ = limits_.initial;
+  } else {
+    backoff_ = std::min(backoff_ * 2, limits_.max);
+  }
+}
+
+ConnectionKeeper::Recovery ConnectionKeeper::succeeded() {
+  Recovery recovery = Recovery::kNone;
+  if (in_outage()) {
+    const std::string gap = seconds_text(utc_now_ns() - outage_since_ns_);
+    if (!ever_read_) {
+      record_("connect", "connected after " + gap);
+      recovery = Recovery::kConnected;
+    } else if (outage_kind_ == "bad-reply") {
+      record_("recovered", "valid replies again after " + gap);
+      recovery = Recovery::kRecovered;
+    } else {
+      record_("reconnect", "reconnected after " + gap);
+      recovery = Recovery::kReconnected;
+    }
+  }
+  ever_read_ = true;
+  outage_since_ns_ = 0;
+  backoff_ = std::chrono::milliseconds(0);
+  return recovery;
+}
 
 }  // namespace bosfuse::acquisition

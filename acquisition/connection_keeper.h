@@ -1,24 +1,21 @@
 #pragma once
 // A ConnectionKeeper keeps one device (a thermocouple reader or a camera)
-// connected: it calls the device's connect function, backs off exponentially
-// while that fails, and reports what happened as the events a user reads
-// later: one "error" per outage (not one per retry), "connect", and
-// "reconnect" with the length of the gap. The DevicePoller and the
-// FrameRecorder share it so every device behaves the same way.
+// connected and says what happened as the events a user reads later. An
+// outage starts at the first failure, of connecting or of reading, and ends
+// at the first read that works again; it is recorded once at each end (not
+// once per retry): "error" (cannot connect), "disconnect" (the link broke)
+// or "bad-reply" (the device answers, but not with readings) when it
+// starts, and "connect", "reconnect" or "recovered" with its length when it
+// ends. While it lasts, attempts are spaced by an exponential backoff. The
+// DevicePoller and the FrameRecorder share it so every device behaves the
+// same way.
 
 #include <chrono>
 #include <cstdint>
 #include <functional>
 #include <string>
 
-#include "storage/run_writer.h"
-
 namespace bosfuse::acquisition {
-
-// Stores a device's event (connect, disconnect, hotplug, ...) in the run and
-// logs it, as a warning when something went wrong.
-void record_device_event(storage::RunWriter& writer, std::int64_t device_id, const std::string& device_name,
-                         const std::string& kind, const std::string& message);
 
 class ConnectionKeeper {
  public:
@@ -28,23 +25,32 @@ class ConnectionKeeper {
     std::string Validate() const;
   };
   using RecordEvent = std::function<void(const std::string& kind, const std::string& message)>;
-  enum class Outcome { kConnected, kReconnected, kFailed };
+  // What a read that worked ended: nothing, the wait for a first connection,
+  // a broken link, or a spell of bad replies.
+  enum class Recovery { kNone, kConnected, kReconnected, kRecovered };
 
   ConnectionKeeper(Backoff backoff, RecordEvent record);
 
-  // Calls `connect` (which throws DeviceError); `address` names the device in
-  // the first connect event. After kFailed, wait backoff() before retrying.
-  Outcome connect(const std::function<void()>& connect, const std::string& address);
-  // The connection dropped at `since_ns` (host UTC); the next connect is a reconnect.
-  void lost(std::int64_t since_ns);
+  // Calls `connect` (which throws DeviceError); `address` names the device
+  // in the first connect event. After false, wait backoff() before retrying.
+  bool connect(const std::function<void()>& connect, const std::string& address);
+  // A read failed at `at_ns` (host UTC): `kind` is "disconnect" or "bad-reply".
+  void failed(const std::string& kind, const std::string& message, std::int64_t at_ns);
+  // A read worked: ends an outage, if there was one.
+  Recovery succeeded();
+
+  bool in_outage() const { return outage_since_ns_ != 0; }
   std::chrono::milliseconds backoff() const { return backoff_; }
 
  private:
+  void start_outage(const std::string& kind, const std::string& message, std::int64_t at_ns);
+
   Backoff limits_;
   RecordEvent record_;
   std::chrono::milliseconds backoff_{0};
-  std::int64_t disconnected_since_ns_ = 0;
-  bool ever_connected_ = false;
+  std::int64_t outage_since_ns_ = 0;
+  std::string outage_kind_;
+  bool ever_read_ = false;
 };
 
 }  // namespace bosfuse::acquisition

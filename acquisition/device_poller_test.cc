@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <mutex>
 #include <thread>
@@ -18,28 +19,36 @@ using namespace std::chrono_literals;
 using storage::SampleStatus;
 
 // A source whose behaviour the test scripts: how long a read takes, how
-// many connection attempts fail, which reads fail.
+// many connection attempts fail, which reads fail and how. Its counters are
+// shared, so a test reads them after the poller (and the source) are gone.
 class ScriptedSource : public ThermocoupleSource {
  public:
+  struct Counters {
+    std::atomic<int> reads{0};
+    std::atomic<int> connects{0};
+    std::atomic<int> disconnects{0};
+  };
   std::chrono::milliseconds read_time{0};
   std::atomic<int> connect_failures_left{0};
   std::atomic<int> reads_failing_from{-1};  // read index from which reads fail
   std::atomic<int> reads_failing_count{0};
-  std::atomic<int> reads{0};
-  std::atomic<int> connects{0};
+  SampleStatus failure_status = SampleStatus::kTimeout;
+  std::optional<double> failure_raw;
+  bool throw_unexpected = false;  // the first failing read throws something that is no DeviceError
+  std::shared_ptr<Counters> counters = std::make_shared<Counters>();
 
   storage::DeviceInfo device_info() const override { return {0, "scripted", "test", "", "nowhere"}; }
   std::vector<storage::ChannelInfo> channel_infos() const override {
     return {{0, 0, "a", "thermocouple", "degC", "K", {}, {}}, {0, 0, "b", "thermocouple", "degC", "K", {}, {}}};
   }
   void connect() override {
-    ++connects;
+    ++counters->connects;
     if (connect_failures_left.load() > 0) {
       --connect_failures_left;
       throw DeviceError("refused");
     }
   }
-  void disconnect() override {}
+  void disconnect() override { ++counters->disconnects; }
   std::vector<std::string> take_notices() override {
     std::lock_guard lock(notices_mutex);
     return std::exchange(notices, {});
@@ -47,10 +56,14 @@ class ScriptedSource : public ThermocoupleSource {
   std::mutex notices_mutex;
   std::vector<std::string> notices;
   std::vector<ChannelReading> read() override {
-    const int index = reads++;
+    const int index = counters->reads++;
     std::this_thread::sleep_for(read_time);
     const int from = reads_failing_from.load();
-    if (from >= 0 && index >= from && index < from + reads_failing_count.load()) throw DeviceError("no reply");
+    if (from >= 0 && index >= from && index < from + reads_failing_count.load()) {
+      if (throw_unexpected && index == from) throw std::out_of_range("a bug in a device driver");
+      throw DeviceError(failure_status == SampleStatus::kBadReply ? "exception reply" : "no reply", failure_status,
+                        failure_raw);
+    }
     return {{double(index), double(index), SampleStatus::kOk}, {std::nullopt, 65535, SampleStatus::kOpenCircuit}};
   }
 };
@@ -66,12 +79,12 @@ struct Harness {
   DevicePoller::Stats run(std::unique_ptr<ScriptedSource> source, DevicePoller::Options options,
                           std::chrono::milliseconds duration) {
     storage::RunWriter writer(store, {20ms, 10'000});
-    DevicePoller poller(std::move(source), device, channels, writer, options);
-    poller.start();
+    const auto poller = std::make_shared<DevicePoller>(std::move(source), device, channels, writer, options);
+    poller->start();
     std::this_thread::sleep_for(duration);
-    poller.stop();
+    EXPECT_TRUE(poller->stop());
     writer.flush();
-    return poller.stats();
+    return poller->stats();
   }
   std::vector<std::string> event_kinds() const {
     std::vector<std::string> kinds;
@@ -109,11 +122,11 @@ TEST(DevicePoller, UnreachableDeviceIsReportedOnceAndRetriedWithBackoff) {
   Harness h;
   auto source = std::make_unique<ScriptedSource>();
   source->connect_failures_left = 4;
-  ScriptedSource* probe = source.get();
+  const auto counters = source->counters;
   const auto stats = h.run(std::move(source), {20ms, 20ms, 80ms, {}}, 800ms);
   // Backoff 20, 40, 80, 80 ms: connected after ~220 ms, then polled.
   EXPECT_EQ(stats.connect_failures, 4);
-  EXPECT_EQ(probe->connects.load(), 5);
+  EXPECT_EQ(counters->connects.load(), 5);
   EXPECT_GE(stats.polls_ok, 15);
   EXPECT_EQ(h.event_kinds(), (std::vector<std::string>{"error", "connect"}));
   EXPECT_NE(h.store.events()[1].message.find("connected after"), std::string::npos);
@@ -133,6 +146,95 @@ TEST(DevicePoller, FailedReadsBecomeTimeoutSamplesThenReconnect) {
   EXPECT_FALSE(samples[5].value.has_value());
   EXPECT_EQ(samples[6].status, SampleStatus::kOk);
   EXPECT_EQ(h.event_kinds(), (std::vector<std::string>{"connect", "disconnect", "reconnect"}));
+}
+
+// A device that keeps failing is one outage: one event when it starts, one
+// when it ends, attempts spaced by the backoff in between (not one pair of
+// disconnect/reconnect events per poll).
+TEST(DevicePoller, AnOutageIsRecordedOnceAndRetriedWithBackoff) {
+  Harness h;
+  auto source = std::make_unique<ScriptedSource>();
+  source->reads_failing_from = 3;
+  source->reads_failing_count = 6;
+  const auto counters = source->counters;
+  const auto stats = h.run(std::move(source), {10ms, 20ms, 80ms, {}}, 900ms);
+  EXPECT_EQ(stats.polls_failed, 6);
+  EXPECT_EQ(stats.reconnects, 1);
+  EXPECT_EQ(h.event_kinds(), (std::vector<std::string>{"connect", "disconnect", "reconnect"}));
+  // Backoff 20, 40, 80, 80, 80 ms between the six failed attempts: ~300 ms
+  // for what a poll on every 10 ms tick would have spent 60 ms on.
+  const auto samples = h.store.read_samples(h.channels[0]);
+  ASSERT_GT(samples.size(), 10u);
+  EXPECT_EQ(samples[3].status, SampleStatus::kTimeout);
+  EXPECT_GE(samples[9].t_ns - samples[3].t_ns, 280'000'000) << "failed attempts were not spaced by the backoff";
+  EXPECT_EQ(samples[9].status, SampleStatus::kOk);
+}
+
+// A device that answers with an exception keeps its link: the samples say
+// bad-reply with the device's code, and the link is not torn down.
+TEST(DevicePoller, BadRepliesKeepTheLinkAndTheirCode) {
+  Harness h;
+  auto source = std::make_unique<ScriptedSource>();
+  source->reads_failing_from = 2;
+  source->reads_failing_count = 3;
+  source->failure_status = SampleStatus::kBadReply;
+  source->failure_raw = 2;  // Modbus "illegal data address"
+  const auto counters = source->counters;
+  h.run(std::move(source), {10ms, 10ms, 40ms, {}}, 400ms);
+  const auto samples = h.store.read_samples(h.channels[1]);
+  ASSERT_GT(samples.size(), 5u);
+  for (int i = 2; i < 5; ++i) {
+    EXPECT_EQ(samples[i].status, SampleStatus::kBadReply);
+    EXPECT_EQ(samples[i].raw, 2.0);
+    EXPECT_FALSE(samples[i].value.has_value());
+  }
+  EXPECT_EQ(samples[5].status, SampleStatus::kOpenCircuit) << "the channel's own status came back";
+  EXPECT_EQ(h.event_kinds(), (std::vector<std::string>{"connect", "bad-reply", "recovered"}));
+  EXPECT_EQ(counters->connects.load(), 1) << "a device that answers was reconnected";
+  EXPECT_EQ(counters->disconnects.load(), 1) << "only the final close";
+}
+
+// A bug below the poller (anything that is not a DeviceError) is recorded
+// and the device goes on; it never ends the process.
+TEST(DevicePoller, AnUnexpectedExceptionIsRecordedAndThePollerGoesOn) {
+  Harness h;
+  auto source = std::make_unique<ScriptedSource>();
+  source->reads_failing_from = 2;
+  source->reads_failing_count = 1;
+  source->throw_unexpected = true;
+  const auto stats = h.run(std::move(source), {10ms, 10ms, 40ms, {}}, 700ms);
+  EXPECT_GE(stats.polls_ok, 10) << "the poller did not go on after the failure";
+  const auto events = h.store.events();
+  const auto error = std::find_if(events.begin(), events.end(), [](const auto& e) { return e.kind == "error"; });
+  ASSERT_NE(error, events.end());
+  EXPECT_NE(error->message.find("a bug in a device driver"), std::string::npos) << error->message;
+}
+
+// A read that never returns does not hold the stop: the poller is abandoned
+// after the grace period, and nothing it reads later reaches the run.
+TEST(DevicePoller, AStuckReadIsAbandonedAtTheStop) {
+  Harness h;
+  auto source = std::make_unique<ScriptedSource>();
+  source->read_time = 3s;
+  storage::RunWriter writer(h.store, {20ms, 10'000});
+  const auto poller = std::make_shared<DevicePoller>(std::move(source), h.device, h.channels, writer,
+                                                     DevicePoller::Options{20ms, 20ms, 80ms, {}});
+  poller->start();
+  std::this_thread::sleep_for(100ms);
+  const auto before = std::chrono::steady_clock::now();
+  EXPECT_FALSE(poller->stop(300ms)) << "the stuck read was waited for";
+  EXPECT_LT(std::chrono::steady_clock::now() - before, 1s);
+  writer.stop();
+  EXPECT_EQ(writer.stats().uncommitted_at_stop, 0) << "the abandoned poller pushed into a stopped writer";
+  EXPECT_EQ(h.event_kinds(), (std::vector<std::string>{"connect", "abandoned"}));
+  EXPECT_TRUE(h.store.read_samples(h.channels[0]).empty());
+}
+
+TEST(DevicePoller, StartingAPollerThatNoSharedPtrOwnsIsRefused) {
+  Harness h;
+  storage::RunWriter writer(h.store);
+  DevicePoller poller(std::make_unique<ScriptedSource>(), h.device, h.channels, writer, {20ms, 20ms, 80ms, {}});
+  EXPECT_THROW(poller.start(), std::logic_error);
 }
 
 TEST(DevicePoller, StopsAfterItsPollCount) {

@@ -36,58 +36,32 @@ std::string FrameRecorder::Options::Validate() const {
 
 FrameRecorder::FrameRecorder(std::unique_ptr<FrameSource> source, std::string name, std::int64_t device_id,
                              fs::path run_dir, storage::RunWriter& writer, Options options)
-    : source_(std::move(source)),
-      name_(std::move(name)),
-      device_id_(device_id),
+    : DeviceWorker(std::move(name), device_id, writer),
+      source_(std::move(source)),
       run_dir_(std::move(run_dir)),
-      frame_dir_(fs::path("frames") / name_),
-      writer_(writer),
+      frame_dir_(fs::path("frames") / this->name()),
       options_(std::move(options)),
       connection_(options_.backoff,
                   [this](const std::string& kind, const std::string& message) { record_event(kind, message); }) {
-  if (!valid_folder_name(name_))
-    throw std::invalid_argument("camera name '" + name_ + "': use letters, digits, - and _");
+  if (!valid_folder_name(this->name()))
+    throw std::invalid_argument("camera name '" + this->name() + "': use letters, digits, - and _");
   if (const std::string problem = options_.Validate(); !problem.empty()) {
-    throw std::invalid_argument("camera " + name_ + ": " + problem);
+    throw std::invalid_argument("camera " + this->name() + ": " + problem);
   }
   fs::create_directories(run_dir_ / frame_dir_);
 }
 
-FrameRecorder::~FrameRecorder() { stop(); }
-
-void FrameRecorder::start() {
-  thread_ = std::thread([this] { run(); });
-}
-
-void FrameRecorder::stop() {
-  {
-    std::lock_guard lock(mutex_);
-    stopping_ = true;
-  }
-  wake_.notify_all();
-  if (thread_.joinable()) thread_.join();
-}
-
 FrameRecorder::Stats FrameRecorder::stats() const {
-  std::lock_guard lock(mutex_);
+  std::lock_guard lock(stats_mutex_);
   return stats_;
-}
-
-bool FrameRecorder::wait_until(SteadyTime deadline) {
-  std::unique_lock lock(mutex_);
-  return !wake_.wait_until(lock, deadline, [&] { return stopping_; });
-}
-
-void FrameRecorder::record_event(const std::string& kind, const std::string& message) {
-  record_device_event(writer_, device_id_, name_, kind, message);
 }
 
 bool FrameRecorder::ensure_connected() {
   if (stats().connected) return true;
-  const auto outcome = connection_.connect([this] { source_->open(); }, source_->describe());
-  std::lock_guard lock(mutex_);
-  stats_.connected = outcome != ConnectionKeeper::Outcome::kFailed;
-  return stats_.connected;
+  const bool connected = connection_.connect([this] { source_->open(); }, source_->describe());
+  std::lock_guard lock(stats_mutex_);
+  stats_.connected = connected;
+  return connected;
 }
 
 bool FrameRecorder::is_reference_now() const {
@@ -107,35 +81,38 @@ void FrameRecorder::store(const CapturedFrame& frame) {
     std::error_code ignored;
     fs::remove(partial, ignored);
     record_event("error", "frame from " + frame.origin + " could not be stored: " + e.what());
-    std::lock_guard lock(mutex_);
+    std::lock_guard lock(stats_mutex_);
     ++stats_.failures;
     return;
   }
-  writer_.push(storage::FrameRecord{0, device_id_, frame.t_ns, frame.device_t_ns, relative.generic_string(),
-                                    frame.image.cols, frame.image.rows, bit_depth_of(frame.image), reference});
-  std::lock_guard lock(mutex_);
+  push(storage::FrameRecord{0, device_id(), frame.t_ns, frame.device_t_ns, relative.generic_string(),
+                            frame.image.cols, frame.image.rows, bit_depth_of(frame.image), reference});
+  std::lock_guard lock(stats_mutex_);
   ++stats_.frames;
   if (reference) ++stats_.reference_frames;
 }
 
 bool FrameRecorder::take_one(std::chrono::milliseconds wait) {
+  std::optional<CapturedFrame> frame;
   try {
-    if (const auto frame = source_->next(wait)) store(*frame);
+    frame = source_->next(wait);
   } catch (const EndOfFrames& e) {
     record_event("stopped", e.what());
     return false;
   } catch (const DeviceError& e) {
     source_->close();
-    connection_.lost(utc_now_ns());
-    record_event("disconnect", e.what());
-    std::lock_guard lock(mutex_);
+    connection_.failed("disconnect", e.what(), utc_now_ns());
+    std::lock_guard lock(stats_mutex_);
     stats_.connected = false;
     ++stats_.failures;
+    return true;
   }
+  connection_.succeeded();
+  if (frame) store(*frame);
   return true;
 }
 
-void FrameRecorder::run() {
+void FrameRecorder::loop() {
   const SteadyTime origin = std::chrono::steady_clock::now();
   SteadyTime deadline = origin;
   const bool scheduled = options_.interval > std::chrono::nanoseconds::zero();
@@ -145,14 +122,19 @@ void FrameRecorder::run() {
       continue;
     }
     if (!take_one(scheduled ? std::chrono::duration_cast<std::chrono::milliseconds>(options_.interval) : kFolderWait)) {
-      std::lock_guard lock(mutex_);
+      std::lock_guard lock(stats_mutex_);
       stats_.finished = true;
-      break;
+      return;
     }
     const auto now = std::chrono::steady_clock::now();
-    deadline = scheduled ? origin + ((now - origin) / options_.interval + 1) * options_.interval : now;
+    if (connection_.in_outage()) {
+      deadline = now + connection_.backoff();
+    } else {
+      deadline = scheduled ? origin + ((now - origin) / options_.interval + 1) * options_.interval : now;
+    }
   }
-  source_->close();
 }
+
+void FrameRecorder::close_device() noexcept { source_->close(); }
 
 }  // namespace bosfuse::acquisition

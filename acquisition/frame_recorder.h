@@ -8,22 +8,20 @@
 // a watched folder is read as files arrive. The first frames, and frames
 // taken while the reference flag file exists, are reference (no-flow)
 // frames. A camera that fails is reported, reconnected with backoff and
-// recorded as events, like a thermocouple reader.
+// recorded as events, like a thermocouple reader (it is a DeviceWorker).
 
-#include <atomic>
-#include <condition_variable>
 #include <filesystem>
 #include <memory>
 #include <mutex>
-#include <thread>
 
 #include "acquisition/connection_keeper.h"
+#include "acquisition/device_worker.h"
 #include "acquisition/frame_source.h"
 #include "storage/run_writer.h"
 
 namespace bosfuse::acquisition {
 
-class FrameRecorder {
+class FrameRecorder : public DeviceWorker {
  public:
   struct Options {
     std::chrono::nanoseconds interval{0};  // 0: take frames as they come
@@ -42,42 +40,28 @@ class FrameRecorder {
   };
 
   // `name` names the camera's folder under frames/ (letters, digits, - and _).
+  // Own it in a std::shared_ptr (std::make_shared) before start().
   FrameRecorder(std::unique_ptr<FrameSource> source, std::string name, std::int64_t device_id,
                 std::filesystem::path run_dir, storage::RunWriter& writer, Options options);
-  ~FrameRecorder();  // stops; never throws
-  FrameRecorder(const FrameRecorder&) = delete;
-  FrameRecorder& operator=(const FrameRecorder&) = delete;
 
-  void start();
-  void stop();
   Stats stats() const;
-  const std::string& name() const { return name_; }
 
  private:
-  using SteadyTime = std::chrono::steady_clock::time_point;
-
-  void run();
+  void loop() override;
+  void close_device() noexcept override;
   bool ensure_connected();
   bool take_one(std::chrono::milliseconds wait);  // false when the source has ended
   void store(const CapturedFrame& frame);
   bool is_reference_now() const;
-  void record_event(const std::string& kind, const std::string& message);
-  bool wait_until(SteadyTime deadline);
 
   std::unique_ptr<FrameSource> source_;
-  std::string name_;
-  std::int64_t device_id_;
   std::filesystem::path run_dir_;
   std::filesystem::path frame_dir_;  // relative to run_dir_
-  storage::RunWriter& writer_;
   Options options_;
-  ConnectionKeeper connection_;
+  ConnectionKeeper connection_;  // used on the worker thread only
 
-  mutable std::mutex mutex_;
-  std::condition_variable wake_;
-  bool stopping_ = false;
+  mutable std::mutex stats_mutex_;
   Stats stats_;
-  std::thread thread_;
 };
 
 }  // namespace bosfuse::acquisition

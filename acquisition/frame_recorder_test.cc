@@ -52,14 +52,14 @@ struct Harness {
   FrameRecorder::Stats record(std::unique_ptr<ScriptedCamera> camera, FrameRecorder::Options options,
                               std::size_t expected_frames) {
     storage::RunWriter writer(store, {20ms, 10'000});
-    FrameRecorder recorder(std::move(camera), "cam", device, store.dir(), writer, options);
-    recorder.start();
-    for (int i = 0; i < 300 && recorder.stats().frames < static_cast<std::int64_t>(expected_frames); ++i) {
+    const auto recorder = std::make_shared<FrameRecorder>(std::move(camera), "cam", device, store.dir(), writer, options);
+    recorder->start();
+    for (int i = 0; i < 300 && recorder->stats().frames < static_cast<std::int64_t>(expected_frames); ++i) {
       std::this_thread::sleep_for(10ms);
     }
-    recorder.stop();
+    EXPECT_TRUE(recorder->stop());
     writer.flush();
-    return recorder.stats();
+    return recorder->stats();
   }
 };
 

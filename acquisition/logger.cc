@@ -26,11 +26,13 @@ std::string Logger::Summary::BriefReport() const {
         << d.stats.reconnects << " reconnects";
     if (d.stats.connect_failures > 0) out << ", " << d.stats.connect_failures << " failed connection attempts";
     if (d.stats.missed_ticks > 0) out << ", " << d.stats.missed_ticks << " polls skipped (device too slow)";
+    if (d.abandoned) out << ", its last read was abandoned at the stop";
   }
   for (const CameraSummary& c : cameras) {
     out << "\n  " << c.name << ": " << c.stats.frames << " frames (" << c.stats.reference_frames << " reference)";
     if (c.stats.failures > 0) out << ", " << c.stats.failures << " failures";
     if (c.stats.finished) out << ", source ended";
+    if (c.abandoned) out << ", its last capture was abandoned at the stop";
   }
   if (writer.uncommitted_at_stop > 0) {
     out << "\n  ERROR: " << writer.uncommitted_at_stop << " records could not be committed: " << writer.last_error;
@@ -40,7 +42,7 @@ std::string Logger::Summary::BriefReport() const {
   return out.str();
 }
 
-std::string Logger::latest_readings(const std::vector<std::unique_ptr<DevicePoller>>& pollers) {
+std::string Logger::latest_readings(const std::vector<std::shared_ptr<DevicePoller>>& pollers) {
   std::ostringstream out;
   out.precision(2);
   out << std::fixed;
@@ -62,7 +64,7 @@ std::string Logger::latest_readings(const std::vector<std::unique_ptr<DevicePoll
 }
 
 void Logger::wait_for_end(const std::atomic<bool>& stop_requested,
-                          const std::vector<std::unique_ptr<DevicePoller>>& pollers) const {
+                          const std::vector<std::shared_ptr<DevicePoller>>& pollers) const {
   const auto start = std::chrono::steady_clock::now();
   auto next_progress = start + options_.progress_interval;
   while (!stop_requested.load()) {
@@ -116,13 +118,13 @@ void Logger::add_camera(std::unique_ptr<FrameSource> source, std::string name, F
   cameras_.push_back({std::move(source), std::move(name), std::move(options)});
 }
 
-std::vector<std::unique_ptr<FrameRecorder>> Logger::make_recorders(storage::RunWriter& writer) {
-  std::vector<std::unique_ptr<FrameRecorder>> recorders;
+std::vector<std::shared_ptr<FrameRecorder>> Logger::make_recorders(storage::RunWriter& writer) {
+  std::vector<std::shared_ptr<FrameRecorder>> recorders;
   for (PendingCamera& camera : cameras_) {
     const std::int64_t device_id =
         store_.add_device({0, camera.name, "camera", camera.source->kind(), camera.source->describe()});
     camera.options.backoff = {options_.backoff_initial, options_.backoff_max};
-    recorders.push_back(std::make_unique<FrameRecorder>(std::move(camera.source), camera.name, device_id, store_.dir(),
+    recorders.push_back(std::make_shared<FrameRecorder>(std::move(camera.source), camera.name, device_id, store_.dir(),
                                                         writer, camera.options));
   }
   cameras_.clear();
@@ -142,11 +144,8 @@ Logger::Summary Logger::run(const std::atomic<bool>& stop_requested) {
   }
 }
 
-Logger::Summary Logger::run_devices(const std::atomic<bool>& stop_requested) {
-  const auto started = std::chrono::steady_clock::now();
-  Summary summary;
-  storage::RunWriter writer(store_, options_.writer);
-  std::vector<std::unique_ptr<DevicePoller>> pollers;
+std::vector<std::shared_ptr<DevicePoller>> Logger::make_pollers(storage::RunWriter& writer) {
+  std::vector<std::shared_ptr<DevicePoller>> pollers;
   for (PendingSource& pending : sources_) {
     const std::int64_t device_id = store_.add_device(pending.source->device_info());
     std::vector<std::int64_t> channel_ids;
@@ -157,32 +156,44 @@ Logger::Summary Logger::run_devices(const std::atomic<bool>& stop_requested) {
     const DevicePoller::Options poll_options{pending.period, options_.backoff_initial, options_.backoff_max,
                                              pending.poll_count};
     pollers.push_back(
-        std::make_unique<DevicePoller>(std::move(pending.source), device_id, channel_ids, writer, poll_options));
+        std::make_shared<DevicePoller>(std::move(pending.source), device_id, channel_ids, writer, poll_options));
   }
   sources_.clear();
-  std::vector<std::unique_ptr<FrameRecorder>> recorders = make_recorders(writer);
+  return pollers;
+}
+
+Logger::Summary Logger::run_devices(const std::atomic<bool>& stop_requested) {
+  const auto started = std::chrono::steady_clock::now();
+  Summary summary;
+  storage::RunWriter writer(store_, options_.writer);
+  const std::vector<std::shared_ptr<DevicePoller>> pollers = make_pollers(writer);
+  const std::vector<std::shared_ptr<FrameRecorder>> recorders = make_recorders(writer);
   writer.push(
       storage::Event{0, std::nullopt, utc_now_ns(), "started",
                      std::to_string(pollers.size()) + " devices, " + std::to_string(recorders.size()) + " cameras"});
-  for (auto& poller : pollers) poller->start();
-  for (auto& recorder : recorders) recorder->start();
+  for (const auto& poller : pollers) poller->start();
+  for (const auto& recorder : recorders) recorder->start();
 
   wait_for_end(stop_requested, pollers);
 
-  for (auto& poller : pollers) {
-    poller->stop();
-    summary.devices.push_back({poller->name(), poller->stats()});
+  // Every device is asked at once, so one stuck device costs the grace
+  // period once, not once per device.
+  for (const auto& poller : pollers) poller->request_stop();
+  for (const auto& recorder : recorders) recorder->request_stop();
+  const auto deadline = std::chrono::steady_clock::now() + DeviceWorker::kStopGrace;
+  for (const auto& poller : pollers) {
+    const bool ended = poller->finish_stop(deadline);
+    summary.devices.push_back({poller->name(), poller->stats(), !ended});
   }
-  for (auto& recorder : recorders) {
-    recorder->stop();
-    summary.cameras.push_back({recorder->name(), recorder->stats()});
+  for (const auto& recorder : recorders) {
+    const bool ended = recorder->finish_stop(deadline);
+    summary.cameras.push_back({recorder->name(), recorder->stats(), !ended});
   }
   writer.push(storage::Event{0, std::nullopt, utc_now_ns(), "stopped",
                              stop_requested.load() ? "stop requested" : "duration reached"});
   writer.stop();
   summary.writer = writer.stats();
-  const bool everything_committed = summary.writer.uncommitted_at_stop == 0;
-  store_.finish(everything_committed ? storage::RunStatus::kComplete : storage::RunStatus::kInterrupted, utc_now_ns());
+  store_.finish(summary.complete() ? storage::RunStatus::kComplete : storage::RunStatus::kInterrupted, utc_now_ns());
   summary.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   return summary;
 }

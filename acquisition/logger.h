@@ -2,9 +2,11 @@
 // The Logger records a run: it registers every device and channel in the
 // run store, polls each device on its own thread (DevicePoller) and commits
 // everything through one RunWriter. It runs until a duration has passed or a
-// stop is requested (Ctrl-C), then stops the devices, commits what was read
-// and marks the run complete. If the store itself fails the run is marked
-// interrupted, with everything committed before the failure kept.
+// stop is requested (Ctrl-C), then stops the devices (abandoning, within a
+// second, any device call that does not return), commits everything read
+// and marks the run complete. If the store itself fails, or a record could
+// not be committed, the run is marked interrupted, with everything committed
+// before kept.
 
 #include <atomic>
 #include <chrono>
@@ -37,11 +39,13 @@ class Logger {
   struct DeviceSummary {
     std::string name;
     DevicePoller::Stats stats;
+    bool abandoned = false;  // its last device call was still running at the stop
   };
 
   struct CameraSummary {
     std::string name;
     FrameRecorder::Stats stats;
+    bool abandoned = false;
   };
 
   struct Summary {
@@ -50,6 +54,8 @@ class Logger {
     storage::RunWriter::Stats writer;
     double elapsed_s = 0;
     std::string BriefReport() const;
+    // Every record read was committed (what a clean stop promises).
+    bool complete() const { return writer.uncommitted_at_stop == 0; }
   };
 
   Logger(storage::RunStore& store, Options options);
@@ -65,7 +71,7 @@ class Logger {
   Summary run(const std::atomic<bool>& stop_requested);
 
   // "adam: tc0 78.21 tc1 open-circuit | m7018: (disconnected)"
-  static std::string latest_readings(const std::vector<std::unique_ptr<DevicePoller>>& pollers);
+  static std::string latest_readings(const std::vector<std::shared_ptr<DevicePoller>>& pollers);
 
  private:
   struct PendingSource {
@@ -76,7 +82,8 @@ class Logger {
 
   Summary run_devices(const std::atomic<bool>& stop_requested);
   void wait_for_end(const std::atomic<bool>& stop_requested,
-                    const std::vector<std::unique_ptr<DevicePoller>>& pollers) const;
+                    const std::vector<std::shared_ptr<DevicePoller>>& pollers) const;
+  std::vector<std::shared_ptr<DevicePoller>> make_pollers(storage::RunWriter& writer);
 
   storage::RunStore& store_;
   Options options_;
@@ -86,7 +93,7 @@ class Logger {
     FrameRecorder::Options options;
   };
 
-  std::vector<std::unique_ptr<FrameRecorder>> make_recorders(storage::RunWriter& writer);
+  std::vector<std::shared_ptr<FrameRecorder>> make_recorders(storage::RunWriter& writer);
 
   std::vector<PendingSource> sources_;
   std::vector<PendingCamera> cameras_;

@@ -27,21 +27,25 @@ void acquire(const AcquireArgs& args) {
   acquisition::Logger::Options options;
   if (!args.duration.empty()) options.duration = parse_duration(args.duration);
   options.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
-  const storage::RunInfo info{0,
-                              config.run_name.empty() ? std::string("run") : config.run_name,
-                              acquisition::utc_now_ns(),
-                              std::nullopt,
-                              config.source_text,
-                              storage::RunStatus::kRunning};
+  storage::RunInfo info;
+  info.name = config.run_name.empty() ? std::string("run") : config.run_name;
+  info.started_ns = acquisition::utc_now_ns();
+  info.config_toml = config.source_text;
   auto store = storage::RunStore::create(
       args.out, info, args.append ? storage::RunStore::CreateMode::kAppend : storage::RunStore::CreateMode::kNew);
+  if (options.duration) store.set_planned_end(info.started_ns + options.duration->count());
   acquisition::Logger logger(store, options);
   logger.add_devices(config);
   spdlog::info("logging {} devices into {} ({})", config.device_count(), args.out,
                args.duration.empty() ? "until Ctrl-C" : "for " + args.duration);
   const auto summary = logger.run(stop_requested_by_signal());
   std::cout << summary.BriefReport() << "\nrun store: " << (store.dir() / storage::RunStore::kDatabaseFileName).string()
-            << "\n";
+            << std::endl;
+  if (!summary.complete()) {
+    throw CommandFailure(kExitIncompleteRun, std::to_string(summary.writer.uncommitted_at_stop) +
+                                                 " records read were not committed (" + summary.writer.last_error +
+                                                 "); the run is marked interrupted");
+  }
 }
 
 void add_acquire(CLI::App& root) {

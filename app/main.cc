@@ -4,6 +4,7 @@
 #include <exception>
 
 #include "app/command.h"
+#include "app/run_control.h"
 
 namespace bosfuse::app {
 
@@ -26,6 +27,9 @@ int main(int argc, char** argv) {
     root.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return root.exit(e);
+  } catch (const bosfuse::app::CommandFailure& e) {
+    spdlog::error("{}", e.what());
+    return e.status();
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return EXIT_FAILURE;

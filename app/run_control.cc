@@ -17,9 +17,9 @@ std::atomic<bool>& stop_requested_by_signal() {
   static const bool installed = [] {
     struct sigaction action {};
     action.sa_handler = request_stop;
+    action.sa_flags = SA_RESETHAND;  // the next signal gets the default action: ends the process
     sigemptyset(&action.sa_mask);
-    sigaction(SIGINT, &action, nullptr);
-    sigaction(SIGTERM, &action, nullptr);
+    for (const int signal : {SIGINT, SIGTERM, SIGHUP}) sigaction(signal, &action, nullptr);
     return true;
   }();
   (void)installed;

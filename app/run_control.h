@@ -1,16 +1,35 @@
 #pragma once
-// Shared pieces of the long-running subcommands: Ctrl-C / SIGTERM turned
-// into a stop request the libraries can poll, and human durations
-// ("90s", "10m", "1.5h", "250ms", or plain seconds).
+// Shared pieces of the long-running subcommands: Ctrl-C, SIGTERM and SIGHUP
+// (a closed terminal) turned into a stop request the libraries can poll,
+// human durations ("90s", "10m", "1.5h", "250ms", or plain seconds), and
+// the exit statuses that tell a script what kind of failure it was.
 
 #include <atomic>
 #include <chrono>
+#include <stdexcept>
 #include <string>
 
 namespace bosfuse::app {
 
-// Installs SIGINT and SIGTERM handlers (once) that set the returned flag.
+// Installs SIGINT, SIGTERM and SIGHUP handlers (once) that set the returned
+// flag. A second signal ends the process at once (what is committed stays).
 std::atomic<bool>& stop_requested_by_signal();
+
+// Exit statuses beyond 0 (success) and 1 (the command failed).
+enum ExitStatus : int {
+  kExitFailure = 1,
+  kExitIncompleteRun = 3,  // the run was recorded, but records read could not be committed
+};
+
+// A failure with its own exit status; main() prints the message and exits with it.
+class CommandFailure : public std::runtime_error {
+ public:
+  CommandFailure(ExitStatus status, const std::string& what) : std::runtime_error(what), status_(status) {}
+  ExitStatus status() const { return status_; }
+
+ private:
+  ExitStatus status_;
+};
 
 // Throws std::invalid_argument naming the text on anything it cannot read.
 std::chrono::nanoseconds parse_duration(const std::string& text);

@@ -80,7 +80,9 @@ TEST(ProcessingStore, AVersionOneStoreReadsAsEmptyAndIsMigratedWhenWritten) {
     for (const char* table : {"probe_samples", "agreements", "fits", "probe_series", "calibrations", "fields"}) {
       db.execute(std::string("DROP TABLE ") + table);
     }
-    db.execute("DELETE FROM schema_version WHERE version = 2");
+    db.execute("ALTER TABLE runs DROP COLUMN alive_ns");
+    db.execute("ALTER TABLE runs DROP COLUMN planned_end_ns");
+    db.execute("DELETE FROM schema_version WHERE version >= 2");
   }
   EXPECT_TRUE(ProcessingStore(f.run_dir).probes().empty());
   EXPECT_FALSE(ProcessingStore(f.run_dir).latest_calibration().has_value());

@@ -1,5 +1,9 @@
 #include "storage/run_store.h"
 
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <sstream>
 #include <system_error>
 
 #include "storage/schema.h"
@@ -32,6 +36,32 @@ void bind_range(Statement& stmt, int first_index, TimeRange range) {
   stmt.bind(first_index, range.from_ns).bind(first_index + 1, range.to_ns);
 }
 
+std::string seconds_text(std::int64_t ns) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3f s", static_cast<double>(ns) * 1e-9);
+  return text;
+}
+
+// "line 7: `host = \"a\"` became `host = \"b\"`", naming the first line that differs.
+std::string first_difference(const std::string& before, const std::string& after) {
+  std::istringstream a(before), b(after);
+  std::string line_a, line_b;
+  for (int line = 1;; ++line) {
+    const bool more_a = static_cast<bool>(std::getline(a, line_a));
+    const bool more_b = static_cast<bool>(std::getline(b, line_b));
+    if (!more_a && !more_b) return "they differ only in line endings";
+    if (!more_a) line_a = "(end of file)";
+    if (!more_b) line_b = "(end of file)";
+    if (line_a != line_b) return "line " + std::to_string(line) + ": `" + line_a + "` became `" + line_b + "`";
+  }
+}
+
+RunStatus stored_status(const fs::path& run_dir) {
+  Database db(database_path(run_dir), Database::Mode::kReadOnly);
+  auto stmt = db.prepare("SELECT status FROM runs ORDER BY id LIMIT 1");
+  return stmt.step() ? run_status_from_string(stmt.column_text(0)) : RunStatus::kComplete;
+}
+
 }  // namespace
 
 RunStore::RunStore(fs::path dir, Database::Mode mode) : dir_(std::move(dir)), db_(database_path(dir_), mode) {}
@@ -51,29 +81,93 @@ RunStore RunStore::create(const fs::path& run_dir, const RunInfo& info, CreateMo
     throw StorageError("'" + run_dir.string() + "' already holds a run; choose another folder or ask to append to it");
   }
   fs::create_directories(run_dir);
+  std::optional<RunLock> lock = RunLock::try_acquire(run_dir);
+  if (!lock) {
+    throw StorageError("'" + run_dir.string() + "' is being recorded by another logger (" +
+                       RunLock::holder(run_dir) + ")");
+  }
   RunStore store(run_dir, Database::Mode::kCreate);
   migrate(store.db_);
   if (existing) {
-    const RunInfo previous = store.run();
-    store.run_id_ = previous.id;
-    store.db_.prepare("UPDATE runs SET status = 'running', ended_ns = NULL WHERE id = ?").bind(1, store.run_id_).run();
-    const std::string how = previous.status == RunStatus::kRunning
-                                ? "the previous session ended without closing the run"
-                                : "after a " + std::string(to_string(previous.status)) + " session";
-    const Event appended{0, std::nullopt, info.started_ns, "appended", "logging resumed in this run, " + how};
-    store.write_events({&appended, 1});
+    store.resume(store.run(), info);
   } else {
     store.run_id_ = store.insert_run(info);
   }
+  store.lock_ = std::move(lock);
   return store;
+}
+
+// Appending continues one experiment: the same experiment file, and a run
+// left open by a dead logger is closed as interrupted before it goes on.
+void RunStore::resume(const RunInfo& previous, const RunInfo& info) {
+  run_id_ = previous.id;
+  if (!previous.config_toml.empty() && previous.config_toml != info.config_toml) {
+    throw StorageError("'" + dir_.string() + "' was recorded with a different experiment file (" +
+                       first_difference(previous.config_toml, info.config_toml) +
+                       "); log into a new folder, or append with the experiment file the run was started with");
+  }
+  if (previous.status == RunStatus::kRunning) close_interrupted();
+  const RunStatus before = run().status;
+  db_.prepare("UPDATE runs SET status = 'running', ended_ns = NULL, planned_end_ns = NULL WHERE id = ?")
+      .bind(1, run_id_)
+      .run();
+  const Event appended{0, std::nullopt, info.started_ns, "appended",
+                       "logging resumed in this run; the previous session ended " + std::string(to_string(before))};
+  write_events({&appended, 1});
+}
+
+// The account of a run whose logger died: where the record ends, the last
+// sign of life, and what was planned but never recorded.
+void RunStore::close_interrupted() {
+  auto stmt = db_.prepare("SELECT started_ns, alive_ns, planned_end_ns FROM runs WHERE id = ?");
+  stmt.bind(1, run_id_).step();
+  const std::int64_t started_ns = stmt.column_int64(0);
+  const std::optional<std::int64_t> alive_ns = stmt.column_optional_int64(1);
+  const std::optional<std::int64_t> planned_end_ns = stmt.column_optional_int64(2);
+  const std::optional<std::int64_t> last_ns = last_record_ns();
+  const std::int64_t ended_ns = std::max({started_ns, alive_ns.value_or(started_ns), last_ns.value_or(started_ns)});
+  std::string message = "the logger stopped without closing the run (killed, crashed or powered off); ";
+  message += last_ns ? "the record ends at +" + seconds_text(*last_ns - started_ns) : "nothing was recorded";
+  if (alive_ns) message += ", the logger was last alive at +" + seconds_text(*alive_ns - started_ns);
+  if (planned_end_ns && *planned_end_ns > ended_ns) {
+    message += "; " + seconds_text(*planned_end_ns - ended_ns) + " of the planned " +
+               seconds_text(*planned_end_ns - started_ns) + " are missing";
+  } else {
+    message += "; anything read after that is missing";
+  }
+  Transaction transaction(db_);
+  db_.prepare("INSERT INTO events (run_id, device_id, t_ns, kind, message) VALUES (?, NULL, ?, 'interrupted', ?)")
+      .bind_all(run_id_, ended_ns, message)
+      .run();
+  finish(RunStatus::kInterrupted, ended_ns);
+  transaction.commit();
+  spdlog::warn("{}: {}", dir_.string(), message);
 }
 
 RunStore RunStore::open(const fs::path& run_dir, bool writable) {
   if (!holds_run(run_dir)) throw StorageError("'" + run_dir.string() + "' holds no bosfuse run");
+  if (stored_status(run_dir) == RunStatus::kRunning) close_if_abandoned(run_dir);
   RunStore store(run_dir, writable ? Database::Mode::kReadWrite : Database::Mode::kReadOnly);
   if (writable) migrate(store.db_);
   store.run_id_ = store.run().id;
   return store;
+}
+
+// A `running` run nobody holds the lock of has lost its logger. A reader
+// that may not write (a read-only copy of a run) only says so.
+void RunStore::close_if_abandoned(const fs::path& run_dir) {
+  std::optional<RunLock> lock;
+  try {
+    lock = RunLock::try_acquire(run_dir);
+  } catch (const StorageError& e) {
+    spdlog::warn("{}: the run is marked running, but it cannot be checked ({})", run_dir.string(), e.what());
+    return;
+  }
+  if (!lock) return;  // being recorded right now
+  RunStore store(run_dir, Database::Mode::kReadWrite);
+  migrate(store.db_);
+  store.run_id_ = store.run().id;
+  if (store.run().status == RunStatus::kRunning) store.close_interrupted();
 }
 
 std::int64_t RunStore::insert_run(const RunInfo& info) {
@@ -167,6 +261,22 @@ void RunStore::write_frames(std::span<const FrameRecord> frames) {
   Transaction transaction(db_);
   for (const FrameRecord& frame : frames) insert_frame(stmt, frame);
   transaction.commit();
+}
+
+void RunStore::set_planned_end(std::int64_t t_ns) {
+  db_.prepare("UPDATE runs SET planned_end_ns = ? WHERE id = ?").bind_all(t_ns, run_id_).run();
+}
+
+void RunStore::mark_alive(std::int64_t t_ns) {
+  db_.prepare("UPDATE runs SET alive_ns = ? WHERE id = ?").bind_all(t_ns, run_id_).run();
+}
+
+std::optional<std::int64_t> RunStore::last_record_ns() const {
+  auto stmt = db_.prepare(
+      "SELECT MAX(t) FROM (SELECT MAX(t_ns) AS t FROM samples UNION ALL SELECT MAX(t_ns) FROM frames "
+      "UNION ALL SELECT MAX(t_ns) FROM events WHERE run_id = ?1)");
+  stmt.bind(1, run_id_).step();
+  return stmt.column_optional_int64(0);
 }
 
 void RunStore::finish(RunStatus status, std::int64_t ended_ns) {

@@ -7,6 +7,11 @@
 // corrupts what was committed. A RunStore is one SQLite connection: use it
 // from one thread (the logger's writer thread owns the writing one; readers
 // open their own).
+//
+// The store that records a run holds its RunLock. A run found `running`
+// with nobody holding the lock lost its logger (killed, crashed, power
+// cut): the next open marks it interrupted, ends it at the logger's last
+// sign of life, and records an "interrupted" event saying what is missing.
 
 #include <cstdint>
 #include <filesystem>
@@ -18,6 +23,7 @@
 
 #include "storage/database.h"
 #include "storage/records.h"
+#include "storage/run_lock.h"
 
 namespace bosfuse::storage {
 
@@ -47,9 +53,12 @@ class RunStore {
   };
 
   // Creates the run folder if needed and starts (or, with kAppend, resumes) a
-  // run, whose status becomes `running`.
+  // run, whose status becomes `running`, and holds its RunLock. Refuses a run
+  // another logger is recording, and appending with a different experiment
+  // file (`info.config_toml`).
   static RunStore create(const std::filesystem::path& run_dir, const RunInfo& info, CreateMode mode);
   // Opens an existing run; throws StorageError if the folder holds none.
+  // Closes a run whose logger died first (see above).
   static RunStore open(const std::filesystem::path& run_dir, bool writable = false);
   static bool holds_run(const std::filesystem::path& run_dir);
 
@@ -65,6 +74,11 @@ class RunStore {
   std::int64_t add_frame(const FrameRecord& frame);
   void write_frames(std::span<const FrameRecord> frames);  // one transaction
   void finish(RunStatus status, std::int64_t ended_ns);
+  // The session was started to run until `t_ns` (a set duration), so an
+  // interruption can say how much of it is missing.
+  void set_planned_end(std::int64_t t_ns);
+  // The logger's heartbeat: it was alive at `t_ns`.
+  void mark_alive(std::int64_t t_ns);
 
   std::vector<DeviceInfo> devices() const;
   std::vector<ChannelInfo> channels() const;
@@ -75,15 +89,21 @@ class RunStore {
   std::vector<Event> events(TimeRange range = {}) const;
   std::vector<FrameRecord> frames(TimeRange range = {}) const;
   std::vector<ChannelSummary> channel_summaries() const;
+  // The newest t_ns of any sample, frame or event; nothing for an empty run.
+  std::optional<std::int64_t> last_record_ns() const;
 
  private:
   RunStore(std::filesystem::path dir, Database::Mode mode);
   std::int64_t insert_run(const RunInfo& info);
+  void resume(const RunInfo& previous, const RunInfo& info);
+  void close_interrupted();
+  static void close_if_abandoned(const std::filesystem::path& run_dir);
 
   std::filesystem::path dir_;
   mutable Database db_;
   std::int64_t run_id_ = 0;
   std::optional<Statement> insert_sample_;
+  std::optional<RunLock> lock_;  // held by the store that records the run
 };
 
 }  // namespace bosfuse::storage

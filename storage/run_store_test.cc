@@ -90,6 +90,67 @@ TEST(RunStore, FolderHoldingARunIsRefusedUnlessAppending) {
   EXPECT_EQ(appended.events()[0].kind, "appended");
 }
 
+TEST(RunStore, ASecondLoggerIsKeptOutOfARunBeingRecorded) {
+  Fixture f;
+  try {
+    RunStore::create(f.dir.path() / "run", test_run(), RunStore::CreateMode::kAppend);
+    FAIL() << "two loggers were let into one run";
+  } catch (const StorageError& e) {
+    EXPECT_NE(std::string(e.what()).find("being recorded by another logger (pid "), std::string::npos) << e.what();
+  }
+}
+
+TEST(RunStore, AppendingWithADifferentExperimentFileIsRefusedNamingTheLine) {
+  testing::TempDir dir;
+  RunStore::create(dir / "run", test_run(), RunStore::CreateMode::kNew).finish(RunStatus::kComplete, 5);
+  RunInfo other = test_run();
+  other.config_toml = "[run]\nname = \"another\"\n";
+  try {
+    RunStore::create(dir / "run", other, RunStore::CreateMode::kAppend);
+    FAIL() << "a run was continued with another experiment file";
+  } catch (const StorageError& e) {
+    EXPECT_NE(std::string(e.what()).find("line 2: `name = \"cooling-test\"` became `name = \"another\"`"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(RunStore::open(dir / "run").run().status, RunStatus::kComplete) << "the refused append changed the run";
+}
+
+// A logger that dies leaves its run `running` with nobody holding the lock:
+// the next open closes it as interrupted and says what is missing.
+TEST(RunStore, ARunWhoseLoggerDiedIsClosedAsInterruptedByTheNextOpen) {
+  testing::TempDir dir;
+  const RunInfo info = test_run();
+  {
+    auto store = RunStore::create(dir / "run", info, RunStore::CreateMode::kNew);
+    store.set_planned_end(info.started_ns + 60'000'000'000);
+    const auto device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", ""});
+    const auto channel = store.add_channel({0, device, "tc0", "thermocouple", "degC", "K", {}, {}});
+    const Sample s{channel, info.started_ns + 12'000'000'000, {}, 30.0, {}, SampleStatus::kOk};
+    store.write_samples({&s, 1});
+    store.mark_alive(info.started_ns + 12'050'000'000);
+    // The store goes away without finish(): as if the logger was killed.
+  }
+  const auto store = RunStore::open(dir / "run");
+  const RunInfo run = store.run();
+  EXPECT_EQ(run.status, RunStatus::kInterrupted);
+  EXPECT_EQ(run.ended_ns, info.started_ns + 12'050'000'000);
+  const auto events = store.events();
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].kind, "interrupted");
+  EXPECT_NE(events[0].message.find("the record ends at +12.000 s"), std::string::npos) << events[0].message;
+  EXPECT_NE(events[0].message.find("last alive at +12.050 s"), std::string::npos) << events[0].message;
+  EXPECT_NE(events[0].message.find("47.950 s of the planned 60.000 s are missing"), std::string::npos)
+      << events[0].message;
+  EXPECT_EQ(RunStore::open(dir / "run").events().size(), 1u) << "a second open recorded the interruption again";
+}
+
+TEST(RunStore, ARunBeingRecordedIsLeftRunning) {
+  Fixture f;
+  EXPECT_EQ(RunStore::open(f.dir.path() / "run").run().status, RunStatus::kRunning);
+  EXPECT_TRUE(RunStore::open(f.dir.path() / "run").events().empty());
+}
+
 TEST(RunStore, OpeningAFolderWithoutARunSaysSo) {
   testing::TempDir dir;
   try {

@@ -1,6 +1,7 @@
 #include "storage/run_writer.h"
 
 #include <exception>
+#include <stdexcept>
 
 namespace bosfuse::storage {
 
@@ -27,10 +28,20 @@ RunWriter::~RunWriter() {
 
 void RunWriter::push(const Sample& sample) { push(std::span<const Sample>(&sample, 1)); }
 
+// Records that arrive after the writer ended cannot be stored; they are
+// counted so the run says it is incomplete.
+bool RunWriter::refuse_after_end(std::size_t count) {
+  if (!writer_done_) return false;
+  stats_.uncommitted_at_stop += static_cast<std::int64_t>(count);
+  stats_.last_error = "records arrived after the writer had stopped";
+  return true;
+}
+
 void RunWriter::push(std::span<const Sample> samples) {
   bool full = false;
   {
     std::lock_guard lock(mutex_);
+    if (refuse_after_end(samples.size())) return;
     pending_samples_.insert(pending_samples_.end(), samples.begin(), samples.end());
     ++pushed_generation_;
     full = pending_samples_.size() >= options_.max_batch_samples;
@@ -40,12 +51,14 @@ void RunWriter::push(std::span<const Sample> samples) {
 
 void RunWriter::push(const Event& event) {
   std::lock_guard lock(mutex_);
+  if (refuse_after_end(1)) return;
   pending_events_.push_back(event);
   ++pushed_generation_;
 }
 
 void RunWriter::push(const FrameRecord& frame) {
   std::lock_guard lock(mutex_);
+  if (refuse_after_end(1)) return;
   pending_frames_.push_back(frame);
   ++pushed_generation_;
 }
@@ -75,6 +88,8 @@ RunWriter::Stats RunWriter::stats() const {
 }
 
 void RunWriter::run() {
+  static constexpr int kShutdownRetries = 5;
+  int failures_while_stopping = 0;
   std::unique_lock lock(mutex_);
   for (;;) {
     wake_writer_.wait_for(lock, options_.flush_interval, [&] {
@@ -82,25 +97,38 @@ void RunWriter::run() {
              committed_generation_ < pushed_generation_;
     });
     const bool committed = commit_pending(lock);
-    if (stopping_ && (committed || pushed_generation_ == committed_generation_)) break;
-    if (stopping_ && !committed) {
-      // A store that keeps failing at shutdown: give it a few more tries,
-      // then give up loudly (stats().last_error says why).
-      static constexpr int kShutdownRetries = 5;
-      bool saved = false;
-      for (int i = 0; i < kShutdownRetries && !saved; ++i) {
-        lock.unlock();
-        std::this_thread::sleep_for(options_.flush_interval);
-        lock.lock();
-        saved = commit_pending(lock);
-      }
-      break;
-    }
+    if (committed) mark_alive(lock);
+    if (!stopping_) continue;
+    // What arrived while the last commit ran is committed too before the end.
+    if (pushed_generation_ == committed_generation_) break;
+    if (committed) continue;
+    // A store that keeps failing at shutdown: a few more tries, then give
+    // up loudly (stats().last_error says why).
+    if (++failures_while_stopping > kShutdownRetries) break;
+    lock.unlock();
+    std::this_thread::sleep_for(options_.flush_interval);
+    lock.lock();
   }
-  stats_.uncommitted_at_stop =
+  stats_.uncommitted_at_stop +=
       static_cast<std::int64_t>(pending_samples_.size() + pending_events_.size() + pending_frames_.size());
   writer_done_ = true;
   committed_.notify_all();
+}
+
+// The run's last sign of life, so a run whose logger died can say how much
+// is missing: with every commit, and at least once a second when idle.
+void RunWriter::mark_alive(std::unique_lock<std::mutex>& lock) {
+  const auto now = std::chrono::system_clock::now();
+  if (!committed_since_alive_ && now - last_alive_ < std::chrono::seconds(1)) return;
+  committed_since_alive_ = false;
+  last_alive_ = now;
+  lock.unlock();
+  try {
+    store_.mark_alive(std::chrono::duration_cast<std::chrono::nanoseconds>(now.time_since_epoch()).count());
+  } catch (const std::exception&) {
+    // A missed heartbeat costs only precision in an interrupted run's account.
+  }
+  lock.lock();
 }
 
 namespace {
@@ -154,6 +182,7 @@ bool RunWriter::commit_pending(std::unique_lock<std::mutex>& lock) {
   stats_.events_committed += event_count;
   stats_.frames_committed += frame_count;
   ++stats_.batches_committed;
+  committed_since_alive_ = true;
   committed_generation_ = generation;
   committed_.notify_all();
   return true;

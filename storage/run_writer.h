@@ -6,7 +6,10 @@
 // samples per second possible with SQLite; one writer is what keeps device
 // threads from ever waiting on a database lock. If a batch cannot be
 // committed (disk full, say) it stays queued and is retried, so nothing a
-// device delivered is dropped while the writer lives.
+// device delivered is dropped while the writer lives; a stop commits
+// everything pushed before it, including what arrived during the last
+// commit. With every commit (and once a second when idle) the writer marks
+// the run alive, so a run whose logger was killed can say what is missing.
 
 #include <chrono>
 #include <condition_variable>
@@ -25,7 +28,9 @@ namespace bosfuse::storage {
 class RunWriter {
  public:
   struct Options {
-    std::chrono::milliseconds flush_interval{250};
+    // The longest a pushed record waits to be committed: what a kill -9 can
+    // lose. WAL with synchronous=NORMAL keeps frequent commits cheap.
+    std::chrono::milliseconds flush_interval{50};
     std::size_t max_batch_samples = 100'000;
     std::string Validate() const;  // empty when valid, else what is wrong
   };
@@ -36,7 +41,7 @@ class RunWriter {
     std::int64_t frames_committed = 0;
     std::int64_t batches_committed = 0;
     std::int64_t failed_commits = 0;
-    std::int64_t uncommitted_at_stop = 0;  // samples + events + frames the store refused to the end
+    std::int64_t uncommitted_at_stop = 0;  // samples + events + frames never committed (see last_error)
     std::string last_error;
   };
 
@@ -62,6 +67,8 @@ class RunWriter {
  private:
   void run();
   bool commit_pending(std::unique_lock<std::mutex>& lock);
+  void mark_alive(std::unique_lock<std::mutex>& lock);
+  bool refuse_after_end(std::size_t count);
 
   RunStore& store_;
   Options options_;
@@ -75,6 +82,8 @@ class RunWriter {
   std::uint64_t committed_generation_ = 0;
   bool stopping_ = false;
   bool writer_done_ = false;
+  bool committed_since_alive_ = true;
+  std::chrono::system_clock::time_point last_alive_;
   Stats stats_;
   std::thread thread_;
 };

@@ -134,7 +134,15 @@ CREATE TABLE fields (
 );
 )sql";
 
-constexpr std::array<Migration, 2> kMigrations = {{{1, kSchemaV1}, {2, kSchemaV2}}};
+// Version 3: what a run whose logger died needs to say what is missing: the
+// logger's last sign of life (a heartbeat with every commit) and, when the
+// run was started for a set duration, when it was meant to end.
+constexpr std::string_view kSchemaV3 = R"sql(
+ALTER TABLE runs ADD COLUMN alive_ns INTEGER;
+ALTER TABLE runs ADD COLUMN planned_end_ns INTEGER;
+)sql";
+
+constexpr std::array<Migration, 3> kMigrations = {{{1, kSchemaV1}, {2, kSchemaV2}, {3, kSchemaV3}}};
 static_assert(kMigrations.back().version == kSchemaVersion);
 static_assert(kSampleStatusCount == 7, "update the sample_status rows of the schema");
 

@@ -58,11 +58,12 @@ TEST(Schema, ForwardMigrationAppliesOnlyNewerSteps) {
   testing::TempDir dir;
   Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
   migrate(db);
-  const std::array<Migration, 3> future = {{schema_migrations()[0],
+  const std::array<Migration, 4> future = {{schema_migrations()[0],
                                             schema_migrations()[1],
-                                            {3, "ALTER TABLE runs ADD COLUMN operator TEXT NOT NULL DEFAULT ''"}}};
-  EXPECT_EQ(migrate(db, future), 2);
-  EXPECT_EQ(schema_version(db), 3);
+                                            schema_migrations()[2],
+                                            {4, "ALTER TABLE runs ADD COLUMN operator TEXT NOT NULL DEFAULT ''"}}};
+  EXPECT_EQ(migrate(db, future), 3);
+  EXPECT_EQ(schema_version(db), 4);
   EXPECT_NO_THROW(db.execute("SELECT operator FROM runs"));
 }
 
@@ -83,22 +84,24 @@ TEST(Schema, FailedMigrationLeavesTheStoreAsItWas) {
   testing::TempDir dir;
   Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
   migrate(db);
-  const std::array<Migration, 3> broken = {
-      {schema_migrations()[0], schema_migrations()[1], {3, "CREATE TABLE extra (x); THIS IS NOT SQL"}}};
+  const std::array<Migration, 4> broken = {{schema_migrations()[0],
+                                            schema_migrations()[1],
+                                            schema_migrations()[2],
+                                            {4, "CREATE TABLE extra (x); THIS IS NOT SQL"}}};
   EXPECT_THROW(migrate(db, broken), StorageError);
-  EXPECT_EQ(schema_version(db), 2);
+  EXPECT_EQ(schema_version(db), 3);
   auto stmt = db.prepare("SELECT 1 FROM sqlite_master WHERE name = 'extra'");
   EXPECT_FALSE(stmt.step()) << "a failed migration left a table behind";
 }
 
-TEST(Schema, VersionOneStoreIsMigratedToVersionTwoKeepingItsData) {
+TEST(Schema, VersionOneStoreIsMigratedToTheNewestKeepingItsData) {
   testing::TempDir dir;
   Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
   migrate(db, schema_migrations().first(1));
   db.execute("INSERT INTO runs (name, started_ns, config_toml, status) VALUES ('old', 5, '', 'complete')");
   ASSERT_EQ(schema_version(db), 1);
   EXPECT_EQ(migrate(db), 1);
-  EXPECT_EQ(schema_version(db), 2);
+  EXPECT_EQ(schema_version(db), kSchemaVersion);
   auto stmt = db.prepare("SELECT name FROM runs");
   ASSERT_TRUE(stmt.step());
   EXPECT_EQ(stmt.column_text(0), "old");

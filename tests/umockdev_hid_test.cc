@@ -177,7 +177,10 @@ TEST(UmockdevHid, UnplugAndReplugAreEventsAndTheRunGoesOn) {
   }
   {
     storage::RunWriter writer(store, {20ms, 10'000});
-    DevicePoller poller(std::move(device), device_id, channel_ids, writer, {100ms, 50ms, 200ms, {}});
+    const auto shared_poller =
+        std::make_shared<DevicePoller>(std::move(device), device_id, channel_ids, writer,
+                                       DevicePoller::Options{100ms, 50ms, 200ms, {}});
+    DevicePoller& poller = *shared_poller;
     poller.start();
     // Two polls are scripted; after them the device hangs up. Unplug it.
     for (int i = 0; i < 100 && poller.stats().polls_ok < 2; ++i) std::this_thread::sleep_for(20ms);
