@@ -1,7 +1,12 @@
 #include "acquisition/modbus_device.h"
 
+#include <netdb.h>
+#include <sys/socket.h>
+
 #include <algorithm>
 #include <cerrno>
+#include <stdexcept>
+#include <utility>
 
 namespace bosfuse::acquisition {
 namespace {
@@ -9,6 +14,38 @@ namespace {
 constexpr int kMaxRegistersPerRead = 125;
 
 std::string modbus_error(const std::string& what) { return what + ": " + modbus_strerror(errno); }
+
+bool is_exception_reply(int error) {
+  return error > MODBUS_ENOBASE && error < MODBUS_ENOBASE + MODBUS_EXCEPTION_MAX;
+}
+
+// The errors libmodbus raises for a reply it received but will not accept.
+bool is_rejected_reply(int error) {
+  return error == EMBBADDATA || error == EMBBADCRC || error == EMBBADSLAVE || error == EMBBADEXC ||
+         error == EMBUNKEXC || error == EMBMDATA;
+}
+
+struct AddrinfoFree {
+  void operator()(addrinfo* list) const noexcept { freeaddrinfo(list); }
+};
+
+// The same lookup libmodbus's modbus_tcp_pi connect makes, so a name that
+// passes here is one libmodbus can connect to. Returns 0 or a getaddrinfo
+// error code.
+int resolve(const ModbusEndpoint& endpoint) {
+  addrinfo hints{};
+  hints.ai_flags = AI_ADDRCONFIG;
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  addrinfo* raw = nullptr;
+  const int result = getaddrinfo(endpoint.host.c_str(), std::to_string(endpoint.port).c_str(), &hints, &raw);
+  const std::unique_ptr<addrinfo, AddrinfoFree> list(raw);
+  return result;
+}
+
+std::string resolve_failure(const ModbusEndpoint& endpoint, int result) {
+  return "cannot resolve host \"" + endpoint.host + "\": " + gai_strerror(result);
+}
 
 bool same_block(const RegisterBlock& block, const ModbusChannel& channel, int max_gap) {
   const int end = channel.address + channel.register_count();
@@ -23,9 +60,29 @@ std::string ModbusEndpoint::describe() const {
   return serial_port + "@" + std::to_string(baud);
 }
 
+void check_endpoint_resolves(const ModbusEndpoint& endpoint) {
+  if (endpoint.transport != ModbusTransport::kTcp) return;
+  if (const int result = resolve(endpoint); result != 0) {
+    throw std::invalid_argument(resolve_failure(endpoint, result));
+  }
+}
+
+DeviceError modbus_failure(const std::string& what, int error) {
+  const std::string message = what + ": " + modbus_strerror(error);
+  if (is_exception_reply(error)) {
+    const int code = error - MODBUS_ENOBASE;
+    return DeviceError(what + ": Modbus exception " + std::to_string(code) + " (" + modbus_strerror(error) + ")",
+                       storage::SampleStatus::kBadReply, code);
+  }
+  if (is_rejected_reply(error)) return DeviceError(message, storage::SampleStatus::kBadReply);
+  return DeviceError(message);
+}
+
+// TCP goes through libmodbus's protocol-independent ("pi") back end, the
+// one that resolves host names; plain modbus_new_tcp takes IPv4 addresses only.
 ModbusHandle make_modbus_context(const ModbusEndpoint& endpoint) {
   modbus_t* raw = endpoint.transport == ModbusTransport::kTcp
-                      ? modbus_new_tcp(endpoint.host.c_str(), endpoint.port)
+                      ? modbus_new_tcp_pi(endpoint.host.c_str(), std::to_string(endpoint.port).c_str())
                       : modbus_new_rtu(endpoint.serial_port.c_str(), endpoint.baud, endpoint.parity, endpoint.data_bits,
                                        endpoint.stop_bits);
   if (!raw) throw DeviceError(modbus_error("cannot create Modbus context for " + endpoint.describe()));
@@ -82,13 +139,32 @@ void ModbusDevice::connect() {
   modbus_set_response_timeout(ctx_.get(), static_cast<std::uint32_t>(micros / 1'000'000),
                               static_cast<std::uint32_t>(micros % 1'000'000));
   if (modbus_connect(ctx_.get()) != 0) {
-    const std::string message = modbus_error("cannot connect to " + endpoint_.describe());
+    std::string message = modbus_error("cannot connect to " + endpoint_.describe());
+    // libmodbus reports a failed lookup as "Connection refused"; say what it was.
+    if (endpoint_.transport == ModbusTransport::kTcp) {
+      if (const int result = resolve(endpoint_); result != 0) message = resolve_failure(endpoint_, result);
+    }
     ctx_.reset();
     throw DeviceError(message);
   }
+  // A serial line may still hold the tail of an answer to a request made
+  // before the reconnection.
+  modbus_flush(ctx_.get());
+  stale_bytes_possible_ = false;
 }
 
 void ModbusDevice::disconnect() { ctx_.reset(); }
+
+// libmodbus reads a reply by the lengths its header announces and leaves the
+// rest in the socket (a byte count that claims too little leaves the last
+// registers behind); only with MODBUS_ERROR_RECOVERY_PROTOCOL does it flush,
+// and then after sleeping a whole response timeout. Flushing at once and
+// again before the next request costs nothing and keeps such a tail, or an
+// answer that arrives after its time-out, out of the next reply.
+void ModbusDevice::discard_stale_bytes() {
+  modbus_flush(ctx_.get());
+  stale_bytes_possible_ = true;
+}
 
 std::vector<std::uint16_t> ModbusDevice::read_block(const RegisterBlock& block) {
   std::vector<std::uint16_t> registers(static_cast<std::size_t>(block.count));
@@ -96,14 +172,19 @@ std::vector<std::uint16_t> ModbusDevice::read_block(const RegisterBlock& block) 
                     ? modbus_read_registers(ctx_.get(), block.address, block.count, registers.data())
                     : modbus_read_input_registers(ctx_.get(), block.address, block.count, registers.data());
   if (n != block.count) {
-    throw DeviceError(modbus_error("reading " + std::to_string(block.count) + " registers at " +
-                                   std::to_string(block.address) + " from " + endpoint_.describe()));
+    const int error = errno;
+    DeviceError failure = modbus_failure("reading " + std::to_string(block.count) + " registers at " +
+                                             std::to_string(block.address) + " from " + endpoint_.describe(),
+                                         error);
+    discard_stale_bytes();
+    throw failure;
   }
   return registers;
 }
 
 std::vector<ChannelReading> ModbusDevice::read() {
   if (!ctx_) throw DeviceError("not connected to " + endpoint_.describe());
+  if (std::exchange(stale_bytes_possible_, false)) modbus_flush(ctx_.get());
   std::vector<std::vector<std::uint16_t>> block_registers;
   for (const RegisterBlock& block : blocks_) block_registers.push_back(read_block(block));
   std::vector<ChannelReading> readings;

@@ -4,6 +4,13 @@
 // (contiguous blocks of one function code, at most 125 registers each) and
 // decodes each channel with its ModbusChannel map. The modbus_t handle lives
 // in a unique_ptr, closed and freed on every path.
+//
+// A failed read says what kind of failure it was (see modbus_failure): a
+// device that answered with an exception or a frame that does not fit the
+// request is a bad reply on a live link; anything else (no answer, a dropped
+// connection) is a transport failure. TCP hosts may be names; they are
+// resolved when the logger starts (check_endpoint_resolves) and again at
+// every connection.
 
 #include <modbus/modbus.h>
 
@@ -31,6 +38,19 @@ struct ModbusEndpoint {
 
   std::string describe() const;  // 127.0.0.1:502 or /dev/ttyUSB0@9600
 };
+
+// Throws std::invalid_argument naming the host when a TCP endpoint's host
+// does not resolve the way libmodbus will resolve it; RTU endpoints pass.
+// A name that never resolves would otherwise be retried for the whole run.
+void check_endpoint_resolves(const ModbusEndpoint& endpoint);
+
+// The DeviceError for a libmodbus call that failed with `error` (its errno)
+// while doing `what`: an exception reply is kBadReply with the exception
+// code as raw; a reply libmodbus rejected (wrong transaction id, function
+// code, byte count or length, bad CRC, another unit's reply, a malformed
+// exception) is kBadReply without raw; everything else is a transport
+// failure (kTimeout).
+DeviceError modbus_failure(const std::string& what, int error);
 
 struct ModbusFree {
   void operator()(modbus_t* ctx) const noexcept {
@@ -66,6 +86,7 @@ class ModbusDevice : public ThermocoupleSource {
 
  private:
   std::vector<std::uint16_t> read_block(const RegisterBlock& block);
+  void discard_stale_bytes();
 
   std::string name_;
   std::string profile_;
@@ -74,6 +95,10 @@ class ModbusDevice : public ThermocoupleSource {
   std::chrono::milliseconds timeout_;
   std::vector<RegisterBlock> blocks_;
   ModbusHandle ctx_;
+  // After a bad reply, bytes of it (or a late answer) may still be on their
+  // way; they are discarded before the next request so they cannot be taken
+  // for its reply.
+  bool stale_bytes_possible_ = false;
 };
 
 }  // namespace bosfuse::acquisition

@@ -97,7 +97,7 @@ void UsbTc32Device::start_hotplug_watch() {
   });
 }
 
-libusb_device_handle* UsbTc32Device::open_matching() {
+LibusbHandle UsbTc32Device::open_matching() {
   libusb_device** raw_list = nullptr;
   const ssize_t count = libusb_get_device_list(context_.get(), &raw_list);
   if (count < 0) throw DeviceError(usb_failure("cannot list USB devices", static_cast<int>(count)));
@@ -107,13 +107,13 @@ libusb_device_handle* UsbTc32Device::open_matching() {
     libusb_device_descriptor descriptor{};
     if (libusb_get_device_descriptor(list.get()[i], &descriptor) != 0) continue;
     if (descriptor.idVendor != kUsbTc32VendorId || descriptor.idProduct != kUsbTc32ProductId) continue;
-    libusb_device_handle* handle = nullptr;
-    if (const int result = libusb_open(list.get()[i], &handle); result != 0) {
+    libusb_device_handle* raw_handle = nullptr;
+    if (const int result = libusb_open(list.get()[i], &raw_handle); result != 0) {
       refused = usb_failure(location(list.get()[i]), result);
       continue;
     }
-    if (!serial_ || serial_of(handle, descriptor) == *serial_) return handle;
-    libusb_close(handle);
+    LibusbHandle handle(raw_handle);
+    if (!serial_ || serial_of(handle.get(), descriptor) == *serial_) return handle;
   }
   throw DeviceError("no USB-TC-32 " + (serial_ ? "with serial " + *serial_ + " " : std::string()) + "is connected" +
                     (refused.empty() ? "" : " that can be opened (" + refused + ")"));
@@ -127,7 +127,7 @@ void UsbTc32Device::connect() {
     start_hotplug_watch();
   }
   unplugged_ = false;
-  handle_.reset(open_matching());
+  handle_ = open_matching();
   libusb_set_auto_detach_kernel_driver(handle_.get(), 1);
   if (const int result = libusb_claim_interface(handle_.get(), kInterface); result != 0) {
     handle_.reset();

@@ -38,6 +38,7 @@ struct LibusbContextFree {
 struct LibusbHandleClose {
   void operator()(libusb_device_handle* handle) const noexcept { libusb_close(handle); }
 };
+using LibusbHandle = std::unique_ptr<libusb_device_handle, LibusbHandleClose>;
 
 class UsbTc32Device : public ThermocoupleSource {
  public:
@@ -56,7 +57,7 @@ class UsbTc32Device : public ThermocoupleSource {
   static int on_hotplug(libusb_context*, libusb_device* device, libusb_hotplug_event event, void* self);
   void start_hotplug_watch();
   void notice(std::string text);
-  libusb_device_handle* open_matching();
+  LibusbHandle open_matching();
   std::vector<std::uint8_t> transfer(const ControlRequest& request);
 
   std::string name_;
@@ -65,7 +66,7 @@ class UsbTc32Device : public ThermocoupleSource {
   std::chrono::milliseconds timeout_;
 
   std::unique_ptr<libusb_context, LibusbContextFree> context_;
-  std::unique_ptr<libusb_device_handle, LibusbHandleClose> handle_;
+  LibusbHandle handle_;
   libusb_hotplug_callback_handle hotplug_ = 0;
   std::atomic<bool> watching_{false};
   std::atomic<bool> unplugged_{false};

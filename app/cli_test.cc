@@ -97,6 +97,30 @@ TEST_F(Cli, MalformedExperimentNamesTheKeyAndLine) {
   EXPECT_FALSE(storage::RunStore::holds_run(run_dir())) << "a bad configuration must not start a run";
 }
 
+// libmodbus's plain TCP context takes an IPv4 address only: a host name
+// used to pass validation, was retried for the whole run and the run ended
+// "complete" with no samples and exit 0.
+TEST_F(Cli, HostNamesAreResolvedAndAnUnresolvableOneStopsTheStart) {
+  std::string text = experiment_text(server_->port());
+  const auto host = text.find("127.0.0.1");
+  write(experiment_, std::string(text).replace(host, 9, "no-such-host.invalid"));
+  const auto refused = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 1s");
+  EXPECT_NE(refused.exit_code, 0) << refused.output;
+  EXPECT_NE(refused.output.find("exp.toml:7: devices[0].host: device \"adam\": cannot resolve host "
+                                "\"no-such-host.invalid\""),
+            std::string::npos)
+      << refused.output;
+  EXPECT_FALSE(storage::RunStore::holds_run(run_dir())) << "an unreachable name must not start a run";
+
+  write(experiment_, text.replace(host, 9, "localhost"));
+  const auto acquired = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 1s");
+  ASSERT_EQ(acquired.exit_code, 0) << acquired.output;
+  const auto store = storage::RunStore::open(run_dir());
+  const auto samples = store.read_samples(store.channels()[0].id);
+  ASSERT_GE(samples.size(), 5u) << acquired.output;
+  for (const auto& s : samples) EXPECT_EQ(s.status, storage::SampleStatus::kOk);
+}
+
 TEST_F(Cli, EverySubcommandHasHelp) {
   for (const char* sub : {"acquire", "runs", "export", "demo", "sim modbus", "replay", "evaluate", "quality",
                           "background", "bench", "fit", "process", "calibrate", "report"}) {

@@ -10,7 +10,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
-#include <set>
+#include <cstring>
 #include <stdexcept>
 
 #include "acquisition/clock.h"
@@ -33,11 +33,14 @@ int mapping_size(const std::vector<ModbusChannel>& channels, RegisterKind kind) 
 }
 
 int bound_port(int socket) {
-  sockaddr_in addr{};
+  sockaddr_storage addr{};
   socklen_t length = sizeof addr;
   if (getsockname(socket, reinterpret_cast<sockaddr*>(&addr), &length) != 0) return 0;
-  return ntohs(addr.sin_port);
+  if (addr.ss_family == AF_INET6) return ntohs(reinterpret_cast<const sockaddr_in6&>(addr).sin6_port);
+  return ntohs(reinterpret_cast<const sockaddr_in&>(addr).sin_port);
 }
+
+constexpr int kTcpHeaderLength = 7;  // MBAP: transaction id, protocol id, length, unit id
 
 }  // namespace
 
@@ -48,6 +51,7 @@ std::string ModbusSimServer::Options::Validate() const {
     if (const std::string problem = c.Validate(); !problem.empty()) return c.name + ": " + problem;
   }
   if (update_period.count() < 0) return "update period must not be negative";
+  if (holding_registers < 0 || input_registers < 0) return "register counts must not be negative";
   return {};
 }
 
@@ -65,16 +69,19 @@ ModbusSimServer::~ModbusSimServer() { stop(); }
 void ModbusSimServer::start() {
   stopping_ = false;
   ctx_ = acquisition::make_modbus_context(options_.endpoint);
-  mapping_ = modbus_mapping_new(0, 0, mapping_size(options_.channels, RegisterKind::kHolding),
-                                mapping_size(options_.channels, RegisterKind::kInput));
+  mapping_.reset(
+      modbus_mapping_new(0, 0, std::max(options_.holding_registers, mapping_size(options_.channels, RegisterKind::kHolding)),
+                         std::max(options_.input_registers, mapping_size(options_.channels, RegisterKind::kInput))));
   if (!mapping_) throw std::runtime_error("cannot allocate Modbus register map");
   start_ = std::chrono::steady_clock::now();
   if (options_.endpoint.transport == ModbusTransport::kTcp) {
-    listen_socket_ = modbus_tcp_listen(ctx_.get(), 8);
-    if (listen_socket_ < 0) {
+    // The TCP context is libmodbus's "pi" one (see make_modbus_context),
+    // whose listen is modbus_tcp_pi_listen.
+    listen_socket_.reset(modbus_tcp_pi_listen(ctx_.get(), 8));
+    if (!listen_socket_) {
       throw std::runtime_error("cannot listen on " + options_.endpoint.describe() + ": " + modbus_strerror(errno));
     }
-    port_ = bound_port(listen_socket_);
+    port_ = bound_port(listen_socket_.get());
     thread_ = std::thread([this] { serve_tcp(); });
   } else {
     if (modbus_connect(ctx_.get()) != 0) {
@@ -87,50 +94,42 @@ void ModbusSimServer::start() {
 void ModbusSimServer::stop() {
   stopping_ = true;
   if (thread_.joinable()) thread_.join();
-  if (listen_socket_ >= 0) close(listen_socket_);
-  listen_socket_ = -1;
+  listen_socket_.reset();
   ctx_.reset();
-  if (mapping_) modbus_mapping_free(mapping_);
-  mapping_ = nullptr;
+  mapping_.reset();
 }
 
 void ModbusSimServer::serve_tcp() {
-  std::set<int> clients;
+  std::vector<UniqueFd> clients;
   while (!stopping_) {
     fd_set ready;
     FD_ZERO(&ready);
-    FD_SET(listen_socket_, &ready);
-    int highest = listen_socket_;
-    for (int fd : clients) {
-      FD_SET(fd, &ready);
-      highest = std::max(highest, fd);
+    FD_SET(listen_socket_.get(), &ready);
+    int highest = listen_socket_.get();
+    for (const UniqueFd& client : clients) {
+      FD_SET(client.get(), &ready);
+      highest = std::max(highest, client.get());
     }
     timeval timeout = kSelectTimeout;
     if (select(highest + 1, &ready, nullptr, nullptr, &timeout) <= 0) continue;
-    if (FD_ISSET(listen_socket_, &ready)) {
-      const int client = accept(listen_socket_, nullptr, nullptr);
-      if (client >= 0) clients.insert(client);
-    }
     for (auto it = clients.begin(); it != clients.end();) {
-      if (!FD_ISSET(*it, &ready)) {
+      if (!FD_ISSET(it->get(), &ready)) {
         ++it;
         continue;
       }
-      modbus_set_socket(ctx_.get(), *it);
+      modbus_set_socket(ctx_.get(), it->get());
       std::uint8_t query[MODBUS_TCP_MAX_ADU_LENGTH];
       const int length = modbus_receive(ctx_.get(), query);
-      if (length > 0) {
-        answer(query, length);
-        ++it;
-      } else if (length < 0) {  // closed by the client, or garbage
-        close(*it);
-        it = clients.erase(it);
-      } else {
-        ++it;
-      }
+      if (length > 0) answer(query, length);
+      // Below zero: closed by the client, or garbage.
+      it = length < 0 ? clients.erase(it) : it + 1;
+    }
+    if (FD_ISSET(listen_socket_.get(), &ready)) {
+      UniqueFd client(accept(listen_socket_.get(), nullptr, nullptr));
+      if (client) clients.push_back(std::move(client));
     }
   }
-  for (int fd : clients) close(fd);
+  // The clients close themselves; the context must not close one again.
   modbus_set_socket(ctx_.get(), -1);
 }
 
@@ -152,21 +151,86 @@ void ModbusSimServer::serve_rtu() {
 
 void ModbusSimServer::answer(const std::uint8_t* query, int length) {
   std::chrono::milliseconds delay;
+  std::optional<int> exception_code;
+  MalformedReply malformed;
   {
     std::lock_guard lock(mutex_);
     if (silent_) return;
     delay = reply_delay_;
+    exception_code = exception_code_;
+    malformed = malformed_;
   }
-  const int header = modbus_get_header_length(ctx_.get());
-  if (length >= header + 5) {
-    const int function = query[header];
-    const int address = (query[header + 1] << 8) | query[header + 2];
-    const int count = (query[header + 3] << 8) | query[header + 4];
-    refresh_registers(function, address, count);
-  }
+  const std::optional<RegisterRead> read = register_read(query, length);
+  const bool send_malformed_reply = !exception_code && malformed != MalformedReply::kNone && read;
+  if (read && !exception_code && !send_malformed_reply) refresh_registers(read->function, read->address, read->count);
   if (delay.count() > 0) std::this_thread::sleep_for(delay);
-  modbus_reply(ctx_.get(), query, length, mapping_);
+  if (exception_code) {
+    modbus_reply_exception(ctx_.get(), query, static_cast<unsigned>(*exception_code));
+  } else if (send_malformed_reply) {
+    send_malformed(query, *read, malformed);
+  } else {
+    modbus_reply(ctx_.get(), query, length, mapping_.get());
+  }
   ++requests_answered_;
+}
+
+// A read of holding or input registers the map can answer, or nullopt.
+std::optional<ModbusSimServer::RegisterRead> ModbusSimServer::register_read(const std::uint8_t* query,
+                                                                             int length) const {
+  const int header = modbus_get_header_length(ctx_.get());
+  if (length < header + 5) return std::nullopt;
+  const RegisterRead read{query[header], (query[header + 1] << 8) | query[header + 2],
+                          (query[header + 3] << 8) | query[header + 4]};
+  if (read.function != MODBUS_FC_READ_HOLDING_REGISTERS && read.function != MODBUS_FC_READ_INPUT_REGISTERS) {
+    return std::nullopt;
+  }
+  const int size = read.function == MODBUS_FC_READ_HOLDING_REGISTERS ? mapping_->nb_registers
+                                                                      : mapping_->nb_input_registers;
+  if (read.count < 1 || read.count > MODBUS_MAX_READ_REGISTERS || read.address + read.count > size) {
+    return std::nullopt;
+  }
+  return read;
+}
+
+// libmodbus only sends correct replies, so the malformed one is composed
+// here: the reply modbus_reply would send for `read`, with one field changed.
+void ModbusSimServer::send_malformed(const std::uint8_t* query, const RegisterRead& read, MalformedReply kind) {
+  const std::uint16_t* table = read.function == MODBUS_FC_READ_HOLDING_REGISTERS ? mapping_->tab_registers
+                                                                                   : mapping_->tab_input_registers;
+  const int pdu_length = 3 + 2 * read.count;  // unit id, function code, byte count, data
+  std::vector<std::uint8_t> adu = {query[0],
+                                   query[1],
+                                   0,
+                                   0,
+                                   static_cast<std::uint8_t>(pdu_length >> 8),
+                                   static_cast<std::uint8_t>(pdu_length & 0xFF),
+                                   query[kTcpHeaderLength - 1],
+                                   static_cast<std::uint8_t>(read.function),
+                                   static_cast<std::uint8_t>(2 * read.count)};
+  for (int i = 0; i < read.count; ++i) {
+    adu.push_back(static_cast<std::uint8_t>(table[read.address + i] >> 8));
+    adu.push_back(static_cast<std::uint8_t>(table[read.address + i] & 0xFF));
+  }
+  switch (kind) {
+    case MalformedReply::kWrongTransactionId:
+      adu[1] = static_cast<std::uint8_t>(adu[1] + 1);
+      if (adu[1] == 0) adu[0] = static_cast<std::uint8_t>(adu[0] + 1);
+      break;
+    case MalformedReply::kWrongByteCount:
+      adu[8] = static_cast<std::uint8_t>(adu[8] - 2);
+      break;
+    case MalformedReply::kWrongFunctionCode:
+      adu[7] = read.function == MODBUS_FC_READ_HOLDING_REGISTERS ? MODBUS_FC_READ_INPUT_REGISTERS
+                                                                  : MODBUS_FC_READ_HOLDING_REGISTERS;
+      break;
+    case MalformedReply::kNone:
+      break;
+  }
+  // One send, so the client finds the whole frame (and any bytes it does
+  // not expect) in its socket at once, as with a real module.
+  if (send(modbus_get_socket(ctx_.get()), adu.data(), adu.size(), MSG_NOSIGNAL) < 0) {
+    spdlog::debug("simulated module: cannot send a malformed reply: {}", std::strerror(errno));
+  }
 }
 
 std::vector<std::uint16_t> ModbusSimServer::registers_for(int channel, double t_s, std::uint64_t draw) {
@@ -238,6 +302,23 @@ void ModbusSimServer::set_silent(bool silent) {
   silent_ = silent;
 }
 
+void ModbusSimServer::set_exception_reply(std::optional<int> code) {
+  if (code && (*code < 1 || *code >= MODBUS_EXCEPTION_MAX)) {
+    throw std::invalid_argument("Modbus exception codes are 1.." + std::to_string(MODBUS_EXCEPTION_MAX - 1) +
+                                ", not " + std::to_string(*code));
+  }
+  std::lock_guard lock(mutex_);
+  exception_code_ = code;
+}
+
+void ModbusSimServer::set_malformed_reply(MalformedReply kind) {
+  if (kind != MalformedReply::kNone && options_.endpoint.transport != ModbusTransport::kTcp) {
+    throw std::logic_error("malformed replies are simulated over Modbus TCP only");
+  }
+  std::lock_guard lock(mutex_);
+  malformed_ = kind;
+}
+
 }  // namespace bosfuse::sim
 
 namespace bosfuse::sim {
@@ -275,10 +356,19 @@ ModbusSimServer::TemperatureFunction cooling_temperatures(const CoolingSignal& s
   };
 }
 
+void use_profile_register_map(ModbusSimServer::Options& options, std::string_view profile) {
+  const acquisition::ModbusProfile* p = acquisition::find_modbus_profile(profile);
+  if (!p || p->input_count == 0) return;  // generic: no map of its own
+  const auto all = module_channels(profile, p->input_count, "K");
+  options.holding_registers = std::max(options.holding_registers, mapping_size(all, RegisterKind::kHolding));
+  options.input_registers = std::max(options.input_registers, mapping_size(all, RegisterKind::kInput));
+}
+
 ModbusSimServer::Options module_server_options(const SimulatedModule& module, acquisition::ModbusEndpoint endpoint) {
   ModbusSimServer::Options options;
   options.endpoint = std::move(endpoint);
   options.channels = module_channels(module.profile, module.inputs, module.tc_type);
+  use_profile_register_map(options, module.profile);
   options.temperature_c = cooling_temperatures(module.signal, options.channels);
   options.update_period = module.update_period;
   return options;

@@ -41,6 +41,7 @@ ModbusSimServer::Options scene_module_options(std::shared_ptr<const SceneThermoc
   options.endpoint.host = "127.0.0.1";
   options.endpoint.port = port;
   options.channels = module_channels(profile, static_cast<int>(table->size()), "K");
+  use_profile_register_map(options, profile);
   const auto inputs = static_cast<int>(table->size());
   options.temperature_c = [table, inputs, ambient_c](int channel, double t_s, std::uint64_t draw) {
     return channel < inputs ? table->temperature_c(channel, t_s, draw) : ambient_c;

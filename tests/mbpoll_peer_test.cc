@@ -60,5 +60,42 @@ TEST(MbpollPeer, IndependentClientSeesWhatTheLoggerRecorded) {
   }
 }
 
+// A client that reads a real module's whole map (all 8 inputs, and the
+// cold junction of a module that has one) must get every register; the
+// simulator used to serve only the channels it simulated and answered
+// "Illegal data address" past them.
+TEST(MbpollPeer, SimulatedModulesServeTheirWholeRegisterMap) {
+  struct Read {
+    std::string profile;
+    std::string mbpoll_type;  // 4: holding registers, 3: input registers
+    int first;
+    int count;
+  };
+  for (const Read& read : {Read{"adam-6018", "4", 0, 8}, Read{"icpdas-m7018", "3", 0, 8},
+                           Read{"icpdas-m7018", "3", 128, 1}}) {
+    SCOPED_TRACE(read.profile + " from " + std::to_string(read.first));
+    sim::SimulatedModule module;
+    module.profile = read.profile;
+    module.signal = sim::CoolingSignal{22.0, 85.0, 0.2, 0.3, 7};
+    sim::ModbusSimServer server(sim::module_server_options(module, loopback_tcp()));
+    server.start();
+    const auto result = run_command("mbpoll -m tcp -a 1 -t " + read.mbpoll_type + " -0 -r " +
+                                    std::to_string(read.first) + " -c " + std::to_string(read.count) + " -1 -o 2 -p " +
+                                    std::to_string(server.port()) + " 127.0.0.1");
+    ASSERT_EQ(result.exit_code, 0) << result.output;
+    const auto registers = parse_mbpoll(result.output);
+    ASSERT_EQ(registers.size(), std::size_t(read.count)) << result.output;
+    // Each register is a temperature of the cooling curve (or the ambient
+    // one at the cold junction), decoded with the profile's own map.
+    for (const auto& [address, value] : registers) {
+      const auto channel = read.first == 128 ? acquisition::profile_cold_junction_channel(read.profile)
+                                             : acquisition::profile_input_channel(read.profile, address, "K");
+      const auto reading = channel.decode(std::span(&value, 1));
+      ASSERT_TRUE(reading.value.has_value()) << address;
+      EXPECT_NEAR(*reading.value, read.first == 128 ? 22.0 : 85.0, 1.5) << address;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace bosfuse
