@@ -169,14 +169,7 @@ ModbusDeviceConfig read_modbus_device(const TomlReader& r) {
   const ModbusProfile* profile = find_modbus_profile(d.profile);
   if (!profile) r.fail("profile", "unknown profile \"" + d.profile + "\" (adam-6018, icpdas-m7018 or generic)");
   d.endpoint = read_endpoint(r, *profile);
-  // A name that does not resolve now is a typo far more often than a
-  // passing DNS outage; refusing it here stops the run before it starts
-  // instead of retrying a device that can never be reached.
-  try {
-    check_endpoint_resolves(d.endpoint);
-  } catch (const std::invalid_argument& e) {
-    r.fail("host", "device \"" + d.name + "\": " + e.what());
-  }
+  d.host_key = r.where("host");
   read_schedule(r, d);
   std::set<std::string> names;
   for (const TomlReader& channel : r.tables("channels")) {
@@ -418,6 +411,16 @@ ExperimentConfig load_experiment(const std::filesystem::path& path) {
   std::ostringstream text;
   text << in.rdbuf();
   return parse_experiment(text.str(), path.string());
+}
+
+void check_hosts_resolve(const ExperimentConfig& config) {
+  for (const ModbusDeviceConfig& d : config.modbus_devices) {
+    try {
+      check_endpoint_resolves(d.endpoint);
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError(d.host_key + ": device \"" + d.name + "\": " + e.what());
+    }
+  }
 }
 
 }  // namespace bosfuse::acquisition

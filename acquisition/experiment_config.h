@@ -26,6 +26,7 @@ struct ModbusDeviceConfig {
   std::string name;
   std::string profile;
   ModbusEndpoint endpoint;
+  std::string host_key;  // where `host` is in the file ("exp.toml:7: devices[0].host"), for check_hosts_resolve
   std::chrono::nanoseconds poll_period = std::chrono::seconds(1);
   std::optional<std::int64_t> poll_count;  // stop polling after this many polls
   std::chrono::milliseconds timeout{500};
@@ -83,5 +84,13 @@ struct ExperimentConfig {
 
 ExperimentConfig parse_experiment(std::string_view text, const std::string& source_name);
 ExperimentConfig load_experiment(const std::filesystem::path& path);  // throws ConfigError
+
+// Throws ConfigError, naming the key and line, for a Modbus TCP host name
+// that does not resolve: at the start of logging a name that does not
+// resolve is a typo far more often than a passing DNS outage, and refusing
+// it stops the run before it starts instead of retrying a device that can
+// never be reached. Parsing itself never resolves names, so a stored run's
+// experiment file reads the same anywhere, offline too.
+void check_hosts_resolve(const ExperimentConfig& config);
 
 }  // namespace bosfuse::acquisition

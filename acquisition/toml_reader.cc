@@ -27,9 +27,13 @@ std::string TomlReader::key_path(std::string_view key) const {
 }
 
 void TomlReader::fail(std::string_view key, const std::string& message) const {
+  throw ConfigError(where(key) + ": " + message);
+}
+
+std::string TomlReader::where(std::string_view key) const {
   const toml::node* at = key.empty() ? nullptr : table_->get(key);
   const toml::source_region& region = at ? at->source() : table_->source();
-  throw ConfigError(location(source_name_, region) + ": " + key_path(key) + ": " + message);
+  return location(source_name_, region) + ": " + key_path(key);
 }
 
 const toml::node* TomlReader::node(std::string_view key) const {

@@ -54,6 +54,9 @@ class TomlReader {
 
   // An error about `key` (or the table itself when empty) at its line.
   [[noreturn]] void fail(std::string_view key, const std::string& message) const;
+  // Where `key` is, as fail() names it ("exp.toml:7: devices[0].host"), for
+  // an error found after parsing.
+  std::string where(std::string_view key) const;
   // Fails on the first key that was never asked for.
   void reject_unknown_keys() const;
 

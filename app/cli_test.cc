@@ -15,6 +15,11 @@ namespace {
 
 using namespace std::chrono_literals;
 
+// A name that fails to resolve on this machine without a query to any DNS
+// server: the resolver refuses a label over 63 characters before sending.
+constexpr const char* kUnresolvableHost =
+    "unresolvable-because-this-first-label-is-longer-than-sixty-three-chars.invalid";
+
 const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
 
 class Cli : public ::testing::Test {
@@ -103,11 +108,11 @@ TEST_F(Cli, MalformedExperimentNamesTheKeyAndLine) {
 TEST_F(Cli, HostNamesAreResolvedAndAnUnresolvableOneStopsTheStart) {
   std::string text = experiment_text(server_->port());
   const auto host = text.find("127.0.0.1");
-  write(experiment_, std::string(text).replace(host, 9, "no-such-host.invalid"));
+  write(experiment_, std::string(text).replace(host, 9, kUnresolvableHost));
   const auto refused = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 1s");
   EXPECT_NE(refused.exit_code, 0) << refused.output;
-  EXPECT_NE(refused.output.find("exp.toml:7: devices[0].host: device \"adam\": cannot resolve host "
-                                "\"no-such-host.invalid\""),
+  EXPECT_NE(refused.output.find("exp.toml:7: devices[0].host: device \"adam\": cannot resolve host \"" +
+                                std::string(kUnresolvableHost) + "\""),
             std::string::npos)
       << refused.output;
   EXPECT_FALSE(storage::RunStore::holds_run(run_dir())) << "an unreachable name must not start a run";

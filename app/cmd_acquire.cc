@@ -24,6 +24,7 @@ struct AcquireArgs {
 void acquire(const AcquireArgs& args) {
   const auto config = acquisition::load_experiment(args.experiment);
   if (config.device_count() == 0) throw std::runtime_error(args.experiment + ": no [[devices]] to log");
+  acquisition::check_hosts_resolve(config);
   acquisition::Logger::Options options;
   if (!args.duration.empty()) options.duration = parse_duration(args.duration);
   options.on_progress = [](const std::string& line) { spdlog::info("{}", line); };

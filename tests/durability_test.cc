@@ -80,7 +80,7 @@ TEST_F(Durability, KilledAtRandomMomentsLosesAtMostTheCommitWindow) {
   const std::string exp = experiment();
   const unsigned seed = std::random_device{}();
   std::mt19937 random(seed);
-  std::uniform_int_distribution<int> kill_after_ms(300, 1500);
+  std::uniform_int_distribution<int> kill_after_ms(0, 1200);
   SCOPED_TRACE("seed " + std::to_string(seed));
   for (int round = 0; round < 5; ++round) {
     const std::string run = (dir_ / ("run-" + std::to_string(round))).string();
@@ -88,6 +88,8 @@ TEST_F(Durability, KilledAtRandomMomentsLosesAtMostTheCommitWindow) {
     std::int64_t killed_ns = 0;
     {
       auto logger = acquire(exp, run);
+      // A random moment while polling (the logger's start-up time varies with the machine's load).
+      ASSERT_TRUE(wait_for([&] { return server_.served().size() > served_before; }, 10s)) << "the logger never polled";
       std::this_thread::sleep_for(std::chrono::milliseconds(kill_after_ms(random)));
       killed_ns = acquisition::utc_now_ns();
       logger.send_signal(SIGKILL);
@@ -106,7 +108,6 @@ TEST_F(Durability, KilledAtRandomMomentsLosesAtMostTheCommitWindow) {
     const auto stored = samples_by_channel(store);
     for (int c = 0; c < kChannels; ++c) {
       const auto& samples = stored.at("tc" + std::to_string(c));
-      ASSERT_FALSE(samples.empty()) << "nothing was committed before the kill";
       std::vector<sim::ModbusSimServer::ServedValue> this_round;
       for (const auto& v : served(c)) {
         if (v.t_ns >= store.run().started_ns) this_round.push_back(v);
