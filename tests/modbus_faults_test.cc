@@ -185,6 +185,9 @@ struct FaultClass {
   std::string recovery_event;  // and the one its end records
 };
 
+// Test listings show the fault's name, not the struct's bytes.
+void PrintTo(const FaultClass& fault, std::ostream* out) { *out << fault.name; }
+
 std::vector<FaultClass> fault_classes() {
   using Malformed = sim::ModbusSimServer::MalformedReply;
   const auto exception = [](int code) {
