@@ -7,6 +7,7 @@
 
 #include "sim/modbus_server.h"
 #include "storage/run_store.h"
+#include "tests/support/modbus_fixture.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
 
@@ -124,6 +125,69 @@ TEST_F(Cli, HostNamesAreResolvedAndAnUnresolvableOneStopsTheStart) {
   const auto samples = store.read_samples(store.channels()[0].id);
   ASSERT_GE(samples.size(), 5u) << acquired.output;
   for (const auto& s : samples) EXPECT_EQ(s.status, storage::SampleStatus::kOk);
+}
+
+// Command-line conventions (issue 11): data on stdout, every message on
+// stderr; a typo of a subcommand is named; --quiet silences the chatter;
+// a run that lacks a device's data says so and exits with its own status.
+TEST_F(Cli, DataGoesToStdoutAndMessagesToStderr) {
+  ASSERT_EQ(bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 300ms").exit_code, 0);
+  // Standard output into a file, standard error into the captured output.
+  const auto stdout_to = [&](const std::string& args, const std::string& file) {
+    return testing::run_command("sh -c '" + kBosfuse + " " + args + " > " + (dir_ / file).string() + "'");
+  };
+  const auto first_line = [&](const std::string& file) {
+    std::ifstream in(dir_ / file);
+    std::string line;
+    std::getline(in, line);
+    return line;
+  };
+  const auto exported = stdout_to("export " + run_dir() + " --csv", "out.csv");
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  EXPECT_EQ(first_line("out.csv"), "time_utc,t_s,tc0 [degC],tc1 [degC]") << "something other than data on stdout";
+  const auto failed = stdout_to("runs " + (dir_ / "nothing-here").string(), "none.txt");
+  EXPECT_NE(failed.exit_code, 0);
+  EXPECT_NE(failed.output.find("holds no bosfuse run"), std::string::npos) << "the error is not on stderr";
+  EXPECT_EQ(first_line("none.txt"), "") << "the error went to stdout";
+}
+
+TEST_F(Cli, AnUnknownSubcommandIsNamed) {
+  const auto result = bosfuse("acquier " + experiment_);
+  EXPECT_NE(result.exit_code, 0);
+  EXPECT_NE(result.output.find("unknown subcommand 'acquier' (one of: "), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("acquire"), std::string::npos) << result.output;
+}
+
+TEST_F(Cli, QuietLeavesOnlyWarningsAndADurationWithoutUnitSaysWhatItAssumed) {
+  const auto chatty = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 0.3");
+  ASSERT_EQ(chatty.exit_code, 0) << chatty.output;
+  EXPECT_NE(chatty.output.find("[info] logging 1 devices"), std::string::npos) << chatty.output;
+  EXPECT_NE(chatty.output.find("duration '0.3' has no unit: taken as 0.3 s"), std::string::npos) << chatty.output;
+  const auto quiet = bosfuse("acquire " + experiment_ + " --out " + (dir_ / "run2").string() + " --duration 300ms -q");
+  ASSERT_EQ(quiet.exit_code, 0) << quiet.output;
+  EXPECT_EQ(quiet.output.find("[info]"), std::string::npos) << quiet.output;
+}
+
+TEST_F(Cli, ARunWhoseDeviceDeliveredNothingEndsWithAWarningAndItsOwnStatus) {
+  write(experiment_, experiment_text(testing::unused_loopback_port()));
+  const auto result = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 500ms");
+  EXPECT_EQ(result.exit_code, 4) << result.output;
+  EXPECT_NE(result.output.find("the run is recorded, but device adam delivered no readings"), std::string::npos)
+      << result.output;
+  EXPECT_EQ(storage::RunStore::open(run_dir()).run().status, storage::RunStatus::kComplete);
+}
+
+TEST_F(Cli, RunsOfAFolderListsTheRunsBelowIt) {
+  ASSERT_EQ(bosfuse("acquire " + experiment_ + " --out " + (dir_ / "day1/a").string() + " --duration 300ms").exit_code,
+            0);
+  ASSERT_EQ(bosfuse("acquire " + experiment_ + " --out " + (dir_ / "day2/b").string() + " --duration 300ms").exit_code,
+            0);
+  const auto listed = bosfuse("runs " + dir_.path().string());
+  ASSERT_EQ(listed.exit_code, 0) << listed.output;
+  EXPECT_NE(listed.output.find("day1/a "), std::string::npos) << listed.output;
+  EXPECT_NE(listed.output.find("day2/b "), std::string::npos) << listed.output;
+  EXPECT_LT(listed.output.find("day1/a "), listed.output.find("day2/b ")) << listed.output;
+  EXPECT_NE(listed.output.find("complete"), std::string::npos) << listed.output;
 }
 
 TEST_F(Cli, EverySubcommandHasHelp) {

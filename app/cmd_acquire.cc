@@ -21,6 +21,24 @@ struct AcquireArgs {
   bool append = false;
 };
 
+// A run that looks fine but lacks a device's data: said at the end, where a
+// user (or a script, by the exit status) cannot miss it.
+std::string what_is_missing(const acquisition::Logger::Summary& summary) {
+  std::string missing;
+  const auto add = [&](const std::string& what) { missing += (missing.empty() ? "" : "; ") + what; };
+  for (const auto& device : summary.devices) {
+    if (device.stats.polls_ok == 0) add("device " + device.name + " delivered no readings");
+  }
+  for (const auto& camera : summary.cameras) {
+    if (camera.stats.frames == 0) {
+      add("camera " + camera.name + " delivered no frames");
+    } else if (camera.stats.failures > 0) {
+      add("camera " + camera.name + " lost " + std::to_string(camera.stats.failures) + " frames");
+    }
+  }
+  return missing;
+}
+
 void acquire(const AcquireArgs& args) {
   const auto config = acquisition::load_experiment(args.experiment);
   if (config.device_count() == 0) throw std::runtime_error(args.experiment + ": no [[devices]] to log");
@@ -46,6 +64,9 @@ void acquire(const AcquireArgs& args) {
     throw CommandFailure(kExitIncompleteRun, std::to_string(summary.writer.uncommitted_at_stop) +
                                                  " records read were not committed (" + summary.writer.last_error +
                                                  "); the run is marked interrupted");
+  }
+  if (const std::string missing = what_is_missing(summary); !missing.empty()) {
+    throw CommandFailure(kExitDeviceSilent, "the run is recorded, but " + missing);
   }
 }
 

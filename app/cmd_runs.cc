@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <filesystem>
 #include <iostream>
 #include <map>
 
@@ -20,9 +22,8 @@ std::string value_or_dash(const std::optional<double>& v) { return v ? fmt::form
 
 void print_run(const storage::RunStore& store) {
   const storage::RunInfo run = store.run();
-  const std::string status = run.status == storage::RunStatus::kRunning
-                                 ? "running (or its logger was killed before it could close the run)"
-                                 : std::string(storage::to_string(run.status));
+  const std::string status = run.status == storage::RunStatus::kRunning ? "running (a logger is recording it now)"
+                                                                        : std::string(storage::to_string(run.status));
   std::cout << fmt::format("run       {}\nfolder    {}\nstatus    {}\nstarted   {}\nended     {}\n", run.name,
                            store.dir().string(), status, acquisition::format_iso8601_utc(run.started_ns, 3),
                            time_or_dash(run.ended_ns));
@@ -59,11 +60,52 @@ void print_events(const storage::RunStore& store) {
   std::cout << fmt::format("frames    {}\n", store.frames().size());
 }
 
+// The run folders under `dir`, in name order; a run's own folder is not
+// searched further (its frames/ and fields/ hold no runs).
+std::vector<std::filesystem::path> runs_under(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> runs;
+  for (auto it = fs::recursive_directory_iterator(dir, fs::directory_options::skip_permission_denied);
+       it != fs::recursive_directory_iterator(); ++it) {
+    if (!it->is_directory()) continue;
+    if (storage::RunStore::holds_run(it->path())) {
+      runs.push_back(it->path());
+      it.disable_recursion_pending();
+    }
+  }
+  std::sort(runs.begin(), runs.end());
+  return runs;
+}
+
+void print_run_list(const std::filesystem::path& dir) {
+  const auto runs = runs_under(dir);
+  if (runs.empty()) throw std::runtime_error("'" + dir.string() + "' holds no bosfuse run, nor any folder below it");
+  std::cout << fmt::format("{:<40} {:<16} {:<12} {:<24} {:>10} {:>9} {:>7}\n", "folder", "name", "status", "started",
+                           "duration", "samples", "frames");
+  for (const auto& run_dir : runs) {
+    const auto store = storage::RunStore::open(run_dir);
+    const storage::RunInfo run = store.run();
+    std::int64_t samples = 0;
+    for (const auto& channel : store.channel_summaries()) samples += channel.sample_count;
+    const std::string duration =
+        run.ended_ns ? fmt::format("{:.1f} s", static_cast<double>(*run.ended_ns - run.started_ns) * 1e-9) : "-";
+    std::cout << fmt::format("{:<40} {:<16} {:<12} {:<24} {:>10} {:>9} {:>7}\n",
+                             std::filesystem::relative(run_dir, dir).string(), run.name, storage::to_string(run.status),
+                             acquisition::format_iso8601_utc(run.started_ns, 0), duration, samples,
+                             store.frames().size());
+  }
+}
+
 void add_runs(CLI::App& root) {
   auto dir = std::make_shared<std::string>();
-  CLI::App* cmd = root.add_subcommand("runs", "Summarise a run: channels, sample counts, time span, events");
-  cmd->add_option("run", *dir, "Run folder")->required();
+  CLI::App* cmd = root.add_subcommand(
+      "runs", "Summarise a run (channels, sample counts, time span, events), or list the runs under a folder");
+  cmd->add_option("run", *dir, "Run folder, or a folder holding runs")->required();
   cmd->callback([dir] {
+    if (!storage::RunStore::holds_run(*dir) && std::filesystem::is_directory(*dir)) {
+      print_run_list(*dir);
+      return;
+    }
     const auto store = storage::RunStore::open(*dir);
     print_run(store);
     print_channels(store);

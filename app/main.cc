@@ -1,7 +1,9 @@
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <cstdlib>
 #include <exception>
+#include <iostream>
 
 #include "app/command.h"
 #include "app/run_control.h"
@@ -13,26 +15,57 @@ std::vector<CommandAdder>& command_registry() {
   return registry;
 }
 
+namespace {
+
+// Data goes to standard output, so `bosfuse export RUN --csv > f.csv` holds
+// only data: every message, from info to error, goes to standard error.
+void log_to_stderr() {
+  spdlog::set_default_logger(
+      std::make_shared<spdlog::logger>("", std::make_shared<spdlog::sinks::stderr_color_sink_mt>()));
+}
+
+// The first word names a subcommand, or the parser would call a typo
+// "a subcommand is required".
+bool names_unknown_subcommand(const CLI::App& root, int argc, char** argv) {
+  if (argc < 2 || argv[1][0] == '-') return false;
+  std::string known;
+  for (const CLI::App* sub : root.get_subcommands([](const CLI::App*) { return true; })) {
+    if (sub->get_name() == argv[1]) return false;
+    known += (known.empty() ? "" : ", ") + sub->get_name();
+  }
+  spdlog::error("unknown subcommand '{}' (one of: {})", argv[1], known);
+  return true;
+}
+
+}  // namespace
 }  // namespace bosfuse::app
 
 int main(int argc, char** argv) {
+  using namespace bosfuse::app;
+  log_to_stderr();
   CLI::App root{
       "bosfuse: thermocouple-and-image data fusion logger for background oriented "
       "schlieren (BOS) convection experiments"};
   root.set_version_flag("--version", "bosfuse 0.1.0");
   root.require_subcommand(1);
   root.fallthrough();
-  for (const auto& add : bosfuse::app::command_registry()) add(root);
+  // Before any subcommand runs: the options of the root are parsed first.
+  root.add_flag_callback(
+      "-q,--quiet", [] { spdlog::set_level(spdlog::level::warn); }, "Only warnings and errors (on standard error)");
+  root.add_flag_callback(
+      "-v,--verbose", [] { spdlog::set_level(spdlog::level::debug); }, "Say more of what is done (on standard error)");
+  for (const auto& add : command_registry()) add(root);
   try {
+    if (names_unknown_subcommand(root, argc, argv)) return static_cast<int>(CLI::ExitCodes::ExtrasError);
     root.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return root.exit(e);
-  } catch (const bosfuse::app::CommandFailure& e) {
+  } catch (const CommandFailure& e) {
     spdlog::error("{}", e.what());
     return e.status();
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
-    return EXIT_FAILURE;
+    return kExitFailure;
   }
   return EXIT_SUCCESS;
 }

@@ -1,5 +1,7 @@
 #include "app/run_control.h"
 
+#include <spdlog/spdlog.h>
+
 #include <cmath>
 #include <csignal>
 #include <stdexcept>
@@ -43,6 +45,7 @@ std::chrono::nanoseconds parse_duration(const std::string& text) {
   if (used == 0 || seconds_per_unit == 0 || !std::isfinite(value) || value <= 0) {
     throw std::invalid_argument("cannot read duration '" + text + "' (examples: 30s, 10m, 1.5h, 250ms)");
   }
+  if (unit.empty()) spdlog::warn("duration '{}' has no unit: taken as {} s (say 90s, 10m, 1.5h or 250ms)", text, value);
   return std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(value * seconds_per_unit * 1e9)));
 }
 

@@ -19,6 +19,7 @@ std::atomic<bool>& stop_requested_by_signal();
 enum ExitStatus : int {
   kExitFailure = 1,
   kExitIncompleteRun = 3,  // the run was recorded, but records read could not be committed
+  kExitDeviceSilent = 4,   // the run was recorded, but a device delivered nothing or a camera lost frames
 };
 
 // A failure with its own exit status; main() prints the message and exits with it.
@@ -32,6 +33,7 @@ class CommandFailure : public std::runtime_error {
 };
 
 // Throws std::invalid_argument naming the text on anything it cannot read.
+// A plain number is seconds, and a warning says it was taken so.
 std::chrono::nanoseconds parse_duration(const std::string& text);
 
 }  // namespace bosfuse::app

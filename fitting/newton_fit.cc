@@ -353,12 +353,19 @@ void add_warnings(NewtonFit& fit, const NewtonFitOptions& options, const Paramet
                "(--ambient prior:VALUE,SIGMA)",
                s.record_time_constants, fit.duration_s, fit.tau_s.value));
   }
-  if (std::abs(s.lag1_autocorrelation) > options.max_lag1_autocorrelation) {
-    const double r = s.lag1_autocorrelation;
+  const double r = s.lag1_autocorrelation;
+  if (r > options.max_lag1_autocorrelation) {
     s.warnings.push_back(
         format("residuals are correlated (lag-1 autocorrelation %.2f): the intervals assume independent noise and are "
                "optimistic (effective sample size about %.0f of %zu); check for drift, filtering or a model mismatch",
                r, std::max(1.0, s.points_used * (1 - r) / (1 + r)), s.points_used));
+  } else if (r < -options.max_lag1_autocorrelation) {
+    // Residuals that alternate in sign carry more information per point than
+    // independent ones, so there is no smaller effective sample to quote.
+    s.warnings.push_back(
+        format("residuals alternate in sign (lag-1 autocorrelation %.2f): the intervals assume independent noise and "
+               "are conservative; check for a sampling or filtering artefact",
+               r));
   }
   if (fit.k_per_s.std_error > 0.5 * fit.k_per_s.value) {
     s.warnings.push_back(format("k is poorly determined (standard error %.0f%% of its value)",

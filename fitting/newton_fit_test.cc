@@ -142,6 +142,23 @@ TEST(NewtonFit, CorrelatedResidualsAreFlagged) {
   EXPECT_TRUE(flagged) << result.brief_report();
 }
 
+// An effective sample size larger than the sample was once quoted for
+// residuals that alternate in sign.
+TEST(NewtonFit, AlternatingResidualsAreFlaggedWithoutAnEffectiveSampleSize) {
+  Curve curve;
+  auto r = sample(curve, 400, 1.0, 0.0, 1);
+  for (std::size_t i = 0; i < r.time_s.size(); ++i) r.temperature_c[i] += (i % 2 ? 0.2 : -0.2);
+  const auto result = fit(r);
+  ASSERT_TRUE(result.ok()) << result.brief_report();
+  EXPECT_LT(result.summary.lag1_autocorrelation, -0.9);
+  bool flagged = false;
+  for (const auto& w : result.summary.warnings) {
+    flagged |= w.find("alternate in sign") != std::string::npos;
+    EXPECT_EQ(w.find("effective sample size"), std::string::npos) << w;
+  }
+  EXPECT_TRUE(flagged) << result.brief_report();
+}
+
 TEST(NewtonFit, TooFewPointsIsAnErrorWithAReason) {
   const Record r{{0.0, 1.0, 2.0}, {50.0, 45.0, 41.0}};
   const auto result = fit(r);
