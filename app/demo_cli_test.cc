@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 
 #include "storage/processing_store.h"
@@ -18,6 +20,36 @@ namespace bosfuse::app {
 namespace {
 
 namespace fs = std::filesystem;
+
+// Every quantity of the demo's report can be computed, so none may show as
+// nan, inf or null (a reader once missed the stored limits of agreement).
+void expect_every_number_present(const std::string& page, const fs::path& json_file) {
+  std::string text = page;
+  for (auto at = text.find("base64,"); at != std::string::npos; at = text.find("base64,", at + 7)) {
+    text.erase(at + 7, text.find('"', at) - at - 7);  // images are not text
+  }
+  for (const char* bad : {">nan", "nan<", "[nan", "nan]", " nan ", ">inf", "inf<", "null"}) {
+    EXPECT_EQ(text.find(bad), std::string::npos)
+        << "report.html shows '" << bad
+        << "' near: " << text.substr(text.find(bad) > 80 ? text.find(bad) - 80 : 0, 160);
+  }
+  nlohmann::json report;
+  std::ifstream(json_file) >> report;
+  std::vector<std::string> nulls;
+  const std::function<void(const nlohmann::json&, const std::string&)> walk = [&](const nlohmann::json& j,
+                                                                                  const std::string& path) {
+    if (j.is_null()) nulls.push_back(path);
+    if (j.is_number_float() && !std::isfinite(j.get<double>())) nulls.push_back(path);
+    if (j.is_object()) {
+      for (const auto& [key, value] : j.items()) walk(value, path + "/" + key);
+    }
+    if (j.is_array()) {
+      for (std::size_t i = 0; i < j.size(); ++i) walk(j[i], path + "/" + std::to_string(i));
+    }
+  };
+  walk(report, "");
+  EXPECT_TRUE(nulls.empty()) << "report.json has no number at " << ::testing::PrintToString(nulls);
+}
 
 TEST(DemoCli, RecoversTheTrueCoolingRateFromThermocouplesAndBos) {
   testing::TempDir dir;
@@ -63,6 +95,7 @@ TEST(DemoCli, RecoversTheTrueCoolingRateFromThermocouplesAndBos) {
     EXPECT_GT(image.spread, 100);
   }
   EXPECT_EQ(storage::RunStore::open(run).run().status, storage::RunStatus::kComplete);
+  expect_every_number_present(page, run / "report/report.json");
 }
 
 }  // namespace

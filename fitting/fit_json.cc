@@ -1,6 +1,9 @@
 #include "fitting/fit_json.h"
 
 #include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
 
 namespace bosfuse::fitting {
 namespace {
@@ -9,7 +12,100 @@ using nlohmann::ordered_json;
 
 ordered_json number_or_null(double value) { return std::isfinite(value) ? ordered_json(value) : ordered_json(nullptr); }
 
+using nlohmann::json;
+
+double number_or_nan(const json& j, const char* key) {
+  const auto it = j.find(key);
+  return it != j.end() && it->is_number() ? it->get<double>() : std::numeric_limits<double>::quiet_NaN();
+}
+
+Estimate estimate_from_json(const json& j) {
+  Estimate e;
+  e.value = e.std_error = e.low = e.high = std::numeric_limits<double>::quiet_NaN();
+  if (!j.is_object()) return e;
+  e.value = number_or_nan(j, "value");
+  e.std_error = number_or_nan(j, "std_error");
+  e.fixed = j.value("fixed", false);
+  if (const auto it = j.find("interval"); it != j.end() && it->is_object()) {
+    e.low = number_or_nan(*it, "low");
+    e.high = number_or_nan(*it, "high");
+  }
+  return e;
+}
+
+FitStatus status_from_json(const json& j) {
+  const std::string status = j.value("status", std::string());
+  for (int i = 0; i <= static_cast<int>(FitStatus::kNotConverged); ++i) {
+    if (status == to_string(static_cast<FitStatus>(i))) return static_cast<FitStatus>(i);
+  }
+  return FitStatus::kNotConverged;
+}
+
+void read_diagnostics(const json& d, NewtonFit& fit) {
+  auto& s = fit.summary;
+  s.points_used = d.value("points_used", std::size_t{0});
+  s.rejected_non_finite = d.value("rejected_non_finite", std::size_t{0});
+  s.duplicate_times = d.value("duplicate_times_kept", std::size_t{0});
+  s.parameters = d.value("parameters", 0);
+  s.dof = d.value("dof", 0.0);
+  s.iterations = d.value("iterations", 0);
+  fit.duration_s = number_or_nan(d, "duration_s");
+  s.residual_rms_c = number_or_nan(d, "residual_rms_c");
+  s.residual_std_c = number_or_nan(d, "residual_std_c");
+  if (const double chi = number_or_nan(d, "reduced_chi_square"); std::isfinite(chi)) s.reduced_chi_square = chi;
+  s.lag1_autocorrelation = number_or_nan(d, "lag1_autocorrelation");
+  s.record_time_constants = number_or_nan(d, "record_time_constants");
+  s.outliers = d.value("outliers", std::size_t{0});
+}
+
 }  // namespace
+
+NewtonFit fit_from_json(const json& j) {
+  NewtonFit fit;
+  fit.origin_s = number_or_nan(j, "origin_s");
+  const json& p = j.at("parameters");
+  fit.k_per_s = estimate_from_json(p.value("k_per_s", json()));
+  fit.tau_s = estimate_from_json(p.value("tau_s", json()));
+  fit.t0_c = estimate_from_json(p.value("T0_c", json()));
+  fit.ambient_c = estimate_from_json(p.value("T_amb_c", json()));
+  auto& s = fit.summary;
+  s.status = status_from_json(j);
+  s.message = j.value("error", std::string());
+  s.absolute_sigma = j.value("uncertainty", std::string()).rfind("absolute", 0) == 0;
+  if (const auto k = p.find("k_per_s"); k != p.end() && k->is_object() && k->contains("interval")) {
+    s.confidence = k->at("interval").value("confidence", 0.95);
+  }
+  if (const auto d = j.find("diagnostics"); d != j.end() && d->is_object()) read_diagnostics(*d, fit);
+  if (const auto w = j.find("warnings"); w != j.end() && w->is_array()) s.warnings = w->get<std::vector<std::string>>();
+  return fit;
+}
+
+Agreement agreement_from_json(const json& j) {
+  Agreement a;
+  a.verdict = j.value("verdict", std::string());
+  if (const auto k = j.find("k"); k != j.end() && k->is_object()) {
+    KAgreement ka;
+    ka.difference_per_s = number_or_nan(*k, "difference_per_s");
+    ka.std_error_per_s = number_or_nan(*k, "std_error_per_s");
+    ka.z = number_or_nan(*k, "z");
+    ka.relative_difference = number_or_nan(*k, "relative_difference");
+    ka.agree = k->value("agree", false);
+    a.k = ka;
+  }
+  if (const auto s = j.find("series"); s != j.end() && s->is_object()) {
+    SeriesAgreement sa;
+    sa.common_points = s->value("common_points", std::size_t{0});
+    sa.overlap_start_s = number_or_nan(*s, "overlap_start_s");
+    sa.overlap_end_s = number_or_nan(*s, "overlap_end_s");
+    sa.rms_difference_c = number_or_nan(*s, "rms_difference_c");
+    sa.bias_c = number_or_nan(*s, "bias_c");
+    sa.difference_std_c = number_or_nan(*s, "difference_std_c");
+    sa.limits_of_agreement_low_c = number_or_nan(*s, "limits_of_agreement_low_c");
+    sa.limits_of_agreement_high_c = number_or_nan(*s, "limits_of_agreement_high_c");
+    a.series = sa;
+  }
+  return a;
+}
 
 ordered_json to_json(const Estimate& e, double confidence) {
   if (!std::isfinite(e.value)) return nullptr;
@@ -42,10 +138,11 @@ ordered_json to_json(const NewtonFit& fit) {
                       {"duration_s", number_or_null(fit.duration_s)},
                       {"residual_rms_c", number_or_null(ok ? s.residual_rms_c : NAN)},
                       {"residual_std_c", number_or_null(ok ? s.residual_std_c : NAN)},
-                      {"reduced_chi_square", number_or_null(s.reduced_chi_square.value_or(NAN))},
                       {"lag1_autocorrelation", number_or_null(ok ? s.lag1_autocorrelation : NAN)},
                       {"record_time_constants", number_or_null(ok ? s.record_time_constants : NAN)},
                       {"outliers", s.outliers}};
+  // Only a fit with a known measurement σ has one; absent, not null, otherwise.
+  if (s.reduced_chi_square) j["diagnostics"]["reduced_chi_square"] = number_or_null(*s.reduced_chi_square);
   j["warnings"] = s.warnings;
   return j;
 }

@@ -2,7 +2,8 @@
 // Fits and agreements as JSON, in one layout for every tool that writes them:
 // `bosfuse fit --json`, the fits and agreements `bosfuse process` stores in a
 // run, and the report's report.json (docs/FITTING.md describes the fields).
-// Numbers that do not exist (a failed fit's parameters, a NaN) are null.
+// Numbers that do not exist (a failed fit's parameters, a NaN) are null;
+// a quantity that does not apply (reduced χ² without a known σ) is absent.
 // Callers add what only they know (the input file, the quantity fitted).
 
 #include <nlohmann/json.hpp>
@@ -17,5 +18,13 @@ nlohmann::ordered_json to_json(const Estimate& estimate, double confidence);
 nlohmann::ordered_json to_json(const NewtonFit& fit);
 // verdict, k (difference, z, ...), series (RMS difference, Bland–Altman).
 nlohmann::ordered_json to_json(const Agreement& agreement);
+
+// The readers of these layouts, for what a run stored. They live here, next
+// to the writers, so a key cannot drift between the two: whatever to_json
+// writes comes back (tested); a null or missing number comes back NaN; the
+// residuals of a fit are not stored and stay empty. Throw
+// nlohmann::json::exception on a document that is not of this layout.
+NewtonFit fit_from_json(const nlohmann::json& j);
+Agreement agreement_from_json(const nlohmann::json& j);
 
 }  // namespace bosfuse::fitting

@@ -42,12 +42,16 @@ ul.files { columns: 2; font-family: monospace; }
 
 std::string esc(const std::string& text) { return html_escape(text); }
 
+// A number, or "—" where it could not be computed: never "nan" in a table.
+std::string num(double value, const char* format) {
+  return std::isfinite(value) ? fmt::format(fmt::runtime(format), value) : "—";
+}
+
 std::string fmt_estimate(const fitting::Estimate& e, const char* format) {
   if (!std::isfinite(e.value)) return "—";
   const std::string value = fmt::format(fmt::runtime(format), e.value);
   if (e.fixed) return value + " (fixed)";
-  return fmt::format("{}<br><small>[{}, {}]</small>", value, fmt::format(fmt::runtime(format), e.low),
-                     fmt::format(fmt::runtime(format), e.high));
+  return fmt::format("{}<br><small>[{}, {}]</small>", value, num(e.low, format), num(e.high, format));
 }
 
 std::string figure_html(const FigureFiles& f, const FigureSize& size) {
@@ -83,7 +87,7 @@ std::string fits_table(const ReportInput& input) {
     }
     h << "<td>" << fmt_estimate(f.k_per_s, "{:.4g}") << "</td><td>" << fmt_estimate(f.tau_s, "{:.4g}") << "</td><td>"
       << fmt_estimate(f.t0_c, "{:.2f}") << "</td><td>" << fmt_estimate(f.ambient_c, "{:.2f}") << "</td><td>"
-      << fmt::format("{:.3g}", f.summary.residual_rms_c) << "</td><td class=\"text\">ok";
+      << num(f.summary.residual_rms_c, "{:.3g}") << "</td><td class=\"text\">ok";
     for (const auto& w : f.summary.warnings) h << "<br><span class=\"warning\">" << esc(w) << "</span>";
     if (s.excluded_samples > 0) {
       h << "<br>" << s.excluded_samples << " samples without a temperature (non-ok status) left out";
@@ -106,13 +110,16 @@ std::string agreement_table(const ReportInput& input) {
     const auto& a = e.agreement;
     h << "<tr><td class=\"text\">" << esc(e.thermocouple) << "</td><td class=\"text\">" << esc(e.probe) << "</td>";
     if (a.k) {
-      h << fmt::format("<td>{:.3g} ± {:.2g}</td><td>{:.2f}</td>", a.k->difference_per_s, a.k->std_error_per_s, a.k->z);
+      h << "<td>" << num(a.k->difference_per_s, "{:.3g}") << " ± " << num(a.k->std_error_per_s, "{:.2g}") << "</td><td>"
+        << num(a.k->z, "{:.2f}") << "</td>";
     } else {
       h << "<td>—</td><td>—</td>";
     }
     if (a.series) {
-      h << fmt::format("<td>{:.3g}</td><td>{:.3g}</td><td>[{:.3g}, {:.3g}]</td>", a.series->rms_difference_c,
-                       a.series->bias_c, a.series->limits_of_agreement_low_c, a.series->limits_of_agreement_high_c);
+      const auto& d = *a.series;
+      h << "<td>" << num(d.rms_difference_c, "{:.3g}") << "</td><td>" << num(d.bias_c, "{:.3g}") << "</td><td>["
+        << num(d.limits_of_agreement_low_c, "{:.3g}") << ", " << num(d.limits_of_agreement_high_c, "{:.3g}")
+        << "]</td>";
     } else {
       h << "<td colspan=\"3\">too few common times</td>";
     }

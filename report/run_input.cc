@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "acquisition/image_file.h"
+#include "fitting/fit_json.h"
 #include "fusion/image_quality.h"
 #include "storage/processing_store.h"
 #include "storage/run_paths.h"
@@ -53,87 +54,12 @@ cv::Mat read_frame(const storage::RunStore& store, const storage::FrameRecord& f
 
 using json = nlohmann::json;
 
-double number_or_nan(const json& j, const char* key) {
-  const auto it = j.find(key);
-  return it != j.end() && it->is_number() ? it->get<double>() : std::numeric_limits<double>::quiet_NaN();
-}
-
-fitting::Estimate estimate_from_json(const json& j) {
-  fitting::Estimate e;
-  e.value = e.std_error = e.low = e.high = std::numeric_limits<double>::quiet_NaN();
-  if (!j.is_object()) return e;
-  e.value = number_or_nan(j, "value");
-  e.std_error = number_or_nan(j, "std_error");
-  e.fixed = j.value("fixed", false);
-  if (const auto it = j.find("interval"); it != j.end() && it->is_object()) {
-    e.low = number_or_nan(*it, "low");
-    e.high = number_or_nan(*it, "high");
-  }
-  return e;
-}
-
-// A fit stored by `bosfuse process` (the layout of `bosfuse fit --json`),
-// its origin moved to the report's time base. No residuals are stored.
-fitting::NewtonFit fit_from_json(const storage::FitRecord& record, std::int64_t origin_ns) {
-  const json j = json::parse(record.json);
-  fitting::NewtonFit fit;
+// A fit stored by `bosfuse process`, its origin moved to the report's time
+// base. No residuals are stored.
+fitting::NewtonFit stored_fit(const storage::FitRecord& record, std::int64_t origin_ns) {
+  fitting::NewtonFit fit = fitting::fit_from_json(json::parse(record.json));
   fit.origin_s = seconds_since(record.origin_t_ns, origin_ns);
-  const json& p = j.at("parameters");
-  fit.k_per_s = estimate_from_json(p.value("k_per_s", json()));
-  fit.tau_s = estimate_from_json(p.value("tau_s", json()));
-  fit.t0_c = estimate_from_json(p.value("T0_c", json()));
-  fit.ambient_c = estimate_from_json(p.value("T_amb_c", json()));
-  auto& s = fit.summary;
-  s.status = fitting::FitStatus::kNotConverged;
-  const std::string status = j.value("status", std::string());
-  for (int i = 0; i <= static_cast<int>(fitting::FitStatus::kNotConverged); ++i) {
-    if (status == fitting::to_string(static_cast<fitting::FitStatus>(i))) s.status = static_cast<fitting::FitStatus>(i);
-  }
-  if (record.ok && j.value("ok", false)) s.status = fitting::FitStatus::kOk;
-  s.message = j.value("error", std::string());
-  if (const auto it = j.find("parameters"); it != j.end()) {
-    if (const auto k = it->find("k_per_s"); k != it->end() && k->is_object() && k->contains("interval")) {
-      s.confidence = k->at("interval").value("confidence", 0.95);
-    }
-  }
-  if (const auto d = j.find("diagnostics"); d != j.end() && d->is_object()) {
-    s.points_used = d->value("points_used", std::size_t{0});
-    s.rejected_non_finite = d->value("rejected_non_finite", std::size_t{0});
-    s.dof = d->value("dof", 0.0);
-    fit.duration_s = d->value("duration_s", 0.0);
-    s.residual_rms_c = number_or_nan(*d, "residual_rms");
-    s.lag1_autocorrelation = number_or_nan(*d, "lag1_autocorrelation");
-    s.record_time_constants = number_or_nan(*d, "record_time_constants");
-    s.outliers = d->value("outliers", std::size_t{0});
-  }
-  if (const auto w = j.find("warnings"); w != j.end() && w->is_array()) s.warnings = w->get<std::vector<std::string>>();
   return fit;
-}
-
-fitting::Agreement agreement_from_json(const std::string& text) {
-  const json j = json::parse(text);
-  fitting::Agreement a;
-  a.verdict = j.value("verdict", std::string());
-  if (const auto k = j.find("k"); k != j.end() && k->is_object()) {
-    fitting::KAgreement ka;
-    ka.difference_per_s = number_or_nan(*k, "difference_per_s");
-    ka.std_error_per_s = number_or_nan(*k, "std_error_per_s");
-    ka.z = number_or_nan(*k, "z");
-    ka.relative_difference = number_or_nan(*k, "relative_difference");
-    ka.agree = k->value("agree", false);
-    a.k = ka;
-  }
-  if (const auto s = j.find("series"); s != j.end() && s->is_object()) {
-    fitting::SeriesAgreement sa;
-    sa.common_points = s->value("common_points", std::size_t{0});
-    sa.rms_difference_c = number_or_nan(*s, "rms_difference_c");
-    sa.bias_c = number_or_nan(*s, "bias_c");
-    sa.difference_std_c = number_or_nan(*s, "difference_std_c");
-    sa.limits_of_agreement_low_c = number_or_nan(*s, "loa_low_c");
-    sa.limits_of_agreement_high_c = number_or_nan(*s, "loa_high_c");
-    a.series = sa;
-  }
-  return a;
 }
 
 // A field CSV written by `bosfuse process` (header x,y,...) as a map on its
@@ -255,7 +181,7 @@ StoredResults load_stored_results(const storage::RunStore& store, std::int64_t o
     }
     if (const auto f = probe_fits.find(probe.id); f != probe_fits.end()) {
       try {
-        s.fit = fit_from_json(f->second, origin_ns);
+        s.fit = stored_fit(f->second, origin_ns);
       } catch (const std::exception& e) {
         input.notes.push_back(
             fmt::format("The stored fit of probe {} could not be read ({}); it is refitted.", probe.name, e.what()));
@@ -276,7 +202,7 @@ StoredResults load_stored_results(const storage::RunStore& store, std::int64_t o
       const auto probe = probe_names.find(a.probe_id);
       entry.thermocouple = tc != channel_names.end() ? tc->second : fmt::format("channel {}", a.channel_id);
       entry.probe = probe != probe_names.end() ? probe->second : fmt::format("probe {}", a.probe_id);
-      entry.agreement = agreement_from_json(a.json);
+      entry.agreement = fitting::agreement_from_json(json::parse(a.json));
       input.agreements.push_back(std::move(entry));
     } catch (const std::exception& e) {
       input.notes.push_back(fmt::format("A stored agreement could not be read: {}", e.what()));

@@ -1,0 +1,108 @@
+// The JSON layout of fits and agreements read back by its own readers:
+// every number written comes back, so the report shows what `process`
+// stored (a reader once looked for keys the writer never wrote, and the
+// report showed NaN limits of agreement and residual RMS).
+
+#include "fitting/fit_json.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tests/support/cooling_curve.h"
+
+namespace bosfuse::fitting {
+namespace {
+
+void expect_same(const Estimate& a, const Estimate& b, const char* what) {
+  EXPECT_DOUBLE_EQ(a.value, b.value) << what;
+  EXPECT_DOUBLE_EQ(a.std_error, b.std_error) << what;
+  EXPECT_DOUBLE_EQ(a.low, b.low) << what;
+  EXPECT_DOUBLE_EQ(a.high, b.high) << what;
+  EXPECT_EQ(a.fixed, b.fixed) << what;
+}
+
+NewtonFit a_fit(unsigned seed, double start_s = 0.0) {
+  const auto r = testing::sample_cooling(testing::CoolingCurve{}, 300, 1.0, 0.05, seed, start_s);
+  return fit_newton(r.time_s, r.temperature_c);
+}
+
+TEST(FitJson, AFitComesBackWithEveryNumber) {
+  const NewtonFit written = a_fit(3, 12.5);
+  ASSERT_TRUE(written.ok());
+  const NewtonFit read = fit_from_json(nlohmann::json::parse(to_json(written).dump()));
+  EXPECT_TRUE(read.ok());
+  EXPECT_DOUBLE_EQ(read.origin_s, written.origin_s);
+  EXPECT_DOUBLE_EQ(read.duration_s, written.duration_s);
+  expect_same(read.k_per_s, written.k_per_s, "k");
+  expect_same(read.tau_s, written.tau_s, "tau");
+  expect_same(read.t0_c, written.t0_c, "T0");
+  expect_same(read.ambient_c, written.ambient_c, "T_amb");
+  const auto& r = read.summary;
+  const auto& w = written.summary;
+  EXPECT_EQ(r.points_used, w.points_used);
+  EXPECT_EQ(r.parameters, w.parameters);
+  EXPECT_DOUBLE_EQ(r.dof, w.dof);
+  EXPECT_EQ(r.iterations, w.iterations);
+  EXPECT_EQ(r.absolute_sigma, w.absolute_sigma);
+  EXPECT_DOUBLE_EQ(r.residual_rms_c, w.residual_rms_c);
+  EXPECT_DOUBLE_EQ(r.residual_std_c, w.residual_std_c);
+  EXPECT_DOUBLE_EQ(r.lag1_autocorrelation, w.lag1_autocorrelation);
+  EXPECT_DOUBLE_EQ(r.record_time_constants, w.record_time_constants);
+  EXPECT_DOUBLE_EQ(r.confidence, w.confidence);
+  EXPECT_EQ(r.warnings, w.warnings);
+}
+
+TEST(FitJson, ReducedChiSquareComesBackOnlyWhereItApplies) {
+  const auto r = testing::sample_cooling(testing::CoolingCurve{}, 300, 1.0, 0.05, 4, 0.0);
+  NewtonFitOptions known_sigma;
+  known_sigma.measurement_sigma_c = 0.05;
+  const NewtonFit with = fit_newton(r.time_s, r.temperature_c, known_sigma);
+  ASSERT_TRUE(with.summary.reduced_chi_square);
+  const NewtonFit read = fit_from_json(nlohmann::json::parse(to_json(with).dump()));
+  ASSERT_TRUE(read.summary.reduced_chi_square);
+  EXPECT_DOUBLE_EQ(*read.summary.reduced_chi_square, *with.summary.reduced_chi_square);
+  EXPECT_TRUE(read.summary.absolute_sigma);
+  const auto scaled = to_json(fit_newton(r.time_s, r.temperature_c));
+  EXPECT_FALSE(scaled["diagnostics"].contains("reduced_chi_square")) << "absent, not null, where it does not apply";
+}
+
+TEST(FitJson, AFailedFitComesBackFailedWithItsReason) {
+  const std::vector<double> t = {0, 1, 2};
+  const std::vector<double> c = {50, 45, 41};
+  const NewtonFit written = fit_newton(t, c);
+  ASSERT_FALSE(written.ok());
+  const NewtonFit read = fit_from_json(nlohmann::json::parse(to_json(written).dump()));
+  EXPECT_EQ(read.summary.status, written.summary.status);
+  EXPECT_EQ(read.summary.message, written.summary.message);
+  EXPECT_TRUE(std::isnan(read.k_per_s.value));
+}
+
+TEST(FitJson, AnAgreementComesBackWithItsLimitsAndOverlap) {
+  const NewtonFit a = a_fit(1);
+  const NewtonFit b = a_fit(2);
+  CleanSeries sa, sb;
+  sa.time_s = sb.time_s = {0, 1, 2, 3, 4, 5};
+  sa.temperature_c = {50, 48, 46, 44, 42, 40};
+  sb.temperature_c = {50.2, 47.9, 46.3, 43.8, 42.1, 40.2};
+  const Agreement written = compare_fits(a, b, sa, sb);
+  ASSERT_TRUE(written.k && written.series);
+  const Agreement read = agreement_from_json(nlohmann::json::parse(to_json(written).dump()));
+  EXPECT_EQ(read.verdict, written.verdict);
+  ASSERT_TRUE(read.k && read.series);
+  EXPECT_DOUBLE_EQ(read.k->z, written.k->z);
+  EXPECT_EQ(read.k->agree, written.k->agree);
+  const auto& r = *read.series;
+  const auto& w = *written.series;
+  EXPECT_EQ(r.common_points, w.common_points);
+  EXPECT_DOUBLE_EQ(r.overlap_start_s, w.overlap_start_s);
+  EXPECT_DOUBLE_EQ(r.overlap_end_s, w.overlap_end_s);
+  EXPECT_GT(r.overlap_end_s, r.overlap_start_s);
+  EXPECT_DOUBLE_EQ(r.bias_c, w.bias_c);
+  EXPECT_DOUBLE_EQ(r.limits_of_agreement_low_c, w.limits_of_agreement_low_c);
+  EXPECT_DOUBLE_EQ(r.limits_of_agreement_high_c, w.limits_of_agreement_high_c);
+  EXPECT_TRUE(std::isfinite(r.limits_of_agreement_low_c));
+}
+
+}  // namespace
+}  // namespace bosfuse::fitting
