@@ -238,6 +238,9 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
   if (options.px_per_mm && !(*options.px_per_mm > 0 && std::isfinite(*options.px_per_mm))) {
     throw std::invalid_argument("px per mm must be positive");
   }
+  if (const fs::path folder = hdf5_path.parent_path(); !folder.empty() && !fs::is_directory(folder)) {
+    throw std::runtime_error(fmt::format("cannot write '{}': no folder '{}'", hdf5_path.string(), folder.string()));
+  }
   const auto run = store.run();
   const storage::ProcessingStore results(store.dir());
   auto rows = results.fields();
@@ -269,7 +272,7 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
   std::vector<Grid> grids;
   std::map<std::string_view, std::vector<ExportedFrame>> exported;
   {
-    hdf5::Writer out(h5_file.path());
+    hdf5::Writer out(h5_file.path(), hdf5_path);
     out.set_attribute("/", "title", fmt::format("bosfuse field export of run '{}'", run.name));
     out.set_attribute("/", "run_name", run.name);
     out.set_attribute("/", "run_started_utc", acquisition::format_iso8601_utc(run.started_ns, 3));

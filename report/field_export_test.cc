@@ -364,10 +364,17 @@ TEST_F(FieldExport, AStoredPathLeadingOutOfTheRunIsRefusedByName) {
   EXPECT_FALSE(fs::exists(dir_ / "fields.h5"));
 }
 
-TEST_F(FieldExport, TheNameMustBeTheHdf5File) {
+TEST_F(FieldExport, TheNameMustBeAnHdf5FileInAFolderThatExists) {
   store_fields();
   EXPECT_THROW(export_to(dir_ / "fields.xmf"), std::invalid_argument);
   EXPECT_THROW(export_to(dir_ / "fields.h5", 0.0), std::invalid_argument);
+  try {
+    export_to(dir_ / "no/such/fields.h5");
+    FAIL() << "exported into a folder that does not exist";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no folder '" + (dir_ / "no/such").string() + "'"), std::string::npos)
+        << e.what();
+  }
 }
 
 // ---- the writer's own promises ---------------------------------------------

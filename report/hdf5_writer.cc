@@ -20,7 +20,8 @@ std::string take_error_stack() {
       H5E_DEFAULT, H5E_WALK_DOWNWARD,
       [](unsigned, const H5E_error2_t* error, void* data) -> herr_t {
         auto& out = *static_cast<std::vector<std::string>*>(data);
-        const std::string text = error->desc ? error->desc : "";
+        std::string text = error->desc ? error->desc : "";
+        std::replace(text.begin(), text.end(), '\n', ' ');  // the open error quotes ctime(), newline included
         if (!text.empty() && std::find(out.begin(), out.end(), text) == out.end()) out.push_back(text);
         return 0;
       },
@@ -31,15 +32,16 @@ std::string take_error_stack() {
   return joined.empty() ? "HDF5 gave no reason" : joined;
 }
 
-Writer::Writer(std::filesystem::path path) : path_(std::move(path)) {
+Writer::Writer(std::filesystem::path path, std::filesystem::path shown_as)
+    : path_(std::move(path)), shown_as_(shown_as.empty() ? path_ : std::move(shown_as)) {
   file_ = File(H5Fcreate(path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
   if (!file_.valid()) fail("cannot create", "");
 }
 
 void Writer::fail(std::string_view action, std::string_view object) const {
   const std::string reason = take_error_stack();
-  if (object.empty()) throw Hdf5Error(fmt::format("{} '{}': {}", action, path_.string(), reason));
-  throw Hdf5Error(fmt::format("{} '{}' in '{}': {}", action, object, path_.string(), reason));
+  if (object.empty()) throw Hdf5Error(fmt::format("{} '{}': {}", action, shown_as_.string(), reason));
+  throw Hdf5Error(fmt::format("{} '{}' in '{}': {}", action, object, shown_as_.string(), reason));
 }
 
 void Writer::create_group(const std::string& path) {

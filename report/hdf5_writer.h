@@ -90,8 +90,10 @@ std::string take_error_stack();
 // a parent group must have been created first.
 class Writer {
  public:
-  // Creates `path`, replacing a file of that name.
-  explicit Writer(std::filesystem::path path);
+  // Creates `path`, replacing a file of that name. Messages name the file
+  // `shown_as` when given (the destination of a file written under a
+  // temporary name).
+  explicit Writer(std::filesystem::path path, std::filesystem::path shown_as = {});
 
   void create_group(const std::string& path);
   // A row-major rows × cols array (HDF5 shape [rows, cols]), gzip level 4
@@ -122,6 +124,7 @@ class Writer {
                  const void* value);
 
   std::filesystem::path path_;
+  std::filesystem::path shown_as_;
   QuietErrors quiet_;  // before file_: errors are quiet until the file is closed
   File file_;
 };
