@@ -84,11 +84,11 @@ void export_fields(const ExportArgs& args, const storage::RunStore& store) {
   report::FieldExportOptions options;
   options.px_per_mm = image_scale(args, store);
   const auto result = report::export_fields(store, args.fields, options);
-  std::cerr << fmt::format("wrote {} ({} displacement and {} temperature frames, grid in {}) and {} (open it in "
-                           "ParaView)\n",
-                           result.hdf5_path.string(), result.displacement_frames, result.temperature_frames,
-                           options.px_per_mm ? fmt::format("mm at {:g} px/mm", *options.px_per_mm) : "px",
-                           result.xdmf_path.string());
+  std::cerr << fmt::format(
+      "wrote {} ({} displacement and {} temperature frames, grid in {}) and {} (open it in "
+      "ParaView)\n",
+      result.hdf5_path.string(), result.displacement_frames, result.temperature_frames,
+      options.px_per_mm ? fmt::format("mm at {:g} px/mm", *options.px_per_mm) : "px", result.xdmf_path.string());
 }
 
 void add_export(CLI::App& root) {
@@ -105,8 +105,7 @@ void add_export(CLI::App& root) {
       "The displacement and temperature fields `bosfuse process` stored, as this HDF5 file (e.g. fields.h5) plus "
       "an XDMF sidecar beside it (fields.xmf) for ParaView");
   format->require_option(1);
-  cmd->add_option("--output,-o", args->output, "File to write with --csv (default: standard output)")
-      ->excludes(fields);
+  cmd->add_option("--output,-o", args->output, "File to write with --csv (default: standard output)")->excludes(fields);
   cmd->add_option("--px-per-mm", args->px_per_mm,
                   "Image scale for --fields, px per mm: grid coordinates in mm too (default: the run config's "
                   "[geometry], else px only)")

@@ -32,9 +32,7 @@ class ExportCli : public ::testing::Test {
     report::testrun::create_run(run(), true, truth_);
   }
   fs::path run() const { return dir_ / "run"; }
-  testing::CommandResult bosfuse(const std::string& args) {
-    return testing::run_command(kBosfuse + " " + args, 120);
-  }
+  testing::CommandResult bosfuse(const std::string& args) { return testing::run_command(kBosfuse + " " + args, 120); }
 
   testing::TempDir dir_;
   report::testrun::Truth truth_;
@@ -50,8 +48,7 @@ TEST_F(ExportCli, FieldsOfAProcessedRunReadBackWithH5pyH5dumpAndTheXdmf) {
 
   const auto exported = bosfuse("export " + sh_quoted(run()) + " --fields " + sh_quoted(dir_ / "f.h5"));
   ASSERT_EQ(exported.exit_code, 0) << exported.output;
-  EXPECT_NE(exported.output.find("2 displacement and 2 temperature frames, grid in mm at 25 px/mm"),
-            std::string::npos)
+  EXPECT_NE(exported.output.find("2 displacement and 2 temperature frames, grid in mm at 25 px/mm"), std::string::npos)
       << "the scale from the run's stored config: " << exported.output;
   ASSERT_TRUE(fs::exists(dir_ / "f.xmf"));
 
@@ -98,8 +95,8 @@ TEST_F(ExportCli, FieldsOfAProcessedRunReadBackWithH5pyH5dumpAndTheXdmf) {
   const std::string first = fmt::format("/displacement/frame_{:06d}", frames[1].id);
   const auto dump = testing::run_command("h5dump -H -d " + first + "/v_px " + sh_quoted(dir_ / "f.h5"));
   ASSERT_EQ(dump.exit_code, 0) << dump.output;
-  EXPECT_NE(dump.output.find(fmt::format("SIMPLE {{ ( {}, {} ) / ( {}, {} ) }}", y_px.size(), x_px.size(),
-                                         y_px.size(), x_px.size())),
+  EXPECT_NE(dump.output.find(fmt::format("SIMPLE {{ ( {}, {} ) / ( {}, {} ) }}", y_px.size(), x_px.size(), y_px.size(),
+                                         x_px.size())),
             std::string::npos)
       << dump.output;
   const auto units = testing::run_command("h5dump -a " + first + "/v_px/units " + sh_quoted(dir_ / "f.h5"));

@@ -64,21 +64,21 @@ StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<c
     if (line.empty()) continue;
     const auto cells = split(line);
     if (cells.size() != width) {
-      throw std::runtime_error(fmt::format("'{}' line {}: {} cells, expected {}", path.string(), line_number,
-                                           cells.size(), width));
+      throw std::runtime_error(
+          fmt::format("'{}' line {}: {} cells, expected {}", path.string(), line_number, cells.size(), width));
     }
     std::vector<double> numbers(width);
     for (std::size_t i = 0; i < width; ++i) {
       if (!parse_number(cells[i], numbers[i]) || (i < 2 && !std::isfinite(numbers[i]))) {
-        throw std::runtime_error(fmt::format("'{}' line {}: '{}' is not a number", path.string(), line_number,
-                                             cells[i].substr(0, 40)));
+        throw std::runtime_error(
+            fmt::format("'{}' line {}: '{}' is not a number", path.string(), line_number, cells[i].substr(0, 40)));
       }
     }
     const std::pair key{numbers[1], numbers[0]};
     numbers.erase(numbers.begin(), numbers.begin() + 2);
     if (!nodes.emplace(key, std::move(numbers)).second) {
-      throw std::runtime_error(fmt::format("'{}' line {}: the node ({}, {}) appears twice", path.string(),
-                                           line_number, key.second, key.first));
+      throw std::runtime_error(fmt::format("'{}' line {}: the node ({}, {}) appears twice", path.string(), line_number,
+                                           key.second, key.first));
     }
   }
   if (nodes.empty()) throw std::runtime_error(fmt::format("'{}' holds no grid", path.string()));
@@ -99,7 +99,8 @@ StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<c
   grid.present = cv::Mat::zeros(grid.rows(), grid.cols(), CV_8U);
   for (const auto& [key, values] : nodes) {
     const int r = static_cast<int>(std::lower_bound(grid.y_px.begin(), grid.y_px.end(), key.first) - grid.y_px.begin());
-    const int c = static_cast<int>(std::lower_bound(grid.x_px.begin(), grid.x_px.end(), key.second) - grid.x_px.begin());
+    const int c =
+        static_cast<int>(std::lower_bound(grid.x_px.begin(), grid.x_px.end(), key.second) - grid.x_px.begin());
     grid.present.at<std::uint8_t>(r, c) = 1;
     for (std::size_t i = 0; i < values.size(); ++i) grid.values[i].at<double>(r, c) = values[i];
   }

@@ -20,8 +20,8 @@
 namespace bosfuse::report {
 
 struct StoredFieldGrid {
-  std::vector<double> x_px;  // column positions, ascending (image coordinates, DESIGN.md)
-  std::vector<double> y_px;  // row positions, ascending (y down)
+  std::vector<double> x_px;          // column positions, ascending (image coordinates, DESIGN.md)
+  std::vector<double> y_px;          // row positions, ascending (y down)
   std::vector<std::string> columns;  // the value columns after x,y, in file order
   std::vector<cv::Mat> values;       // per column: CV_64F, y_px.size() × x_px.size()
   cv::Mat present;                   // CV_8U of the same size, 1 where the file has the node

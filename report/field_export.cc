@@ -58,8 +58,7 @@ constexpr Quantity kTemperatureQuantities[] = {
     {"temperature_c", "temperature_c", "degC",
      "temperature recovered from the displacement field; NaN where there is none", false},
     {"measured", "measured", "1",
-     "1 where the node's displacement was measured; 0 where the temperature was filled in from the surroundings",
-     true},
+     "1 where the node's displacement was measured; 0 where the temperature was filled in from the surroundings", true},
 };
 
 struct Kind {
@@ -125,11 +124,20 @@ std::string xml_escaped(std::string_view text) {
   std::string out;
   for (const char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -265,7 +273,8 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
   }
   // In time order, so the per-kind t_s arrays and the XDMF collection need no sorting.
   std::sort(rows.begin(), rows.end(), [&](const auto& a, const auto& b) {
-    return std::pair(frame_by_id.at(a.frame_id).t_ns, a.frame_id) < std::pair(frame_by_id.at(b.frame_id).t_ns, b.frame_id);
+    return std::pair(frame_by_id.at(a.frame_id).t_ns, a.frame_id) <
+           std::pair(frame_by_id.at(b.frame_id).t_ns, b.frame_id);
   });
 
   PartialFile h5_file(hdf5_path), xmf_file(result.xdmf_path);

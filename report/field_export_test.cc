@@ -85,8 +85,8 @@ std::string displacement_csv(int k) {
   for (int r = 0; r < kRows; ++r) {
     for (int c = 0; c < kCols; ++c) {
       const int i = r * kCols + c;
-      text += fmt::format("{:.1f},{:.1f},{:.5f},{:.5f},{},{:.3f}\n", 8.0 + 8 * c, 8.0 + 8 * r, 0.01 * i + k,
-                          -0.02 * i, i == 5 ? 0 : 1, 1.5 + 0.125 * i);
+      text += fmt::format("{:.1f},{:.1f},{:.5f},{:.5f},{},{:.3f}\n", 8.0 + 8 * c, 8.0 + 8 * r, 0.01 * i + k, -0.02 * i,
+                          i == 5 ? 0 : 1, 1.5 + 0.125 * i);
     }
   }
   return text;

@@ -66,8 +66,8 @@ void Writer::write(const std::string& path, hid_t file_type, hid_t memory_type, 
       fail("cannot set chunks and compression of", path);
     }
   }
-  Dataset dataset(H5Dcreate2(file_.get(), path.c_str(), file_type, space.get(), H5P_DEFAULT, create.get(),
-                             H5P_DEFAULT));
+  Dataset dataset(
+      H5Dcreate2(file_.get(), path.c_str(), file_type, space.get(), H5P_DEFAULT, create.get(), H5P_DEFAULT));
   if (!dataset.valid()) fail("cannot create dataset", path);
   if (!empty && H5Dwrite(dataset.get(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
     fail("cannot write dataset", path);
@@ -89,8 +89,7 @@ void Writer::write_2d(const std::string& path, std::span<const double> data, std
   write(path, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, data.data(), dims, true);
 }
 
-void Writer::write_2d(const std::string& path, std::span<const std::uint8_t> data, std::size_t rows,
-                      std::size_t cols) {
+void Writer::write_2d(const std::string& path, std::span<const std::uint8_t> data, std::size_t rows, std::size_t cols) {
   check_size(data.size(), rows, cols, path);
   const hsize_t dims[] = {rows, cols};
   write(path, H5T_STD_U8LE, H5T_NATIVE_UINT8, data.data(), dims, true);

@@ -115,9 +115,8 @@ inline nlohmann::json run_python(const char* script, const std::filesystem::path
                                  const std::filesystem::path& scratch) {
   const auto script_path = scratch / "reader.py";
   std::ofstream(script_path) << script;
-  const auto result = testing::run_command(std::string(kPython) + " " + sh_quoted(script_path) + " " +
-                                               sh_quoted(argument),
-                                           60);
+  const auto result =
+      testing::run_command(std::string(kPython) + " " + sh_quoted(script_path) + " " + sh_quoted(argument), 60);
   if (result.exit_code != 0) throw std::runtime_error("python reader failed: " + result.output);
   // The JSON is the last line; anything before it (a warning on stderr) is not ours to parse.
   std::string text = result.output;
