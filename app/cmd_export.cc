@@ -1,14 +1,21 @@
-// bosfuse export: a run's samples as CSV, one column per channel.
+// bosfuse export: a run's samples as CSV, one column per channel (--csv), or
+// the displacement and temperature fields `bosfuse process` stored, as HDF5
+// with an XDMF sidecar (--fields OUT.h5, report/field_export.h). The image
+// scale for the fields' mm coordinates is --px-per-mm, else the [geometry]
+// table of the run's stored experiment config, as for `bosfuse report`.
 
 #include <fmt/format.h>
 
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 
 #include "acquisition/clock.h"
 #include "app/command.h"
+#include "app/geometry_config.h"
 #include "report/csv_cell.h"
+#include "report/field_export.h"
 #include "storage/run_store.h"
 
 namespace bosfuse::app {
@@ -52,17 +59,61 @@ struct ExportArgs {
   std::string run;
   std::string output;
   bool csv = false;
+  std::string fields;
+  double px_per_mm = 0;
 };
+
+// --px-per-mm, else the run config's [geometry] (the same rule as `bosfuse
+// report`), else none: the grid is then in px only.
+std::optional<double> image_scale(const ExportArgs& args, const storage::RunStore& store) {
+  if (args.px_per_mm > 0) return args.px_per_mm;
+  const std::string& toml = store.run().config_toml;
+  if (toml.find("[geometry]") == std::string::npos) return std::nullopt;
+  try {
+    if (const auto config = parse_geometry_config(toml, "run config")) {
+      return fusion::BosGeometry(config->geometry).px_per_m_flow() * 1e-3;
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "warning: grid in px only, the run config's [geometry] could not be read: " << e.what() << "\n";
+  }
+  return std::nullopt;
+}
+
+void export_fields(const ExportArgs& args, const storage::RunStore& store) {
+  if (args.fields == "-") throw std::runtime_error("--fields needs a file name: HDF5 cannot be written to a pipe");
+  report::FieldExportOptions options;
+  options.px_per_mm = image_scale(args, store);
+  const auto result = report::export_fields(store, args.fields, options);
+  std::cerr << fmt::format(
+      "wrote {} ({} displacement and {} temperature frames, grid in {}) and {} (open it in "
+      "ParaView)\n",
+      result.hdf5_path.string(), result.displacement_frames, result.temperature_frames,
+      options.px_per_mm ? fmt::format("mm at {:g} px/mm", *options.px_per_mm) : "px", result.xdmf_path.string());
+}
 
 void add_export(CLI::App& root) {
   auto args = std::make_shared<ExportArgs>();
-  CLI::App* cmd =
-      root.add_subcommand("export", "Export a run's samples (CSV: one column per channel, ISO-8601 UTC time)");
+  CLI::App* cmd = root.add_subcommand(
+      "export",
+      "Export a run: its samples as CSV (one column per channel, ISO-8601 UTC time), or its processed fields as "
+      "HDF5 with an XDMF sidecar");
   cmd->add_option("run", args->run, "Run folder")->required();
-  cmd->add_flag("--csv", args->csv, "CSV output (the only format so far)")->required();
-  cmd->add_option("--output,-o", args->output, "File to write (default: standard output)");
+  auto* format = cmd->add_option_group("format", "What to export (one of)");
+  auto* csv = format->add_flag("--csv", args->csv, "The samples as CSV, one column per channel");
+  auto* fields = format->add_option(
+      "--fields", args->fields,
+      "The displacement and temperature fields `bosfuse process` stored, as this HDF5 file (e.g. fields.h5) plus "
+      "an XDMF sidecar beside it (fields.xmf) for ParaView");
+  format->require_option(1);
+  cmd->add_option("--output,-o", args->output, "File to write with --csv (default: standard output)")->excludes(fields);
+  cmd->add_option("--px-per-mm", args->px_per_mm,
+                  "Image scale for --fields, px per mm: grid coordinates in mm too (default: the run config's "
+                  "[geometry], else px only)")
+      ->check(CLI::PositiveNumber)
+      ->excludes(csv);
   cmd->callback([args] {
     const auto store = storage::RunStore::open(args->run);
+    if (!args->fields.empty()) return export_fields(*args, store);
     if (args->output.empty()) return write_csv(store, std::cout);
     std::ofstream out(args->output);
     if (!out) throw std::runtime_error("cannot write '" + args->output + "'");

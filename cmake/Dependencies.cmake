@@ -9,6 +9,11 @@ pkg_check_modules(UMOCKDEV REQUIRED IMPORTED_TARGET umockdev-1.0)
 # Report figures: PLplot's C library; its cairo driver (plplot-driver-cairo)
 # provides the pngcairo and svgcairo devices, loaded at run time.
 pkg_check_modules(PLPLOT REQUIRED IMPORTED_TARGET plplot)
+# Field export (report/field_export.h): HDF5's C library, Debian's serial
+# flavour (headers under /usr/include/hdf5/serial). Found through its
+# pkg-config file rather than FindHDF5, whose C component would need the C
+# language enabled for the whole project just for a test compile.
+pkg_check_modules(HDF5 REQUIRED IMPORTED_TARGET hdf5)
 find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs videoio video)
 # The codecs' own libraries, to read an image's declared size from its header
 # before OpenCV decodes it (acquisition/image_file.h). libopencv-dev brings

@@ -6,17 +6,16 @@
 #include <algorithm>
 #include <cmath>
 #include <ctime>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
-#include <sstream>
 
 #include "acquisition/image_file.h"
 #include "fitting/fit_json.h"
 #include "fusion/image_quality.h"
+#include "report/field_csv.h"
 #include "storage/processing_store.h"
 #include "storage/run_paths.h"
 
@@ -62,71 +61,42 @@ fitting::NewtonFit stored_fit(const storage::FitRecord& record, std::int64_t ori
   return fit;
 }
 
-// A field CSV written by `bosfuse process` (header x,y,...) as a map on its
-// regular grid: `value` gives a node's value and whether it is shown.
-MapField read_field_csv(const fs::path& path,
-                        const std::function<std::pair<double, bool>(const std::vector<std::string>&)>& value,
-                        std::size_t columns) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read '" + path.string() + "'");
-  std::string line;
-  std::getline(in, line);  // header
-  struct Node {
-    double x, y, value;
-    bool shown;
-  };
-  std::vector<Node> nodes;
-  std::set<double> xs, ys;
-  while (std::getline(in, line)) {
-    if (line.empty()) continue;
-    std::vector<std::string> cells;
-    std::stringstream cells_in(line);
-    std::string cell;
-    while (cells.size() <= columns && std::getline(cells_in, cell, ',')) cells.push_back(cell);
-    if (line.back() == ',') cells.emplace_back();
-    if (cells.size() < columns) throw std::runtime_error("'" + path.string() + "': short line '" + line + "'");
-    const auto [v, shown] = value(cells);
-    nodes.push_back({std::stod(cells[0]), std::stod(cells[1]), v, shown});
-    xs.insert(nodes.back().x);
-    ys.insert(nodes.back().y);
-  }
-  if (nodes.empty()) throw std::runtime_error("'" + path.string() + "' holds no grid");
+// A stored field (report/field_csv.h) as a map on its grid: `value` at the
+// nodes where `shown` is non-zero and finite, masked elsewhere.
+MapField map_from_stored(const StoredFieldGrid& grid, const cv::Mat& value, const cv::Mat& shown) {
   MapField map;
-  map.values = cv::Mat::zeros(static_cast<int>(ys.size()), static_cast<int>(xs.size()), CV_64F);
-  map.mask = cv::Mat(map.values.rows, map.values.cols, CV_8U, cv::Scalar(255));
-  const std::vector<double> xv(xs.begin(), xs.end()), yv(ys.begin(), ys.end());
-  map.x0_px = xv.front();
-  map.y0_px = yv.front();
-  map.step_px = xv.size() > 1 ? xv[1] - xv[0] : (yv.size() > 1 ? yv[1] - yv[0] : 1.0);
-  for (const auto& n : nodes) {
-    const int c = static_cast<int>(std::lower_bound(xv.begin(), xv.end(), n.x) - xv.begin());
-    const int r = static_cast<int>(std::lower_bound(yv.begin(), yv.end(), n.y) - yv.begin());
-    const bool shown = n.shown && std::isfinite(n.value);
-    map.values.at<double>(r, c) = shown ? n.value : 0.0;
-    map.mask.at<std::uint8_t>(r, c) = shown ? 0 : 255;
+  map.values = cv::Mat::zeros(grid.rows(), grid.cols(), CV_64F);
+  map.mask = cv::Mat(grid.rows(), grid.cols(), CV_8U, cv::Scalar(255));
+  map.x0_px = grid.x_px.front();
+  map.y0_px = grid.y_px.front();
+  map.step_px = grid.cols() > 1 ? grid.x_px[1] - grid.x_px[0] : (grid.rows() > 1 ? grid.y_px[1] - grid.y_px[0] : 1.0);
+  for (int r = 0; r < grid.rows(); ++r) {
+    for (int c = 0; c < grid.cols(); ++c) {
+      const double v = value.at<double>(r, c);
+      const double s = shown.at<double>(r, c);
+      const bool is_shown = grid.present.at<std::uint8_t>(r, c) && std::isfinite(v) && std::isfinite(s) && s != 0;
+      map.values.at<double>(r, c) = is_shown ? v : 0.0;
+      map.mask.at<std::uint8_t>(r, c) = is_shown ? 0 : 255;
+    }
   }
   return map;
 }
 
 MapField read_temperature_csv(const fs::path& path) {
-  MapField map = read_field_csv(
-      path,
-      [](const std::vector<std::string>& cells) {
-        return std::pair{cells[2].empty() ? std::numeric_limits<double>::quiet_NaN() : std::stod(cells[2]), true};
-      },
-      4);
+  const auto grid = read_stored_field(path, kTemperatureColumns);
+  const cv::Mat& t = grid.column("temperature_c");
+  // Unmeasured nodes that the field filled in are shown; only missing temperatures are masked.
+  MapField map = map_from_stored(grid, t, cv::Mat(t.size(), CV_64F, cv::Scalar(1)));
   map.quantity = "temperature";
   map.unit = "°C";
   return map;
 }
 
 MapField read_displacement_csv(const fs::path& path) {
-  MapField map = read_field_csv(
-      path,
-      [](const std::vector<std::string>& cells) {
-        return std::pair{std::hypot(std::stod(cells[2]), std::stod(cells[3])), cells[4] == "1"};
-      },
-      6);
+  const auto grid = read_stored_field(path, kDisplacementColumns);
+  cv::Mat magnitude;
+  cv::magnitude(grid.column("u"), grid.column("v"), magnitude);
+  MapField map = map_from_stored(grid, magnitude, grid.column("valid"));
   map.quantity = "|displacement|";
   map.unit = "px";
   return map;

@@ -1,0 +1,149 @@
+// `bosfuse export RUN --fields OUT.h5` end to end: a synthetic run (the
+// report tests' run: a reference and two frames with a known hot-spot
+// displacement, its experiment config giving the image scale) processed by
+// the executable, exported by it, and read back by programs that share no
+// code with bosfuse: h5py, h5dump, and xml.etree for the XDMF sidecar.
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "report/test_readers.h"
+#include "report/test_run.h"
+#include "storage/processing_store.h"
+#include "tests/support/subprocess.h"
+#include "tests/support/temp_dir.h"
+
+namespace bosfuse {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using report::testreaders::sh_quoted;
+
+const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+
+class ExportCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    truth_.config_toml = "[geometry]\npx_per_mm_flow = 25\n";
+    report::testrun::create_run(run(), true, truth_);
+  }
+  fs::path run() const { return dir_ / "run"; }
+  testing::CommandResult bosfuse(const std::string& args) { return testing::run_command(kBosfuse + " " + args, 120); }
+
+  testing::TempDir dir_;
+  report::testrun::Truth truth_;
+};
+
+TEST_F(ExportCli, FieldsOfAProcessedRunReadBackWithH5pyH5dumpAndTheXdmf) {
+  const auto processed = bosfuse("process --window 16 --step 8 " + sh_quoted(run()));
+  ASSERT_EQ(processed.exit_code, 0) << processed.output;
+  const auto store = storage::RunStore::open(run());
+  const auto frames = store.frames();
+  const auto fields = storage::ProcessingStore(run()).fields();
+  ASSERT_EQ(fields.size(), 4u) << "displacement and temperature of two measurement frames";
+
+  const auto exported = bosfuse("export " + sh_quoted(run()) + " --fields " + sh_quoted(dir_ / "f.h5"));
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  EXPECT_NE(exported.output.find("2 displacement and 2 temperature frames, grid in mm at 25 px/mm"), std::string::npos)
+      << "the scale from the run's stored config: " << exported.output;
+  ASSERT_TRUE(fs::exists(dir_ / "f.xmf"));
+
+  const json h5 = report::testreaders::h5py_listing(dir_ / "f.h5", dir_.path());
+  EXPECT_EQ(h5.at("/").at("attrs").at("run_name"), "synthetic cooling");
+  EXPECT_EQ(h5.at("/").at("attrs").at("px_per_mm"), 25.0);
+  const json& x_px = h5.at("/grids/grid_000/x_px").at("data");
+  const json& y_px = h5.at("/grids/grid_000/y_px").at("data");
+  const json& x_mm = h5.at("/grids/grid_000/x_mm").at("data");
+  ASSERT_GT(x_px.size(), 10u);
+  ASSERT_GT(y_px.size(), 10u);
+  EXPECT_DOUBLE_EQ(x_mm[3].get<double>(), x_px[3].get<double>() / 25.0);
+  EXPECT_DOUBLE_EQ(x_px[1].get<double>() - x_px[0].get<double>(), 8.0) << "--step 8";
+  const json shape = json::array({y_px.size(), x_px.size()});
+  std::vector<double> peaks;
+  for (int k = 0; k < 2; ++k) {
+    const auto& frame = frames[1 + k];
+    const std::string d = fmt::format("/displacement/frame_{:06d}", frame.id);
+    const std::string t = fmt::format("/temperature/frame_{:06d}", frame.id);
+    // Experiment time: seconds since the run started; the frames were taken 10.003 s and 60.003 s in.
+    EXPECT_NEAR(h5.at(d).at("attrs").at("t_s").get<double>(), truth_.frame_times_s[k] + 0.003, 1e-9);
+    EXPECT_EQ(h5.at(t).at("attrs").at("t_s"), h5.at(d).at("attrs").at("t_s"));
+    EXPECT_EQ(h5.at(d).at("attrs").at("frame_path"), frame.path);
+    for (const char* name : {"u_px", "v_px", "valid", "peak_ratio"}) {
+      EXPECT_EQ(h5.at(d + "/" + name).at("shape"), shape) << name;
+    }
+    EXPECT_EQ(h5.at(d + "/u_px").at("attrs").at("units"), "px");
+    EXPECT_EQ(h5.at(t + "/temperature_c").at("shape"), shape);
+    EXPECT_EQ(h5.at(t + "/temperature_c").at("attrs").at("units"), "degC");
+    // The rendered bump: its largest valid shift near the rendered peak.
+    const json& u = h5.at(d + "/u_px").at("data");
+    const json& v = h5.at(d + "/v_px").at("data");
+    const json& valid = h5.at(d + "/valid").at("data");
+    double peak = 0;
+    for (std::size_t i = 0; i < u.size(); ++i) {
+      if (valid[i] == 1) peak = std::max(peak, std::hypot(u[i].get<double>(), v[i].get<double>()));
+    }
+    peaks.push_back(peak);
+    EXPECT_NEAR(peak, truth_.frame_peak_px[k], 0.2 * truth_.frame_peak_px[k]) << d;
+  }
+  EXPECT_GT(peaks[0], peaks[1]) << "the frames are not mixed up";
+
+  // h5dump: the same shape and unit, from HDF5's own tool.
+  const std::string first = fmt::format("/displacement/frame_{:06d}", frames[1].id);
+  const auto dump = testing::run_command("h5dump -H -d " + first + "/v_px " + sh_quoted(dir_ / "f.h5"));
+  ASSERT_EQ(dump.exit_code, 0) << dump.output;
+  EXPECT_NE(dump.output.find(fmt::format("SIMPLE {{ ( {}, {} ) / ( {}, {} ) }}", y_px.size(), x_px.size(), y_px.size(),
+                                         x_px.size())),
+            std::string::npos)
+      << dump.output;
+  const auto units = testing::run_command("h5dump -a " + first + "/v_px/units " + sh_quoted(dir_ / "f.h5"));
+  EXPECT_NE(units.output.find("\"px\""), std::string::npos) << units.output;
+
+  // The sidecar: every reference resolves to a dataset of the declared shape, times match.
+  const json xdmf = report::testreaders::xdmf_check(dir_ / "f.xmf", dir_.path());
+  for (const char* kind : {"displacement", "temperature"}) {
+    const json& grids = xdmf.at("collections").at(kind);
+    ASSERT_EQ(grids.size(), 2u);
+    for (const auto& g : grids) {
+      const std::string group = fmt::format("/{}/{}", kind, g.at("name").get<std::string>());
+      EXPECT_EQ(std::stod(g.at("time").get<std::string>()), h5.at(group).at("attrs").at("t_s").get<double>());
+      EXPECT_EQ(g.at("geometry")[0].at("ref"), "f.h5:/grids/grid_000/x_mm");
+      for (const auto& [name, item] : g.at("attributes").items()) EXPECT_EQ(item.at("shape"), shape) << name;
+    }
+  }
+}
+
+TEST_F(ExportCli, ARunWithoutStoredFieldsIsToldToProcessFirst) {
+  const auto unprocessed = bosfuse("export " + sh_quoted(run()) + " --fields " + sh_quoted(dir_ / "f.h5"));
+  EXPECT_NE(unprocessed.exit_code, 0);
+  EXPECT_NE(unprocessed.output.find("has no stored fields: run `bosfuse process RUN` first"), std::string::npos)
+      << unprocessed.output;
+  ASSERT_EQ(bosfuse("process --probes-only " + sh_quoted(run())).exit_code, 0);
+  const auto probes_only = bosfuse("export " + sh_quoted(run()) + " --fields " + sh_quoted(dir_ / "f.h5"));
+  EXPECT_NE(probes_only.exit_code, 0);
+  EXPECT_NE(probes_only.output.find("not --probes-only"), std::string::npos) << probes_only.output;
+  EXPECT_FALSE(fs::exists(dir_ / "f.h5"));
+  EXPECT_FALSE(fs::exists(dir_ / "f.xmf"));
+}
+
+TEST_F(ExportCli, CsvAndFieldsAreAlternatives) {
+  const auto neither = bosfuse("export " + sh_quoted(run()));
+  EXPECT_NE(neither.exit_code, 0);
+  EXPECT_NE(neither.output.find("--csv,--fields"), std::string::npos) << neither.output;
+  const auto both = bosfuse("export " + sh_quoted(run()) + " --csv --fields " + sh_quoted(dir_ / "f.h5"));
+  EXPECT_NE(both.exit_code, 0);
+  const auto output_with_fields =
+      bosfuse("export " + sh_quoted(run()) + " --fields " + sh_quoted(dir_ / "f.h5") + " -o x.csv");
+  EXPECT_NE(output_with_fields.exit_code, 0);
+  EXPECT_NE(output_with_fields.output.find("--output excludes --fields"), std::string::npos)
+      << output_with_fields.output;
+  const auto csv = bosfuse("export " + sh_quoted(run()) + " --csv -o " + sh_quoted(dir_ / "s.csv"));
+  ASSERT_EQ(csv.exit_code, 0) << csv.output;
+  EXPECT_TRUE(fs::exists(dir_ / "s.csv"));
+}
+
+}  // namespace
+}  // namespace bosfuse

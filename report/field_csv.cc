@@ -1,0 +1,110 @@
+#include "report/field_csv.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <stdexcept>
+
+namespace bosfuse::report {
+namespace {
+
+std::vector<std::string_view> split(std::string_view line) {
+  std::vector<std::string_view> cells;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    cells.push_back(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
+    if (comma == std::string_view::npos) return cells;
+    start = comma + 1;
+  }
+}
+
+// from_chars rather than stod: it ignores the locale and rejects trailing text.
+bool parse_number(std::string_view cell, double& out) {
+  if (cell.empty()) {
+    out = std::numeric_limits<double>::quiet_NaN();
+    return true;
+  }
+  const auto [end, error] = std::from_chars(cell.data(), cell.data() + cell.size(), out);
+  return error == std::errc() && end == cell.data() + cell.size();
+}
+
+}  // namespace
+
+const cv::Mat& StoredFieldGrid::column(std::string_view name) const {
+  const auto it = std::find(columns.begin(), columns.end(), name);
+  if (it == columns.end()) throw std::out_of_range(fmt::format("the field has no column '{}'", name));
+  return values[static_cast<std::size_t>(it - columns.begin())];
+}
+
+StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<const std::string_view> value_columns) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(fmt::format("cannot read '{}'", path.string()));
+  std::string expected = "x,y";
+  for (const auto c : value_columns) expected += fmt::format(",{}", c);
+  std::string line;
+  std::getline(in, line);
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line != expected) {
+    throw std::runtime_error(
+        fmt::format("'{}': the header is '{}', expected '{}'", path.string(), line.substr(0, 80), expected));
+  }
+  const std::size_t width = value_columns.size() + 2;
+  // Nodes keyed by (y, x) so rows come out in order; the grid is known only at the end.
+  std::map<std::pair<double, double>, std::vector<double>> nodes;
+  std::size_t line_number = 1;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) continue;
+    const auto cells = split(line);
+    if (cells.size() != width) {
+      throw std::runtime_error(
+          fmt::format("'{}' line {}: {} cells, expected {}", path.string(), line_number, cells.size(), width));
+    }
+    std::vector<double> numbers(width);
+    for (std::size_t i = 0; i < width; ++i) {
+      if (!parse_number(cells[i], numbers[i]) || (i < 2 && !std::isfinite(numbers[i]))) {
+        throw std::runtime_error(
+            fmt::format("'{}' line {}: '{}' is not a number", path.string(), line_number, cells[i].substr(0, 40)));
+      }
+    }
+    const std::pair key{numbers[1], numbers[0]};
+    numbers.erase(numbers.begin(), numbers.begin() + 2);
+    if (!nodes.emplace(key, std::move(numbers)).second) {
+      throw std::runtime_error(fmt::format("'{}' line {}: the node ({}, {}) appears twice", path.string(), line_number,
+                                           key.second, key.first));
+    }
+  }
+  if (nodes.empty()) throw std::runtime_error(fmt::format("'{}' holds no grid", path.string()));
+
+  StoredFieldGrid grid;
+  for (const auto& [key, values] : nodes) {
+    grid.y_px.push_back(key.first);
+    grid.x_px.push_back(key.second);
+  }
+  for (auto* axis : {&grid.x_px, &grid.y_px}) {
+    std::sort(axis->begin(), axis->end());
+    axis->erase(std::unique(axis->begin(), axis->end()), axis->end());
+  }
+  grid.columns.assign(value_columns.begin(), value_columns.end());
+  for (std::size_t i = 0; i < value_columns.size(); ++i) {
+    grid.values.emplace_back(grid.rows(), grid.cols(), CV_64F, cv::Scalar(std::numeric_limits<double>::quiet_NaN()));
+  }
+  grid.present = cv::Mat::zeros(grid.rows(), grid.cols(), CV_8U);
+  for (const auto& [key, values] : nodes) {
+    const int r = static_cast<int>(std::lower_bound(grid.y_px.begin(), grid.y_px.end(), key.first) - grid.y_px.begin());
+    const int c =
+        static_cast<int>(std::lower_bound(grid.x_px.begin(), grid.x_px.end(), key.second) - grid.x_px.begin());
+    grid.present.at<std::uint8_t>(r, c) = 1;
+    for (std::size_t i = 0; i < values.size(); ++i) grid.values[i].at<double>(r, c) = values[i];
+  }
+  return grid;
+}
+
+}  // namespace bosfuse::report

@@ -1,0 +1,44 @@
+#pragma once
+// A field file written by `bosfuse process` (docs/SCHEMA.md, table `fields`),
+// read back onto its grid: displacement `x,y,u,v,valid,peak_ratio` or
+// temperature `x,y,temperature_c,measured`, one line per grid node. This is
+// the one reader of stored field files; the report's maps and the HDF5
+// export both use it, so a change of the CSV layout is made here once.
+//
+// The grid is whatever distinct x and y values the file holds (ascending),
+// so it needs no step to be declared and a file with missing nodes still
+// reads: such nodes are NaN in every column and 0 in `present`. Empty cells
+// (a temperature the field could not give) are NaN too.
+
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace bosfuse::report {
+
+struct StoredFieldGrid {
+  std::vector<double> x_px;          // column positions, ascending (image coordinates, DESIGN.md)
+  std::vector<double> y_px;          // row positions, ascending (y down)
+  std::vector<std::string> columns;  // the value columns after x,y, in file order
+  std::vector<cv::Mat> values;       // per column: CV_64F, y_px.size() × x_px.size()
+  cv::Mat present;                   // CV_8U of the same size, 1 where the file has the node
+
+  int rows() const { return static_cast<int>(y_px.size()); }
+  int cols() const { return static_cast<int>(x_px.size()); }
+  // The values of column `name`; throws std::out_of_range naming it when absent.
+  const cv::Mat& column(std::string_view name) const;
+};
+
+inline constexpr std::string_view kDisplacementColumns[] = {"u", "v", "valid", "peak_ratio"};
+inline constexpr std::string_view kTemperatureColumns[] = {"temperature_c", "measured"};
+
+// Reads `path`, whose header must be `x,y` followed by `value_columns`.
+// Throws std::runtime_error naming the file (and the line) when it cannot be
+// read, has another header, a short line or a cell that is not a number, or
+// holds no node.
+StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<const std::string_view> value_columns);
+
+}  // namespace bosfuse::report

@@ -1,0 +1,77 @@
+#include "report/field_csv.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "tests/support/temp_dir.h"
+
+namespace bosfuse::report {
+namespace {
+
+std::string error_of(const std::filesystem::path& path, std::span<const std::string_view> columns) {
+  try {
+    read_stored_field(path, columns);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(FieldCsv, ReadsTheGridInRowOrderWhateverTheLineOrder) {
+  testing::TempDir dir;
+  std::ofstream(dir / "d.csv") << "x,y,u,v,valid,peak_ratio\n"
+                               << "16.0,8.0,0.10000,-0.20000,1,2.500\n"
+                               << "8.0,8.0,0.30000,0.40000,1,3.000\n"
+                               << "8.0,16.0,9.00000,9.00000,0,1.000\n"
+                               << "16.0,16.0,0.00000,0.00000,0,0.000\n";
+  const auto grid = read_stored_field(dir / "d.csv", kDisplacementColumns);
+  EXPECT_EQ(grid.x_px, (std::vector<double>{8, 16}));
+  EXPECT_EQ(grid.y_px, (std::vector<double>{8, 16}));
+  ASSERT_EQ(grid.columns.size(), 4u);
+  EXPECT_EQ(grid.column("u").at<double>(0, 0), 0.3) << "the text's double, exactly";
+  EXPECT_EQ(grid.column("v").at<double>(0, 1), -0.2);
+  EXPECT_EQ(grid.column("valid").at<double>(1, 0), 0.0);
+  EXPECT_EQ(grid.column("peak_ratio").at<double>(0, 1), 2.5);
+  EXPECT_EQ(cv::countNonZero(grid.present), 4);
+  EXPECT_THROW(grid.column("w"), std::out_of_range);
+}
+
+TEST(FieldCsv, EmptyCellsAndMissingNodesAreNaN) {
+  testing::TempDir dir;
+  std::ofstream(dir / "t.csv") << "x,y,temperature_c,measured\r\n8.0,8.0,30.5,1\r\n16.0,8.0,,0\r\n8.0,16.0,25.0,1\r\n";
+  const auto grid = read_stored_field(dir / "t.csv", kTemperatureColumns);
+  ASSERT_EQ(grid.rows(), 2);
+  ASSERT_EQ(grid.cols(), 2);
+  EXPECT_TRUE(std::isnan(grid.column("temperature_c").at<double>(0, 1))) << "an empty cell";
+  EXPECT_EQ(grid.column("measured").at<double>(0, 1), 0.0);
+  EXPECT_TRUE(std::isnan(grid.column("measured").at<double>(1, 1))) << "a node the file does not have";
+  EXPECT_EQ(grid.present.at<std::uint8_t>(1, 1), 0);
+  EXPECT_EQ(grid.present.at<std::uint8_t>(1, 0), 1);
+}
+
+TEST(FieldCsv, MistakesNameTheFileAndLine) {
+  testing::TempDir dir;
+  const auto path = dir / "bad.csv";
+  std::ofstream(path) << "x,y,u,v\n8,8,1,1\n";
+  EXPECT_NE(error_of(path, kDisplacementColumns).find("bad.csv': the header is 'x,y,u,v'"), std::string::npos)
+      << error_of(path, kDisplacementColumns);
+  std::ofstream(path) << "x,y,temperature_c,measured\n8,8,1,1\n16,8,1\n";
+  EXPECT_NE(error_of(path, kTemperatureColumns).find("line 3: 3 cells, expected 4"), std::string::npos)
+      << error_of(path, kTemperatureColumns);
+  std::ofstream(path) << "x,y,temperature_c,measured\n8,8,hot,1\n";
+  EXPECT_NE(error_of(path, kTemperatureColumns).find("line 2: 'hot' is not a number"), std::string::npos)
+      << error_of(path, kTemperatureColumns);
+  std::ofstream(path) << "x,y,temperature_c,measured\n,8,1,1\n";
+  EXPECT_NE(error_of(path, kTemperatureColumns).find("line 2: '' is not a number"), std::string::npos)
+      << "a node needs a position";
+  std::ofstream(path) << "x,y,temperature_c,measured\n8,8,1,1\n8,8,2,1\n";
+  EXPECT_NE(error_of(path, kTemperatureColumns).find("appears twice"), std::string::npos);
+  std::ofstream(path) << "x,y,temperature_c,measured\n";
+  EXPECT_NE(error_of(path, kTemperatureColumns).find("holds no grid"), std::string::npos);
+  EXPECT_NE(error_of(dir / "none.csv", kTemperatureColumns).find("cannot read"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace bosfuse::report

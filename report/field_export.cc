@@ -1,0 +1,370 @@
+#include "report/field_export.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <span>
+#include <string_view>
+
+#include "acquisition/clock.h"
+#include "report/experiment_time.h"
+#include "report/field_csv.h"
+#include "report/hdf5_writer.h"
+#include "storage/processing_store.h"
+#include "storage/run_paths.h"
+
+#ifndef BOSFUSE_VERSION
+#define BOSFUSE_VERSION "unknown"
+#endif
+
+namespace bosfuse::report {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Bumped when a reader would have to change: files say which layout they follow.
+constexpr std::int64_t kLayoutVersion = 1;
+
+constexpr std::string_view kDisplacementConvention =
+    "a background feature at (x, y) in the reference image appears at (x + u, y + v) in the measurement image";
+constexpr std::string_view kCoordinates =
+    "image coordinates: origin at the top-left pixel's centre, x to the right, y down; 2-D arrays are [ny, nx] "
+    "(row index = y)";
+
+// A stored CSV column and the dataset it becomes.
+struct Quantity {
+  std::string_view column;
+  std::string_view dataset;
+  std::string_view units;
+  std::string_view description;
+  bool flag;  // 0/1, stored as uint8
+};
+
+constexpr Quantity kDisplacementQuantities[] = {
+    {"u", "u_px", "px", "displacement along x (DESIGN.md convention); not a measurement where valid is 0", false},
+    {"v", "v_px", "px", "displacement along y (down); not a measurement where valid is 0", false},
+    {"valid", "valid", "1",
+     "1 where (u, v) was measured; 0 where masked, without texture or correlation peak, or an outlier replaced by "
+     "its neighbours' median",
+     true},
+    {"peak_ratio", "peak_ratio", "1", "first / second correlation peak height; 0 where not measured", false},
+};
+
+constexpr Quantity kTemperatureQuantities[] = {
+    {"temperature_c", "temperature_c", "degC",
+     "temperature recovered from the displacement field; NaN where there is none", false},
+    {"measured", "measured", "1",
+     "1 where the node's displacement was measured; 0 where the temperature was filled in from the surroundings", true},
+};
+
+struct Kind {
+  std::string_view name;
+  std::span<const std::string_view> columns;
+  std::span<const Quantity> quantities;
+  std::string_view description;
+};
+
+const Kind kKinds[] = {
+    {"displacement", kDisplacementColumns, kDisplacementQuantities,
+     "displacement fields of the measurement frames against the reference frame, one group per frame"},
+    {"temperature", kTemperatureColumns, kTemperatureQuantities,
+     "temperature fields recovered from the displacement fields, one group per frame"},
+};
+
+struct Grid {
+  std::vector<double> x_px, y_px;
+  std::string group;  // /grids/grid_000
+};
+
+// What the sidecar needs of one exported frame.
+struct ExportedFrame {
+  std::string group;  // /displacement/frame_000012
+  std::int64_t frame_id = 0;
+  double t_s = 0;
+  std::size_t grid = 0;
+  int rows = 0, cols = 0;
+};
+
+// A file written under a temporary name beside its destination, removed
+// unless commit() renames it into place.
+class PartialFile {
+ public:
+  explicit PartialFile(const fs::path& destination)
+      : destination_(destination),
+        temporary_(destination.parent_path() /
+                   fmt::format(".{}.partial-{}", destination.filename().string(), static_cast<long>(getpid()))) {}
+  ~PartialFile() {
+    std::error_code ignored;
+    if (!committed_) fs::remove(temporary_, ignored);
+  }
+  PartialFile(const PartialFile&) = delete;
+  PartialFile& operator=(const PartialFile&) = delete;
+
+  const fs::path& path() const { return temporary_; }
+  void commit() {
+    std::error_code error;
+    fs::rename(temporary_, destination_, error);
+    if (error) {
+      throw std::runtime_error(fmt::format("cannot write '{}': {}", destination_.string(), error.message()));
+    }
+    committed_ = true;
+  }
+
+ private:
+  fs::path destination_;
+  fs::path temporary_;
+  bool committed_ = false;
+};
+
+std::string xml_escaped(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+std::vector<double> as_doubles(const cv::Mat& values) {
+  const cv::Mat continuous = values.isContinuous() ? values : values.clone();
+  return std::vector<double>(continuous.ptr<double>(), continuous.ptr<double>() + continuous.total());
+}
+
+// A flag column: 1 where the file says non-zero, 0 where it says 0 or lacks the node.
+std::vector<std::uint8_t> as_flags(const cv::Mat& values) {
+  std::vector<std::uint8_t> out;
+  out.reserve(values.total());
+  for (int r = 0; r < values.rows; ++r) {
+    for (int c = 0; c < values.cols; ++c) {
+      const double v = values.at<double>(r, c);
+      out.push_back(std::isfinite(v) && v != 0 ? 1 : 0);
+    }
+  }
+  return out;
+}
+
+std::size_t grid_of(const StoredFieldGrid& field, std::vector<Grid>& grids, hdf5::Writer& out,
+                    std::optional<double> px_per_mm) {
+  for (std::size_t i = 0; i < grids.size(); ++i) {
+    if (grids[i].x_px == field.x_px && grids[i].y_px == field.y_px) return i;
+  }
+  Grid grid{field.x_px, field.y_px, fmt::format("/grids/grid_{:03d}", grids.size())};
+  out.create_group(grid.group);
+  out.set_attribute(grid.group, "description",
+                    "node positions of a field grid; the frames on it link x_px, y_px (x_mm, y_mm) to these");
+  auto axis = [&](const std::string& name, const std::vector<double>& values, std::string_view units,
+                  std::string_view what) {
+    const std::string path = grid.group + "/" + name;
+    out.write_1d(path, values);
+    out.set_attribute(path, "units", units);
+    out.set_attribute(path, "description", what);
+  };
+  axis("x_px", grid.x_px, "px", "x of each column (image coordinates)");
+  axis("y_px", grid.y_px, "px", "y of each row (image coordinates, down)");
+  if (px_per_mm) {
+    auto scaled = [&](const std::vector<double>& px) {
+      std::vector<double> mm;
+      for (const double p : px) mm.push_back(p / *px_per_mm);
+      return mm;
+    };
+    axis("x_mm", scaled(grid.x_px), "mm", "x of each column in the flow plane: x_px / px_per_mm");
+    axis("y_mm", scaled(grid.y_px), "mm", "y of each row in the flow plane (down): y_px / px_per_mm");
+  }
+  grids.push_back(std::move(grid));
+  return grids.size() - 1;
+}
+
+std::string data_item(std::string_view h5_name, const std::string& dataset, std::string_view dims, bool flag) {
+  return fmt::format(R"(<DataItem Dimensions="{}" NumberType="{}" Precision="{}" Format="HDF">{}:{}</DataItem>)", dims,
+                     flag ? "UChar" : "Float", flag ? 1 : 8, xml_escaped(h5_name), xml_escaped(dataset));
+}
+
+void write_xdmf(const fs::path& path, std::string_view h5_name, const std::vector<Grid>& grids,
+                const std::map<std::string_view, std::vector<ExportedFrame>>& frames, bool in_mm) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw std::runtime_error(fmt::format("cannot write '{}'", path.string()));
+  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      << "<Xdmf Version=\"3.0\">\n"
+      << "  <Domain>\n";
+  const std::string x = in_mm ? "x_mm" : "x_px", y = in_mm ? "y_mm" : "y_px";
+  for (const auto& kind : kKinds) {
+    const auto it = frames.find(kind.name);
+    if (it == frames.end()) continue;
+    out << fmt::format("    <Grid Name=\"{}\" GridType=\"Collection\" CollectionType=\"Temporal\">\n", kind.name);
+    for (const auto& f : it->second) {
+      const Grid& grid = grids[f.grid];
+      const std::string dims = fmt::format("{} {}", f.rows, f.cols);
+      // {} prints the shortest text that reads back as the same double: Time equals the t_s attribute.
+      out << fmt::format("      <Grid Name=\"frame_{:06d}\" GridType=\"Uniform\">\n", f.frame_id)
+          << fmt::format("        <Time Value=\"{}\"/>\n", f.t_s)
+          << fmt::format("        <Topology TopologyType=\"2DRectMesh\" Dimensions=\"{}\"/>\n", dims)
+          << "        <Geometry GeometryType=\"VXVY\">\n"
+          << "          " << data_item(h5_name, grid.group + "/" + x, std::to_string(f.cols), false) << "\n"
+          << "          " << data_item(h5_name, grid.group + "/" + y, std::to_string(f.rows), false) << "\n"
+          << "        </Geometry>\n";
+      for (const auto& q : kind.quantities) {
+        out << fmt::format("        <Attribute Name=\"{}\" AttributeType=\"Scalar\" Center=\"Node\">\n", q.dataset)
+            << "          " << data_item(h5_name, f.group + "/" + std::string(q.dataset), dims, q.flag) << "\n"
+            << "        </Attribute>\n";
+      }
+      out << "      </Grid>\n";
+    }
+    out << "    </Grid>\n";
+  }
+  out << "  </Domain>\n</Xdmf>\n";
+  if (!out.flush()) throw std::runtime_error(fmt::format("cannot write '{}'", path.string()));
+}
+
+}  // namespace
+
+fs::path xdmf_path_for(const fs::path& hdf5_path) { return fs::path(hdf5_path).replace_extension(".xmf"); }
+
+FieldExportResult export_fields(const storage::RunStore& store, const fs::path& hdf5_path,
+                                const FieldExportOptions& options) {
+  if (hdf5_path.filename().empty() || hdf5_path.extension() == ".xmf") {
+    throw std::invalid_argument(
+        fmt::format("'{}': name the HDF5 file (e.g. fields.h5); its .xmf sidecar goes beside it", hdf5_path.string()));
+  }
+  if (options.px_per_mm && !(*options.px_per_mm > 0 && std::isfinite(*options.px_per_mm))) {
+    throw std::invalid_argument("px per mm must be positive");
+  }
+  if (const fs::path folder = hdf5_path.parent_path(); !folder.empty() && !fs::is_directory(folder)) {
+    throw std::runtime_error(fmt::format("cannot write '{}': no folder '{}'", hdf5_path.string(), folder.string()));
+  }
+  const auto run = store.run();
+  const storage::ProcessingStore results(store.dir());
+  auto rows = results.fields();
+  if (rows.empty()) {
+    throw NoStoredFields(fmt::format(
+        "the run '{}' has no stored fields: run `bosfuse process RUN` first (full fields, not --probes-only)",
+        store.dir().string()));
+  }
+  std::map<std::int64_t, storage::FrameRecord> frame_by_id;
+  for (const auto& f : store.frames()) frame_by_id[f.id] = f;
+  FieldExportResult result;
+  result.hdf5_path = hdf5_path;
+  result.xdmf_path = xdmf_path_for(hdf5_path);
+
+  // The schema allows only the two kinds and only frames of the run; a row
+  // naming a frame the run lacks means the store was edited by hand.
+  for (const auto& row : rows) {
+    if (!frame_by_id.count(row.frame_id)) {
+      throw std::runtime_error(fmt::format("stored {} field '{}' names frame {}, which the run does not have",
+                                           storage::printable(row.kind), storage::printable(row.path), row.frame_id));
+    }
+  }
+  // In time order, so the per-kind t_s arrays and the XDMF collection need no sorting.
+  std::sort(rows.begin(), rows.end(), [&](const auto& a, const auto& b) {
+    return std::pair(frame_by_id.at(a.frame_id).t_ns, a.frame_id) <
+           std::pair(frame_by_id.at(b.frame_id).t_ns, b.frame_id);
+  });
+
+  PartialFile h5_file(hdf5_path), xmf_file(result.xdmf_path);
+  std::vector<Grid> grids;
+  std::map<std::string_view, std::vector<ExportedFrame>> exported;
+  {
+    hdf5::Writer out(h5_file.path(), hdf5_path);
+    out.set_attribute("/", "title", fmt::format("bosfuse field export of run '{}'", run.name));
+    out.set_attribute("/", "run_name", run.name);
+    out.set_attribute("/", "run_started_utc", acquisition::format_iso8601_utc(run.started_ns, 3));
+    out.set_attribute("/", "bosfuse_version", BOSFUSE_VERSION);
+    out.set_attribute("/", "layout_version", kLayoutVersion);
+    out.set_attribute("/", "content",
+                      "displacement and temperature fields of the run's frames as stored by `bosfuse process`: "
+                      "/displacement/frame_NNNNNN and /temperature/frame_NNNNNN (NNNNNN = frame id in the run "
+                      "store), grid coordinates under /grids; see docs/REPORT.md, Field export");
+    out.set_attribute("/", "displacement_convention", kDisplacementConvention);
+    out.set_attribute("/", "coordinates", kCoordinates);
+    out.set_attribute("/", "time", "t_s: " + experiment_time_basis(run));
+    if (options.px_per_mm) out.set_attribute("/", "px_per_mm", *options.px_per_mm);
+    out.create_group("/grids");
+
+    for (const auto& kind : kKinds) {
+      const std::string group = fmt::format("/{}", kind.name);
+      std::vector<double> times_s;
+      std::vector<std::int64_t> frame_ids;
+      for (const auto& row : rows) {
+        if (row.kind != kind.name) continue;
+        if (times_s.empty()) {
+          out.create_group(group);
+          out.set_attribute(group, "description", kind.description);
+        }
+        const auto& frame = frame_by_id.at(row.frame_id);
+        StoredFieldGrid field;
+        try {
+          field = read_stored_field(storage::resolve_in_run(store.dir(), row.path), kind.columns);
+        } catch (const std::exception& e) {
+          throw std::runtime_error(fmt::format("stored {} field of frame {}: {}", kind.name, frame.id, e.what()));
+        }
+        ExportedFrame f;
+        f.group = fmt::format("/{}/frame_{:06d}", kind.name, frame.id);
+        f.frame_id = frame.id;
+        f.t_s = experiment_time_s(run, frame.t_ns);
+        f.grid = grid_of(field, grids, out, options.px_per_mm);
+        f.rows = field.rows();
+        f.cols = field.cols();
+        out.create_group(f.group);
+        out.set_attribute(f.group, "t_s", f.t_s);
+        out.set_attribute(f.group, "frame_id", f.frame_id);
+        out.set_attribute(f.group, "frame_path", frame.path);
+        out.set_attribute(f.group, "field_path", row.path);
+        out.set_attribute(f.group, "grid", grids[f.grid].group);
+        out.set_attribute(f.group, "summary", row.json);
+        for (const char* axis : {"x_px", "y_px", "x_mm", "y_mm"}) {
+          if (options.px_per_mm || std::string_view(axis).ends_with("_px")) {
+            out.link(grids[f.grid].group + "/" + axis, f.group + "/" + axis);
+          }
+        }
+        for (const auto& q : kind.quantities) {
+          const std::string path = f.group + "/" + std::string(q.dataset);
+          const cv::Mat& values = field.column(q.column);
+          if (q.flag) {
+            out.write_2d(path, as_flags(values), field.y_px.size(), field.x_px.size());
+          } else {
+            out.write_2d(path, as_doubles(values), field.y_px.size(), field.x_px.size());
+          }
+          out.set_attribute(path, "units", q.units);
+          out.set_attribute(path, "description", q.description);
+        }
+        times_s.push_back(f.t_s);
+        frame_ids.push_back(f.frame_id);
+        exported[kind.name].push_back(std::move(f));
+      }
+      if (times_s.empty()) continue;
+      out.write_1d(group + "/t_s", times_s);
+      out.set_attribute(group + "/t_s", "units", "s");
+      out.set_attribute(group + "/t_s", "description", "t_s of the frames below, in time order");
+      out.write_1d(group + "/frame_id", frame_ids);
+      out.set_attribute(group + "/frame_id", "units", "1");
+      out.set_attribute(group + "/frame_id", "description", "frame ids in the run store, in the order of t_s");
+    }
+    out.close();
+  }
+  write_xdmf(xmf_file.path(), hdf5_path.filename().string(), grids, exported, options.px_per_mm.has_value());
+  h5_file.commit();
+  xmf_file.commit();
+  result.displacement_frames = exported["displacement"].size();
+  result.temperature_frames = exported["temperature"].size();
+  result.grids = grids.size();
+  return result;
+}
+
+}  // namespace bosfuse::report
