@@ -14,6 +14,13 @@ inline std::int64_t utc_now_ns() {
       .count();
 }
 
+// The calendar years a timestamp read from a file may carry. Any two of
+// them are less than 292 years apart, so the times and their differences
+// fit in int64 nanoseconds; a date outside is a damaged or forged field.
+inline constexpr int kEarliestYear = 1900;
+inline constexpr int kLatestYear = 2100;
+inline constexpr bool plausible_year(int year) { return year >= kEarliestYear && year <= kLatestYear; }
+
 // ISO-8601 UTC with `fraction_digits` decimals of a second (0..9), e.g.
 // 2026-11-23T09:13:48.289123Z.
 std::string format_iso8601_utc(std::int64_t t_ns, int fraction_digits = 6);

@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <string>
 
+#include "acquisition/clock.h"
+
 namespace bosfuse::acquisition {
 namespace {
 
@@ -101,7 +103,7 @@ std::optional<std::int64_t> parse_exif_datetime_ns(const std::string& text) {
     return std::nullopt;
   }
   const std::chrono::year_month_day date{std::chrono::year(year), std::chrono::month(month), std::chrono::day(day)};
-  if (!date.ok() || hour > 23 || minute > 59 || second > 60) return std::nullopt;
+  if (!plausible_year(year) || !date.ok() || hour > 23 || minute > 59 || second > 60) return std::nullopt;
   const auto t = std::chrono::sys_days(date) + std::chrono::hours(hour) + std::chrono::minutes(minute) +
                  std::chrono::seconds(second);
   return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
@@ -123,8 +125,9 @@ std::int64_t subsecond_ns(const std::string& digits) {
 std::optional<std::int64_t> zone_offset_s(const std::string& text) {
   int hours, minutes;
   char sign;
-  if (std::sscanf(text.c_str(), "%c%2d:%2d", &sign, &hours, &minutes) != 3 || (sign != '+' && sign != '-')) {
-    return std::nullopt;
+  if (std::sscanf(text.c_str(), "%c%2d:%2d", &sign, &hours, &minutes) != 3 || (sign != '+' && sign != '-') ||
+      hours > 14 || minutes < 0 || minutes > 59) {
+    return std::nullopt;  // no time zone is further than 14 h from UTC
   }
   return (sign == '-' ? -1 : 1) * (hours * 3600 + minutes * 60);
 }

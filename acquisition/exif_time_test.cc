@@ -52,6 +52,14 @@ TEST_F(ExifTime, ZoneOffsetIsApplied) {
   EXPECT_TRUE(t->had_zone_offset);
 }
 
+// Found by fuzzing: a year far from 1970 overflowed int64 nanoseconds. A
+// date no camera could have taken is no capture time (the file time is used).
+TEST_F(ExifTime, AnImplausibleYearIsNoCaptureTime) {
+  EXPECT_FALSE(exif_capture_time(file_bytes(image("far.jpg", {"-DateTimeOriginal=7381:01:02 03:04:05"}))));
+  EXPECT_FALSE(exif_capture_time(file_bytes(image("old.jpg", {"-DateTimeOriginal=1066:10:14 09:00:00"}))));
+  EXPECT_TRUE(exif_capture_time(file_bytes(image("ok.jpg", {"-DateTimeOriginal=2099:12:31 23:59:59"}))));
+}
+
 TEST_F(ExifTime, TiffCaptureTime) {
   const auto t = exif_capture_time(file_bytes(image("c.tif", {"-DateTimeOriginal=2025:01:02 03:04:05"})));
   ASSERT_TRUE(t.has_value());

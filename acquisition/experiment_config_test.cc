@@ -216,6 +216,23 @@ TEST(ExperimentConfig, HostNamesResolveOrAreRefusedNamingTheKey) {
   }
 }
 
+// Found by fuzzing: periods beyond ~292 years became a negative poll
+// period in int64 nanoseconds (nan and inf were already refused).
+TEST(ExperimentConfig, APeriodThatIsNoNumberOfSecondsIsRefused) {
+  const auto error_for = [](const std::string& period) {
+    return error_of("[[devices]]\nname = \"a\"\nprofile = \"adam-6018\"\nhost = \"localhost\"\npoll_period_s = " +
+                    period + "\n[[devices.channels]]\nname = \"t\"\ninput = 0\n");
+  };
+  for (const char* period : {"1e300", "3.2e7"}) {
+    EXPECT_NE(error_for(period).find("exp.toml:5: devices[0].poll_period_s: must be a number of seconds from"),
+              std::string::npos)
+        << period << ": " << error_for(period);
+  }
+  for (const char* period : {"nan", "inf", "-inf"}) {
+    EXPECT_NE(error_for(period).find("exp.toml:5: devices[0].poll_period_s: "), std::string::npos) << period;
+  }
+}
+
 TEST(ExperimentConfig, GenericChannelsNeedTheirRegisters) {
   const std::string text =
       "[[devices]]\nname = \"g\"\nprofile = \"generic\"\ntransport = \"tcp\"\nhost = \"localhost\"\n"

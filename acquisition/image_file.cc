@@ -138,6 +138,30 @@ bool starts_with(std::span<const std::uint8_t> bytes, std::string_view magic) {
   return bytes.size() >= magic.size() && std::memcmp(bytes.data(), magic.data(), magic.size()) == 0;
 }
 
+// The formats bosfuse reads: PNG, JPEG, TIFF (headers size-checked above),
+// BMP and PNM. Debian's OpenCV would also hand other bytes to GDCM (DICOM)
+// or GDAL, whose decoders allocate before any limit is consulted: a 166-byte
+// forged DICOM header asked for 1.7 GB when fuzzed.
+bool is_format_read(std::span<const std::uint8_t> bytes) {
+  static constexpr std::string_view kSignatures[] = {"\x89PNG\r\n\x1a\n"sv,
+                                                     "\xff\xd8\xff"sv,
+                                                     "II*\0"sv,
+                                                     "MM\0*"sv,
+                                                     "II+\0"sv,
+                                                     "MM\0+"sv,
+                                                     "BM"sv,
+                                                     "P1"sv,
+                                                     "P2"sv,
+                                                     "P3"sv,
+                                                     "P4"sv,
+                                                     "P5"sv,
+                                                     "P6"sv};
+  for (const std::string_view signature : kSignatures) {
+    if (starts_with(bytes, signature)) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 ImageLimits ImageLimits::from_environment() {
@@ -171,7 +195,7 @@ cv::Mat decode_image(std::span<const std::uint8_t> bytes, const std::string& nam
           name, size->width_px, size->height_px, pixels * 1e-6, limits.max_side_px, limits.max_pixels * 1e-6));
     }
   }
-  if (bytes.empty() || bytes.size() > static_cast<std::size_t>(INT_MAX)) return {};
+  if (!is_format_read(bytes) || bytes.size() > static_cast<std::size_t>(INT_MAX)) return {};
   const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8U, const_cast<std::uint8_t*>(bytes.data()));
   try {
     return cv::imdecode(buffer, cv::IMREAD_UNCHANGED);

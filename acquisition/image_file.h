@@ -11,8 +11,9 @@
 // BOSFUSE_MAX_IMAGE_PIXELS and BOSFUSE_MAX_IMAGE_SIDE_PX (docs/CONFIG.md).
 // OpenCV's own limits (OPENCV_IO_MAX_IMAGE_*) cannot serve: imgcodecs reads
 // them once, when the library is loaded, before any code of ours runs.
-// Formats other than PNG, JPEG and TIFF are decoded under OpenCV's limits
-// only (2^30 pixels).
+// BMP and PNM are decoded under OpenCV's limits only (2^30 pixels); any
+// other format is not decoded at all (OpenCV's DICOM and GDAL decoders
+// allocate before its limits are checked).
 
 #include <cstdint>
 #include <filesystem>
@@ -50,13 +51,13 @@ struct DeclaredSize {
 std::optional<DeclaredSize> declared_image_size(std::span<const std::uint8_t> bytes);
 
 // cv::imdecode(IMREAD_UNCHANGED) of `bytes` once the declared size is within
-// `limits`; empty when the bytes are no image OpenCV can decode. Throws
+// `limits`; empty when the bytes are not a PNG, JPEG, TIFF, BMP or PNM image
+// OpenCV can decode. Throws
 // ImageTooLarge naming `name` and the declared size.
 cv::Mat decode_image(std::span<const std::uint8_t> bytes, const std::string& name,
                      const ImageLimits& limits = ImageLimits::from_environment());
 
 // decode_image() of a file's bytes; empty when it is missing or unreadable.
-cv::Mat read_image_file(const std::filesystem::path& path,
-                        const ImageLimits& limits = ImageLimits::from_environment());
+cv::Mat read_image_file(const std::filesystem::path& path, const ImageLimits& limits = ImageLimits::from_environment());
 
 }  // namespace bosfuse::acquisition

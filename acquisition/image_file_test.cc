@@ -71,6 +71,22 @@ TEST(ImageFile, TheLimitsComeFromTheEnvironment) {
   EXPECT_EQ(defaults.max_side_px, 30'000);
 }
 
+// Found by fuzzing: Debian's OpenCV hands a DICOM header to GDCM, which
+// allocated 1.7 GB for 166 bytes. Only the formats bosfuse reads are decoded.
+TEST(ImageFile, OnlyTheFormatsBosfuseReadsAreDecoded) {
+  std::vector<std::uint8_t> dicom(128, 0);
+  for (char c : std::string("DICM\x02\x00\x10\x00UI")) dicom.push_back(static_cast<std::uint8_t>(c));
+  dicom.resize(400, 0xff);
+  EXPECT_TRUE(decode_image(dicom, "forged.dcm").empty());
+  const cv::Mat image(7, 5, CV_8U, cv::Scalar(90));
+  for (const char* extension : {".png", ".bmp", ".pgm", ".tif", ".jpg"}) {
+    std::vector<std::uint8_t> bytes;
+    ASSERT_TRUE(cv::imencode(extension, image, bytes)) << extension;
+    const cv::Mat decoded = decode_image(bytes, std::string("frame") + extension);
+    EXPECT_EQ(decoded.size(), image.size()) << extension;
+  }
+}
+
 TEST(ImageFile, MissingOrUndecodableFilesAreEmpty) {
   testing::TempDir dir;
   EXPECT_TRUE(read_image_file(dir / "none.png").empty());

@@ -17,6 +17,10 @@ bool contains(const std::vector<double>& codes, double raw) {
 std::string ModbusChannel::Validate() const {
   if (name.empty()) return "channel has no name";
   if (address < 0 || address > 0xFFFF) return "address " + std::to_string(address) + " is not in 0..65535";
+  if (address + register_count() > 0x10000) {
+    return "a " + std::to_string(register_count()) + "-register value at address " + std::to_string(address) +
+           " runs past the last register (65535)";
+  }
   if (!std::isfinite(scale) || scale == 0) return "scale must be a finite non-zero number";
   if (!std::isfinite(offset)) return "offset must be finite";
   if (linear && (linear->raw_high == linear->raw_low || linear->value_high == linear->value_low)) {

@@ -68,6 +68,20 @@ TEST(ModbusChannel, ValidRangeMarksOutOfRange) {
   EXPECT_EQ(c.decode(c.encode_raw(std::numeric_limits<double>::quiet_NaN())).status, SampleStatus::kInvalidValue);
 }
 
+// Found by fuzzing: a 32-bit value at address 65535 was accepted, though
+// its second register does not exist.
+TEST(ModbusChannel, AValueRunningPastTheLastRegisterIsRefused) {
+  ModbusChannel c;
+  c.name = "oven";
+  c.type = DataType::kFloat32;
+  c.address = 65534;
+  EXPECT_EQ(c.Validate(), "");
+  c.address = 65535;
+  EXPECT_EQ(c.Validate(), "a 2-register value at address 65535 runs past the last register (65535)");
+  c.type = DataType::kUint16;
+  EXPECT_EQ(c.Validate(), "");
+}
+
 TEST(ModbusChannel, EncodeIsTheInverseOfDecode) {
   for (const char* profile : {"adam-6018", "icpdas-m7018"}) {
     const ModbusChannel c = profile_input_channel(profile, 1, "K");

@@ -82,7 +82,9 @@ std::optional<std::int64_t> parse_iso8601_utc_ns(const std::string& text) {
   const std::string zone = text.substr(i);
   if (zone != "Z" && zone != "+00:00") return std::nullopt;
   // timegm would quietly roll 2026-13-45 into 2027; a typo must not become a time.
-  if (month < 1 || month > 12 || day < 1 || day > 31 || hour > 23 || minute > 59 || second > 60) return std::nullopt;
+  if (!acquisition::plausible_year(year) || month < 1 || month > 12 || day < 1 || day > 31 || hour > 23 ||
+      minute > 59 || second > 60)
+    return std::nullopt;
   std::tm fields{};
   fields.tm_year = year - 1900;
   fields.tm_mon = month - 1;

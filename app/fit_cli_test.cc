@@ -97,6 +97,14 @@ TEST_F(FitCli, FitsAnExportedRunByIsoTimeOrBySeconds) {
 
 // A channel named like a formula went into the export as-is, so a
 // spreadsheet opening it ran the command.
+// Found by fuzzing: a year far from 1970 overflowed int64 nanoseconds.
+TEST_F(FitCli, ATimeWithAnImplausibleYearIsAnErrorNamingIt) {
+  write("far.csv", "time_utc,T\n2026-11-23T09:00:00Z,50\n7381-01-01T00:00:00Z,49\n");
+  const auto result = bosfuse("fit " + path("far.csv") + " --temperature-column T");
+  EXPECT_NE(result.exit_code, 0);
+  EXPECT_NE(result.output.find("7381-01-01T00:00:00Z"), std::string::npos) << result.output;
+}
+
 TEST_F(FitCli, AFormulaNamedChannelIsExportedInertAndFitsByItsName) {
   const std::string name = "=cmd|' /C calc'!A0";
   const testing::CoolingCurve curve{21.5, 64.0, 0.02};
@@ -127,8 +135,8 @@ TEST_F(FitCli, AFormulaNamedChannelIsExportedInertAndFitsByItsName) {
   EXPECT_TRUE(first.ends_with(",-3.5")) << "a negative number is a number, not a formula: " << first;
 
   // Shell-quoted: the name holds single quotes, a pipe and an exclamation mark.
-  const auto fitted = bosfuse("fit " + path("export.csv") + " --temperature-column '=cmd|'\\'' /C calc'\\''!A0 [degC]' --json " +
-                              path("fit.json"));
+  const auto fitted = bosfuse("fit " + path("export.csv") +
+                              " --temperature-column '=cmd|'\\'' /C calc'\\''!A0 [degC]' --json " + path("fit.json"));
   ASSERT_EQ(fitted.exit_code, 0) << fitted.output;
   const auto j = read_json("fit.json");
   EXPECT_EQ(j.at("input").at("temperature_column"), name + " [degC]");

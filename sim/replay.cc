@@ -1,10 +1,12 @@
 #include "sim/replay.h"
 
+#include <toml++/toml.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
-#include <toml++/toml.h>
+#include <stdexcept>
 
 #include "storage/run_paths.h"
 #include "storage/run_store.h"
@@ -31,9 +33,21 @@ double served_value(const storage::Sample& sample) {
   }
 }
 
+// later − earlier for two times of one run. A damaged store (times centuries
+// apart, which no run spans) is refused instead of overflowing.
+std::int64_t span_ns(std::int64_t later, std::int64_t earlier) {
+  static constexpr std::int64_t kLongestRunNs = 100LL * 366 * 86400 * 1'000'000'000;
+  std::int64_t span = 0;
+  if (__builtin_sub_overflow(later, earlier, &span) || span > kLongestRunNs || span < -kLongestRunNs) {
+    throw std::runtime_error("the run's times are damaged: " + std::to_string(later) + " ns and " +
+                             std::to_string(earlier) + " ns lie more than a century apart");
+  }
+  return span;
+}
+
 std::chrono::nanoseconds median_interval(const std::vector<storage::Sample>& samples) {
   std::vector<std::int64_t> gaps;
-  for (std::size_t i = 1; i < samples.size(); ++i) gaps.push_back(samples[i].t_ns - samples[i - 1].t_ns);
+  for (std::size_t i = 1; i < samples.size(); ++i) gaps.push_back(span_ns(samples[i].t_ns, samples[i - 1].t_ns));
   if (gaps.empty()) return std::chrono::seconds(1);
   std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
   return std::chrono::nanoseconds(std::max<std::int64_t>(gaps[gaps.size() / 2], 1'000'000));
@@ -88,11 +102,11 @@ void inspect_frames(const storage::RunStore& store, RecordedRun& recorded) {
       try {
         (fs::exists(storage::resolve_in_run(recorded.dir, frame.path)) ? present : missing) += 1;
       } catch (const storage::StorageError& e) {
-        recorded.problems.push_back("camera " + device.name + ": frame " + std::to_string(frame.id) + ": " +
-                                    e.what() + "; it is skipped");
+        recorded.problems.push_back("camera " + device.name + ": frame " + std::to_string(frame.id) + ": " + e.what() +
+                                    "; it is skipped");
         missing += 1;
       }
-      recorded.last_offset_ns = std::max(recorded.last_offset_ns, frame.t_ns - recorded.run.started_ns);
+      recorded.last_offset_ns = std::max(recorded.last_offset_ns, span_ns(frame.t_ns, recorded.run.started_ns));
     }
     if (missing > 0) {
       recorded.problems.push_back("camera " + device.name + ": " + std::to_string(missing) + " of " +
@@ -122,7 +136,7 @@ RecordedRun inspect_recorded_run(const fs::path& dir) {
       replay.samples.push_back(store.read_samples(channel.id));
       if (!replay.samples.back().empty()) {
         recorded.last_offset_ns =
-            std::max(recorded.last_offset_ns, replay.samples.back().back().t_ns - recorded.run.started_ns);
+            std::max(recorded.last_offset_ns, span_ns(replay.samples.back().back().t_ns, recorded.run.started_ns));
       }
     }
     if (replay.channels.empty() || replay.samples.front().empty()) {
@@ -163,11 +177,16 @@ std::string replay_experiment_toml(const RecordedRun& run, const std::vector<int
   // may hold any character (control characters, quotes, non-ASCII), which
   // toml++ escapes so the logger reads back exactly the same string.
   toml::array devices;
-  for (std::size_t d = 0; d < run.devices.size(); ++d) devices.push_back(device_table(run.devices[d], ports.at(d), speed));
+  for (std::size_t d = 0; d < run.devices.size(); ++d)
+    devices.push_back(device_table(run.devices[d], ports.at(d), speed));
   toml::array cameras;
   for (const std::string& camera : run.cameras) {
-    cameras.push_back(toml::table{{"name", camera},          {"source", "replay"}, {"run", run.dir.string()},
-                                  {"camera", camera},        {"speed", speed},     {"reference_frames", 0}});
+    cameras.push_back(toml::table{{"name", camera},
+                                  {"source", "replay"},
+                                  {"run", run.dir.string()},
+                                  {"camera", camera},
+                                  {"speed", speed},
+                                  {"reference_frames", 0}});
   }
   toml::table document{{"run", toml::table{{"name", "replay of " + run.run.name}}}};
   if (!devices.empty()) document.insert("devices", std::move(devices));

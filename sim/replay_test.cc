@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "acquisition/experiment_config.h"
+#include "storage/run_store.h"
+#include "tests/support/temp_dir.h"
 
 namespace bosfuse::sim {
 namespace {
@@ -10,8 +12,9 @@ namespace {
 // Names a run store may hold: control characters, tab, newline, quotes,
 // backslashes, TOML syntax and non-ASCII.
 const std::vector<std::string> kAwkwardNames = {
-    "tc\x01one", "tab\there", "line\nbreak", "say \"hi\"", "back\\slash\\", "Ofen 1 – Δ°C µ", "]] [x]\nname = \"y\"",
-    "'single' ''' \"\"\"", "trailing\\"};
+    "tc\x01one",     "tab\there",      "line\nbreak",          "say \"hi\"",
+    "back\\slash\\", "Ofen 1 – Δ°C µ", "]] [x]\nname = \"y\"", "'single' ''' \"\"\"",
+    "trailing\\"};
 
 RecordedRun awkward_run() {
   RecordedRun run;
@@ -49,6 +52,29 @@ TEST(ReplayExperiment, AnyNameRoundTripsThroughTheExperimentFile) {
   ASSERT_EQ(config.cameras.size(), 1u);
   EXPECT_EQ(config.cameras[0].name, run.cameras[0]);
   EXPECT_EQ(config.cameras[0].replay_camera, run.cameras[0]);
+}
+
+// Found by fuzzing: a damaged store whose times lie centuries apart made
+// the replay's offsets overflow. It is refused, saying why.
+TEST(InspectRecordedRun, TimesCenturiesApartAreRefusedAsDamaged) {
+  testing::TempDir dir;
+  {
+    auto store = storage::RunStore::create(
+        dir / "run", {0, "damaged", -9'000'000'000'000'000'000, {}, "", storage::RunStatus::kRunning},
+        storage::RunStore::CreateMode::kNew);
+    const auto device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", ""});
+    const auto channel = store.add_channel({0, device, "tc0", "thermocouple", "degC", "K", {}, {}});
+    const storage::Sample samples[] = {{channel, 9'000'000'000'000'000'000, {}, 20.0, {}, storage::SampleStatus::kOk},
+                                       {channel, 9'000'000'001'000'000'000, {}, 20.0, {}, storage::SampleStatus::kOk}};
+    store.write_samples(samples);
+    store.finish(storage::RunStatus::kComplete, 0);
+  }
+  try {
+    inspect_recorded_run(dir / "run");
+    FAIL() << "a run with damaged times was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("the run's times are damaged"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -206,10 +207,16 @@ class UmockdevBed {
   }
   static std::string strip_sys(const std::string& path) { return path.substr(4); }  // "/sys/devices" -> "/devices"
 
+  // The testbed's root folder; umockdev hands out a copy the caller frees.
+  std::filesystem::path root_dir() const {
+    const std::unique_ptr<gchar, decltype(&g_free)> root(umockdev_testbed_get_root_dir(bed_), g_free);
+    return root.get();
+  }
+
   // The kernel links hidrawN/device to its HID parent, and hidapi's filtered
   // enumeration reads the ids through that link; umockdev does not make it.
   void link_hidraw_to_hid(const std::string& hid_sysfs_path, const std::string& node) {
-    const std::filesystem::path root = umockdev_testbed_get_root_dir(bed_);
+    const std::filesystem::path root = root_dir();
     std::filesystem::create_directory_symlink("../../../" + std::filesystem::path(hid_sysfs_path).filename().string(),
                                               root / (hid_sysfs_path.substr(1) + "/hidraw/" + node + "/device"));
   }
@@ -222,8 +229,7 @@ class UmockdevBed {
   }
 
   std::filesystem::path write_temp(const std::string& text, const std::string& suffix) {
-    const auto file = std::filesystem::path(umockdev_testbed_get_root_dir(bed_)) /
-                      ("bosfuse-" + std::to_string(++files_) + "." + suffix);
+    const auto file = root_dir() / ("bosfuse-" + std::to_string(++files_) + "." + suffix);
     std::ofstream(file, std::ios::binary) << text;
     return file;
   }
