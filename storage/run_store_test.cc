@@ -151,6 +151,24 @@ TEST(RunStore, ARunBeingRecordedIsLeftRunning) {
   EXPECT_TRUE(RunStore::open(f.dir.path() / "run").events().empty());
 }
 
+// Found by fuzzing: a forged store (foreign keys off) held a status code
+// no SampleStatus has, and reading it was undefined behaviour.
+TEST(RunStore, ASampleWithAnUnknownStatusCodeIsRefusedAsDamage) {
+  Fixture f;
+  {
+    Database db((f.dir.path() / "run" / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
+    db.execute("PRAGMA foreign_keys = OFF");
+    db.execute("INSERT INTO samples (channel_id, t_ns, value, status) VALUES (" + std::to_string(f.channel) +
+               ", 5, NULL, 77)");
+  }
+  try {
+    f.store.read_samples(f.channel);
+    FAIL() << "an unknown status code was read";
+  } catch (const StorageError& e) {
+    EXPECT_NE(std::string(e.what()).find("status code 77"), std::string::npos) << e.what();
+  }
+}
+
 TEST(RunStore, OpeningAFolderWithoutARunSaysSo) {
   testing::TempDir dir;
   try {
