@@ -1,0 +1,63 @@
+# Sanitizer and fuzzing builds (docs/RELIABILITY.md, "Always-on checks").
+#
+#   -DBOSFUSE_SANITIZE=address,undefined   ASan + UBSan on all bosfuse code and tests
+#   -DBOSFUSE_SANITIZE=thread              TSan (scripts/check-sanitizers builds only
+#                                          the threaded storage/acquisition tests)
+#   -DBOSFUSE_FUZZ=ON                      clang-14 only: the libFuzzer targets in fuzz/,
+#                                          the libraries instrumented for coverage + ASan/UBSan
+#
+# The flags are added with add_compile_options/add_link_options before any
+# bosfuse folder is added, so they reach every library, test and the
+# executable; the Debian libraries (OpenCV, Ceres, SQLite, libstdc++) are not
+# instrumented, which ASan/UBSan tolerate (TSan may report races inside them:
+# see scripts/sanitizers/). -O1 -g keeps the build and the suite fast enough
+# for CI while stacks stay readable (BOSFUSE_SANITIZE_OPT).
+
+set(BOSFUSE_SANITIZE "" CACHE STRING "Sanitizers for all bosfuse code: empty, address,undefined, or thread")
+set_property(CACHE BOSFUSE_SANITIZE PROPERTY STRINGS "" "address,undefined" "thread")
+option(BOSFUSE_FUZZ "Build the libFuzzer targets in fuzz/ (needs clang++-14)" OFF)
+# -O0 compiles about twice as fast as -O1 (app/cmd_replay.cc under ASan:
+# 5.5 s against 11 s of CPU); -O1 runs the instrumented suite faster.
+set(BOSFUSE_SANITIZE_OPT "-O1" CACHE STRING "Optimisation level of sanitizer and fuzzing builds")
+
+if(BOSFUSE_FUZZ AND BOSFUSE_SANITIZE)
+  message(FATAL_ERROR "BOSFUSE_FUZZ already builds with address,undefined; leave BOSFUSE_SANITIZE empty")
+endif()
+
+set(_bosfuse_san_flags "")
+if(BOSFUSE_SANITIZE STREQUAL "address,undefined" OR BOSFUSE_SANITIZE STREQUAL "undefined,address")
+  # Every UBSan finding is an error (no recover), so a test fails at the first one.
+  set(_bosfuse_san_flags -fsanitize=address,undefined -fno-sanitize-recover=undefined)
+elseif(BOSFUSE_SANITIZE STREQUAL "thread")
+  set(_bosfuse_san_flags -fsanitize=thread)
+elseif(BOSFUSE_SANITIZE)
+  message(FATAL_ERROR "BOSFUSE_SANITIZE='${BOSFUSE_SANITIZE}': use address,undefined or thread")
+endif()
+
+if(_bosfuse_san_flags)
+  # -g1 (line tables) is enough for the sanitizers' stack traces and keeps
+  # the objects and the links of the test binaries much smaller than -g.
+  add_compile_options(${_bosfuse_san_flags} -fno-omit-frame-pointer ${BOSFUSE_SANITIZE_OPT} -g1)
+  add_link_options(${_bosfuse_san_flags})
+  message(STATUS "bosfuse: sanitizers ${BOSFUSE_SANITIZE} (${BOSFUSE_SANITIZE_OPT} -g1)")
+endif()
+
+if(BOSFUSE_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "BOSFUSE_FUZZ=ON needs clang (CXX=clang++-14), not ${CMAKE_CXX_COMPILER_ID}")
+  endif()
+  # Libraries get coverage instrumentation without libFuzzer's main; the
+  # targets in fuzz/ link with -fsanitize=fuzzer.
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
+                      -fno-omit-frame-pointer ${BOSFUSE_SANITIZE_OPT} -g1)
+  add_link_options(-fsanitize=address,undefined)
+  message(STATUS "bosfuse: libFuzzer targets (fuzz/), libraries with fuzzer-no-link,address,undefined")
+endif()
+
+# Benchmarks of instrumented code measure nothing useful and cost build time.
+if(BOSFUSE_SANITIZE OR BOSFUSE_FUZZ)
+  set(_bosfuse_bench_default OFF)
+else()
+  set(_bosfuse_bench_default ON)
+endif()
+option(BOSFUSE_BENCH "Build the benchmarks in bench/" ${_bosfuse_bench_default})
