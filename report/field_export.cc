@@ -14,6 +14,7 @@
 #include "report/experiment_time.h"
 #include "report/field_csv.h"
 #include "report/hdf5_writer.h"
+#include "report/html.h"
 #include "storage/processing_store.h"
 #include "storage/run_paths.h"
 
@@ -120,29 +121,6 @@ class PartialFile {
   bool committed_ = false;
 };
 
-std::string xml_escaped(std::string_view text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 std::vector<double> as_doubles(const cv::Mat& values) {
   const cv::Mat continuous = values.isContinuous() ? values : values.clone();
   return std::vector<double>(continuous.ptr<double>(), continuous.ptr<double>() + continuous.total());
@@ -194,7 +172,7 @@ std::size_t grid_of(const StoredFieldGrid& field, std::vector<Grid>& grids, hdf5
 
 std::string data_item(std::string_view h5_name, const std::string& dataset, std::string_view dims, bool flag) {
   return fmt::format(R"(<DataItem Dimensions="{}" NumberType="{}" Precision="{}" Format="HDF">{}:{}</DataItem>)", dims,
-                     flag ? "UChar" : "Float", flag ? 1 : 8, xml_escaped(h5_name), xml_escaped(dataset));
+                     flag ? "UChar" : "Float", flag ? 1 : 8, html_escape(h5_name), html_escape(dataset));
 }
 
 void write_xdmf(const fs::path& path, std::string_view h5_name, const std::vector<Grid>& grids,
