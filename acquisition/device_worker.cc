@@ -40,6 +40,10 @@ DeviceWorker::~DeviceWorker() {
 void DeviceWorker::start() {
   std::shared_ptr<DeviceWorker> self = weak_from_this().lock();
   if (!self) throw std::logic_error("device worker " + name_ + " must be owned by a std::shared_ptr to start");
+  // spdlog makes its default logger on first use; made here, before the
+  // thread starts, every thread sees it made (ThreadSanitizer cannot see the
+  // guard inside the uninstrumented library).
+  spdlog::default_logger_raw();
   thread_ = std::thread([self] { self->run(); });
 }
 
