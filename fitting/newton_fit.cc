@@ -218,7 +218,7 @@ class NewtonProblem {
 
   // Covariance of (log τ, ΔT, T_amb) for the weighted residuals, or nullopt
   // when J has a null space (rank deficiency).
-  std::optional<std::array<std::array<double, 3>, 3>> covariance(bool ambient_fixed) {
+  std::optional<ParameterCovariance> covariance(bool ambient_fixed) {
     ceres::Covariance::Options options;
     options.algorithm_type = ceres::DENSE_SVD;  // rank deficiency is detected, not papered over
     options.num_threads = 1;
@@ -229,7 +229,7 @@ class NewtonProblem {
     for (auto* a : blocks)
       for (auto* b : blocks) pairs.emplace_back(a, b);
     if (!covariance.Compute(pairs, problem_.get())) return std::nullopt;
-    std::array<std::array<double, 3>, 3> c{};
+    ParameterCovariance c{};  // a fixed ambient leaves its row and column zero
     for (std::size_t i = 0; i < blocks.size(); ++i)
       for (std::size_t j = 0; j < blocks.size(); ++j) covariance.GetCovarianceBlock(blocks[i], blocks[j], &c[i][j]);
     return c;
@@ -308,6 +308,7 @@ using Failure = std::pair<FitStatus, std::string>;
 NewtonFit failed(NewtonFit fit, FitStatus status, std::string message) {
   fit.summary.status = status;
   fit.summary.message = std::move(message);
+  fit.covariance.reset();
   for (Estimate* e : {&fit.k_per_s, &fit.tau_s, &fit.t0_c, &fit.ambient_c}) *e = {kNaN, kNaN, kNaN, kNaN, false};
   return fit;
 }
@@ -321,8 +322,7 @@ Estimate symmetric(double value, double std_error, double critical) {
 }
 
 // Fills k, τ, T0, T_amb from the parameters and their covariance.
-void set_estimates(NewtonFit& fit, const Parameters& p, const std::array<std::array<double, 3>, 3>& c, bool fixed,
-                   double critical) {
+void set_estimates(NewtonFit& fit, const Parameters& p, const ParameterCovariance& c, bool fixed, double critical) {
   const double se_log_tau = std::sqrt(c[0][0]);
   const double tau = std::exp(p.log_tau);
   const double tau_low = std::exp(p.log_tau - critical * se_log_tau);
@@ -525,6 +525,7 @@ std::optional<Failure> set_uncertainties(NewtonFit& fit, Solution& solution, con
   summary.t_critical = summary.absolute_sigma ? normal_critical(options.confidence)
                                               : student_t_critical(summary.dof, options.confidence);
   set_estimates(fit, p, *covariance, fixed, summary.t_critical);
+  fit.covariance = *covariance;
   summary.record_time_constants = fit.duration_s / fit.tau_s.value;
   const double delta_se = std::sqrt((*covariance)[1][1]);
   if (std::abs(p.delta_c) < summary.t_critical * delta_se) return flat_record(p.delta_c, delta_se, "±");
@@ -605,6 +606,20 @@ double NewtonFit::temperature_at(double time_s) const {
   if (!ok()) return kNaN;
   const double delta = t0_c.value - ambient_c.value;
   return ambient_c.value + delta * std::exp(-k_per_s.value * (time_s - origin_s));
+}
+
+double NewtonFit::temperature_half_width_at(double time_s) const {
+  if (!ok() || !covariance) return kNaN;
+  const double t = time_s - origin_s;
+  const double decay = std::exp(-k_per_s.value * t);
+  const double delta = t0_c.value - ambient_c.value;
+  // ∂T/∂log τ = ΔT·e^(−kt)·kt, ∂T/∂ΔT = e^(−kt), ∂T/∂T_amb = 1.
+  const std::array<double, 3> g{delta * decay * k_per_s.value * t, decay, 1.0};
+  double variance = 0.0;
+  for (std::size_t i = 0; i < 3; ++i)
+    for (std::size_t j = 0; j < 3; ++j) variance += g[i] * (*covariance)[i][j] * g[j];
+  // Rounding can leave a tiny negative variance where the true one is 0.
+  return summary.t_critical * std::sqrt(std::max(0.0, variance));
 }
 
 std::string NewtonFitSummary::brief_report() const {

@@ -20,6 +20,7 @@
 // they are absolute and a reduced χ² tells whether σ was right.
 // See docs/FITTING.md.
 
+#include <array>
 #include <cstddef>
 #include <optional>
 #include <span>
@@ -120,6 +121,12 @@ struct NewtonFitSummary {
   std::string brief_report() const;
 };
 
+// Covariance of the solver's parameters in the order (log τ, ΔT = T0 − T_amb
+// in °C, T_amb in °C), in the convention of the fit's uncertainties (scaled by
+// s² unless summary.absolute_sigma). With a fixed ambient the T_amb row and
+// column are zero.
+using ParameterCovariance = std::array<std::array<double, 3>, 3>;
+
 struct NewtonFit {
   double origin_s = 0.0;  // absolute time of t = 0, in the caller's time base
   double duration_s = 0.0;
@@ -129,10 +136,22 @@ struct NewtonFit {
   Estimate ambient_c;
   NewtonFitSummary summary;
   std::vector<double> residuals_c;  // data − model, in time order of the cleaned series
+  // Kept so that a derived quantity (the curve at a time) gets its
+  // uncertainty with the parameters' correlations, which the four Estimates
+  // alone lose. nullopt for a failed fit and for a stored fit written before
+  // the covariance was.
+  std::optional<ParameterCovariance> covariance;
 
   bool ok() const { return summary.ok(); }
   // The fitted curve at an absolute time (same time base as the input).
   double temperature_at(double time_s) const;
+  // Half-width of the confidence interval (at summary.confidence) of the
+  // fitted curve at an absolute time, by the delta method: t_critical ·
+  // sqrt(g·C·gᵀ) with g the gradient of T(t) in the parameters. It is the
+  // band of the curve, not a prediction band for new samples (no noise
+  // term). ≥ 0 and finite for an ok fit within its record, 0 for a noiseless
+  // one; NaN when the fit is not ok or has no covariance.
+  double temperature_half_width_at(double time_s) const;
   // Parameters with intervals, then the summary.
   std::string brief_report() const;
 };
