@@ -1,9 +1,13 @@
 #include "fitting/fit_json.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
+
+#include "fitting/student_t.h"
 
 namespace bosfuse::fitting {
 namespace {
@@ -41,6 +45,48 @@ FitStatus status_from_json(const json& j) {
   return FitStatus::kNotConverged;
 }
 
+constexpr std::array<const char*, 3> kCovarianceParameters{"log_tau", "delta_c", "ambient_c"};
+
+bool all_finite(const ParameterCovariance& c) {
+  return std::all_of(c.begin(), c.end(), [](const auto& row) {
+    return std::all_of(row.begin(), row.end(), [](double v) { return std::isfinite(v); });
+  });
+}
+
+// Absent rather than null when there is none (a failed fit), so a reader
+// never meets a null where a number belongs.
+void write_covariance(const NewtonFit& fit, ordered_json& j) {
+  if (!fit.ok() || !fit.covariance || !all_finite(*fit.covariance)) return;
+  ordered_json matrix = ordered_json::array();
+  for (const auto& row : *fit.covariance) matrix.push_back(row);
+  j["covariance"] = {{"parameters", kCovarianceParameters}, {"matrix", std::move(matrix)}};
+}
+
+// nullopt when absent (a fit stored before the covariance was) or not a
+// 3 × 3 matrix of numbers in the written parameter order.
+std::optional<ParameterCovariance> covariance_from_json(const json& j) {
+  const auto it = j.find("covariance");
+  if (it == j.end() || !it->is_object()) return std::nullopt;
+  if (it->value("parameters", json()) != json(kCovarianceParameters)) return std::nullopt;
+  const json& m = it->value("matrix", json());
+  if (!m.is_array() || m.size() != 3) return std::nullopt;
+  ParameterCovariance c{};
+  for (std::size_t r = 0; r < 3; ++r) {
+    if (!m[r].is_array() || m[r].size() != 3) return std::nullopt;
+    for (std::size_t k = 0; k < 3; ++k) {
+      if (!m[r][k].is_number()) return std::nullopt;
+      c[r][k] = m[r][k].get<double>();
+    }
+  }
+  return c;
+}
+
+// A fit stored before t_critical was written: the same value from what was.
+double t_critical_from(const NewtonFitSummary& s) {
+  if (!s.ok() || !(s.dof > 0) || !(s.confidence > 0 && s.confidence < 1)) return 0.0;
+  return s.absolute_sigma ? normal_critical(s.confidence) : student_t_critical(s.dof, s.confidence);
+}
+
 void read_diagnostics(const json& d, NewtonFit& fit) {
   auto& s = fit.summary;
   s.points_used = d.value("points_used", std::size_t{0});
@@ -56,6 +102,7 @@ void read_diagnostics(const json& d, NewtonFit& fit) {
   s.lag1_autocorrelation = number_or_nan(d, "lag1_autocorrelation");
   s.record_time_constants = number_or_nan(d, "record_time_constants");
   s.outliers = d.value("outliers", std::size_t{0});
+  s.t_critical = number_or_nan(d, "t_critical");
 }
 
 }  // namespace
@@ -77,6 +124,8 @@ NewtonFit fit_from_json(const json& j) {
   }
   if (const auto d = j.find("diagnostics"); d != j.end() && d->is_object()) read_diagnostics(*d, fit);
   if (const auto w = j.find("warnings"); w != j.end() && w->is_array()) s.warnings = w->get<std::vector<std::string>>();
+  if (!std::isfinite(s.t_critical)) s.t_critical = t_critical_from(s);
+  fit.covariance = covariance_from_json(j);
   return fit;
 }
 
@@ -141,8 +190,10 @@ ordered_json to_json(const NewtonFit& fit) {
                       {"lag1_autocorrelation", number_or_null(ok ? s.lag1_autocorrelation : NAN)},
                       {"record_time_constants", number_or_null(ok ? s.record_time_constants : NAN)},
                       {"outliers", s.outliers}};
+  if (ok) j["diagnostics"]["t_critical"] = number_or_null(s.t_critical);
   // Only a fit with a known measurement σ has one; absent, not null, otherwise.
   if (s.reduced_chi_square) j["diagnostics"]["reduced_chi_square"] = number_or_null(*s.reduced_chi_square);
+  write_covariance(fit, j);
   j["warnings"] = s.warnings;
   return j;
 }

@@ -14,7 +14,9 @@
 namespace bosfuse::fitting {
 
 nlohmann::ordered_json to_json(const Estimate& estimate, double confidence);
-// model, origin_s, ok, status, error (when failed), parameters, uncertainty, diagnostics, warnings.
+// model, origin_s, ok, status, error (when failed), parameters, uncertainty,
+// diagnostics (with t_critical when ok), covariance (when ok: "parameters"
+// ["log_tau", "delta_c", "ambient_c"] and the 3 × 3 "matrix"), warnings.
 nlohmann::ordered_json to_json(const NewtonFit& fit);
 // verdict, k (difference, z, ...), series (RMS difference, Bland–Altman).
 nlohmann::ordered_json to_json(const Agreement& agreement);
@@ -22,7 +24,9 @@ nlohmann::ordered_json to_json(const Agreement& agreement);
 // The readers of these layouts, for what a run stored. They live here, next
 // to the writers, so a key cannot drift between the two: whatever to_json
 // writes comes back (tested); a null or missing number comes back NaN; the
-// residuals of a fit are not stored and stay empty. Throw
+// residuals of a fit are not stored and stay empty. A fit stored without a
+// covariance (written before it was) comes back with none, and without
+// t_critical gets it from its dof and confidence. Throw
 // nlohmann::json::exception on a document that is not of this layout.
 NewtonFit fit_from_json(const nlohmann::json& j);
 Agreement agreement_from_json(const nlohmann::json& j);

@@ -53,6 +53,50 @@ TEST(FitJson, AFitComesBackWithEveryNumber) {
   EXPECT_EQ(r.warnings, w.warnings);
 }
 
+TEST(FitJson, TheCovarianceAndTheCurvesBandComeBack) {
+  const NewtonFit written = a_fit(5, 40.0);
+  ASSERT_TRUE(written.ok() && written.covariance);
+  const auto j = to_json(written);
+  ASSERT_TRUE(j.contains("covariance"));
+  EXPECT_EQ(j["covariance"]["parameters"], nlohmann::json({"log_tau", "delta_c", "ambient_c"}));
+  const std::string text = j.dump();
+  EXPECT_EQ(text.find("null"), std::string::npos) << "an ok fit has a number wherever one belongs";
+  const NewtonFit read = fit_from_json(nlohmann::json::parse(text));
+  ASSERT_TRUE(read.covariance);
+  for (std::size_t r = 0; r < 3; ++r)
+    for (std::size_t c = 0; c < 3; ++c) EXPECT_DOUBLE_EQ((*read.covariance)[r][c], (*written.covariance)[r][c]);
+  EXPECT_DOUBLE_EQ(read.summary.t_critical, written.summary.t_critical);
+  for (double t_s : {40.0, 100.0, 339.0}) {
+    EXPECT_DOUBLE_EQ(read.temperature_half_width_at(t_s), written.temperature_half_width_at(t_s)) << t_s;
+  }
+}
+
+// Fits stored before the covariance and t_critical were written still read:
+// no band (no covariance), and t_critical from the dof and confidence.
+TEST(FitJson, AnOlderFitWithoutACovarianceStillReads) {
+  const NewtonFit written = a_fit(6);
+  auto j = nlohmann::json::parse(to_json(written).dump());
+  j.erase("covariance");
+  j["diagnostics"].erase("t_critical");
+  const NewtonFit read = fit_from_json(j);
+  EXPECT_TRUE(read.ok());
+  EXPECT_FALSE(read.covariance);
+  EXPECT_TRUE(std::isnan(read.temperature_half_width_at(10.0)));
+  EXPECT_NEAR(read.summary.t_critical, written.summary.t_critical, 1e-9);
+  EXPECT_DOUBLE_EQ(read.k_per_s.value, written.k_per_s.value);
+}
+
+TEST(FitJson, AFixedAmbientsCovarianceKeepsItsZeroRow) {
+  const auto r = testing::sample_cooling(testing::CoolingCurve{}, 300, 1.0, 0.05, 8, 0.0);
+  NewtonFitOptions options;
+  options.ambient = AmbientModel::fixed(22.0);
+  const NewtonFit read =
+      fit_from_json(nlohmann::json::parse(to_json(fit_newton(r.time_s, r.temperature_c, options)).dump()));
+  ASSERT_TRUE(read.covariance);
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ((*read.covariance)[2][i], 0.0);
+  EXPECT_GT(read.temperature_half_width_at(30.0), 0.0);
+}
+
 TEST(FitJson, ReducedChiSquareComesBackOnlyWhereItApplies) {
   const auto r = testing::sample_cooling(testing::CoolingCurve{}, 300, 1.0, 0.05, 4, 0.0);
   NewtonFitOptions known_sigma;
@@ -76,6 +120,8 @@ TEST(FitJson, AFailedFitComesBackFailedWithItsReason) {
   EXPECT_EQ(read.summary.status, written.summary.status);
   EXPECT_EQ(read.summary.message, written.summary.message);
   EXPECT_TRUE(std::isnan(read.k_per_s.value));
+  EXPECT_FALSE(to_json(written).contains("covariance")) << "absent, not null";
+  EXPECT_FALSE(read.covariance);
 }
 
 TEST(FitJson, AnAgreementComesBackWithItsLimitsAndOverlap) {
