@@ -14,6 +14,8 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "report/html.h"
+
 namespace bosfuse::report {
 namespace {
 
@@ -38,6 +40,9 @@ constexpr std::array<std::array<int, 3>, 15> kPalette{{{255, 255, 255},
                                                        {188, 189, 34},
                                                        {23, 190, 207}}};
 constexpr int kSeriesColours = static_cast<int>(kPalette.size()) - kFirstSeries;
+// A spare cmap0 slot after the palette, set to a translucent series colour to shade a band.
+constexpr int kBandFill = static_cast<int>(kPalette.size());
+constexpr double kBandAlpha = 0.22;
 constexpr std::size_t kMaxPlottedPoints = 4000;
 constexpr int kMaxDrawnCells = 250;  // per map side; finer grids are block-averaged for drawing  // per series; longer
                                      // records are decimated for drawing only
@@ -45,13 +50,15 @@ constexpr int kMaxDrawnCells = 250;  // per map side; finer grids are block-aver
 int series_colour(std::size_t i) { return kFirstSeries + static_cast<int>(i % kSeriesColours); }
 
 void load_palette() {
-  std::array<PLINT, kPalette.size()> r, g, b;
+  std::array<PLINT, kPalette.size() + 1> r{}, g{}, b{};
+  std::array<PLFLT, kPalette.size() + 1> alpha;
+  alpha.fill(1.0);
   for (std::size_t i = 0; i < kPalette.size(); ++i) {
     r[i] = kPalette[i][0];
     g[i] = kPalette[i][1];
     b[i] = kPalette[i][2];
   }
-  plscmap0(r.data(), g.data(), b.data(), static_cast<PLINT>(kPalette.size()));
+  plscmap0a(r.data(), g.data(), b.data(), alpha.data(), static_cast<PLINT>(r.size()));
   // cmap1 for maps: dark blue → blue → cyan → yellow → red → dark red (jet-like, as in the paper's figures).
   const std::array<PLFLT, 6> pos{0.0, 0.15, 0.4, 0.6, 0.85, 1.0};
   const std::array<PLFLT, 6> red{0.0, 0.0, 0.0, 1.0, 1.0, 0.5};
@@ -155,21 +162,94 @@ std::vector<std::size_t> plotted_indices(std::size_t n) {
 
 bool fitted(const CurveSeries& s) { return s.fit && s.fit->ok(); }
 
-// The fitted curve on [t_low, t_high].
-void fit_curve(const fitting::NewtonFit& fit, double t_low, double t_high, std::vector<PLFLT>& t,
-               std::vector<PLFLT>& temp) {
+// The fitted curve on [t_low, t_high] with its confidence band; no band
+// when the fit has no covariance (one stored before it was kept).
+struct FittedCurve {
+  std::vector<PLFLT> t, temp, low, high;
+  bool has_band() const { return !low.empty(); }
+};
+
+FittedCurve fitted_curve(const fitting::NewtonFit& fit, double t_low, double t_high) {
   constexpr int kPoints = 400;
-  t.resize(kPoints);
-  temp.resize(kPoints);
+  FittedCurve c;
+  bool band = true;
   for (int i = 0; i < kPoints; ++i) {
-    t[i] = t_low + (t_high - t_low) * i / (kPoints - 1);
-    temp[i] = fit.temperature_at(t[i]);
+    const double t = t_low + (t_high - t_low) * i / (kPoints - 1);
+    const double half_width = fit.temperature_half_width_at(t);
+    band = band && std::isfinite(half_width);
+    c.t.push_back(t);
+    c.temp.push_back(fit.temperature_at(t));
+    c.low.push_back(c.temp.back() - half_width);
+    c.high.push_back(c.temp.back() + half_width);
   }
+  if (!band) {
+    c.low.clear();
+    c.high.clear();
+  }
+  return c;
+}
+
+void add_curve(Range& range, const FittedCurve& c) {
+  for (const auto* values : {&c.temp, &c.low, &c.high})
+    for (double v : *values) range.add(v);
+}
+
+// Shaded in a translucent `colour`, under the points and the line.
+void draw_band(const FittedCurve& c, int colour) {
+  if (!c.has_band()) return;
+  std::vector<PLFLT> x = c.t, y = c.high;
+  x.insert(x.end(), c.t.rbegin(), c.t.rend());
+  y.insert(y.end(), c.low.rbegin(), c.low.rend());
+  const auto& rgb = kPalette[colour];
+  plscol0a(kBandFill, rgb[0], rgb[1], rgb[2], kBandAlpha);
+  plcol0(kBandFill);
+  plfill(static_cast<PLINT>(x.size()), x.data(), y.data());
+}
+
+void draw_line(const FittedCurve& c, int colour) {
+  plcol0(colour);
+  plwidth(2);
+  plline(static_cast<PLINT>(c.t.size()), c.t.data(), c.temp.data());
+  plwidth(1);
 }
 
 std::string format_estimate(const fitting::Estimate& e, const char* unit) {
-  if (e.fixed) return fmt::format("{:.4g} {} (fixed)", e.value, unit);
-  return fmt::format("{:.4g} {} [{:.4g}, {:.4g}]", e.value, unit, e.low, e.high);
+  if (e.fixed) return fmt::format("{} {} (fixed)", display_number(e.value, "{:.4g}"), unit);
+  return fmt::format("{} {} [{}, {}]", display_number(e.value, "{:.4g}"), unit, display_number(e.low, "{:.4g}"),
+                     display_number(e.high, "{:.4g}"));
+}
+
+std::string time_label(const std::string& time_basis) { return pl_text("time (" + time_basis + ")"); }
+
+std::size_t codepoints(const std::string& utf8) {
+  return static_cast<std::size_t>(
+      std::count_if(utf8.begin(), utf8.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+}
+
+// A label under the plot that is longer than the figure (a long time basis)
+// is written smaller rather than cut off. PLplot has no public text-width
+// query; 0.7 character heights per character is a little above DejaVu
+// Sans's average, so the estimate errs towards fitting.
+void bottom_label(const std::string& text, double disp) {
+  PLFLT default_mm = 0, height_mm = 0, x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  plgchr(&default_mm, &height_mm);
+  plgspa(&x0, &x1, &y0, &y1);
+  const double width_mm = 0.7 * height_mm * static_cast<double>(codepoints(text));
+  const double scale = width_mm > 0 ? std::min(1.0, 0.92 * (x1 - x0) / width_mm) : 1.0;
+  plschr(0, scale);
+  plmtex("b", disp / scale, 0.5, 0.5, text.c_str());
+  plschr(0, 1);
+}
+
+std::string value_label(const CurveSeries& s) {
+  return pl_text(s.unit == "°C" ? std::string("temperature (°C)") : "value (" + s.unit + ")");
+}
+
+std::string band_caption(const CurveSeries& s) {
+  if (s.fit->covariance) {
+    return fmt::format(", shaded with its {:.0f}% confidence band", 100 * s.fit->summary.confidence);
+  }
+  return " (no confidence band: the stored fit has no covariance)";
 }
 
 void draw_points(const std::vector<PLFLT>& x, const std::vector<PLFLT>& y, int colour) {
@@ -201,7 +281,8 @@ bool cairo_devices_available() {
   return available;
 }
 
-FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size, const fs::path& base) {
+FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size, const fs::path& base,
+                               const std::string& time_basis) {
   if (series.time_s.size() != series.temperature_c.size()) {
     throw std::invalid_argument("series '" + series.name + "': times and temperatures differ in length");
   }
@@ -209,14 +290,14 @@ FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size
   FigureFiles files = files_for(base);
   const bool has_fit = fitted(series);
   files.title = fmt::format("{} {}", to_string(series.kind), series.name);
-  files.caption = has_fit
-                      ? fmt::format(
-                            "Samples of {} ({} points) with the fitted Newton curve (red); below, the residuals "
-                            "(data − fit). k = {}, τ = {}.",
-                            series.name, series.time_s.size(), format_estimate(series.fit->k_per_s, "1/s"),
-                            format_estimate(series.fit->tau_s, "s"))
-                      : fmt::format("Samples of {} ({} points). No Newton fit: {}.", series.name, series.time_s.size(),
-                                    series.fit ? series.fit->summary.message : std::string("not fitted"));
+  files.caption =
+      has_fit ? fmt::format(
+                    "Samples of {} ({} points) with the fitted Newton curve (red){}; below, the residuals "
+                    "(data − fit). k = {}, τ = {}. t in {}.",
+                    series.name, series.time_s.size(), band_caption(series),
+                    format_estimate(series.fit->k_per_s, "1/s"), format_estimate(series.fit->tau_s, "s"), time_basis)
+              : fmt::format("Samples of {} ({} points). No Newton fit: {}. t in {}.", series.name, series.time_s.size(),
+                            series.fit ? series.fit->summary.message : std::string("not fitted"), time_basis);
 
   std::vector<PLFLT> t, temp, residual;
   Range t_range, temp_range, residual_range;
@@ -232,10 +313,10 @@ FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size
     }
   }
   if (t.empty()) throw std::invalid_argument("series '" + series.name + "' has no finite samples to draw");
-  std::vector<PLFLT> fit_t, fit_temp;
+  FittedCurve curve;
   if (has_fit) {
-    fit_curve(*series.fit, t_range.low, t_range.high, fit_t, fit_temp);
-    for (double v : fit_temp) temp_range.add(v);
+    curve = fitted_curve(*series.fit, t_range.low, t_range.high);
+    add_curve(temp_range, curve);
   }
   const Range tr = t_range.padded(0.02), yr = temp_range.padded(0.05);
   // Residual axis symmetric about zero.
@@ -251,18 +332,16 @@ FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size
     plbox("g", 0, 0, "g", 0, 0);
     plcol0(kInk);
     plbox(has_fit ? "bcst" : "bcnst", 0, 0, "bcnstv", 0, 0);
-    plmtex("l", 4.5, 0.5, 0.5, "temperature (°C)");
+    plmtex("l", 4.5, 0.5, 0.5, value_label(series).c_str());
     plmtex("t", 1.5, 0.5, 0.5, title.c_str());
+    draw_band(curve, kFirstSeries + 1);
     draw_points(t, temp, kFirstSeries);
     if (has_fit) {
-      plcol0(kFirstSeries + 1);
-      plwidth(2);
-      plline(static_cast<PLINT>(fit_t.size()), fit_t.data(), fit_temp.data());
-      plwidth(1);
+      draw_line(curve, kFirstSeries + 1);
       const auto& f = *series.fit;
-      const std::string fit_text =
-          pl_text(fmt::format("k = {:.4g} 1/s [{:.4g}, {:.4g}]   T0 = {:.2f} °C   T_amb = {:.2f} °C", f.k_per_s.value,
-                              f.k_per_s.low, f.k_per_s.high, f.t0_c.value, f.ambient_c.value));
+      const std::string fit_text = pl_text(
+          fmt::format("k = {:.4g} 1/s [{:.4g}, {:.4g}]   T0 = {:.2f} {}   T_amb = {:.2f} {}", f.k_per_s.value,
+                      f.k_per_s.low, f.k_per_s.high, f.t0_c.value, series.unit, f.ambient_c.value, series.unit));
       plcol0(kInk);
       plschr(0, 0.8);
       plmtex("t", -1.5, 0.97, 1.0, fit_text.c_str());
@@ -291,21 +370,23 @@ FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size
       plschr(0, 1);
     }
     plcol0(kInk);
-    plmtex("b", 3.0, 0.5, 0.5, "time since the run's first sample (s)");
+    bottom_label(time_label(time_basis), 3.0);
   });
   return files;
 }
 
-FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const FigureSize& size,
-                                  const fs::path& base) {
+FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const FigureSize& size, const fs::path& base,
+                                  const std::string& time_basis) {
   if (series.empty()) throw std::invalid_argument("no series to draw");
   FigureFiles files = files_for(base);
   files.title = "All cooling curves";
   files.caption =
-      "Every series (points) with its fitted Newton curve (line of the same colour); thermocouples as dots, BOS "
-      "probes as crosses.";
+      "Every series (points) with its fitted Newton curve (line of the same colour) and the curve's confidence band "
+      "(shaded); thermocouples as dots, BOS probes as crosses. t in " +
+      time_basis + ".";
   Range tr, yr;
-  std::vector<std::vector<PLFLT>> ts(series.size()), ys(series.size()), fts(series.size()), fys(series.size());
+  std::vector<std::vector<PLFLT>> ts(series.size()), ys(series.size());
+  std::vector<FittedCurve> curves(series.size());
   for (std::size_t s = 0; s < series.size(); ++s) {
     const auto& cs = series[s];
     if (cs.time_s.size() != cs.temperature_c.size()) {
@@ -321,8 +402,8 @@ FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const 
       yr.add(cs.temperature_c[i]);
     }
     if (fitted(cs) && !own.empty()) {
-      fit_curve(*cs.fit, own.low, own.high, fts[s], fys[s]);
-      for (double v : fys[s]) yr.add(v);
+      curves[s] = fitted_curve(*cs.fit, own.low, own.high);
+      add_curve(yr, curves[s]);
     }
   }
   if (tr.empty()) throw std::invalid_argument("no finite samples to draw");
@@ -335,7 +416,9 @@ FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const 
     plbox("g", 0, 0, "g", 0, 0);
     plcol0(kInk);
     plbox("bcnst", 0, 0, "bcnstv", 0, 0);
-    pllab("time since the run's first sample (s)", "temperature (°C)", "All cooling curves");
+    pllab("", "temperature (°C)", "All cooling curves");
+    bottom_label(time_label(time_basis), 3.2);
+    for (std::size_t s = 0; s < series.size(); ++s) draw_band(curves[s], series_colour(s));
     for (std::size_t s = 0; s < series.size(); ++s) {
       const int colour = series_colour(s);
       if (series[s].kind == SeriesKind::kBosProbe) {
@@ -346,12 +429,7 @@ FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const 
       } else {
         draw_points(ts[s], ys[s], colour);
       }
-      if (!fts[s].empty()) {
-        plcol0(colour);
-        plwidth(2);
-        plline(static_cast<PLINT>(fts[s].size()), fts[s].data(), fys[s].data());
-        plwidth(1);
-      }
+      if (!curves[s].t.empty()) draw_line(curves[s], colour);
     }
     // Legend to the right of the plot.
     const auto n = static_cast<PLINT>(series.size());
@@ -362,7 +440,7 @@ FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const 
     std::vector<const char*> text_ptrs(n), symbol_ptrs(n);
     for (PLINT s = 0; s < n; ++s) {
       colours[s] = series_colour(s);
-      if (fts[s].empty()) opts[s] = PL_LEGEND_SYMBOL;  // no fitted curve to show
+      if (curves[s].t.empty()) opts[s] = PL_LEGEND_SYMBOL;  // no fitted curve to show
       texts[s] = pl_text(series[s].name);
       symbols[s] = series[s].kind == SeriesKind::kBosProbe ? "×" : "•";
       text_ptrs[s] = texts[s].c_str();
@@ -409,8 +487,10 @@ FigureFiles write_agreement_figure(const CurveSeries& a, const CurveSeries& b, c
   files.caption = fmt::format("Bland–Altman plot: {} − {} against their mean at {} common times ({} interpolated)",
                               a.name, b.name, mean.size(), b.name);
   if (stats) {
-    files.caption += fmt::format("; red: bias {:.3g} °C, dashed: limits of agreement [{:.3g}, {:.3g}] °C",
-                                 stats->bias_c, stats->limits_of_agreement_low_c, stats->limits_of_agreement_high_c);
+    files.caption +=
+        fmt::format("; red: bias {} °C, dashed: limits of agreement [{}, {}] °C",
+                    display_number(stats->bias_c, "{:.3g}"), display_number(stats->limits_of_agreement_low_c, "{:.3g}"),
+                    display_number(stats->limits_of_agreement_high_c, "{:.3g}"));
   }
   files.caption += ". " + agreement.verdict;
   const Range x = mr.padded(0.03), y = dr.padded(0.1);
@@ -428,6 +508,7 @@ FigureFiles write_agreement_figure(const CurveSeries& a, const CurveSeries& b, c
     draw_points(mean, difference, kFirstSeries);
     const std::array<PLFLT, 2> lx{x.low, x.high};
     auto hline = [&](double value, int colour, int style) {
+      if (!std::isfinite(value)) return;  // a line where there is no number would be a lie
       const std::array<PLFLT, 2> ly{value, value};
       plcol0(colour);
       pllsty(style);

@@ -35,13 +35,16 @@ struct FigureFiles {
 // True when PLplot has both the pngcairo and the svgcairo device.
 bool cairo_devices_available();
 
-// One series: its samples, the fitted Newton curve (when fitted) and, below,
-// the residuals (data − fit).
-FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size, const std::filesystem::path& base);
+// One series: its samples, the fitted Newton curve (when fitted) shaded with
+// its confidence band (NewtonFit::temperature_half_width_at, at the fit's
+// confidence) and, below, the residuals (data − fit). The time axis is
+// labelled with `time_basis` (ReportInput::time_basis).
+FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size, const std::filesystem::path& base,
+                               const std::string& time_basis = kDefaultTimeBasis);
 
-// Every series on one plot with its fitted curve, for comparison.
+// Every series on one plot with its fitted curve and band, for comparison.
 FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const FigureSize& size,
-                                  const std::filesystem::path& base);
+                                  const std::filesystem::path& base, const std::string& time_basis = kDefaultTimeBasis);
 
 // Bland–Altman plot of a thermocouple (a) against its BOS probe (b): the
 // difference a − b against the mean of the two, on a's times where both

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -174,6 +175,44 @@ TEST(Figures, UnfittedSeriesIsDrawnWithoutAFitAndSaysWhy) {
   EXPECT_NE(files.caption.find("No Newton fit"), std::string::npos) << files.caption;
 }
 
+// The band is where the true curve may lie: light red around the red fitted
+// line, wide enough to see on a short, noisy record. A fit without its
+// covariance (stored before it was kept) has none, and the caption says so.
+TEST(Figures, TheFittedCurveIsShadedWithItsConfidenceBand) {
+  testing::TempDir dir;
+  CurveSeries noisy = testdata::cooling_series("noisy", 0.02, 80, 22, 25, 4.0, 3.0, 6);
+  noisy.fit = fitting::fit_newton(noisy.time_s, noisy.temperature_c);
+  ASSERT_TRUE(noisy.fit->ok()) << noisy.fit->brief_report();
+  ASSERT_GT(noisy.fit->temperature_half_width_at(50.0), 0.5);
+  const auto band_pixels = [](const std::filesystem::path& png_file) {
+    const cv::Mat png = cv::imread(png_file.string(), cv::IMREAD_COLOR);
+    int count = 0;
+    for (int r = 0; r < png.rows; ++r) {
+      for (int c = 0; c < png.cols; ++c) {
+        const auto p = png.at<cv::Vec3b>(r, c);  // BGR; (214, 39, 40) at 22% over white is about (246, 207, 207)
+        count += std::abs(p[2] - 246) < 8 && std::abs(p[1] - 207) < 10 && std::abs(p[0] - 207) < 10;
+      }
+    }
+    return count;
+  };
+  const auto files = write_curve_figure(noisy, {}, dir / "band", "experiment seconds since heater off");
+  expect_png(files.png, {});
+  expect_svg(files.svg, {});
+  EXPECT_NE(files.caption.find("95% confidence band"), std::string::npos) << files.caption;
+  EXPECT_NE(files.caption.find("t in experiment seconds since heater off"), std::string::npos) << files.caption;
+  const int with_band = band_pixels(files.png);
+  std::printf("band-coloured pixels: %d with the band\n", with_band);
+  EXPECT_GT(with_band, 1000);
+
+  CurveSeries stored = noisy;
+  stored.fit->covariance.reset();
+  const auto without = write_curve_figure(stored, {}, dir / "no_band");
+  EXPECT_NE(without.caption.find("no confidence band"), std::string::npos) << without.caption;
+  const int without_band = band_pixels(without.png);  // anti-aliased edges of the red line and points
+  std::printf("band-coloured pixels: %d without\n", without_band);
+  EXPECT_LT(without_band, with_band / 10);
+}
+
 TEST(Figures, OverviewFigureHoldsEverySeries) {
   testing::TempDir dir;
   ReportInput input = testdata::sample_input(false);
@@ -181,9 +220,11 @@ TEST(Figures, OverviewFigureHoldsEverySeries) {
   input.series.back().kind = SeriesKind::kBosProbe;
   fit_missing(input);
   const FigureSize size{800, 500};
-  const auto files = write_overview_figure(input.series, size, dir / "all");
+  const auto files = write_overview_figure(input.series, size, dir / "all", "s since heater off");
   expect_png(files.png, size);
   expect_svg(files.svg, size);
+  EXPECT_NE(files.caption.find("confidence band"), std::string::npos) << files.caption;
+  EXPECT_NE(files.caption.find("t in s since heater off"), std::string::npos) << files.caption;
 }
 
 TEST(Figures, MapFigureHasColourMaskContoursAndMarkers) {

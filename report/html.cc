@@ -1,12 +1,19 @@
 #include "report/html.h"
 
+#include <fmt/format.h>
+
 #include <cctype>
+#include <cmath>
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
 #include <vector>
 
 namespace bosfuse::report {
+
+std::string display_number(double value, std::string_view format) {
+  return std::isfinite(value) ? fmt::format(fmt::runtime(format), value) : "—";
+}
 
 std::string html_escape(std::string_view text) {
   std::string out;

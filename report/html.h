@@ -1,5 +1,6 @@
 #pragma once
-// Small pieces of the self-contained HTML page: escaping and base64 data URIs.
+// Small pieces of the self-contained HTML page: numbers as a reader sees
+// them, escaping and base64 data URIs.
 
 #include <cstdint>
 #include <filesystem>
@@ -8,6 +9,10 @@
 #include <string_view>
 
 namespace bosfuse::report {
+
+// A number for a reader, formatted with `format` (fmt syntax, e.g. "{:.3g}"),
+// or "—" when it does not exist (NaN, ±inf): a page never shows "nan".
+std::string display_number(double value, std::string_view format);
 
 // &, <, >, " and ' as entities, so any run or channel name is safe in text and attributes.
 std::string html_escape(std::string_view text);

@@ -4,12 +4,14 @@
 
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 
 #include "report/export.h"
 #include "report/html.h"
+#include "report/summary.h"
 
 namespace bosfuse::report {
 namespace {
@@ -42,18 +44,6 @@ ul.files { columns: 2; font-family: monospace; }
 
 std::string esc(const std::string& text) { return html_escape(text); }
 
-// A number, or "—" where it could not be computed: never "nan" in a table.
-std::string num(double value, const char* format) {
-  return std::isfinite(value) ? fmt::format(fmt::runtime(format), value) : "—";
-}
-
-std::string fmt_estimate(const fitting::Estimate& e, const char* format) {
-  if (!std::isfinite(e.value)) return "—";
-  const std::string value = fmt::format(fmt::runtime(format), e.value);
-  if (e.fixed) return value + " (fixed)";
-  return fmt::format("{}<br><small>[{}, {}]</small>", value, num(e.low, format), num(e.high, format));
-}
-
 std::string figure_html(const FigureFiles& f, const FigureSize& size) {
   return fmt::format(
       "<figure><img class=\"figure\" src=\"{}\" width=\"{}\" height=\"{}\" alt=\"{}\">"
@@ -62,72 +52,7 @@ std::string figure_html(const FigureFiles& f, const FigureSize& size) {
       esc(f.png.filename().string()), esc(f.svg.filename().string()));
 }
 
-std::string fits_table(const ReportInput& input) {
-  double confidence = 0.95;  // the fits' own, as they were made
-  for (const auto& s : input.series) {
-    if (s.fit) confidence = s.fit->summary.confidence;
-  }
-  std::ostringstream h;
-  h << "<table class=\"fits\"><tr><th class=\"text\">series</th><th class=\"text\">kind</th><th>points</th>"
-    << fmt::format("<th>k (1/s)<br><small>{:.0f}% interval</small></th>", confidence * 100)
-    << "<th>τ (s)</th><th>T0 (°C)</th><th>T_amb (°C)</th><th>residual RMS (°C)</th>"
-       "<th class=\"text\">status</th></tr>\n";
-  for (const auto& s : input.series) {
-    h << "<tr><td class=\"text\">" << esc(s.name) << "</td><td class=\"text\">" << to_string(s.kind) << "</td>";
-    if (!s.fit) {
-      h << "<td>" << s.time_s.size() << "</td><td colspan=\"5\"></td><td class=\"text\">not fitted</td></tr>\n";
-      continue;
-    }
-    const auto& f = *s.fit;
-    h << "<td>" << f.summary.points_used << "</td>";
-    if (!f.ok()) {
-      h << "<td colspan=\"5\">—</td><td class=\"text error\">" << esc(fitting::to_string(f.summary.status)) << ": "
-        << esc(f.summary.message) << "</td></tr>\n";
-      continue;
-    }
-    h << "<td>" << fmt_estimate(f.k_per_s, "{:.4g}") << "</td><td>" << fmt_estimate(f.tau_s, "{:.4g}") << "</td><td>"
-      << fmt_estimate(f.t0_c, "{:.2f}") << "</td><td>" << fmt_estimate(f.ambient_c, "{:.2f}") << "</td><td>"
-      << num(f.summary.residual_rms_c, "{:.3g}") << "</td><td class=\"text\">ok";
-    for (const auto& w : f.summary.warnings) h << "<br><span class=\"warning\">" << esc(w) << "</span>";
-    if (s.excluded_samples > 0) {
-      h << "<br>" << s.excluded_samples << " samples without a temperature (non-ok status) left out";
-    }
-    h << "</td></tr>\n";
-  }
-  h << "</table>\n";
-  h << "<p><small>Model T(t) = T_amb + (T0 − T_amb)·exp(−k·t), t in s since the run's first sample (so T0 is the "
-       "fitted temperature then). Intervals from the fit's covariance, scaled by the residual variance unless the "
-       "measurement σ was given (docs/FITTING.md).</small></p>\n";
-  return h.str();
-}
-
-std::string agreement_table(const ReportInput& input) {
-  std::ostringstream h;
-  h << "<table class=\"agreement\"><tr><th class=\"text\">thermocouple</th><th class=\"text\">BOS probe</th>"
-       "<th>Δk (1/s)</th><th>z</th><th>RMS difference (°C)</th><th>bias (°C)</th><th>95% limits of agreement "
-       "(°C)</th><th class=\"text\">verdict</th></tr>\n";
-  for (const auto& e : input.agreements) {
-    const auto& a = e.agreement;
-    h << "<tr><td class=\"text\">" << esc(e.thermocouple) << "</td><td class=\"text\">" << esc(e.probe) << "</td>";
-    if (a.k) {
-      h << "<td>" << num(a.k->difference_per_s, "{:.3g}") << " ± " << num(a.k->std_error_per_s, "{:.2g}") << "</td><td>"
-        << num(a.k->z, "{:.2f}") << "</td>";
-    } else {
-      h << "<td>—</td><td>—</td>";
-    }
-    if (a.series) {
-      const auto& d = *a.series;
-      h << "<td>" << num(d.rms_difference_c, "{:.3g}") << "</td><td>" << num(d.bias_c, "{:.3g}") << "</td><td>["
-        << num(d.limits_of_agreement_low_c, "{:.3g}") << ", " << num(d.limits_of_agreement_high_c, "{:.3g}")
-        << "]</td>";
-    } else {
-      h << "<td colspan=\"3\">too few common times</td>";
-    }
-    h << "<td class=\"text\">" << esc(a.verdict) << "</td></tr>\n";
-  }
-  h << "</table>\n";
-  return h.str();
-}
+std::string n3(double v) { return display_number(v, "{:.3f}"); }
 
 std::string quality_html(const ReportInput& input) {
   if (!input.quality) {
@@ -137,10 +62,9 @@ std::string quality_html(const ReportInput& input) {
   std::ostringstream h;
   h << "<table class=\"quality\"><tr><th>Q_L (luminance)</th><th>Q_C (contrast)</th><th>Q_mod</th>"
        "<th>mean image / reference</th><th>σ image / reference</th></tr>\n"
-    << fmt::format(
-           "<tr><td>{:.3f}</td><td>{:.3f}</td><td><b>{:.3f}</b></td><td>{:.3f} / {:.3f}</td>"
-           "<td>{:.3f} / {:.3f}</td></tr></table>\n",
-           q.q_l, q.q_c, q.q_mod, q.mean_image, q.mean_reference, q.std_image, q.std_reference)
+    << fmt::format("<tr><td>{}</td><td>{}</td><td><b>{}</b></td><td>{} / {}</td><td>{} / {}</td></tr></table>\n",
+                   n3(q.q_l), n3(q.q_c), n3(q.q_mod), n3(q.mean_image), n3(q.mean_reference), n3(q.std_image),
+                   n3(q.std_reference))
     << "<p>" << esc(input.quality->compared)
     << ". Q_mod = Q_L·Q_C (Gojani &amp; Obayashi 2012): cross-correlation failed on images with Q_mod ≈ 0.01 and "
        "worked on Q_mod ≈ 0.7; values near 1 mean the two images have the same brightness and contrast.</p>\n";
@@ -168,6 +92,186 @@ std::string time_tag(double t_s) {
   return rounded < 0 ? fmt::format("m{}s", -rounded) : fmt::format("{}s", rounded);
 }
 
+const CurveSeries* find_series(const ReportInput& input, const std::string& name) {
+  for (const auto& s : input.series) {
+    if (s.name == name) return &s;
+  }
+  return nullptr;
+}
+
+// Where the report's files go, each with a unique name.
+struct Output {
+  fs::path dir;
+  ReportOptions options;
+  std::set<std::string> used{"report", "series", "fits", "summary"};
+  fs::path base(const std::string& stem) { return unique_base(dir, stem, used); }
+};
+
+// The figures in the order the page shows them; `all` also lists them for the files section.
+struct Figures {
+  std::optional<FigureFiles> overview;
+  std::vector<FigureFiles> curves;
+  std::vector<FigureFiles> agreements;
+  std::vector<std::string> agreement_notes;  // pairs that could not be drawn, and why
+  std::vector<FigureFiles> displacement_maps;
+  std::vector<FigureFiles> temperature_maps;
+  std::vector<fs::path> map_csv;
+  std::vector<FigureFiles> all;
+};
+
+void draw_curves(const ReportInput& input, Output& out, Figures& f) {
+  std::vector<const CurveSeries*> drawable;
+  for (const auto& s : input.series) {
+    if (!s.time_s.empty()) drawable.push_back(&s);
+  }
+  if (drawable.size() > 1) {
+    std::vector<CurveSeries> copies;
+    for (const auto* s : drawable) copies.push_back(*s);
+    f.overview = write_overview_figure(copies, out.options.curve_size, out.base("curves_all"), input.time_basis);
+    f.all.push_back(*f.overview);
+  }
+  for (const auto* s : drawable) {
+    const std::string prefix = s->kind == SeriesKind::kBosProbe ? "curve_probe_" : "curve_";
+    f.curves.push_back(
+        write_curve_figure(*s, out.options.curve_size, out.base(prefix + slug(s->name)), input.time_basis));
+    f.all.push_back(f.curves.back());
+  }
+}
+
+void draw_agreements(const ReportInput& input, Output& out, Figures& f) {
+  for (const auto& e : input.agreements) {
+    const auto* a = find_series(input, e.thermocouple);
+    const auto* b = find_series(input, e.probe);
+    if (!a || !b) {
+      f.agreement_notes.push_back(
+          fmt::format("No plot of {} against {}: the report holds no series named so.", e.thermocouple, e.probe));
+      continue;
+    }
+    if (const auto* other = a->unit != "°C" ? a : (b->unit != "°C" ? b : nullptr)) {
+      f.agreement_notes.push_back(fmt::format("No Bland–Altman plot of {} against {}: {} is in {}, not °C.",
+                                              e.thermocouple, e.probe, other->name, other->unit));
+      continue;
+    }
+    try {
+      f.agreements.push_back(
+          write_agreement_figure(*a, *b, e.agreement, out.options.curve_size,
+                                 out.base("agreement_" + slug(e.thermocouple) + "_" + slug(e.probe))));
+      f.all.push_back(f.agreements.back());
+    } catch (const std::invalid_argument& error) {
+      f.agreement_notes.push_back(error.what());
+    }
+  }
+}
+
+std::vector<FigureFiles> draw_maps(const std::vector<MapField>& maps, const std::string& kind, double default_spacing,
+                                   const ReportInput& input, Output& out, Figures& f) {
+  const auto markers = thermocouple_markers(input);
+  std::vector<FigureFiles> drawn;
+  for (const auto& m : maps) {
+    const double spacing = m.contour_spacing > 0 ? m.contour_spacing : default_spacing;
+    const fs::path base = out.base(fmt::format("map_{}_t{}", kind, time_tag(m.time_s)));
+    drawn.push_back(write_map_figure(m, spacing, markers, input.px_per_mm, out.options.map_size, base));
+    f.all.push_back(drawn.back());
+    fs::path csv = drawn.back().png;
+    csv.replace_extension(".csv");
+    write_map_csv(m, input.px_per_mm, csv);
+    f.map_csv.push_back(csv);
+  }
+  return drawn;
+}
+
+Figures draw_figures(const ReportInput& input, Output& out) {
+  Figures f;
+  draw_curves(input, out, f);
+  draw_agreements(input, out, f);
+  f.displacement_maps =
+      draw_maps(input.displacement_maps, "displacement", out.options.displacement_contour_px, input, out, f);
+  f.temperature_maps =
+      draw_maps(input.temperature_maps, "temperature", out.options.temperature_contour_c, input, out, f);
+  return f;
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write '" + path.string() + "'");
+  out << text;
+  out.flush();
+  if (!out) throw std::runtime_error("writing '" + path.string() + "' failed");
+}
+
+void write_data(const ReportInput& input, const ReportSummary& summary, const Figures& f, const fs::path& dir,
+                ReportFiles& files) {
+  files.csv = {dir / "summary.csv", dir / "series.csv", dir / "fits.csv"};
+  files.csv.insert(files.csv.end(), f.map_csv.begin(), f.map_csv.end());
+  write_summary_csv(summary, dir / "summary.csv");
+  write_series_csv(input, dir / "series.csv");
+  write_fits_csv(input, dir / "fits.csv");
+  files.json = dir / "report.json";
+  std::vector<fs::path> data = files.csv;
+  data.push_back(files.json);
+  write_text(files.json, report_json(input, summary, f.all, data).dump(2) + "\n");
+}
+
+std::string page_head(const std::string& title, const ReportInput& input) {
+  std::ostringstream h;
+  h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" << esc(title)
+    << "</title>\n<style>" << kStyle << "</style>\n</head>\n<body>\n";
+  h << "<h1>" << esc(title) << "</h1>\n<dl class=\"run\">"
+    << "<dt>run</dt><dd>" << esc(input.run_name) << "</dd><dt>folder</dt><dd><code>" << esc(input.run_dir)
+    << "</code></dd><dt>started (UTC)</dt><dd>" << esc(input.started_utc) << "</dd><dt>status</dt><dd>"
+    << esc(input.status) << "</dd><dt>time</dt><dd>" << esc(input.time_basis) << "</dd></dl>\n";
+  for (const auto& note : input.notes) h << "<p class=\"note\">" << esc(note) << "</p>\n";
+  return h.str();
+}
+
+std::string summary_section(const ReportInput& input, const ReportSummary& summary) {
+  std::string h = "<h2 id=\"summary\">Summary</h2>\n" + summary_html(summary);
+  if (!input.agreements.empty()) return h;
+  if (!input.has_probes()) return h + "<p class=\"note\">Thermocouples against BOS probes: " + kNotProcessed + "</p>\n";
+  return h + "<p class=\"note\">No thermocouple has a BOS probe at its position to compare with.</p>\n";
+}
+
+std::string curves_section(const ReportInput& input, const Figures& f, const ReportOptions& options) {
+  std::string h = "<h2 id=\"curves\">Cooling curves</h2>\n";
+  if (f.curves.empty()) h += "<p class=\"note\">The run has no temperature samples.</p>\n";
+  if (!input.has_probes()) h += std::string("<p class=\"note\">BOS probe curves: ") + kNotProcessed + "</p>\n";
+  if (f.overview) h += figure_html(*f.overview, options.curve_size);
+  for (const auto& figure : f.curves) h += figure_html(figure, options.curve_size);
+  return h;
+}
+
+std::string agreement_section(const ReportInput& input, const Figures& f, const ReportOptions& options) {
+  std::string h = "<h2 id=\"agreement\">Agreement of thermocouples and BOS probes</h2>\n";
+  if (input.agreements.empty()) return h + "<p class=\"note\">No pairs to compare (see the summary).</p>\n";
+  h += "<p>Δk, z, the RMS difference, the bias and the limits of agreement of each pair are in the summary at the "
+       "top. Below, the Bland–Altman plots.</p>\n";
+  for (const auto& note : f.agreement_notes) h += "<p class=\"note\">" + esc(note) + "</p>\n";
+  for (const auto& figure : f.agreements) h += figure_html(figure, options.curve_size);
+  return h;
+}
+
+std::string maps_sections(const ReportInput& input, const Figures& f, const ReportOptions& options) {
+  std::string h = "<h2 id=\"displacement\">Displacement maps</h2>\n";
+  if (f.displacement_maps.empty()) {
+    h += "<p class=\"note\">No displacement maps" +
+         (input.displacement_maps_note.empty() ? "." : ": " + esc(input.displacement_maps_note) + ".") + "</p>\n";
+  }
+  for (const auto& figure : f.displacement_maps) h += figure_html(figure, options.map_size);
+  h += "<h2 id=\"temperature\">Temperature maps</h2>\n";
+  if (f.temperature_maps.empty()) h += std::string("<p class=\"note\">") + kNotProcessed + "</p>\n";
+  for (const auto& figure : f.temperature_maps) h += figure_html(figure, options.map_size);
+  return h;
+}
+
+std::string files_section(const ReportFiles& files) {
+  std::string h = "<h2 id=\"files\">Files beside this report</h2>\n<ul class=\"files\">";
+  for (const auto& f : files.figures) {
+    h += "<li>" + esc(f.png.filename().string()) + "</li><li>" + esc(f.svg.filename().string()) + "</li>";
+  }
+  for (const auto& f : files.csv) h += "<li>" + esc(f.filename().string()) + "</li>";
+  return h + "<li>report.json</li></ul>\n";
+}
+
 }  // namespace
 
 ReportFiles write_report(const ReportInput& input, const ReportOptions& options, const fs::path& out_dir) {
@@ -176,147 +280,23 @@ ReportFiles write_report(const ReportInput& input, const ReportOptions& options,
   if (ec || !fs::is_directory(out_dir)) {
     throw std::runtime_error("cannot create the report folder '" + out_dir.string() + "': " + ec.message());
   }
-  ReportFiles files;
-  std::set<std::string> used{"report", "series", "fits"};
   const std::string title = options.title.empty()
                                 ? "Cooling report — " + (input.run_name.empty() ? std::string("run") : input.run_name)
                                 : options.title;
-
-  // Figures.
-  std::vector<FigureFiles> curve_figures;
-  std::optional<FigureFiles> overview;
-  std::vector<const CurveSeries*> drawable;
-  for (const auto& s : input.series) {
-    if (!s.time_s.empty()) drawable.push_back(&s);
-  }
-  if (drawable.size() > 1) {
-    std::vector<CurveSeries> copies;
-    for (const auto* s : drawable) copies.push_back(*s);
-    overview = write_overview_figure(copies, options.curve_size, unique_base(out_dir, "curves_all", used));
-    files.figures.push_back(*overview);
-  }
-  for (const auto* s : drawable) {
-    const std::string prefix = s->kind == SeriesKind::kBosProbe ? "curve_probe_" : "curve_";
-    curve_figures.push_back(
-        write_curve_figure(*s, options.curve_size, unique_base(out_dir, prefix + slug(s->name), used)));
-    files.figures.push_back(curve_figures.back());
-  }
-  const auto markers = thermocouple_markers(input);
-  auto draw_maps = [&](const std::vector<MapField>& maps, const std::string& kind, double default_spacing) {
-    std::vector<FigureFiles> out;
-    for (std::size_t i = 0; i < maps.size(); ++i) {
-      const auto& m = maps[i];
-      const double spacing = m.contour_spacing > 0 ? m.contour_spacing : default_spacing;
-      const std::string stem = fmt::format("map_{}_t{}", kind, time_tag(m.time_s));
-      out.push_back(
-          write_map_figure(m, spacing, markers, input.px_per_mm, options.map_size, unique_base(out_dir, stem, used)));
-      files.figures.push_back(out.back());
-      fs::path csv = out.back().png;
-      csv.replace_extension(".csv");
-      write_map_csv(m, input.px_per_mm, csv);
-      files.csv.push_back(csv);
-    }
-    return out;
-  };
-  std::vector<FigureFiles> agreement_figures;
-  std::vector<std::string> agreement_notes;
-  auto find_series = [&](const std::string& name) -> const CurveSeries* {
-    for (const auto& s : input.series) {
-      if (s.name == name) return &s;
-    }
-    return nullptr;
-  };
-  for (const auto& e : input.agreements) {
-    const auto* a = find_series(e.thermocouple);
-    const auto* b = find_series(e.probe);
-    if (!a || !b) {
-      agreement_notes.push_back(
-          fmt::format("No plot of {} against {}: the report holds no series named so.", e.thermocouple, e.probe));
-      continue;
-    }
-    try {
-      agreement_figures.push_back(write_agreement_figure(
-          *a, *b, e.agreement, options.curve_size,
-          unique_base(out_dir, "agreement_" + slug(e.thermocouple) + "_" + slug(e.probe), used)));
-      files.figures.push_back(agreement_figures.back());
-    } catch (const std::invalid_argument& error) {
-      agreement_notes.push_back(error.what());
-    }
-  }
-  const auto displacement_figures = draw_maps(input.displacement_maps, "displacement", options.displacement_contour_px);
-  const auto temperature_figures = draw_maps(input.temperature_maps, "temperature", options.temperature_contour_c);
-
-  // Data.
-  files.csv.insert(files.csv.begin(), {out_dir / "series.csv", out_dir / "fits.csv"});
-  write_series_csv(input, out_dir / "series.csv");
-  write_fits_csv(input, out_dir / "fits.csv");
-  files.json = out_dir / "report.json";
-  {
-    std::vector<fs::path> data = files.csv;
-    data.push_back(files.json);
-    std::ofstream out(files.json);
-    if (!out) throw std::runtime_error("cannot write '" + files.json.string() + "'");
-    out << report_json(input, files.figures, data).dump(2) << "\n";
-    if (!out) throw std::runtime_error("writing '" + files.json.string() + "' failed");
-  }
-
-  // The page.
-  std::ostringstream h;
-  h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" << esc(title)
-    << "</title>\n<style>" << kStyle << "</style>\n</head>\n<body>\n";
-  h << "<h1>" << esc(title) << "</h1>\n<dl class=\"run\">"
-    << "<dt>run</dt><dd>" << esc(input.run_name) << "</dd><dt>folder</dt><dd><code>" << esc(input.run_dir)
-    << "</code></dd><dt>started (UTC)</dt><dd>" << esc(input.started_utc) << "</dd><dt>status</dt><dd>"
-    << esc(input.status) << "</dd></dl>\n";
-  for (const auto& note : input.notes) h << "<p class=\"note\">" << esc(note) << "</p>\n";
-
-  h << "<h2 id=\"quality\">Image quality index</h2>\n" << quality_html(input);
-
-  h << "<h2 id=\"curves\">Cooling curves</h2>\n";
-  if (drawable.empty()) h << "<p class=\"note\">The run has no temperature samples.</p>\n";
-  if (!input.has_probes()) {
-    h << "<p class=\"note\">BOS probe curves: " << kNotProcessed << "</p>\n";
-  }
-  if (overview) h << figure_html(*overview, options.curve_size);
-  for (const auto& f : curve_figures) h << figure_html(f, options.curve_size);
-
-  h << "<h2 id=\"fits\">Fitted parameters</h2>\n" << fits_table(input);
-
-  h << "<h2 id=\"agreement\">Agreement of thermocouples and BOS probes</h2>\n";
-  if (!input.agreements.empty()) {
-    h << agreement_table(input);
-    for (const auto& note : agreement_notes) h << "<p class=\"note\">" << esc(note) << "</p>\n";
-    for (const auto& f : agreement_figures) h << figure_html(f, options.curve_size);
-  } else if (!input.has_probes()) {
-    h << "<p class=\"note\">" << kNotProcessed << "</p>\n";
-  } else {
-    h << "<p class=\"note\">No thermocouple has a BOS probe at its position to compare with.</p>\n";
-  }
-
-  h << "<h2 id=\"displacement\">Displacement maps</h2>\n";
-  if (displacement_figures.empty()) {
-    h << "<p class=\"note\">No displacement maps"
-      << (input.displacement_maps_note.empty() ? "." : ": " + esc(input.displacement_maps_note) + ".") << "</p>\n";
-  }
-  for (const auto& f : displacement_figures) h << figure_html(f, options.map_size);
-
-  h << "<h2 id=\"temperature\">Temperature maps</h2>\n";
-  if (temperature_figures.empty()) h << "<p class=\"note\">" << kNotProcessed << "</p>\n";
-  for (const auto& f : temperature_figures) h << figure_html(f, options.map_size);
-
-  h << "<h2 id=\"files\">Files beside this report</h2>\n<ul class=\"files\">";
-  for (const auto& f : files.figures) {
-    h << "<li>" << esc(f.png.filename().string()) << "</li><li>" << esc(f.svg.filename().string()) << "</li>";
-  }
-  for (const auto& f : files.csv) h << "<li>" << esc(f.filename().string()) << "</li>";
-  h << "<li>report.json</li></ul>\n</body>\n</html>\n";
+  Output out{out_dir, options};
+  const Figures figures = draw_figures(input, out);
+  const ReportSummary summary = summarize(input);
+  ReportFiles files;
+  files.figures = figures.all;
+  write_data(input, summary, figures, out_dir, files);
 
   files.html = out_dir / "report.html";
-  std::ofstream out(files.html);
-  if (!out) throw std::runtime_error("cannot write '" + files.html.string() + "'");
-  out << h.str();
-  out.flush();
-  if (!out) throw std::runtime_error("writing '" + files.html.string() + "' failed");
+  write_text(files.html, page_head(title, input) + summary_section(input, summary) +
+                             "<h2 id=\"quality\">Image "
+                             "quality index</h2>\n" +
+                             quality_html(input) + curves_section(input, figures, options) +
+                             agreement_section(input, figures, options) + maps_sections(input, figures, options) +
+                             files_section(files) + "</body>\n</html>\n");
   return files;
 }
 

@@ -2,16 +2,20 @@
 // The cooling-curve report: write_report() turns a ReportInput into a folder
 // holding
 //   report.html   one self-contained page (inline CSS, figures embedded as
-//                 base64 PNG data URIs; no script, no network) with the
-//                 cooling curves, fitted parameters with their intervals, the
-//                 agreement table, the maps and the image quality index;
+//                 base64 PNG data URIs; no script, no network): first the
+//                 summary (summary.h: fits and thermocouple–probe pairs),
+//                 then the image quality index, the cooling curves with their
+//                 confidence bands, the Bland–Altman plots and the maps;
 //   *.png, *.svg  every figure, drawn with PLplot (figures.h);
-//   series.csv    every sample of every series with the fitted curve and residual;
+//   summary.csv   the summary, one row per quantity;
+//   series.csv    every sample of every series with the fitted curve, residual and band half-width;
 //   fits.csv      one row per series: parameters with their intervals and diagnostics;
 //   map_*.csv     each map's grid (x, y in px and mm, value, masked);
 //   report.json   all of the above (data included) for other tools.
 // Sections without data say why (e.g. BOS probes "not processed yet — run
-// bosfuse process"), they never show made-up numbers.
+// bosfuse process"), they never show made-up numbers, and no file shows
+// NaN, inf or null where a number belongs: "—", absent or empty, with the
+// reason beside it.
 
 #include <filesystem>
 #include <string>

@@ -6,9 +6,11 @@
 // the same fields. write_report() (report.h) turns it into HTML, figures and
 // data files.
 //
-// Conventions (DESIGN.md): times in seconds relative to the run's origin (its
-// first sample), temperatures in °C, image coordinates in pixels with the
-// origin at the top-left pixel's centre, x right, y down.
+// Conventions (DESIGN.md): times in seconds relative to the run's origin,
+// said in words by ReportInput::time_basis (every axis, caption and
+// report.json repeats it, so a reader never has to guess the time base),
+// temperatures in °C, image coordinates in pixels with the origin at the
+// top-left pixel's centre, x right, y down.
 
 #include <cstddef>
 #include <opencv2/core.hpp>
@@ -32,6 +34,9 @@ struct CurveSeries {
   SeriesKind kind = SeriesKind::kThermocouple;
   std::vector<double> time_s;  // relative to the run's origin
   std::vector<double> temperature_c;
+  // "°C", or "px" for a BOS probe without a calibration (its shift
+  // magnitude): a px series has a rate but no temperature to compare.
+  std::string unit = "°C";
   std::optional<cv::Point2d> image_px;  // where it sits in the camera image (a map marker)
   std::size_t excluded_samples = 0;     // samples left out (non-ok status), said in the report
   std::optional<fitting::NewtonFit> fit;
@@ -67,8 +72,13 @@ struct QualityInfo {
   std::string compared;  // what was compared with what, e.g. "frame 9 against reference frame 1"
 };
 
+inline constexpr const char* kDefaultTimeBasis = "s since the run's origin";
+
 struct ReportInput {
   std::string run_name;
+  // What t counts from, in words, e.g. "experiment seconds since heater off
+  // (2026-11-30T02:00:00.000Z); recorded at 16×".
+  std::string time_basis = kDefaultTimeBasis;
   std::string run_dir;
   std::string started_utc;          // ISO-8601
   std::string status;               // running, complete, interrupted

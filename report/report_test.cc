@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -127,14 +128,14 @@ TEST_F(Report, RunWithoutFramesHasNoMapsButSaysWhy) {
   EXPECT_NE(html.find("No image quality index"), std::string::npos);
   const auto json = nlohmann::json::parse(read_text(files.json));
   EXPECT_TRUE(json["maps"].empty());
-  EXPECT_TRUE(json["image_quality"].is_null());
+  EXPECT_EQ(json["image_quality"], "not computed: the run has no frames to compare") << "a reason, not null";
 }
 
 TEST_F(Report, CsvAndJsonHoldEveryChannelsDataAndTheFitsWithIntervals) {
   const auto files = write(testdata::sample_input(true));
   const auto series = lines_of(read_text(dir_ / "out" / "series.csv"));
   ASSERT_FALSE(series.empty());
-  EXPECT_EQ(series[0], "series,kind,t_s,temperature_c,fit_c,residual_c");
+  EXPECT_EQ(series[0], "series,kind,t_s,temperature_c,fit_c,residual_c,fit_half_width_c");
   std::map<std::string, std::size_t> rows;
   for (std::size_t i = 1; i < series.size(); ++i) ++rows[series[i].substr(0, series[i].find(','))];
   EXPECT_EQ(rows["tc0"], input_.series[0].time_s.size());
@@ -199,8 +200,8 @@ TEST(ReportCsv, AFormulaLikeNameIsInertAndNumbersStayNumbers) {
   write_fits_csv(input, dir / "fits.csv");
   const auto series = lines_of(read_text(dir / "series.csv"));
   ASSERT_EQ(series.size(), 3u);
-  EXPECT_EQ(series[1], "\"'=cmd|' /C calc'!A0\",thermocouple,0,-3.5,,");
-  EXPECT_EQ(series[2], "\"'=cmd|' /C calc'!A0\",thermocouple,1.5,-4,,");
+  EXPECT_EQ(series[1], "\"'=cmd|' /C calc'!A0\",thermocouple,0,-3.5,,,");
+  EXPECT_EQ(series[2], "\"'=cmd|' /C calc'!A0\",thermocouple,1.5,-4,,,");
   const auto fits = lines_of(read_text(dir / "fits.csv"));
   ASSERT_EQ(fits.size(), 2u);
   EXPECT_EQ(fits[1].rfind("\"'=cmd|' /C calc'!A0\",thermocouple,false,", 0), 0u) << fits[1];
@@ -225,7 +226,7 @@ TEST_F(Report, ProbesAgreementAndTemperatureMapsAppearWhenProvided) {
   const std::string html = read_text(files.html);
   expect_self_contained(html);
   EXPECT_EQ(html.find("Not processed yet"), std::string::npos) << "everything was processed";
-  EXPECT_NE(html.find("class=\"agreement\""), std::string::npos);
+  EXPECT_NE(html.find("class=\"summary agreement\""), std::string::npos);
   EXPECT_NE(html.find(html_escape(input.agreements[0].agreement.verdict)), std::string::npos);
   EXPECT_TRUE(fs::exists(dir_ / "out" / "map_temperature_t10s.png"));
   EXPECT_TRUE(fs::exists(dir_ / "out" / "curve_probe_tc0_probe.svg"));
@@ -235,6 +236,189 @@ TEST_F(Report, ProbesAgreementAndTemperatureMapsAppearWhenProvided) {
   ASSERT_EQ(json["agreements"].size(), 1u);
   EXPECT_TRUE(json["agreements"][0]["k"].contains("z"));
   EXPECT_EQ(json["series"][2]["kind"], "BOS probe");
+}
+
+// The page without its embedded images (base64 is not text).
+std::string page_text(const fs::path& html_file) {
+  std::string text = read_text(html_file);
+  for (auto at = text.find("base64,"); at != std::string::npos; at = text.find("base64,", at + 7)) {
+    text.erase(at + 7, text.find('"', at) - at - 7);
+  }
+  return text;
+}
+
+// Words nan, inf, infinity or null standing where a number would: between
+// the characters that delimit a number in a table cell, a list or a CSV
+// field. A reason such as "rejected as NaN/inf" is prose, not a number.
+std::vector<std::string> missing_numbers_shown(const std::string& text) {
+  const auto is_letter = [](char c) { return std::isalpha(static_cast<unsigned char>(c)) != 0; };
+  const std::string before = ">[(,=: \n\t\"+-", after = "<])},; \n\t\"%";
+  std::vector<std::string> found;
+  for (std::size_t i = 0; i < text.size();) {
+    if (!is_letter(text[i])) {
+      ++i;
+      continue;
+    }
+    std::size_t end = i;
+    while (end < text.size() && is_letter(text[end])) ++end;
+    std::string word = text.substr(i, end - i);
+    std::transform(word.begin(), word.end(), word.begin(), [](unsigned char c) { return std::tolower(c); });
+    const bool opens = i == 0 || before.find(text[i - 1]) != std::string::npos;
+    const bool closes = end == text.size() || after.find(text[end]) != std::string::npos;
+    if ((word == "nan" || word == "inf" || word == "infinity" || word == "null") && opens && closes) {
+      found.push_back(text.substr(i >= 40 ? i - 40 : 0, 80));
+    }
+    i = end;
+  }
+  return found;
+}
+
+std::vector<std::string> json_gaps(const nlohmann::json& j, const std::string& path = "") {
+  std::vector<std::string> gaps;
+  if (j.is_null() || (j.is_number_float() && !std::isfinite(j.get<double>()))) gaps.push_back(path);
+  if (j.is_object()) {
+    for (const auto& [key, value] : j.items()) {
+      for (auto& g : json_gaps(value, path + "/" + key)) gaps.push_back(g);
+    }
+  }
+  if (j.is_array()) {
+    for (std::size_t i = 0; i < j.size(); ++i) {
+      for (auto& g : json_gaps(j[i], path + "/" + std::to_string(i))) gaps.push_back(g);
+    }
+  }
+  return gaps;
+}
+
+// What the summary cannot compute: a failed fit (tc2, three points), a BOS
+// probe in px (no temperature to compare with tc0), a pair without series
+// statistics (tc1 against its probe) and one without k (tc2), plus a NaN
+// sample.
+ReportInput input_with_gaps() {
+  ReportInput input = testdata::sample_input(false);
+  input.time_basis = "experiment seconds since heater off (2026-11-30T02:00:00.000Z); recorded at 16×";
+  input.series[1].temperature_c[5] = NAN;
+  CurveSeries failed;
+  failed.name = "tc2";
+  failed.time_s = {0, 1, 2};
+  failed.temperature_c = {50, 45, 41};
+  input.series.push_back(failed);
+  CurveSeries px = testdata::cooling_series("tc0 probe", 0.0102, 0.8, 0.02, 40, 10.0, 0.005, 9);
+  px.kind = SeriesKind::kBosProbe;
+  px.unit = "px";
+  input.series.push_back(px);
+  CurveSeries probe = testdata::cooling_series("tc1 probe", 0.012, 70, 22, 40, 10.0, 0.3, 10);
+  probe.kind = SeriesKind::kBosProbe;
+  input.series.push_back(probe);
+  fit_missing(input);
+  const auto pair = [&](std::size_t a, std::size_t b) {
+    const auto& sa = input.series[a];
+    const auto& sb = input.series[b];
+    return AgreementEntry{
+        sa.name, sb.name,
+        fitting::compare_fits(*sa.fit, *sb.fit, fitting::clean_series(sa.time_s, sa.temperature_c, 0.0),
+                              fitting::clean_series(sb.time_s, sb.temperature_c, 0.0))};
+  };
+  input.agreements.push_back(pair(0, 3));
+  input.agreements.push_back(pair(1, 4));
+  input.agreements.back().agreement.series.reset();
+  input.agreements.push_back(pair(2, 4));
+  return input;
+}
+
+TEST_F(Report, NoNumberIsNanInfOrNullAndEveryGapSaysWhy) {
+  const ReportInput input = input_with_gaps();
+  ASSERT_FALSE(input.series[2].fit->ok());
+  ASSERT_TRUE(input.series[3].fit->ok()) << input.series[3].fit->brief_report();
+  ASSERT_TRUE(input.agreements[0].agreement.series) << "compare_fits compares px with °C: the report must not";
+  const auto files = write_report(input, {}, dir_ / "out");
+
+  const std::string html = page_text(files.html);
+  EXPECT_TRUE(missing_numbers_shown(html).empty()) << ::testing::PrintToString(missing_numbers_shown(html));
+  for (const char* reason :
+       {"Δk only: tc0 probe is in px, not °C — no temperature difference", "the fit of tc2 failed (too few points)",
+        "no temperature difference: the two series share too few common times", "no Δk: the fit of tc2 failed",
+        "T0, T_amb and the residual RMS are in px, not °C"}) {
+    EXPECT_NE(html.find(html_escape(reason)), std::string::npos) << reason;
+  }
+  EXPECT_NE(html.find("<td>—<sup>1</sup></td>"), std::string::npos) << "a gap is a dash with its footnote";
+  EXPECT_NE(html.find("<ol class=\"footnotes\">"), std::string::npos);
+
+  const std::string json_text = read_text(files.json);
+  const auto json = nlohmann::json::parse(json_text);
+  EXPECT_TRUE(json_gaps(json).empty()) << ::testing::PrintToString(json_gaps(json));
+  EXPECT_TRUE(missing_numbers_shown(json_text).empty()) << ::testing::PrintToString(missing_numbers_shown(json_text));
+  const auto& summary = json["summary"];
+  EXPECT_FALSE(summary["series"][2]["k"].contains("value"));
+  EXPECT_NE(summary["series"][2]["k"]["not_computed"].get<std::string>().find("failed"), std::string::npos);
+  EXPECT_EQ(summary["series"][3]["T0"]["unit"], "px");
+  EXPECT_TRUE(summary["pairs"][0]["delta_k"].contains("value")) << "k compares whatever the unit";
+  EXPECT_NE(summary["pairs"][0]["bias"]["not_computed"].get<std::string>().find("px, not °C"), std::string::npos);
+  EXPECT_TRUE(json["agreements"][0]["series"].is_string()) << "no °C − px statistics in report.json";
+  const std::string verdict = summary["pairs"][0]["verdict"];
+  EXPECT_EQ(verdict.find("°C RMS"), std::string::npos) << verdict;
+  EXPECT_NE(verdict.find("k agree"), std::string::npos) << verdict;
+  EXPECT_NE(verdict.find("The temperatures are not compared: tc0 probe is in px, not °C."), std::string::npos);
+  EXPECT_EQ(json["agreements"][0]["verdict"], verdict);
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "agreement_tc0_tc0_probe.png")) << "no Bland–Altman plot of °C against px";
+  EXPECT_NE(html.find("No Bland–Altman plot of tc0 against tc0 probe: tc0 probe is in px, not °C."), std::string::npos);
+  EXPECT_TRUE(json["agreements"][1]["series"].is_string());
+  EXPECT_TRUE(json["agreements"][1]["k"].is_object());
+  EXPECT_TRUE(json["agreements"][2]["k"].is_string());
+  EXPECT_EQ(json["series"][1]["non_finite_samples_left_out"], 1);
+  EXPECT_FALSE(json["series"][2]["fit"]["ok"].get<bool>());
+  EXPECT_FALSE(json["series"][2]["fit"]["parameters"].contains("k_per_s")) << "absent, not null";
+
+  for (const char* csv : {"summary.csv", "series.csv", "fits.csv"}) {
+    const std::string text = read_text(dir_ / "out" / csv);
+    EXPECT_TRUE(missing_numbers_shown(text).empty())
+        << csv << ": " << ::testing::PrintToString(missing_numbers_shown(text));
+  }
+  const auto rows = lines_of(read_text(dir_ / "out" / "summary.csv"));
+  EXPECT_NE(std::find_if(rows.begin(), rows.end(),
+                         [](const std::string& r) {
+                           return r.rfind("tc2,thermocouple,,k,,,,,1/s,the fit of tc2 failed (too few points)", 0) == 0;
+                         }),
+            rows.end())
+      << "an empty value with its reason";
+}
+
+TEST_F(Report, TheSummaryComesFirstInTheRunsTimeBasis) {
+  ReportInput input = input_with_gaps();
+  const auto files = write_report(input, {}, dir_ / "out");
+  const std::string html = page_text(files.html);
+  const auto summary_at = html.find("<h2 id=\"summary\">");
+  ASSERT_NE(summary_at, std::string::npos);
+  EXPECT_LT(summary_at, html.find("<figure")) << "the summary comes before the figures";
+  EXPECT_LT(summary_at, html.find("class=\"summary agreement\""));
+  EXPECT_NE(
+      html.find("<caption>Newton fits T(t) = T_amb + (T0 − T_amb)·exp(−k·t), t in " + html_escape(input.time_basis)),
+      std::string::npos);
+  for (const auto& f : files.figures) {
+    if (f.png.filename().string().rfind("curve", 0) == 0) {
+      EXPECT_NE(f.caption.find(input.time_basis), std::string::npos) << f.caption;
+    }
+  }
+
+  const auto json = nlohmann::json::parse(read_text(files.json));
+  EXPECT_EQ(json["time_basis"], input.time_basis);
+  EXPECT_EQ(json["summary"]["time_basis"], input.time_basis);
+  const auto& k = json["summary"]["series"][0]["k"];
+  EXPECT_DOUBLE_EQ(k["value"].get<double>(), input.series[0].fit->k_per_s.value);
+  EXPECT_DOUBLE_EQ(k["low"].get<double>(), input.series[0].fit->k_per_s.low);
+  EXPECT_EQ(json["summary"]["pairs"].size(), 3u);
+  EXPECT_EQ(json["summary"]["pairs"][1]["k_agree"], input.agreements[1].agreement.k->agree);
+
+  const auto rows = lines_of(read_text(dir_ / "out" / "summary.csv"));
+  ASSERT_FALSE(rows.empty());
+  EXPECT_EQ(rows[0], "series,kind,compared_with,quantity,value,std_error,low,high,unit,note");
+  EXPECT_EQ(rows[1], "tc0,thermocouple,,points,200,,,,,");
+  // series.csv: the band's half-width beside every fitted value, positive and small.
+  const auto series = lines_of(read_text(dir_ / "out" / "series.csv"));
+  const std::string last = series[1].substr(series[1].rfind(',') + 1);
+  ASSERT_FALSE(last.empty());
+  EXPECT_GT(std::stod(last), 0.0);
+  EXPECT_LT(std::stod(last), 0.5);
+  EXPECT_DOUBLE_EQ(std::stod(last), input.series[0].fit->temperature_half_width_at(input.series[0].time_s[0]));
 }
 
 TEST_F(Report, UnwritableFolderIsAnError) {
