@@ -5,6 +5,7 @@
 
 #include <fstream>
 
+#include "app/test_streams.h"
 #include "sim/modbus_server.h"
 #include "storage/run_store.h"
 #include "tests/support/modbus_fixture.h"
@@ -44,6 +45,9 @@ class Cli : public ::testing::Test {
   static void write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
   std::string run_dir() const { return (dir_ / "run").string(); }
   testing::CommandResult bosfuse(const std::string& args) { return testing::run_command(kBosfuse + " " + args); }
+  testing::StreamsResult streams(const std::string& args) {
+    return testing::run_with_streams(kBosfuse + " " + args, dir_.path());
+  }
 
   testing::TempDir dir_;
   std::unique_ptr<sim::ModbusSimServer> server_;
@@ -197,6 +201,87 @@ TEST_F(Cli, EverySubcommandHasHelp) {
     EXPECT_EQ(help.exit_code, 0) << sub;
     EXPECT_NE(help.output.find("Usage"), std::string::npos) << sub;
   }
+}
+
+// Every subcommand spells an option the same way: the output is -o/--out
+// (export's --output and evaluate's --png are gone), a JSON output is
+// --json FILE|- (quality's --json was a flag), an image of a map is --map.
+TEST_F(Cli, OneSpellingPerOptionAcrossSubcommands) {
+  const std::vector<std::string> subcommands{"acquire", "runs",     "export",    "demo",       "sim modbus",
+                                             "replay",  "evaluate", "quality",   "background", "bench",
+                                             "fit",     "process",  "calibrate", "report"};
+  for (const auto& sub : subcommands) {
+    const auto help = streams(sub + " --help");
+    ASSERT_EQ(help.exit_code, 0) << sub;
+    for (const char* gone : {"--output", "--png"}) {
+      EXPECT_EQ(help.out.find(gone), std::string::npos) << sub << " has " << gone << ":\n" << help.out;
+    }
+    if (const auto out = help.out.find("--out "); out != std::string::npos) {
+      EXPECT_EQ(help.out.substr(out - 3, 9), "-o,--out ") << sub;
+    }
+    if (const auto json = help.out.find("--json"); json != std::string::npos) {
+      EXPECT_EQ(help.out.substr(json, 11), "--json TEXT") << sub << ": --json takes FILE or -";
+    }
+  }
+}
+
+TEST_F(Cli, ARunFolderCannotBeStandardOutput) {
+  const auto refused = streams("acquire " + experiment_ + " -o - --duration 300ms");
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("--out cannot be standard output ('-'): a run is a folder"), std::string::npos)
+      << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "-"));
+  EXPECT_EQ(server_->requests_answered(), 0) << "refused before any device was polled";
+}
+
+// Piped or logged, progress is plain lines on stderr flushed as they
+// happen; the table is the only thing on stdout.
+TEST_F(Cli, BenchShowsProgressOnStderrAndTheTableOnStdout) {
+  const auto bench = streams("bench --size 64");
+  ASSERT_EQ(bench.exit_code, 0) << bench.err;
+  EXPECT_TRUE(bench.out.starts_with("synthetic 64x64 pairs")) << bench.out;
+  EXPECT_NE(bench.out.find("\nflow-farneback "), std::string::npos) << bench.out;
+  EXPECT_NE(bench.out.find("  IW  8: "), std::string::npos) << bench.out;
+  EXPECT_EQ(bench.out.find("ETA"), std::string::npos) << "progress on stdout: " << bench.out;
+  EXPECT_EQ(std::count(bench.err.begin(), bench.err.end(), '\n'), 12) << bench.err;
+  EXPECT_TRUE(bench.err.starts_with("0/11   0%  0:00 elapsed  ETA —  xcorr, IW 32, 1 pass\n")) << bench.err;
+  EXPECT_NE(bench.err.find("\n11/11 100%  "), std::string::npos) << bench.err;
+  EXPECT_EQ(bench.err.find('\r'), std::string::npos) << "no carriage returns in a log";
+  EXPECT_EQ(bench.err.find('\x1b'), std::string::npos) << "no escape codes in a log";
+
+  const auto quiet = streams("bench --size 64 -q");
+  ASSERT_EQ(quiet.exit_code, 0) << quiet.err;
+  EXPECT_EQ(quiet.err, "") << "--quiet: no progress";
+  EXPECT_TRUE(quiet.out.starts_with("synthetic 64x64 pairs")) << quiet.out;
+}
+
+// On a terminal (a pseudo-terminal from util-linux's script) the progress
+// is one line rewritten in place.
+TEST_F(Cli, BenchProgressIsOneLineInPlaceOnATerminal) {
+  if (testing::run_command("sh -c 'command -v script'").exit_code != 0) GTEST_SKIP() << "no script(1)";
+  const auto tty = testing::run_with_streams(
+      "script -qec '" + kBosfuse + " bench --size 64 > " + (dir_ / "table.txt").string() + "' /dev/null", dir_.path());
+  ASSERT_EQ(tty.exit_code, 0) << tty.out << tty.err;
+  EXPECT_NE(tty.out.find("\r0/11   0%"), std::string::npos) << tty.out;
+  EXPECT_NE(tty.out.find("\x1b[K\r1/11   9%"), std::string::npos) << tty.out;
+  EXPECT_NE(tty.out.find("\r11/11 100%"), std::string::npos) << tty.out;
+  EXPECT_EQ(std::count(tty.out.begin(), tty.out.end(), '\n'), 1) << "one line, ended once: " << tty.out;
+  std::ifstream table(dir_ / "table.txt");
+  std::string first;
+  std::getline(table, first);
+  EXPECT_EQ(first.rfind("synthetic 64x64 pairs", 0), 0u) << first;
+}
+
+// A server has no data: where it serves and what it answered are messages.
+TEST_F(Cli, SimModbusSpeaksOnStderr) {
+  const auto served = streams("sim modbus --port 0 --duration 200ms --update-period 100ms");
+  ASSERT_EQ(served.exit_code, 0) << served.err;
+  EXPECT_EQ(served.out, "");
+  EXPECT_NE(served.err.find("inputs serving on 127.0.0.1:"), std::string::npos) << served.err;
+  EXPECT_NE(served.err.find("answered 0 requests"), std::string::npos) << served.err;
+  const auto bad = streams("sim modbus --port 0 --duration 200ms --update-period soon");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("cannot read duration 'soon'"), std::string::npos) << bad.err;
 }
 
 }  // namespace

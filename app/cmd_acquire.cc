@@ -8,6 +8,7 @@
 #include "acquisition/experiment_config.h"
 #include "acquisition/logger.h"
 #include "app/command.h"
+#include "app/output_stream.h"
 #include "app/run_control.h"
 #include "storage/run_store.h"
 
@@ -40,6 +41,7 @@ std::string what_is_missing(const acquisition::Logger::Summary& summary) {
 }
 
 void acquire(const AcquireArgs& args) {
+  refuse_standard_output(args.out, "--out", "a run is a folder (run.sqlite, frames/)");
   const auto config = acquisition::load_experiment(args.experiment);
   if (config.device_count() == 0) throw std::runtime_error(args.experiment + ": no [[devices]] to log");
   acquisition::check_hosts_resolve(config);

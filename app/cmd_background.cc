@@ -1,11 +1,15 @@
 // bosfuse background: a printable random-dot background pattern, the same
-// file serving as the digital reference for `bosfuse quality`.
+// file serving as the digital reference for `bosfuse quality`. The file
+// is the output and its description (the printed size) the result on
+// standard output; `-o -` is refused, as the format (PNG or TIFF, each with
+// its resolution for printing) comes from the file name.
 
 #include <fmt/format.h>
 
 #include <iostream>
 
 #include "app/command.h"
+#include "app/output_stream.h"
 #include "sim/background_pattern.h"
 
 namespace bosfuse::app {
@@ -17,6 +21,7 @@ struct BackgroundArgs {
 };
 
 void background(const BackgroundArgs& args) {
+  refuse_standard_output(args.out, "--out", "the pattern is a .png or .tif image whose format comes from its name");
   const auto pattern = sim::generate_pattern(args.pattern);
   sim::write_pattern_image(args.out, sim::render_pattern(pattern), args.pattern.dpi);
   const double mm_per_px = 25.4 / args.pattern.dpi;

@@ -1,24 +1,26 @@
 // bosfuse evaluate: a reference and a measurement image → a displacement
-// field as CSV (x,y,u,v,valid,peak_ratio), optionally a map PNG.
+// field as CSV (x,y,u,v,valid,peak_ratio) on standard output or in the
+// file -o names, optionally a map PNG (--map); the summary goes to standard
+// error.
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include <iostream>
 #include <map>
 #include <sstream>
 
 #include "app/command.h"
 #include "app/displacement_map.h"
 #include "app/image_io.h"
+#include "app/output_stream.h"
 #include "fusion/displacement_evaluator.h"
 
 namespace bosfuse::app {
 namespace {
 
 struct EvaluateArgs {
-  std::string reference, measurement, out, png, mask, roi, method = "xcorr", flow = "dis", subpixel = "auto",
-                                                           interpolator = "lanczos3";
+  std::string reference, measurement, out = "-", map, mask, roi, method = "xcorr", flow = "dis", subpixel = "auto",
+                                      interpolator = "lanczos3";
   std::vector<std::string> probes;
   int window_px = 16, first_window_px = 0, step_px = 8, passes = 3;
   double max_shift_px = 4, contour_px = 0.1;
@@ -50,8 +52,8 @@ cv::Point2d parse_point(const std::string& text, cv::Size image_size) {
     throw std::runtime_error("probe '" + text + "' must be x,y in pixels");
   }
   if (!(point.x >= 0 && point.y >= 0 && point.x <= image_size.width - 1 && point.y <= image_size.height - 1)) {
-    throw std::runtime_error(fmt::format("probe '{}' lies outside the {}x{} image", text, image_size.width,
-                                         image_size.height));
+    throw std::runtime_error(
+        fmt::format("probe '{}' lies outside the {}x{} image", text, image_size.width, image_size.height));
   }
   return point;
 }
@@ -88,6 +90,10 @@ fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
 
 void evaluate(const EvaluateArgs& args) {
   const auto options = evaluator_options(args);
+  if (!args.map.empty()) {
+    refuse_standard_output(args.map, "--map", "the image format comes from the file name (.png)");
+    if (!args.probes.empty()) throw std::runtime_error("--map draws a full field; it cannot be used with --probe");
+  }
   const cv::Mat reference = read_image(args.reference, "reference");
   const cv::Mat measurement = read_image(args.measurement, "measurement");
   const cv::Mat mask = args.mask.empty() ? cv::Mat() : read_image(args.mask, "mask");
@@ -99,16 +105,11 @@ void evaluate(const EvaluateArgs& args) {
     for (const auto& p : args.probes) points.push_back(parse_point(p, reference.size()));
     result = fusion::probe_displacement(reference, measurement, points, options, mask);
   }
-  if (args.out.empty() || args.out == "-") {
-    fusion::write_csv(result.field, std::cout);
-  } else {
-    fusion::write_csv(result.field, std::filesystem::path(args.out));
-  }
-  if (!args.png.empty()) {
-    if (!args.probes.empty()) throw std::runtime_error("--png draws a full field; it cannot be used with --probe");
-    write_image(args.png, draw_displacement_map(result.field, {args.contour_px, 800}));
-  }
-  std::cerr << result.summary.BriefReport() << "\n";
+  OutputStream out(args.out);
+  fusion::write_csv(result.field, out.stream());
+  out.close();
+  if (!args.map.empty()) write_image(args.map, draw_displacement_map(result.field, {args.contour_px, 800}));
+  spdlog::info("{}", result.summary.BriefReport());
 }
 
 void add_evaluate(CLI::App& root) {
@@ -117,7 +118,7 @@ void add_evaluate(CLI::App& root) {
       root.add_subcommand("evaluate", "Displacement field of an image pair (CSV: x,y,u,v,valid,peak_ratio)");
   cmd->add_option("reference", args->reference, "Reference image (no flow)")->required();
   cmd->add_option("measurement", args->measurement, "Measurement image (through the flow)")->required();
-  cmd->add_option("--out,-o", args->out, "CSV file to write; '-' or none: standard output");
+  cmd->add_option("--out,-o", args->out, "CSV file to write; '-' (the default): standard output");
   cmd->add_option("--window", args->window_px, "Final interrogation window, px (8..128)")->capture_default_str();
   cmd->add_option("--first-window", args->first_window_px, "First-pass window, px (halved each pass down to --window)");
   cmd->add_option("--step", args->step_px, "Grid spacing, px")->capture_default_str();
@@ -141,7 +142,7 @@ void add_evaluate(CLI::App& root) {
   cmd->add_option("--mask", args->mask, "Mask image: non-zero pixels are not evaluated");
   cmd->add_option("--roi", args->roi, "Region of interest x,y,w,h in pixels");
   cmd->add_option("--probe", args->probes, "Evaluate only the window centred at x,y (repeatable)");
-  cmd->add_option("--png", args->png, "Also draw the displacement magnitude map to this PNG");
+  cmd->add_option("--map", args->map, "Also draw the displacement magnitude map to this PNG");
   cmd->add_option("--contour", args->contour_px, "Contour spacing of the map, px (0: none)")->capture_default_str();
   cmd->callback([args] { evaluate(*args); });
 }

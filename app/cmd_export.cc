@@ -3,10 +3,12 @@
 // with an XDMF sidecar (--fields OUT.h5, report/field_export.h). The image
 // scale for the fields' mm coordinates is --px-per-mm, else the [geometry]
 // table of the run's stored experiment config, as for `bosfuse report`.
+// The CSV goes to standard output unless -o names a file ("-" is standard
+// output too); messages go to standard error.
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
-#include <fstream>
 #include <iostream>
 #include <map>
 #include <optional>
@@ -14,6 +16,7 @@
 #include "acquisition/clock.h"
 #include "app/command.h"
 #include "app/geometry_config.h"
+#include "app/output_stream.h"
 #include "report/csv_cell.h"
 #include "report/field_export.h"
 #include "storage/run_store.h"
@@ -57,7 +60,7 @@ void write_csv(const storage::RunStore& store, std::ostream& out) {
 
 struct ExportArgs {
   std::string run;
-  std::string output;
+  std::string out = "-";
   bool csv = false;
   std::string fields;
   double px_per_mm = 0;
@@ -74,19 +77,19 @@ std::optional<double> image_scale(const ExportArgs& args, const storage::RunStor
       return fusion::BosGeometry(config->geometry).px_per_m_flow() * 1e-3;
     }
   } catch (const std::exception& e) {
-    std::cerr << "warning: grid in px only, the run config's [geometry] could not be read: " << e.what() << "\n";
+    spdlog::warn("grid in px only, the run config's [geometry] could not be read: {}", e.what());
   }
   return std::nullopt;
 }
 
 void export_fields(const ExportArgs& args, const storage::RunStore& store) {
-  if (args.fields == "-") throw std::runtime_error("--fields needs a file name: HDF5 cannot be written to a pipe");
+  refuse_standard_output(args.fields, "--fields", "HDF5 cannot be written to a pipe");
   report::FieldExportOptions options;
   options.px_per_mm = image_scale(args, store);
   const auto result = report::export_fields(store, args.fields, options);
-  std::cerr << fmt::format(
+  spdlog::info(
       "wrote {} ({} displacement and {} temperature frames, grid in {}) and {} (open it in "
-      "ParaView)\n",
+      "ParaView)",
       result.hdf5_path.string(), result.displacement_frames, result.temperature_frames,
       options.px_per_mm ? fmt::format("mm at {:g} px/mm", *options.px_per_mm) : "px", result.xdmf_path.string());
 }
@@ -105,7 +108,8 @@ void add_export(CLI::App& root) {
       "The displacement and temperature fields `bosfuse process` stored, as this HDF5 file (e.g. fields.h5) plus "
       "an XDMF sidecar beside it (fields.xmf) for ParaView");
   format->require_option(1);
-  cmd->add_option("--output,-o", args->output, "File to write with --csv (default: standard output)")->excludes(fields);
+  cmd->add_option("--out,-o", args->out, "File to write with --csv; '-' (the default): standard output")
+      ->excludes(fields);
   cmd->add_option("--px-per-mm", args->px_per_mm,
                   "Image scale for --fields, px per mm: grid coordinates in mm too (default: the run config's "
                   "[geometry], else px only)")
@@ -114,11 +118,9 @@ void add_export(CLI::App& root) {
   cmd->callback([args] {
     const auto store = storage::RunStore::open(args->run);
     if (!args->fields.empty()) return export_fields(*args, store);
-    if (args->output.empty()) return write_csv(store, std::cout);
-    std::ofstream out(args->output);
-    if (!out) throw std::runtime_error("cannot write '" + args->output + "'");
-    write_csv(store, out);
-    std::cerr << "wrote " << args->output << "\n";
+    OutputStream out(args->out);
+    write_csv(store, out.stream());
+    out.close();
   });
 }
 

@@ -1,8 +1,10 @@
 // bosfuse fit: Newton's law of cooling fitted to a time and a temperature
 // column of a plain CSV file (for example one written by `bosfuse export
-// --csv`), so the fitter is useful without a run store. Prints the fit and
-// its diagnostics; --json writes them for other tools. A fit that cannot be
-// trusted is an error (exit status 1) with its reason, and the JSON says so.
+// --csv`, or piped from it with FILE "-"), so the fitter is useful without
+// a run store. Prints the fit and its diagnostics; --json FILE writes them
+// for other tools, and --json - puts the JSON alone on standard output (the
+// printed fit then goes to standard error). A fit that cannot be trusted is
+// an error (exit status 1) with its reason, and the JSON says so.
 
 #include <glog/logging.h>
 
@@ -19,6 +21,7 @@
 
 #include "acquisition/clock.h"
 #include "app/command.h"
+#include "app/output_stream.h"
 #include "fitting/fit_json.h"
 #include "fitting/newton_fit.h"
 #include "report/csv_cell.h"
@@ -271,34 +274,37 @@ NewtonFitOptions fit_options(const FitArgs& args) {
   return options;
 }
 
-void print_header(const CsvSeries& series, const std::string& file, double origin_s) {
-  std::cout << file << ": '" << series.temperature_name << "' against '" << series.time_name << "'";
+void print_header(std::ostream& out, const CsvSeries& series, const std::string& file, double origin_s) {
+  out << (file == "-" ? "standard input" : file) << ": '" << series.temperature_name << "' against '"
+      << series.time_name << "'";
   if (series.iso_origin_ns) {
-    std::cout << " (t = 0 at " << acquisition::format_iso8601_utc(*series.iso_origin_ns, 6) << ")";
+    out << " (t = 0 at " << acquisition::format_iso8601_utc(*series.iso_origin_ns, 6) << ")";
   } else if (origin_s != 0.0) {
-    std::cout << " (t = 0 at " << series.time_name << " = " << std::setprecision(15) << origin_s << std::setprecision(6)
-              << ")";
+    out << " (t = 0 at " << series.time_name << " = " << std::setprecision(15) << origin_s << std::setprecision(6)
+        << ")";
   }
-  if (series.empty_rows) std::cout << "; " << series.empty_rows << " rows with an empty cell skipped";
-  std::cout << "\n";
+  if (series.empty_rows) out << "; " << series.empty_rows << " rows with an empty cell skipped";
+  out << "\n";
 }
 
 void run_fit(const FitArgs& args) {
   FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres logs rank deficiency itself; the summary says it better
   const NewtonFitOptions options = fit_options(args);
-  std::ifstream in(args.file);
-  if (!in) throw std::runtime_error("cannot read '" + args.file + "'");
-  const CsvSeries series = read_series(in, args.time_column, args.temperature_column);
-  const NewtonFit fit = fitting::fit_newton(series.time_s, series.temperature_c, options);
-  print_header(series, args.file, fit.origin_s);
-  std::cout << fit.brief_report();
-  if (!args.json.empty()) {
-    std::ofstream out(args.json);
-    if (!out) throw std::runtime_error("cannot write '" + args.json + "'");
-    out << fit_json(fit, series, args.file).dump(2) << "\n";
-    std::cout << "wrote " << args.json << "\n";
+  std::ifstream file;
+  if (args.file != "-") {
+    file.open(args.file);
+    if (!file) throw std::runtime_error("cannot read '" + args.file + "'");
   }
-  std::cout.flush();
+  const CsvSeries series = read_series(args.file == "-" ? std::cin : file, args.time_column, args.temperature_column);
+  const NewtonFit fit = fitting::fit_newton(series.time_s, series.temperature_c, options);
+  std::ostream& text = text_stream(names_standard_output(args.json));
+  print_header(text, series, args.file, fit.origin_s);
+  text << fit.brief_report() << std::flush;
+  if (!args.json.empty()) {
+    OutputStream out(args.json);
+    out.stream() << fit_json(fit, series, args.file).dump(2) << "\n";
+    out.close();
+  }
   if (!fit.ok()) throw std::runtime_error("no fit: " + fit.summary.message);
 }
 
@@ -306,7 +312,9 @@ void add_fit(CLI::App& root) {
   auto args = std::make_shared<FitArgs>();
   CLI::App* cmd = root.add_subcommand(
       "fit", "Fit Newton's law of cooling, T = T_amb + (T0 - T_amb) exp(-k t), to a time and a temperature column");
-  cmd->add_option("data", args->file, "CSV file with a header row (e.g. from `bosfuse export --csv`)")->required();
+  cmd->add_option("data", args->file,
+                  "CSV file with a header row (e.g. from `bosfuse export --csv`); '-': standard input")
+      ->required();
   cmd->add_option("--time-column", args->time_column,
                   "Time column: seconds or ISO-8601 UTC (default: t_s, time_s, t, time or time_utc, else the first)");
   cmd->add_option("--temperature-column", args->temperature_column,
@@ -318,7 +326,9 @@ void add_fit(CLI::App& root) {
                   "Known measurement σ in °C: absolute uncertainties and a reduced χ² (default: scaled by the "
                   "residual variance)");
   cmd->add_option("--confidence", args->confidence, "Confidence level of the intervals")->capture_default_str();
-  cmd->add_option("--json", args->json, "Write the fit as JSON to this file");
+  cmd->add_option("--json", args->json,
+                  "Also write the fit as JSON to this file; '-': the JSON alone on standard output (the printed fit "
+                  "then goes to standard error)");
   cmd->callback([args] { run_fit(*args); });
 }
 

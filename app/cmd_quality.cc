@@ -1,54 +1,68 @@
 // bosfuse quality: the image quality index of a captured background against
 // the digital pattern it was printed from (Q_L, Q_C, Q_mod, Wang–Bovik Q).
+// The result is text on standard output; --json FILE writes it for programs
+// as well, and --json - puts the JSON alone on standard output (the text
+// then goes to standard error).
 
 #include <fmt/format.h>
 
-#include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "app/command.h"
 #include "app/displacement_map.h"
 #include "app/image_io.h"
+#include "app/output_stream.h"
 #include "fusion/image_quality.h"
 
 namespace bosfuse::app {
 namespace {
 
 struct QualityArgs {
-  std::string image, reference, map;
-  bool json = false;
+  std::string image, reference, map, json;
   int window_px = 8;
 };
 
+nlohmann::ordered_json quality_json(const QualityArgs& args, const fusion::QualityReport& report) {
+  const auto& g = report.global;
+  return {{"image", args.image},
+          {"reference", args.reference},
+          {"q_l", g.q_l},
+          {"q_c", g.q_c},
+          {"q_mod", g.q_mod},
+          {"universal_index", report.universal_index},
+          {"mean_local_q_mod", report.mean_local_q_mod},
+          {"window_px", args.window_px},
+          {"mean_image", g.mean_image},
+          {"mean_reference", g.mean_reference},
+          {"std_image", g.std_image},
+          {"std_reference", g.std_reference}};
+}
+
+std::string quality_text(const QualityArgs& args, const fusion::QualityReport& report) {
+  const auto& g = report.global;
+  return fmt::format(
+      "Q_L   {:.3f}  (luminance: mean {:.3f} vs {:.3f} of full scale)\n"
+      "Q_C   {:.3f}  (contrast: std {:.3f} vs {:.3f})\n"
+      "Q_mod {:.3f}\n"
+      "Wang-Bovik Q {:.3f}, mean local Q_mod {:.3f} ({} px windows)\n",
+      g.q_l, g.mean_image, g.mean_reference, g.q_c, g.std_image, g.std_reference, g.q_mod, report.universal_index,
+      report.mean_local_q_mod, args.window_px);
+}
+
 void quality(const QualityArgs& args) {
+  if (!args.map.empty()) refuse_standard_output(args.map, "--map", "the image format comes from the file name (.png)");
   const cv::Mat image = read_image(args.image, "image");
   const cv::Mat reference = read_image(args.reference, "reference");
+  std::optional<OutputStream> json;
+  if (!args.json.empty()) json.emplace(args.json);
   fusion::QualityOptions options;
   options.window_px = args.window_px;
   const auto report = fusion::assess_quality(image, reference, options);
-  const auto& g = report.global;
-  if (args.json) {
-    const nlohmann::json out{{"image", args.image},
-                             {"reference", args.reference},
-                             {"q_l", g.q_l},
-                             {"q_c", g.q_c},
-                             {"q_mod", g.q_mod},
-                             {"universal_index", report.universal_index},
-                             {"mean_local_q_mod", report.mean_local_q_mod},
-                             {"window_px", args.window_px},
-                             {"mean_image", g.mean_image},
-                             {"mean_reference", g.mean_reference},
-                             {"std_image", g.std_image},
-                             {"std_reference", g.std_reference}};
-    std::cout << out.dump(2) << "\n";
-  } else {
-    std::cout << fmt::format(
-        "Q_L   {:.3f}  (luminance: mean {:.3f} vs {:.3f} of full scale)\n"
-        "Q_C   {:.3f}  (contrast: std {:.3f} vs {:.3f})\n"
-        "Q_mod {:.3f}\n"
-        "Wang-Bovik Q {:.3f}, mean local Q_mod {:.3f} ({} px windows)\n",
-        g.q_l, g.mean_image, g.mean_reference, g.q_c, g.std_image, g.std_reference, g.q_mod, report.universal_index,
-        report.mean_local_q_mod, args.window_px);
+  text_stream(names_standard_output(args.json)) << quality_text(args, report) << std::flush;
+  if (json) {
+    json->stream() << quality_json(args, report).dump(2) << "\n";
+    json->close();
   }
   if (!args.map.empty()) write_image(args.map, draw_scalar_map(report.local_q_mod, 0.0, 1.0, "local Q_mod"));
 }
@@ -58,9 +72,11 @@ void add_quality(CLI::App& root) {
   CLI::App* cmd = root.add_subcommand("quality", "Image quality index of a captured background (Q_L, Q_C, Q_mod)");
   cmd->add_option("image", args->image, "Captured background image")->required();
   cmd->add_option("--reference", args->reference, "The digital pattern it was printed from")->required();
-  cmd->add_flag("--json", args->json, "Print JSON instead of text");
+  cmd->add_option("--json", args->json,
+                  "Also write the result as JSON to this file; '-': the JSON alone on standard output (the text "
+                  "then goes to standard error)");
   cmd->add_option("--map", args->map, "Write the local Q_mod map to this PNG");
-  cmd->add_option("--window", args->window_px, "Sliding window, px")->capture_default_str();
+  cmd->add_option("--window", args->window_px, "Sliding window of the local index, px")->capture_default_str();
   cmd->callback([args] { quality(*args); });
 }
 

@@ -1,8 +1,9 @@
 // bosfuse sim modbus: a simulated thermocouple module anyone can log from.
+// A server has no data to print: where it serves and what it answered are
+// messages, on standard error.
 
 #include <spdlog/spdlog.h>
 
-#include <iostream>
 #include <thread>
 
 #include "app/command.h"
@@ -20,7 +21,7 @@ struct SimModbusArgs {
   std::string serial_port;
   int baud = 9600;
   int unit_id = 1;
-  double update_period_s = 0;
+  std::string update_period = "0";
   std::string duration;
 };
 
@@ -39,21 +40,36 @@ acquisition::ModbusEndpoint endpoint_of(const SimModbusArgs& args) {
   return endpoint;
 }
 
+// Zero means every request here, where a duration must be positive: "0",
+// "0s" and "0ms" all say so; anything else is a duration.
+std::chrono::nanoseconds update_period(const std::string& text) {
+  std::size_t used = 0;
+  try {
+    if (std::stod(text, &used) == 0.0) {
+      const std::string unit = text.substr(used);
+      if (unit.empty() || unit == "s" || unit == "ms" || unit == "m" || unit == "min" || unit == "h") return {};
+    }
+  } catch (const std::exception&) {
+    // not a number: parse_duration names the text
+  }
+  return parse_duration(text);
+}
+
 void serve(SimModbusArgs args) {
-  args.module.update_period = std::chrono::nanoseconds(static_cast<std::int64_t>(args.update_period_s * 1e9));
+  args.module.update_period = update_period(args.update_period);
   sim::ModbusSimServer server(sim::module_server_options(args.module, endpoint_of(args)));
   server.start();
   const std::string where =
       args.transport == "rtu" ? args.serial_port : args.host + ":" + std::to_string(server.port());
-  std::cout << "simulated " << args.module.profile << " (unit " << args.unit_id << ") with " << args.module.inputs
-            << " type " << args.module.tc_type << " inputs serving on " << where << "; Ctrl-C to stop" << std::endl;
+  spdlog::info("simulated {} (unit {}) with {} type {} inputs serving on {}; Ctrl-C to stop", args.module.profile,
+               args.unit_id, args.module.inputs, args.module.tc_type, where);
   const auto& stop = stop_requested_by_signal();
   const auto end = args.duration.empty() ? std::chrono::steady_clock::time_point::max()
                                          : std::chrono::steady_clock::now() + parse_duration(args.duration);
   while (!stop.load() && std::chrono::steady_clock::now() < end) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
-  std::cout << "answered " << server.requests_answered() << " requests" << std::endl;
+  spdlog::info("answered {} requests", server.requests_answered());
 }
 
 void add_sim(CLI::App& root) {
@@ -79,19 +95,18 @@ void add_sim(CLI::App& root) {
   cmd->add_option("--serial", args->serial_port, "Serial device (RTU), e.g. one end of a socat pty pair");
   cmd->add_option("--baud", args->baud, "Baud rate (RTU)")->capture_default_str();
   cmd->add_option("--unit-id", args->unit_id, "Modbus unit id")->check(CLI::Range(0, 247))->capture_default_str();
-  cmd->add_option("--ambient", args->module.signal.ambient_c, "Ambient temperature, degC")->capture_default_str();
-  cmd->add_option("--initial", args->module.signal.initial_c, "Temperature at start, degC")->capture_default_str();
+  cmd->add_option("--ambient", args->module.signal.ambient_c, "Ambient temperature, °C")->capture_default_str();
+  cmd->add_option("--initial", args->module.signal.initial_c, "Temperature at start, °C")->capture_default_str();
   cmd->add_option("--k", args->module.signal.k_per_s, "Cooling rate k, 1/s")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->add_option("--noise", args->module.signal.noise_c, "Noise standard deviation, degC")
+  cmd->add_option("--noise", args->module.signal.noise_c, "Noise standard deviation, °C")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--seed", args->module.signal.seed, "Noise seed")->capture_default_str();
-  cmd->add_option("--update-period", args->update_period_s, "Seconds between value updates (0: every request)")
-      ->check(CLI::NonNegativeNumber)
+  cmd->add_option("--update-period", args->update_period, "Time between value updates (250ms, 1s; 0: every request)")
       ->capture_default_str();
-  cmd->add_option("--duration", args->duration, "Stop after this long (default: until Ctrl-C)");
+  cmd->add_option("--duration", args->duration, "Stop after this long (30s, 10m, 2h); default: until Ctrl-C");
   cmd->callback([args] { serve(*args); });
 }
 

@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "app/test_streams.h"
 #include "sim/background_pattern.h"
 #include "sim/synthetic_pair.h"
 #include "tests/support/forged_image.h"
@@ -32,6 +33,9 @@ class EvaluateCli : public ::testing::Test {
   }
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
   testing::CommandResult bosfuse(const std::string& args) { return testing::run_command(kBosfuse + " " + args); }
+  testing::StreamsResult streams(const std::string& args) {
+    return testing::run_with_streams(kBosfuse + " " + args, dir_.path());
+  }
   static std::string read(const std::string& file) {
     std::ifstream in(file);
     std::stringstream text;
@@ -44,7 +48,7 @@ class EvaluateCli : public ::testing::Test {
 
 TEST_F(EvaluateCli, AGoodPairGivesACsvWithTheHeader) {
   const auto run = bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " -o " + path("field.csv") +
-                           " --png " + path("map.png") + " --contour 0.05");
+                           " --map " + path("map.png") + " --contour 0.05");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const std::string csv = read(path("field.csv"));
   std::istringstream lines(csv);
@@ -127,8 +131,8 @@ TEST_F(EvaluateCli, RoiOutsideTheImageIsAnError) {
 // 388 KB one took 7.5 GB and 134 s evaluated against itself).
 TEST_F(EvaluateCli, AnImageDeclaringTooManyPixelsIsRefusedUnread) {
   const auto bomb = testing::png_declaring(20000, 20000);
-  std::ofstream(path("bomb.png"), std::ios::binary).write(reinterpret_cast<const char*>(bomb.data()),
-                                                           static_cast<std::streamsize>(bomb.size()));
+  std::ofstream(path("bomb.png"), std::ios::binary)
+      .write(reinterpret_cast<const char*>(bomb.data()), static_cast<std::streamsize>(bomb.size()));
   const auto run = bosfuse("evaluate " + path("bomb.png") + " " + path("bomb.png"));
   EXPECT_NE(run.exit_code, 0);
   EXPECT_NE(run.output.find("bomb.png: the image declares 20000x20000 px (400.0 megapixels), over the limit"),
@@ -168,14 +172,84 @@ TEST_F(EvaluateCli, BackgroundAndQuality) {
   cv::Mat captured;
   cv::imread(path("bg.png"), cv::IMREAD_GRAYSCALE).convertTo(captured, CV_8U, 0.5, 30);
   cv::imwrite(path("captured.png"), captured);
-  const auto q =
-      bosfuse("quality " + path("captured.png") + " --reference " + path("bg.png") + " --json --map " + path("q.png"));
-  ASSERT_EQ(q.exit_code, 0) << q.output;
-  const auto json = nlohmann::json::parse(q.output.substr(q.output.find('{')));
+  const auto q = streams("quality " + path("captured.png") + " --reference " + path("bg.png") + " --json - --map " +
+                         path("q.png"));
+  ASSERT_EQ(q.exit_code, 0) << q.err;
+  const auto json = nlohmann::json::parse(q.out);
   EXPECT_GT(json.at("q_mod").get<double>(), 0.2);
   EXPECT_LT(json.at("q_mod").get<double>(), 0.9);
   EXPECT_NEAR(json.at("q_mod").get<double>(), json.at("q_l").get<double>() * json.at("q_c").get<double>(), 1e-9);
   EXPECT_FALSE(cv::imread(path("q.png")).empty());
+}
+
+// Command-line conventions (issue 11): `-o -` is standard output, which then
+// holds the CSV and nothing else; the summary is a message on stderr.
+TEST_F(EvaluateCli, DashIsStandardOutputWithOnlyTheCsvOnIt) {
+  const auto dash = streams("evaluate " + path("ref.png") + " " + path("meas.png") + " -o -");
+  ASSERT_EQ(dash.exit_code, 0) << dash.err;
+  EXPECT_TRUE(dash.out.starts_with("x,y,u,v,valid,peak_ratio\n")) << dash.out.substr(0, 200);
+  EXPECT_EQ(std::count(dash.out.begin(), dash.out.end(), '\n'), 1 + 15 * 11);
+  EXPECT_NE(dash.err.find("vectors"), std::string::npos) << "the summary goes to stderr: " << dash.err;
+  EXPECT_EQ(dash.err.find("x,y,u,v"), std::string::npos) << dash.err;
+  const auto plain = streams("evaluate " + path("ref.png") + " " + path("meas.png"));
+  EXPECT_EQ(plain.out, dash.out) << "no -o is standard output too";
+
+  const auto to_file = streams("evaluate " + path("ref.png") + " " + path("meas.png") + " --out " + path("f.csv"));
+  ASSERT_EQ(to_file.exit_code, 0) << to_file.err;
+  EXPECT_EQ(to_file.out, "");
+  EXPECT_EQ(read(path("f.csv")), dash.out);
+  EXPECT_NE(to_file.err.find("wrote " + path("f.csv")), std::string::npos) << to_file.err;
+}
+
+// One spelling per option: the map image is --map here as in `quality`.
+TEST_F(EvaluateCli, TheMapIsWrittenWithMapAndNeedsAFileName) {
+  const auto old_spelling = streams("evaluate " + path("ref.png") + " " + path("meas.png") + " --png " + path("m.png"));
+  EXPECT_NE(old_spelling.exit_code, 0);
+  EXPECT_NE(old_spelling.err.find("--png"), std::string::npos) << old_spelling.err;
+  const auto dash = streams("evaluate " + path("ref.png") + " " + path("meas.png") + " --map -");
+  EXPECT_NE(dash.exit_code, 0);
+  EXPECT_EQ(dash.out, "") << "refused before any work";
+  EXPECT_NE(dash.err.find("--map cannot be standard output ('-'): the image format comes from the file name"),
+            std::string::npos)
+      << dash.err;
+}
+
+TEST_F(EvaluateCli, QualityTextIsTheOutputUnlessJsonTakesStandardOutput) {
+  const auto made = bosfuse("background --out " + path("bg.png") + " --width 160 --height 120 --seed 2");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  const std::string quality = "quality " + path("bg.png") + " --reference " + path("bg.png");
+
+  const auto text = streams(quality);
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_TRUE(text.out.starts_with("Q_L   1.000")) << text.out;
+  EXPECT_EQ(text.err, "");
+
+  const auto dash = streams(quality + " --json -");
+  ASSERT_EQ(dash.exit_code, 0) << dash.err;
+  const auto json = nlohmann::json::parse(dash.out);  // throws on anything but one JSON document
+  EXPECT_DOUBLE_EQ(json.at("q_mod").get<double>(), 1.0);
+  EXPECT_EQ(dash.err, text.out) << "the text moves to stderr";
+
+  const auto to_file = streams(quality + " --json " + path("q.json"));
+  ASSERT_EQ(to_file.exit_code, 0) << to_file.err;
+  EXPECT_EQ(to_file.out, text.out);
+  EXPECT_EQ(nlohmann::json::parse(read(path("q.json"))), json);
+  EXPECT_NE(to_file.err.find("wrote " + path("q.json")), std::string::npos) << to_file.err;
+
+  const auto quiet = streams(quality + " --json - -q");
+  EXPECT_EQ(nlohmann::json::parse(quiet.out), json);
+  EXPECT_EQ(quiet.err, "") << "--quiet leaves only warnings and errors";
+
+  const auto bare = streams(quality + " --json");
+  EXPECT_NE(bare.exit_code, 0) << "--json takes FILE or -";
+}
+
+TEST_F(EvaluateCli, ABackgroundPatternIsAFileNotStandardOutput) {
+  const auto refused = streams("background --out - --width 160 --height 120");
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_EQ(refused.out, "");
+  EXPECT_NE(refused.err.find("--out cannot be standard output ('-')"), std::string::npos) << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "-"));
 }
 
 }  // namespace

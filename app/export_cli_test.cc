@@ -8,8 +8,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
+#include "app/test_streams.h"
 #include "report/test_readers.h"
 #include "report/test_run.h"
 #include "storage/processing_store.h"
@@ -33,6 +36,7 @@ class ExportCli : public ::testing::Test {
   }
   fs::path run() const { return dir_ / "run"; }
   testing::CommandResult bosfuse(const std::string& args) { return testing::run_command(kBosfuse + " " + args, 120); }
+  testing::StreamsResult streams(const std::string& command) { return testing::run_with_streams(command, dir_.path()); }
 
   testing::TempDir dir_;
   report::testrun::Truth truth_;
@@ -138,11 +142,64 @@ TEST_F(ExportCli, CsvAndFieldsAreAlternatives) {
   const auto output_with_fields =
       bosfuse("export " + sh_quoted(run()) + " --fields " + sh_quoted(dir_ / "f.h5") + " -o x.csv");
   EXPECT_NE(output_with_fields.exit_code, 0);
-  EXPECT_NE(output_with_fields.output.find("--output excludes --fields"), std::string::npos)
-      << output_with_fields.output;
+  EXPECT_NE(output_with_fields.output.find("--out excludes --fields"), std::string::npos) << output_with_fields.output;
   const auto csv = bosfuse("export " + sh_quoted(run()) + " --csv -o " + sh_quoted(dir_ / "s.csv"));
   ASSERT_EQ(csv.exit_code, 0) << csv.output;
   EXPECT_TRUE(fs::exists(dir_ / "s.csv"));
+}
+
+std::string read_file(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Command-line conventions (issue 11): `-o -` is standard output, which
+// then holds the CSV and nothing else; a file named by -o/--out gets the
+// same bytes and standard output stays empty; messages are on stderr.
+TEST_F(ExportCli, DashIsStandardOutputAndOutIsTheOneSpellingOfTheOutput) {
+  const auto dash = streams(kBosfuse + " export " + sh_quoted(run()) + " --csv -o -");
+  ASSERT_EQ(dash.exit_code, 0) << dash.err;
+  EXPECT_TRUE(dash.out.starts_with("time_utc,t_s,tc0 [degC],tc1 [degC]\n")) << dash.out.substr(0, 200);
+  EXPECT_EQ(std::count(dash.out.begin(), dash.out.end(), '\n'), 1 + 2 * truth_.samples) << "one row per poll";
+  EXPECT_EQ(dash.err, "") << "nothing but data was asked for";
+  const auto plain = streams(kBosfuse + " export " + sh_quoted(run()) + " --csv");
+  EXPECT_EQ(plain.out, dash.out) << "no -o is standard output too";
+
+  const auto to_file = streams(kBosfuse + " export " + sh_quoted(run()) + " --csv --out " + sh_quoted(dir_ / "s.csv"));
+  ASSERT_EQ(to_file.exit_code, 0) << to_file.err;
+  EXPECT_EQ(to_file.out, "");
+  EXPECT_NE(to_file.err.find("wrote " + (dir_ / "s.csv").string()), std::string::npos) << to_file.err;
+  EXPECT_EQ(read_file(dir_ / "s.csv"), dash.out);
+
+  const auto old_spelling =
+      streams(kBosfuse + " export " + sh_quoted(run()) + " --csv --output " + sh_quoted(dir_ / "t.csv"));
+  EXPECT_NE(old_spelling.exit_code, 0);
+  EXPECT_NE(old_spelling.err.find("--output"), std::string::npos) << old_spelling.err;
+  EXPECT_FALSE(fs::exists(dir_ / "t.csv"));
+
+  const auto fields = streams(kBosfuse + " export " + sh_quoted(run()) + " --fields -");
+  EXPECT_NE(fields.exit_code, 0);
+  EXPECT_EQ(fields.out, "");
+  EXPECT_NE(fields.err.find("--fields cannot be standard output ('-'): HDF5 cannot be written to a pipe"),
+            std::string::npos)
+      << fields.err;
+}
+
+// The two conventions together: one command's standard output is the next
+// one's input, and their messages stay out of the pipe.
+TEST_F(ExportCli, AnExportPipedIntoFitGivesTheChannelsCoolingRate) {
+  const auto piped = streams(kBosfuse + " export " + sh_quoted(run()) + " --csv -o - | " + kBosfuse +
+                             " fit - --temperature-column 'tc1 [degC]' --json -");
+  ASSERT_EQ(piped.exit_code, 0) << piped.err;
+  const json fit = json::parse(piped.out);
+  EXPECT_EQ(fit.at("input").at("file"), "-");
+  EXPECT_EQ(fit.at("input").at("temperature_column"), "tc1 [degC]");
+  const json& k = fit.at("parameters").at("k_per_s");
+  EXPECT_NEAR(k.at("value").get<double>(), truth_.k_per_s[1], 4 * k.at("std_error").get<double>());
+  EXPECT_NE(piped.err.find("standard input: 'tc1 [degC]' against 't_s'"), std::string::npos)
+      << "the printed fit goes to stderr: " << piped.err;
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "acquisition/clock.h"
+#include "app/test_streams.h"
 #include "storage/run_store.h"
 #include "tests/support/cooling_curve.h"
 #include "tests/support/subprocess.h"
@@ -19,6 +20,9 @@ const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
 class FitCli : public ::testing::Test {
  protected:
   testing::CommandResult bosfuse(const std::string& args) { return testing::run_command(kBosfuse + " " + args); }
+  testing::StreamsResult streams(const std::string& args) {
+    return testing::run_with_streams(kBosfuse + " " + args, dir_.path());
+  }
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
   void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
   nlohmann::json read_json(const std::string& name) const {
@@ -204,6 +208,48 @@ TEST_F(FitCli, NonFiniteValuesAreCountedAndBadCellsNamed) {
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_NE(missing.output.find("no time column 'time'; the columns are 't_s', 'T'"), std::string::npos)
       << missing.output;
+}
+
+// Command-line conventions (issue 11): `--json -` puts the JSON alone on
+// standard output and the printed fit on standard error; with a file, the
+// printed fit is the output and "wrote" a message; "-" as the data reads
+// standard input.
+TEST_F(FitCli, JsonDashIsStandardOutputAndDashReadsStandardInput) {
+  const testing::CoolingCurve curve{22.0, 75.0, 0.012};
+  write("run.csv", seconds_csv(curve, 300, 0.05, 7));
+  const auto dash = streams("fit " + path("run.csv") + " --json -");
+  ASSERT_EQ(dash.exit_code, 0) << dash.err;
+  const auto j = nlohmann::json::parse(dash.out);  // throws on anything but one JSON document
+  EXPECT_TRUE(j.at("ok").get<bool>());
+  EXPECT_NE(dash.err.find("T_amb"), std::string::npos) << "the printed fit moves to stderr: " << dash.err;
+  EXPECT_EQ(dash.err.find("wrote"), std::string::npos) << dash.err;
+
+  const auto to_file = streams("fit " + path("run.csv") + " --json " + path("fit.json"));
+  ASSERT_EQ(to_file.exit_code, 0) << to_file.err;
+  EXPECT_NE(to_file.out.find("T_amb"), std::string::npos) << to_file.out;
+  EXPECT_EQ(to_file.out.find("wrote"), std::string::npos) << "a message on stdout: " << to_file.out;
+  EXPECT_NE(to_file.err.find("wrote " + path("fit.json")), std::string::npos) << to_file.err;
+  EXPECT_EQ(read_json("fit.json"), j) << "the same JSON in the file as on stdout";
+
+  const auto from_stdin = streams("fit - --json - < " + path("run.csv"));
+  ASSERT_EQ(from_stdin.exit_code, 0) << from_stdin.err;
+  const auto piped = nlohmann::json::parse(from_stdin.out);
+  EXPECT_EQ(piped.at("input").at("file"), "-");
+  EXPECT_EQ(piped.at("parameters"), j.at("parameters")) << "the same data, the same fit";
+  EXPECT_NE(from_stdin.err.find("standard input: 'T' against 't_s'"), std::string::npos) << from_stdin.err;
+
+  const auto quiet = streams("fit - --json - -q < " + path("run.csv"));
+  ASSERT_EQ(quiet.exit_code, 0) << quiet.err;
+  EXPECT_EQ(nlohmann::json::parse(quiet.out).at("parameters"), j.at("parameters"));
+  EXPECT_EQ(quiet.err, "") << "--quiet leaves only warnings and errors";
+}
+
+TEST_F(FitCli, AFailedFitWithJsonDashStillGivesTheJsonAndTheErrorOnStderr) {
+  write("flat.csv", seconds_csv(testing::CoolingCurve{22.0, 22.0, 0.01}, 200, 0.05, 4));
+  const auto result = streams("fit " + path("flat.csv") + " --json -");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_FALSE(nlohmann::json::parse(result.out).at("ok").get<bool>());
+  EXPECT_NE(result.err.find("no fit"), std::string::npos) << result.err;
 }
 
 TEST_F(FitCli, HasHelp) {

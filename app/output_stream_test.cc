@@ -1,0 +1,104 @@
+#include "app/output_stream.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <sstream>
+
+#include "tests/support/temp_dir.h"
+
+namespace bosfuse::app {
+namespace {
+
+// Standard output into a string for the test's lifetime.
+class CapturedStdout {
+ public:
+  CapturedStdout() : previous_(std::cout.rdbuf(text_.rdbuf())) {}
+  ~CapturedStdout() { std::cout.rdbuf(previous_); }
+  std::string text() const { return text_.str(); }
+
+ private:
+  std::ostringstream text_;
+  std::streambuf* previous_;
+};
+
+std::string read(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST(OutputStream, ADashIsStandardOutput) {
+  CapturedStdout captured;
+  OutputStream out("-");
+  EXPECT_TRUE(out.to_standard_output());
+  out.stream() << "a,b\n1,2\n";
+  out.close();
+  EXPECT_EQ(captured.text(), "a,b\n1,2\n");
+}
+
+TEST(OutputStream, AnyOtherNameIsAFile) {
+  testing::TempDir dir;
+  CapturedStdout captured;
+  OutputStream out((dir / "x.csv").string());
+  EXPECT_FALSE(out.to_standard_output());
+  out.stream() << "data\n";
+  out.close();
+  EXPECT_EQ(read(dir / "x.csv"), "data\n");
+  EXPECT_EQ(captured.text(), "") << "nothing on standard output when the data went to a file";
+}
+
+TEST(OutputStream, AFileThatCannotBeCreatedFailsBeforeAnyWork) {
+  testing::TempDir dir;
+  const std::string path = (dir / "no-such-folder" / "x.csv").string();
+  try {
+    OutputStream out(path);
+    FAIL() << "opened " << path;
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), "cannot write '" + path + "'");
+  }
+}
+
+TEST(OutputStream, AFailedWriteIsAnErrorNotAShortFile) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  OutputStream out("/dev/full");
+  out.stream() << "data that does not fit\n";
+  EXPECT_THROW(
+      {
+        try {
+          out.close();
+        } catch (const std::runtime_error& e) {
+          EXPECT_EQ(std::string(e.what()), "could not write '/dev/full'");
+          throw;
+        }
+      },
+      std::runtime_error);
+}
+
+TEST(OutputStream, OptionsNeedingAFileRefuseADashWithTheReason) {
+  EXPECT_NO_THROW(refuse_standard_output("map.png", "--map", "a PNG image"));
+  try {
+    refuse_standard_output("-", "--map", "the image format comes from its name");
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), "--map cannot be standard output ('-'): the image format comes from its name");
+  }
+}
+
+TEST(OutputStream, TheTextResultMovesToStandardErrorWhenTheDataTookStandardOutput) {
+  EXPECT_EQ(&text_stream(false), &std::cout);
+  const auto level = spdlog::get_level();
+  spdlog::set_level(spdlog::level::info);
+  EXPECT_EQ(&text_stream(true), &std::cerr);
+  spdlog::set_level(spdlog::level::warn);  // --quiet
+  std::ostream& quiet = text_stream(true);
+  EXPECT_NE(&quiet, &std::cerr);
+  EXPECT_NE(&quiet, &std::cout);
+  quiet << "dropped\n";
+  EXPECT_EQ(&text_stream(false), &std::cout) << "--quiet keeps the result when it is the output";
+  spdlog::set_level(level);
+}
+
+}  // namespace
+}  // namespace bosfuse::app
