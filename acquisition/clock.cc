@@ -19,23 +19,6 @@ std::int64_t floor_div(std::int64_t a, std::int64_t b) { return a / b - ((a % b 
 
 }  // namespace
 
-std::string format_iso8601_utc(std::int64_t t_ns, int fraction_digits) {
-  fraction_digits = std::clamp(fraction_digits, 0, 9);
-  const std::int64_t seconds = floor_div(t_ns, 1'000'000'000);
-  const std::int64_t fraction_ns = t_ns - seconds * 1'000'000'000;
-  const std::tm f = utc_fields(seconds);
-  char text[96];
-  int n = std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d", f.tm_year + 1900, f.tm_mon + 1, f.tm_mday,
-                        f.tm_hour, f.tm_min, f.tm_sec);
-  if (fraction_digits > 0) {
-    char digits[16];
-    std::snprintf(digits, sizeof digits, "%09lld", static_cast<long long>(fraction_ns));
-    n += std::snprintf(text + n, sizeof text - static_cast<std::size_t>(n), ".%.*s", fraction_digits, digits);
-  }
-  std::snprintf(text + n, sizeof text - static_cast<std::size_t>(n), "Z");
-  return text;
-}
-
 std::string format_compact_utc(std::int64_t t_ns) {
   const std::tm f = utc_fields(floor_div(t_ns, 1'000'000'000));
   char text[80];

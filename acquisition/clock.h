@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <string>
 
+#include "storage/experiment_clock.h"
+
 namespace bosfuse::acquisition {
 
 inline std::int64_t utc_now_ns() {
@@ -21,9 +23,8 @@ inline constexpr int kEarliestYear = 1900;
 inline constexpr int kLatestYear = 2100;
 inline constexpr bool plausible_year(int year) { return year >= kEarliestYear && year <= kLatestYear; }
 
-// ISO-8601 UTC with `fraction_digits` decimals of a second (0..9), e.g.
-// 2026-11-23T09:13:48.289123Z.
-std::string format_iso8601_utc(std::int64_t t_ns, int fraction_digits = 6);
+// ISO-8601 UTC, e.g. 2026-11-23T09:13:48.289123Z (storage/experiment_clock.h).
+using storage::format_iso8601_utc;
 
 // A compact UTC stamp usable in file names: 20261123T091348Z.
 std::string format_compact_utc(std::int64_t t_ns);

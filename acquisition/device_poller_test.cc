@@ -70,7 +70,7 @@ class ScriptedSource : public ThermocoupleSource {
 
 struct Harness {
   testing::TempDir dir;
-  storage::RunStore store = storage::RunStore::create(dir / "run", {0, "t", 0, {}, "", storage::RunStatus::kRunning},
+  storage::RunStore store = storage::RunStore::create(dir / "run", {0, "t", 0, {}, "", storage::RunStatus::kRunning, 1.0, std::nullopt},
                                                       storage::RunStore::CreateMode::kNew);
   std::int64_t device = store.add_device({0, "scripted", "test", "", ""});
   std::vector<std::int64_t> channels = {store.add_channel({0, device, "a", "thermocouple", "degC", "K", {}, {}}),

@@ -384,6 +384,12 @@ ExperimentConfig parse_experiment(std::string_view text, const std::string& sour
   if (const auto run = reader.table("run")) {
     config.run_name = run->optional_string("name").value_or("");
     config.description = run->optional_string("description").value_or("");
+    config.time_scale = run->optional_number("time_scale").value_or(1.0);
+    if (!(config.time_scale > 0) || !std::isfinite(config.time_scale)) {
+      run->fail("time_scale", "expected a positive number (experiment seconds per recorded second)");
+    }
+    config.origin_event = run->optional_string("origin");
+    if (config.origin_event && config.origin_event->empty()) run->fail("origin", "expected the name of a marker event");
     run->reject_unknown_keys();
   }
   std::set<std::string> names;
@@ -403,6 +409,16 @@ ExperimentConfig parse_experiment(std::string_view text, const std::string& sour
   }
   reader.reject_unknown_keys();
   return config;
+}
+
+storage::RunInfo run_info(const ExperimentConfig& config, std::int64_t started_ns) {
+  storage::RunInfo info;
+  info.name = config.run_name.empty() ? std::string("run") : config.run_name;
+  info.started_ns = started_ns;
+  info.config_toml = config.source_text;
+  info.time_scale = config.time_scale;
+  info.origin_event = config.origin_event;
+  return info;
 }
 
 ExperimentConfig load_experiment(const std::filesystem::path& path) {

@@ -19,6 +19,7 @@
 #include "acquisition/toml_reader.h"
 #include "acquisition/usb_tc32_device.h"
 #include "acquisition/watched_folder_source.h"
+#include "storage/records.h"
 
 namespace bosfuse::acquisition {
 
@@ -71,6 +72,8 @@ struct CameraConfig {
 struct ExperimentConfig {
   std::string run_name;
   std::string description;
+  double time_scale = 1;                    // [run] time_scale: experiment seconds per recorded second
+  std::optional<std::string> origin_event;  // [run] origin: the marker event that is t = 0
   std::vector<ModbusDeviceConfig> modbus_devices;
   std::vector<HidDeviceConfig> hid_devices;
   std::vector<UsbDeviceConfig> usb_devices;
@@ -83,6 +86,8 @@ struct ExperimentConfig {
 };
 
 ExperimentConfig parse_experiment(std::string_view text, const std::string& source_name);
+// The run a logger records with this experiment file, started at `started_ns`.
+storage::RunInfo run_info(const ExperimentConfig& config, std::int64_t started_ns);
 ExperimentConfig load_experiment(const std::filesystem::path& path);  // throws ConfigError
 
 // Throws ConfigError, naming the key and line, for a Modbus TCP host name

@@ -45,7 +45,7 @@ class ScriptedCamera : public FrameSource {
 
 struct Harness {
   testing::TempDir dir;
-  storage::RunStore store = storage::RunStore::create(dir / "run", {0, "t", 0, {}, "", storage::RunStatus::kRunning},
+  storage::RunStore store = storage::RunStore::create(dir / "run", {0, "t", 0, {}, "", storage::RunStatus::kRunning, 1.0, std::nullopt},
                                                       storage::RunStore::CreateMode::kNew);
   std::int64_t device = store.add_device({0, "cam", "camera", "virtual", ""});
 

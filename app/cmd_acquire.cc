@@ -48,10 +48,7 @@ void acquire(const AcquireArgs& args) {
   acquisition::Logger::Options options;
   if (!args.duration.empty()) options.duration = parse_duration(args.duration);
   options.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
-  storage::RunInfo info;
-  info.name = config.run_name.empty() ? std::string("run") : config.run_name;
-  info.started_ns = acquisition::utc_now_ns();
-  info.config_toml = config.source_text;
+  const storage::RunInfo info = acquisition::run_info(config, acquisition::utc_now_ns());
   auto store = storage::RunStore::create(
       args.out, info, args.append ? storage::RunStore::CreateMode::kAppend : storage::RunStore::CreateMode::kNew);
   if (options.duration) store.set_planned_end(info.started_ns + options.duration->count());

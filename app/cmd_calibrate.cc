@@ -6,7 +6,7 @@
 #include <iostream>
 
 #include "app/command.h"
-#include "app/run_processing.h"
+#include "pipeline/calibrate.h"
 
 namespace bosfuse::app {
 namespace {
@@ -22,19 +22,19 @@ void add_calibrate(CLI::App& root) {
   auto args = std::make_shared<CalibrateArgs>();
   CLI::App* cmd = root.add_subcommand(
       "calibrate", "Fit degC per px of shift at each thermocouple from a processed run and store it in the run");
-  cmd->add_option("run", args->run, "Run folder (processed: `bosfuse process RUN --probes-only` is enough)")
+  cmd->add_option("run", args->run, "Run folder (processed: `bosfuse process RUN --mode probes` is enough)")
       ->required();
   cmd->add_option("--geometry", args->geometry, "TOML file whose [alignment] camera_offset_s is used");
   cmd->add_option("--camera-offset", args->camera_offset_s,
-                  "Camera clock offset, s: a frame stamped t happened at host time t + offset");
+                  "Camera clock offset, experiment s: a frame stamped t happened at t + offset");
   cmd->add_option("--estimate-offset", args->estimate_offset_s,
                   "Estimate the camera clock offset within +-this many seconds (needs a feature in the record)");
   cmd->callback([args] {
-    CalibrateOptions options;
+    pipeline::CalibrateOptions options;
     options.geometry_file = args->geometry;
     options.camera_offset_s = args->camera_offset_s;
     options.estimate_offset_max_s = args->estimate_offset_s;
-    std::cout << calibrate_run(args->run, options);
+    std::cout << pipeline::calibrate_run(args->run, options);
   });
 }
 

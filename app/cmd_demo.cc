@@ -20,8 +20,9 @@
 #include "acquisition/experiment_config.h"
 #include "acquisition/logger.h"
 #include "app/command.h"
+#include "app/progress_display.h"
 #include "app/run_control.h"
-#include "app/run_processing.h"
+#include "pipeline/process.h"
 #include "report/report.h"
 #include "report/run_input.h"
 #include "sim/virtual_devices.h"
@@ -67,18 +68,20 @@ DemoSetup demo_setup(double experiment_s) {
   return setup;
 }
 
-std::string demo_experiment(const DemoSetup& setup, int port, double poll_period_s) {
+std::string demo_experiment(const DemoSetup& setup, int port, double poll_period_s, double speed) {
   const sim::SceneOptions& s = setup.scene;
   std::string text = fmt::format(
       "# Written by 'bosfuse demo': the simulated convection experiment, its thermocouples\n"
       "# served by a simulated ADAM-6018 on loopback and its frames by a virtual camera.\n"
-      "[run]\nname = \"demo\"\ndescription = \"simulated cylinder cooling (pure exponential), {} s\"\n\n"
+      "[run]\nname = \"demo\"\ndescription = \"simulated cylinder cooling (pure exponential), {} s\"\n"
+      "time_scale = {}  # recorded {}x faster than the experiment\norigin = \"heater off\"  # the marker at the "
+      "scene's t = 0\n\n"
       "[geometry]\nz_d_m = {}\ndepth_m = {}\nmagnification = {}\npixel_pitch_um = {}\n"
       "ambient_pressure_pa = {}\nambient_temperature_c = {}  # the room, read before the run\nopen_edges = [\"top\"]  "
       "# the plume rises out of the image\n\n"
       "[[devices]]\nname = \"sim-adam\"\nprofile = \"adam-6018\"\nhost = \"127.0.0.1\"\nport = {}\n"
       "poll_period_s = {}\ntimeout_s = 0.5\n",
-      s.duration_s, s.z_d_m, s.depth_m, s.px_per_mm * setup.pixel_pitch_um * 1e-3, setup.pixel_pitch_um, s.pressure_pa,
+      s.duration_s, speed, speed, s.z_d_m, s.depth_m, s.px_per_mm * setup.pixel_pitch_um * 1e-3, setup.pixel_pitch_um, s.pressure_pa,
       s.ambient_c, port, poll_period_s);
   const sim::ConvectionScene& scene = *setup.model;
   for (std::size_t i = 0; i < setup.thermocouples.size(); ++i) {
@@ -98,7 +101,8 @@ struct Recording {
 };
 
 // Simulates the experiment and logs it through the real paths.
-Recording record_demo(const DemoArgs& args, const DemoSetup& setup, const std::filesystem::path& run_dir) {
+Recording record_demo(const DemoArgs& args, const DemoSetup& setup, const std::filesystem::path& run_dir,
+                      ProgressDisplay& display) {
   const std::int64_t started_ns = acquisition::utc_now_ns();
   const auto& scene = setup.model;
   const auto table = std::make_shared<const sim::SceneThermocoupleTable>(*scene, setup.thermocouples, args.speed,
@@ -106,15 +110,19 @@ Recording record_demo(const DemoArgs& args, const DemoSetup& setup, const std::f
   sim::ModbusSimServer server(sim::scene_module_options(table, "adam-6018", setup.scene.ambient_c, 0));
   server.start();
   const double poll_period_s = 1.0 / args.speed;  // one reading per second of experiment time
-  const std::string toml = demo_experiment(setup, server.port(), poll_period_s);
-  auto store =
-      storage::RunStore::create(run_dir, {0, "demo", started_ns, std::nullopt, toml, storage::RunStatus::kRunning},
-                                storage::RunStore::CreateMode::kNew);
+  const std::string toml = demo_experiment(setup, server.port(), poll_period_s, args.speed);
+  const auto config = acquisition::parse_experiment(toml, "demo.toml");
+  auto store = storage::RunStore::create(run_dir, acquisition::run_info(config, started_ns),
+                                         storage::RunStore::CreateMode::kNew);
+  // The scene's t = 0, when the heater is switched off: the run's declared origin.
+  const storage::Event heater_off{0, std::nullopt, started_ns, "marker", "heater off"};
+  store.write_events({&heater_off, 1});
   acquisition::Logger::Options options;
   options.duration = std::chrono::duration_cast<std::chrono::nanoseconds>(
       std::chrono::duration<double>(args.experiment_s / args.speed));
+  options.on_progress = [&](const std::string& line) { display.note(line); };
   acquisition::Logger logger(store, options);
-  logger.add_devices(acquisition::parse_experiment(toml, "demo.toml"));
+  logger.add_devices(config);
   sim::PatternOptions pattern;
   pattern.width_px = setup.scene.width_px;
   pattern.height_px = setup.scene.height_px;
@@ -126,11 +134,11 @@ Recording record_demo(const DemoArgs& args, const DemoSetup& setup, const std::f
   logger.add_camera(
       std::make_unique<sim::SceneCamera>(scene, sim::generate_pattern(pattern), sim::CameraModel{}, args.speed, 1),
       "camera", camera);
-  std::cout << fmt::format(
-      "demo: simulating {:.0f} s of cooling ({:.0f} -> {:.0f} degC, k = {:.5f} 1/s at the cylinder) at {}x, "
-      "logging thermocouples over Modbus TCP (127.0.0.1:{}) and frames from the virtual camera\n",
+  display.note(fmt::format(
+      "demo: simulating {:.0f} s of cooling ({:.0f} -> {:.0f} °C, k = {:.5f} 1/s at the cylinder) at {}x, "
+      "logging thermocouples over Modbus TCP (127.0.0.1:{}) and frames from the virtual camera",
       args.experiment_s, setup.scene.initial_c, setup.scene.ambient_c, scene->initial_cooling_rate_per_s(), args.speed,
-      server.port());
+      server.port()));
   Recording recording{run_dir, logger.run(stop_requested_by_signal())};
   server.stop();
   return recording;
@@ -140,31 +148,37 @@ Recording record_demo(const DemoArgs& args, const DemoSetup& setup, const std::f
 // Q' decays like the cylinder's excess, and the plume's excess like Q'^(4/5).
 double true_plume_cooling_rate(const DemoSetup& setup) { return 0.8 * setup.model->initial_cooling_rate_per_s(); }
 
-std::filesystem::path process_and_report(const DemoArgs& args, const DemoSetup& setup,
-                                         const std::filesystem::path& run_dir) {
-  const auto progress = [](const std::string& line) { std::cout << "  " << line << "\n"; };
+// Processes the run as a user would (its settings stored with the results,
+// so `bosfuse process RUN` repeats them) and writes the report. False when
+// Ctrl-C stopped the processing.
+bool process_and_report(const DemoArgs& args, const DemoSetup& setup, const std::filesystem::path& run_dir,
+                        ProgressDisplay& display) {
   cv::imwrite((run_dir / "holder-mask.png").string(), setup.model->holder_mask());
-  ProcessOptions process;
-  process.evaluator.set_grid(16, 8);
-  process.mask_file = "holder-mask.png";
-  process.progress = progress;
-  std::cout << "processing (full displacement and temperature fields) ...\n";
-  std::cout << process_run(run_dir, process).text << "\n";
+  pipeline::ProcessOptions process;
+  process.overrides.window_px = 16;
+  process.overrides.step_px = 8;
+  process.overrides.mask = "holder-mask.png";
+  process.stop = &stop_requested_by_signal();
+  process.progress = [&](const pipeline::ProcessProgress& p) {
+    p.frame ? display.step(p.done, p.total, p.line) : display.note(p.line);
+  };
+  display.note("processing (full displacement and temperature fields) ...");
+  const auto processed = pipeline::process_run(run_dir, process);
+  display.finish();
+  std::cout << processed.text << "\n";
+  if (!processed.complete) return false;
 
-  const storage::RunStore store = storage::RunStore::open(run_dir);
   report::RunReportOptions input_options;
-  input_options.px_per_mm = setup.scene.px_per_mm;
-  input_options.mask = cv::imread((run_dir / "holder-mask.png").string(), cv::IMREAD_GRAYSCALE);
-  // Maps early and late in the cooling; the run's times are host seconds.
-  input_options.map_times_s = {0.1 * args.experiment_s / args.speed, 0.6 * args.experiment_s / args.speed};
-  input_options.on_progress = progress;
-  std::cout << "writing the report ...\n";
-  const auto files = report::write_report(report::build_report_input(store, input_options), {}, run_dir / "report");
-  return files.html;
+  input_options.map_times_s = {0.1 * args.experiment_s, 0.6 * args.experiment_s};  // early and late in the cooling
+  display.note("writing the report ...");
+  report::write_report(report::build_report_input(storage::RunStore::open(run_dir), input_options), {},
+                       run_dir / "report");
+  return true;
 }
 
-// Fitted rates in experiment time (host time × speed-up) beside the truth.
-void print_rates(const std::filesystem::path& run_dir, double speed, double true_k_per_s) {
+// Fitted rates (stored in experiment time, like everything in the run)
+// beside the truth.
+void print_rates(const std::filesystem::path& run_dir, double true_k_per_s) {
   const storage::RunStore store = storage::RunStore::open(run_dir);
   const storage::ProcessingStore results(run_dir);
   std::map<std::int64_t, std::string> channel_names, probe_names;
@@ -175,14 +189,14 @@ void print_rates(const std::filesystem::path& run_dir, double speed, double true
     const auto k = nlohmann::json::parse(fit.json)["parameters"]["k_per_s"];
     const bool thermocouple = fit.subject == storage::FitSubject::kChannel;
     const std::string name = thermocouple ? channel_names[fit.subject_id] : probe_names[fit.subject_id];
-    if (k.is_null()) {
+    if (k.is_null() || k["value"].is_null()) {
       std::cout << fmt::format("  {:<28} no fit\n", name);
       continue;
     }
-    const double k_experiment = k["value"].get<double>() / speed;
+    const double k_per_s = k["value"].get<double>();
     std::cout << fmt::format("  {:<28} k = {:.5f} ± {:.5f} 1/s ({:+.1f}% from the truth)\n",
-                             (thermocouple ? "thermocouple " : "BOS ") + name, k_experiment,
-                             k["std_error"].get<double>() / speed, 100 * (k_experiment / true_k_per_s - 1));
+                             (thermocouple ? "thermocouple " : "BOS ") + name, k_per_s,
+                             k["std_error"].get<double>(), 100 * (k_per_s / true_k_per_s - 1));
   }
   for (const auto& agreement : results.agreements()) {
     std::cout << "  " << nlohmann::json::parse(agreement.json)["verdict"].get<std::string>() << "\n";
@@ -196,7 +210,7 @@ void write_truth(const std::filesystem::path& run_dir, const DemoArgs& args, con
   nlohmann::json truth = {{"speed", args.speed},
                           {"cylinder_k_per_s", scene.initial_cooling_rate_per_s()},
                           {"plume_k_per_s", true_plume_cooling_rate(setup)},
-                          {"note", "k in 1/s of experiment time; fits in the run are in host time (divide by speed)"}};
+                          {"note", "k in 1/s of experiment time, as every fit the run stores"}};
   std::ofstream(run_dir / "demo-truth.json") << truth.dump(2) << "\n";
 }
 
@@ -205,14 +219,22 @@ void run_demo(const DemoArgs& args) {
   const std::filesystem::path run_dir =
       std::filesystem::path(args.out) / acquisition::format_compact_utc(acquisition::utc_now_ns());
   const DemoSetup setup = demo_setup(args.experiment_s);
-  const Recording recording = record_demo(args, setup, run_dir);
+  ProgressDisplay display;
+  const Recording recording = record_demo(args, setup, run_dir, display);
   std::cout << recording.summary.BriefReport() << "\n";
   write_truth(run_dir, args, setup);
-  const std::filesystem::path report = process_and_report(args, setup, run_dir);
+  if (stop_requested_by_signal()) {
+    throw CommandFailure(kExitStopped, "stopped: the run is recorded up to here in " + run_dir.string() +
+                                           "; `bosfuse process " + run_dir.string() + "` processes it");
+  }
+  if (!process_and_report(args, setup, run_dir, display)) {
+    throw CommandFailure(kExitStopped, "stopped while processing; `bosfuse process " + run_dir.string() +
+                                           " --resume` continues");
+  }
   std::cout << "\n";
-  print_rates(run_dir, args.speed, true_plume_cooling_rate(setup));
+  print_rates(run_dir, true_plume_cooling_rate(setup));
   std::cout << "\nrun:     " << run_dir.string() << "\n"
-            << "report:  " << report.string() << "\n";
+            << "report:  " << (run_dir / "report" / "report.html").string() << "\n";
 }
 
 void add_demo(CLI::App& root) {

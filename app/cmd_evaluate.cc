@@ -11,12 +11,15 @@
 
 #include "app/command.h"
 #include "app/displacement_map.h"
-#include "app/image_io.h"
 #include "app/output_stream.h"
 #include "fusion/displacement_evaluator.h"
+#include "pipeline/image_io.h"
 
 namespace bosfuse::app {
 namespace {
+
+using pipeline::read_image;
+using pipeline::write_image;
 
 struct EvaluateArgs {
   std::string reference, measurement, out = "-", map, mask, roi, method = "xcorr", flow = "dis", subpixel = "auto",

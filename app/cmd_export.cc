@@ -15,10 +15,11 @@
 
 #include "acquisition/clock.h"
 #include "app/command.h"
-#include "app/geometry_config.h"
 #include "app/output_stream.h"
+#include "pipeline/processing_settings.h"
 #include "report/csv_cell.h"
 #include "report/field_export.h"
+#include "storage/experiment_clock.h"
 #include "storage/run_store.h"
 
 namespace bosfuse::app {
@@ -29,19 +30,19 @@ namespace {
 void write_csv(const storage::RunStore& store, std::ostream& out) {
   const auto channels = store.channels();
   std::map<std::int64_t, std::size_t> column;
+  const storage::ExperimentClock clock = storage::experiment_clock(store);
   out << "time_utc,t_s";
   for (const auto& c : channels) {
     column[c.id] = column.size();
     out << "," << report::csv_text_cell(c.name + " [" + c.unit + "]");
   }
   out << "\n";
-  const std::int64_t origin_ns = store.run().started_ns;
   std::vector<std::string> cells(channels.size());
   std::optional<std::int64_t> row_t;
   const auto flush_row = [&] {
     if (!row_t) return;
     out << acquisition::format_iso8601_utc(*row_t, 6) << ","
-        << fmt::format("{:.6f}", static_cast<double>(*row_t - origin_ns) * 1e-9);
+        << fmt::format("{:.6f}", clock.seconds(*row_t));
     for (auto& cell : cells) {
       out << "," << cell;
       cell.clear();
@@ -66,18 +67,14 @@ struct ExportArgs {
   double px_per_mm = 0;
 };
 
-// --px-per-mm, else the run config's [geometry] (the same rule as `bosfuse
-// report`), else none: the grid is then in px only.
+// --px-per-mm, else the run's stored geometry (as for `bosfuse report`),
+// else none: the grid is then in px only.
 std::optional<double> image_scale(const ExportArgs& args, const storage::RunStore& store) {
   if (args.px_per_mm > 0) return args.px_per_mm;
-  const std::string& toml = store.run().config_toml;
-  if (toml.find("[geometry]") == std::string::npos) return std::nullopt;
   try {
-    if (const auto config = parse_geometry_config(toml, "run config")) {
-      return fusion::BosGeometry(config->geometry).px_per_m_flow() * 1e-3;
-    }
+    return pipeline::stored_px_per_mm(store.dir());
   } catch (const std::exception& e) {
-    spdlog::warn("grid in px only, the run config's [geometry] could not be read: {}", e.what());
+    spdlog::warn("grid in px only, the run's geometry could not be read: {}", e.what());
   }
   return std::nullopt;
 }

@@ -1,60 +1,98 @@
 // bosfuse process: a run's frames against its reference frame → BOS probe
-// series at the thermocouples (and, unless --probes-only, displacement and
-// temperature fields under RUN/fields/), Newton fits and agreement, stored
-// in the run (docs/SCHEMA.md, version 2). Progress goes to stderr.
+// series at the thermocouples (and, unless in probe mode, displacement and
+// temperature fields), Newton fits and agreement, stored in the run with
+// the settings used (pipeline/process.h). With no options the run's stored
+// settings are used again; options override them and are stored in turn.
+// Progress goes to stderr, the summary to stdout.
 
 #include <iostream>
 
 #include "app/command.h"
-#include "app/run_processing.h"
+#include "app/progress_display.h"
+#include "app/run_control.h"
+#include "pipeline/process.h"
 
 namespace bosfuse::app {
 namespace {
 
 struct ProcessArgs {
   std::string run;
-  bool probes_only = false;
-  int window_px = 32, step_px = 16, passes = 3, probe_context = 1;
-  double max_shift_px = 4;
-  std::string geometry;
-  std::string mask;
+  bool resume = false;
+  std::optional<std::string> mode, method, mask, geometry, roi;
+  std::optional<int> window_px, step_px, passes, probe_context;
+  std::optional<double> max_shift_px;
 };
 
+cv::Rect parse_roi(const std::string& text) {
+  int x = 0, y = 0, w = 0, h = 0;
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%d,%d,%d,%d%c", &x, &y, &w, &h, &tail) != 4 || w <= 0 || h <= 0 || x < 0 || y < 0) {
+    throw std::runtime_error("--roi '" + text + "': expected x,y,width,height in pixels");
+  }
+  return {x, y, w, h};
+}
+
+pipeline::SettingsOverrides overrides(const ProcessArgs& args) {
+  pipeline::SettingsOverrides o;
+  if (args.mode) o.probes_only = *args.mode == "probes";
+  o.method = args.method;
+  o.window_px = args.window_px;
+  o.step_px = args.step_px;
+  o.passes = args.passes;
+  o.probe_context_nodes = args.probe_context;
+  o.max_shift_px = args.max_shift_px;
+  if (args.roi) o.roi_px = parse_roi(*args.roi);
+  o.mask = args.mask;
+  o.geometry_file = args.geometry;
+  return o;
+}
+
 void process(const ProcessArgs& args) {
-  ProcessOptions options;
-  options.probes_only = args.probes_only;
-  options.evaluator.set_grid(args.window_px, args.step_px);
-  options.evaluator.xcorr.passes = args.passes;
-  options.evaluator.xcorr.max_shift_px = args.max_shift_px;
-  options.evaluator.xcorr.probe_context_nodes = args.probe_context;
-  options.geometry_file = args.geometry;
-  options.mask_file = args.mask;
-  options.progress = [](const std::string& line) { std::cerr << line << (line.ends_with('\n') ? "" : "\n"); };
-  const ProcessReport report = process_run(args.run, options);
+  pipeline::ProcessOptions options;
+  options.overrides = overrides(args);
+  options.resume = args.resume;
+  options.stop = &stop_requested_by_signal();
+  ProgressDisplay display;
+  options.progress = [&](const pipeline::ProcessProgress& p) {
+    p.frame ? display.step(p.done, p.total, p.line) : display.note(p.line);
+  };
+  const auto report = pipeline::process_run(args.run, options);
+  display.finish();
   std::cout << report.text;
+  if (!report.complete) throw CommandFailure(kExitStopped, "processing stopped on request");
 }
 
 void add_process(CLI::App& root) {
   auto args = std::make_shared<ProcessArgs>();
   CLI::App* cmd = root.add_subcommand(
-      "process", "Evaluate a run's frames against its reference: probes, fields, temperatures, fits, agreement");
+      "process",
+      "Evaluate a run's frames against its reference: probes, fields, temperatures, fits, agreement. Without "
+      "options the run's stored settings are used again; options change them and are stored with the results");
   cmd->add_option("run", args->run, "Run folder")->required();
-  cmd->add_flag("--probes-only", args->probes_only,
-                "Evaluate only the windows at the thermocouples' image positions (no field files)");
-  cmd->add_option("--window", args->window_px, "Final interrogation window, px")->capture_default_str();
-  cmd->add_option("--step", args->step_px, "Grid spacing, px")->capture_default_str();
-  cmd->add_option("--passes", args->passes, "Passes (window deformation after the first)")->capture_default_str();
+  cmd->add_flag("--resume", args->resume,
+                "Continue the run's interrupted processing with its own settings from the first frame it had not "
+                "finished");
+  cmd->add_option("--mode", args->mode,
+                  "full: displacement and temperature fields of every frame; probes: only the windows at the "
+                  "thermocouples' image positions (default: stored, else full)")
+      ->check(CLI::IsMember({"full", "probes"}));
+  cmd->add_option("--method", args->method, "xcorr or flow (default: stored, else xcorr)")
+      ->check(CLI::IsMember({"xcorr", "flow"}));
+  cmd->add_option("--window", args->window_px, "Final interrogation window, px (default: stored, else 16)");
+  cmd->add_option("--step", args->step_px, "Grid spacing, px (default: stored, else 8)");
+  cmd->add_option("--passes", args->passes, "Passes, window deformation after the first (default: stored, else 3)");
   cmd->add_option("--probe-context", args->probe_context,
                   "Probe mode: grid nodes evaluated around each probe; -1: all the full field depends on (then a "
-                  "probe equals the full field there, but is ~40x slower)")
-      ->check(CLI::Range(-1, 16))
-      ->capture_default_str();
-  cmd->add_option("--max-shift", args->max_shift_px, "Largest displacement expected, px")->capture_default_str();
+                  "probe equals the full field there, but is ~40x slower) (default: stored, else 1)")
+      ->check(CLI::Range(-1, 16));
+  cmd->add_option("--max-shift", args->max_shift_px, "Largest displacement expected, px (default: stored, else 4)");
+  cmd->add_option("--roi", args->roi, "Region of interest x,y,width,height in pixels (default: stored, else all)");
   cmd->add_option("--geometry", args->geometry,
-                  "TOML file with [geometry] (and [alignment]); default: the run's config, else built-in defaults");
+                  "TOML file with [geometry] (and [alignment]); default: stored, else the run's experiment file, "
+                  "else built-in defaults");
   cmd->add_option("--mask", args->mask,
-                  "Mask image (e.g. the heater's holder): non-zero pixels are not evaluated and the temperature "
-                  "field is filled there from its surroundings; a path relative to the run folder or absolute");
+                  "Mask image (e.g. the heater's holder): non-zero pixels are not evaluated; a path relative to the "
+                  "run folder, or absolute (then copied into the run); '' for none (default: stored, else none)");
   cmd->callback([args] { process(*args); });
 }
 

@@ -11,12 +11,15 @@
 
 #include "app/command.h"
 #include "app/displacement_map.h"
-#include "app/image_io.h"
 #include "app/output_stream.h"
 #include "fusion/image_quality.h"
+#include "pipeline/image_io.h"
 
 namespace bosfuse::app {
 namespace {
+
+using pipeline::read_image;
+using pipeline::write_image;
 
 struct QualityArgs {
   std::string image, reference, map, json;

@@ -11,6 +11,7 @@
 #include "acquisition/logger.h"
 #include "app/command.h"
 #include "app/run_control.h"
+#include "pipeline/processing_settings.h"
 #include "sim/replay.h"
 #include "storage/run_store.h"
 
@@ -51,6 +52,18 @@ void stop_when_replayed(const sim::RecordedRun& recorded,
   stop = true;
 }
 
+// The recorded run's markers (its declared origin among them) at the same
+// place in the replay: the replay starts where the recording did.
+void copy_markers(const sim::RecordedRun& recorded, double speed, std::int64_t started_ns, storage::RunStore& store) {
+  std::vector<storage::Event> markers;
+  for (const auto& e : storage::RunStore::open(recorded.dir).events()) {
+    if (e.kind != "marker") continue;
+    const auto offset_ns = static_cast<double>(e.t_ns - recorded.run.started_ns) / speed;
+    markers.push_back({0, std::nullopt, started_ns + static_cast<std::int64_t>(offset_ns), "marker", e.message});
+  }
+  store.write_events(markers);
+}
+
 void replay(const ReplayArgs& args) {
   const sim::RecordedRun recorded = sim::inspect_recorded_run(args.run);
   for (const std::string& problem : recorded.problems) spdlog::warn("{}: {}", args.run, problem);
@@ -65,10 +78,14 @@ void replay(const ReplayArgs& args) {
   }
   const std::string toml = sim::replay_experiment_toml(recorded, ports, args.speed);
   const auto config = acquisition::parse_experiment(toml, "replay.toml");
-  auto store = storage::RunStore::create(args.out,
-                                         {0, "replay of " + recorded.run.name, acquisition::utc_now_ns(), std::nullopt,
-                                          toml, storage::RunStatus::kRunning},
+  const std::int64_t started_ns = acquisition::utc_now_ns();
+  auto store = storage::RunStore::create(args.out, acquisition::run_info(config, started_ns),
                                          storage::RunStore::CreateMode::kNew);
+  copy_markers(recorded, args.speed, started_ns, store);
+  if (pipeline::inherit_settings(args.run, args.out)) {
+    spdlog::info("the recorded run's processing settings are the replay's: `bosfuse process {}` repeats them",
+                 args.out);
+  }
   acquisition::Logger::Options options;
   options.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
   acquisition::Logger logger(store, options);

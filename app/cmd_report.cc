@@ -1,10 +1,7 @@
 // bosfuse report: the cooling-curve report of a run — one self-contained
 // HTML page plus every figure as PNG and SVG and the data as CSV and JSON
-// (report/report.h). It fits the run's thermocouples and draws the
-// displacement maps of its frames; BOS probes, agreement and temperature
-// maps come from what `bosfuse process` stored (report/run_input.h). The
-// image scale is --px-per-mm, else the [geometry] table of the run's stored
-// experiment config (px_per_mm_flow, or magnification / pixel_pitch_um).
+// (report/report.h), from the run's samples and what `bosfuse process`
+// stored (report/run_input.h): it never evaluates or fits on its own.
 
 #include <fmt/format.h>
 
@@ -13,8 +10,6 @@
 #include <sstream>
 
 #include "app/command.h"
-#include "app/geometry_config.h"
-#include "app/image_io.h"
 #include "report/report.h"
 #include "report/run_input.h"
 #include "storage/run_store.h"
@@ -27,12 +22,9 @@ struct ReportArgs {
   std::string out;
   std::string map_times = "10,60";
   std::string title;
-  std::string mask;
   double contour_px = 0.05;
   double contour_c = 1.0;
   double px_per_mm = 0;
-  int window_px = 16;
-  int step_px = 8;
 };
 
 std::vector<double> parse_times(const std::string& text) {
@@ -60,21 +52,7 @@ void make_report(const ReportArgs& args) {
   const auto store = storage::RunStore::open(args.run);
   report::RunReportOptions input_options;
   input_options.map_times_s = parse_times(args.map_times);
-  if (args.px_per_mm > 0) {
-    input_options.px_per_mm = args.px_per_mm;
-  } else if (const std::string& toml = store.run().config_toml; toml.find("[geometry]") != std::string::npos) {
-    try {
-      if (const auto config = parse_geometry_config(toml, "run config")) {
-        input_options.px_per_mm = fusion::BosGeometry(config->geometry).px_per_m_flow() * 1e-3;
-      }
-    } catch (const std::exception& e) {
-      std::cerr << "warning: map axes in px, the run config's [geometry] could not be read: " << e.what() << "\n";
-    }
-  }
-  input_options.evaluator.set_grid(args.window_px, args.step_px);
-  if (const auto problem = input_options.evaluator.Validate(); !problem.empty()) throw std::runtime_error(problem);
-  if (!args.mask.empty()) input_options.mask = read_image(args.mask, "mask");
-  input_options.on_progress = [](const std::string& line) { std::cerr << line << " ...\n"; };
+  if (args.px_per_mm > 0) input_options.px_per_mm = args.px_per_mm;
   const auto input = report::build_report_input(store, input_options);
 
   report::ReportOptions options;
@@ -103,7 +81,7 @@ void add_report(CLI::App& root) {
   cmd->add_option("run", args->run, "Run folder (holding run.sqlite)")->required()->check(CLI::ExistingDirectory);
   cmd->add_option("--out,-o", args->out, "Folder to write the report into (created if needed)")->required();
   cmd->add_option("--map-times", args->map_times,
-                  "Times of the maps, s since the run's first sample, comma-separated (nearest frame)")
+                  "Times of the maps, experiment seconds, comma-separated (the nearest frame with a stored field)")
       ->capture_default_str();
   cmd->add_option("--contour", args->contour_px, "Contour spacing of displacement maps, px (0: none)")
       ->check(CLI::NonNegativeNumber)
@@ -112,14 +90,8 @@ void add_report(CLI::App& root) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--px-per-mm", args->px_per_mm,
-                  "Image scale, px per mm: map axes in mm (default: the run config's [geometry], else axes in px)")
+                  "Image scale, px per mm: map axes in mm (default: the run's stored geometry, else axes in px)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--window", args->window_px, "Interrogation window of the displacement maps, px")
-      ->capture_default_str();
-  cmd->add_option("--step", args->step_px, "Grid spacing of the displacement maps, px")->capture_default_str();
-  cmd->add_option("--mask", args->mask,
-                  "Mask image of the frames' size: non-zero pixels (e.g. the heater's holder) are not evaluated")
-      ->check(CLI::ExistingFile);
   cmd->add_option("--title", args->title, "Title of the report (default: Cooling report — <run name>)");
   cmd->callback([args] { make_report(*args); });
 }

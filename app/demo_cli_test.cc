@@ -1,15 +1,23 @@
 // The main job end to end, small and short: `bosfuse demo` simulates the
-// experiment, records it through the real paths, processes it and writes the
-// report; the cooling rates it recovers from thermocouples and from BOS must
-// match the scene's true one.
+// experiment, records it through the real paths (at 10x), processes it and
+// writes the report; the cooling rates it recovers from thermocouples and
+// from BOS must match the scene's true one in experiment time. Then the run
+// is read back the way a user would: `process` with no options, `report`,
+// `export` + `fit`, and a `replay --speed 10` processed and reported the
+// same way, and every one of them must state the same k.
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
 #include <functional>
+#include <map>
+#include <signal.h>
 #include <nlohmann/json.hpp>
 
+#include <fmt/format.h>
+
+#include "fitting/fit_json.h"
 #include "storage/processing_store.h"
 #include "storage/run_store.h"
 #include "tests/support/browser.h"
@@ -51,41 +59,132 @@ void expect_every_number_present(const std::string& page, const fs::path& json_f
   EXPECT_TRUE(nulls.empty()) << "report.json has no number at " << ::testing::PrintToString(nulls);
 }
 
-TEST(DemoCli, RecoversTheTrueCoolingRateFromThermocouplesAndBos) {
+const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+
+std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+
+testing::CommandResult bosfuse(const std::string& args, int timeout_s = 120) {
+  return testing::run_command(kBosfuse + " " + args, timeout_s);
+}
+
+// What a run stores, by series name: k and its interval; per pair the RMS
+// temperature difference.
+struct StoredRates {
+  std::map<std::string, fitting::Estimate> k;
+  std::map<std::string, double> rms_difference_c;
+};
+
+StoredRates stored_rates(const fs::path& run) {
+  const storage::RunStore store = storage::RunStore::open(run);
+  const storage::ProcessingStore results(run);
+  std::map<std::int64_t, std::string> channel_names, probe_names;
+  for (const auto& c : store.channels()) channel_names[c.id] = c.name;
+  for (const auto& p : results.probes()) probe_names[p.id] = p.name + " (BOS)";
+  StoredRates out;
+  for (const auto& fit : results.fits()) {
+    EXPECT_TRUE(fit.ok) << fit.json;
+    const auto f = fitting::fit_from_json(nlohmann::json::parse(fit.json));
+    out.k[fit.subject == storage::FitSubject::kChannel ? channel_names[fit.subject_id]
+                                                       : probe_names[fit.subject_id]] = f.k_per_s;
+  }
+  for (const auto& a : results.agreements()) {
+    const auto agreement = fitting::agreement_from_json(nlohmann::json::parse(a.json));
+    EXPECT_TRUE(agreement.series) << a.json;
+    if (agreement.series) out.rms_difference_c[channel_names[a.channel_id]] = agreement.series->rms_difference_c;
+  }
+  return out;
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// report.json's summary and the page state the k of every stored fit.
+void expect_report_states(const fs::path& report_dir, const StoredRates& stored) {
+  const auto json = nlohmann::json::parse(read_text(report_dir / "report.json"));
+  const std::string page = read_text(report_dir / "report.html");
+  std::size_t found = 0;
+  for (const auto& row : json.at("summary").at("series")) {
+    const std::string name = row.at("name");
+    ASSERT_TRUE(stored.k.count(name)) << name;
+    const double k = row.at("k").at("value").get<double>();
+    EXPECT_EQ(k, stored.k.at(name).value) << name << ": report.json states another k than the stored fit";
+    EXPECT_NE(page.find(fmt::format("{:.4g}", k)), std::string::npos) << name << ": k not on the page";
+    ++found;
+  }
+  EXPECT_EQ(found, stored.k.size());
+  EXPECT_NE(json.at("time_basis").get<std::string>().find("experiment seconds since heater off"), std::string::npos);
+}
+
+TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
   testing::TempDir dir;
-  const auto result = testing::run_command(std::string(BOSFUSE_BINARY_DIR) + "/bosfuse demo --out " +
-                                               (dir / "demo").string() + " --experiment-time 150 --speed 30",
-                                           120);
-  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const auto demo = bosfuse("demo --out " + quoted(dir / "demo") + " --experiment-time 150 --speed 10");
+  ASSERT_EQ(demo.exit_code, 0) << demo.output;
   ASSERT_EQ(std::distance(fs::directory_iterator(dir / "demo"), fs::directory_iterator()), 1);
   const fs::path run = fs::directory_iterator(dir / "demo")->path();
-  EXPECT_NE(result.output.find((run / "report/report.html").string()), std::string::npos) << result.output;
+  EXPECT_NE(demo.output.find((run / "report/report.html").string()), std::string::npos) << demo.output;
 
+  // 1. The demo itself: every fit within 5% of the true rate, in experiment time.
   nlohmann::json truth;
   std::ifstream(run / "demo-truth.json") >> truth;
-  const double speed = truth["speed"], true_k = truth["plume_k_per_s"];
-  const storage::ProcessingStore results(run);
-  int thermocouple_fits = 0, bos_fits = 0;
-  for (const auto& fit : results.fits()) {
-    ASSERT_TRUE(fit.ok) << fit.json;
-    const double k = nlohmann::json::parse(fit.json)["parameters"]["k_per_s"]["value"].get<double>() / speed;
-    // Stated tolerance: 5% of the true rate, for both kinds of measurement.
-    EXPECT_NEAR(k, true_k, 0.05 * true_k) << fit.json;
-    (fit.subject == storage::FitSubject::kChannel ? thermocouple_fits : bos_fits) += 1;
-  }
-  EXPECT_EQ(thermocouple_fits, 2);
-  EXPECT_EQ(bos_fits, 2);
-  EXPECT_EQ(results.agreements().size(), 2u);
+  const double true_k = truth["plume_k_per_s"];
+  const StoredRates by_demo = stored_rates(run);
+  ASSERT_EQ(by_demo.k.size(), 4u) << "two thermocouples, two BOS probes";
+  ASSERT_EQ(by_demo.rms_difference_c.size(), 2u);
+  for (const auto& [name, k] : by_demo.k) EXPECT_NEAR(k.value, true_k, 0.05 * true_k) << name;
+  for (const auto& [name, rms] : by_demo.rms_difference_c) EXPECT_LT(rms, 0.5) << name;
+  expect_report_states(run / "report", by_demo);
+  expect_every_number_present(read_text(run / "report/report.html"), run / "report/report.json");
 
-  std::ifstream html(run / "report/report.html");
-  const std::string page((std::istreambuf_iterator<char>(html)), std::istreambuf_iterator<char>());
+  // 2. `process` with no options repeats the demo (its stored settings), `report` states it.
+  const auto again = bosfuse("process " + quoted(run));
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_NE(again.output.find("settings from the run's stored settings"), std::string::npos) << again.output;
+  const StoredRates reprocessed = stored_rates(run);
+  for (const auto& [name, k] : by_demo.k) EXPECT_EQ(reprocessed.k.at(name).value, k.value) << name;
+  EXPECT_EQ(reprocessed.rms_difference_c, by_demo.rms_difference_c);
+  ASSERT_EQ(bosfuse("report " + quoted(run) + " -o " + quoted(dir / "report")).exit_code, 0);
+  expect_report_states(dir / "report", reprocessed);
+
+  // 3. export + fit on the thermocouple's column: the stored fit's k.
+  const auto csv = dir / "samples.csv";
+  ASSERT_EQ(bosfuse("export " + quoted(run) + " --csv -o " + quoted(csv)).exit_code, 0);
+  const auto fitted = bosfuse("fit " + quoted(csv) + " --temperature-column 'tc-35mm [degC]' --json " +
+                              quoted(dir / "fit.json"));
+  ASSERT_EQ(fitted.exit_code, 0) << fitted.output;
+  const auto exported_fit = fitting::fit_from_json(nlohmann::json::parse(read_text(dir / "fit.json")));
+  const auto& stored_tc = by_demo.k.at("tc-35mm");
+  EXPECT_NEAR(exported_fit.k_per_s.value, stored_tc.value, 0.01 * stored_tc.std_error)
+      << "export + fit and the stored fit disagree on one series";
+
+  // 4. A replay at 10x (so 100x in all) processed with no options: the same experiment.
+  const fs::path replay = dir / "replay";
+  const auto replayed = bosfuse("replay " + quoted(run) + " -o " + quoted(replay) + " --speed 10");
+  ASSERT_EQ(replayed.exit_code, 0) << replayed.output;
+  EXPECT_DOUBLE_EQ(storage::RunStore::open(replay).run().time_scale, 100.0);
+  const auto processed = bosfuse("process " + quoted(replay));
+  ASSERT_EQ(processed.exit_code, 0) << processed.output;
+  EXPECT_NE(processed.output.find("inherited from the recorded run"), std::string::npos) << processed.output;
+  const StoredRates by_replay = stored_rates(replay);
+  for (const auto& [name, k] : by_demo.k) {
+    ASSERT_TRUE(by_replay.k.count(name)) << name;
+    EXPECT_NEAR(by_replay.k.at(name).value, k.value, k.high - k.value) << name << ": outside the demo's interval";
+  }
+  for (const auto& [name, rms] : by_demo.rms_difference_c) {
+    EXPECT_NEAR(by_replay.rms_difference_c.at(name), rms, 0.1) << name;
+  }
+  ASSERT_EQ(bosfuse("report " + quoted(replay) + " -o " + quoted(dir / "replay-report")).exit_code, 0);
+  expect_report_states(dir / "replay-report", by_replay);
+
+  // 5. And a real browser draws every figure of the demo's report.
+  const std::string page = read_text(run / "report/report.html");
   std::size_t figures = 0;
   for (auto at = page.find("src=\"data:image/png;base64,"); at != std::string::npos;
        at = page.find("src=\"data:image/png;base64,", at + 1)) {
     ++figures;
   }
   EXPECT_GE(figures, 4u);
-  // And a real browser draws every one of them.
   ASSERT_TRUE(testing::have_chromium()) << "chromium is not installed (scripts/debian-packages.txt lists it)";
   const auto images = testing::render_check(page, run / "report/render-check.html", dir.path());
   EXPECT_EQ(images.size(), figures);
@@ -95,7 +194,32 @@ TEST(DemoCli, RecoversTheTrueCoolingRateFromThermocouplesAndBos) {
     EXPECT_GT(image.spread, 100);
   }
   EXPECT_EQ(storage::RunStore::open(run).run().status, storage::RunStatus::kComplete);
-  expect_every_number_present(page, run / "report/report.json");
+}
+
+TEST(DemoCli, CtrlCStopsTheDemoPromptlyWithTheRunRecordedSoFar) {
+  testing::TempDir dir;
+  testing::BackgroundProcess demo(
+      {kBosfuse, "demo", "--out", (dir / "demo").string(), "--experiment-time", "600", "--speed", "10"});
+  const auto has_samples = [&] {
+    if (!fs::is_directory(dir / "demo") || fs::directory_iterator(dir / "demo") == fs::directory_iterator()) {
+      return false;
+    }
+    const fs::path run = fs::directory_iterator(dir / "demo")->path();
+    try {
+      return storage::RunStore::holds_run(run) && storage::RunStore::open(run).first_sample_ns().has_value();
+    } catch (const std::exception&) {
+      return false;  // being created
+    }
+  };
+  ASSERT_TRUE(testing::wait_for(has_samples, std::chrono::seconds(30)));
+  const auto interrupted = std::chrono::steady_clock::now();
+  demo.send_signal(SIGINT);
+  EXPECT_EQ(demo.wait_exit(std::chrono::seconds(10)), 5) << "kExitStopped";
+  EXPECT_LT(std::chrono::steady_clock::now() - interrupted, std::chrono::seconds(3)) << "not prompt";
+  const fs::path run = fs::directory_iterator(dir / "demo")->path();
+  const auto store = storage::RunStore::open(run);
+  EXPECT_EQ(store.run().status, storage::RunStatus::kComplete) << "the logger closed the run cleanly";
+  EXPECT_TRUE(store.first_sample_ns().has_value());
 }
 
 }  // namespace

@@ -14,7 +14,7 @@
 
 #include "app/test_streams.h"
 #include "report/test_readers.h"
-#include "report/test_run.h"
+#include "tests/support/synthetic_run.h"
 #include "storage/processing_store.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
@@ -32,14 +32,14 @@ class ExportCli : public ::testing::Test {
  protected:
   void SetUp() override {
     truth_.config_toml = "[geometry]\npx_per_mm_flow = 25\n";
-    report::testrun::create_run(run(), true, truth_);
+    testrun::create_run(run(), true, truth_);
   }
   fs::path run() const { return dir_ / "run"; }
   testing::CommandResult bosfuse(const std::string& args) { return testing::run_command(kBosfuse + " " + args, 120); }
   testing::StreamsResult streams(const std::string& command) { return testing::run_with_streams(command, dir_.path()); }
 
   testing::TempDir dir_;
-  report::testrun::Truth truth_;
+  testrun::Truth truth_;
 };
 
 TEST_F(ExportCli, FieldsOfAProcessedRunReadBackWithH5pyH5dumpAndTheXdmf) {
@@ -123,12 +123,12 @@ TEST_F(ExportCli, FieldsOfAProcessedRunReadBackWithH5pyH5dumpAndTheXdmf) {
 TEST_F(ExportCli, ARunWithoutStoredFieldsIsToldToProcessFirst) {
   const auto unprocessed = bosfuse("export " + sh_quoted(run()) + " --fields " + sh_quoted(dir_ / "f.h5"));
   EXPECT_NE(unprocessed.exit_code, 0);
-  EXPECT_NE(unprocessed.output.find("has no stored fields: run `bosfuse process RUN` first"), std::string::npos)
+  EXPECT_NE(unprocessed.output.find("has no stored fields: run `bosfuse process RUN --mode full` first"), std::string::npos)
       << unprocessed.output;
-  ASSERT_EQ(bosfuse("process --probes-only " + sh_quoted(run())).exit_code, 0);
+  ASSERT_EQ(bosfuse("process --mode probes " + sh_quoted(run())).exit_code, 0);
   const auto probes_only = bosfuse("export " + sh_quoted(run()) + " --fields " + sh_quoted(dir_ / "f.h5"));
   EXPECT_NE(probes_only.exit_code, 0);
-  EXPECT_NE(probes_only.output.find("not --probes-only"), std::string::npos) << probes_only.output;
+  EXPECT_NE(probes_only.output.find("--mode full"), std::string::npos) << probes_only.output;
   EXPECT_FALSE(fs::exists(dir_ / "f.h5"));
   EXPECT_FALSE(fs::exists(dir_ / "f.xmf"));
 }

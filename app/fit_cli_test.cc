@@ -115,7 +115,7 @@ TEST_F(FitCli, AFormulaNamedChannelIsExportedInertAndFitsByItsName) {
   const auto r = testing::sample_cooling(curve, 200, 1.0, 0.03, 5);
   const std::int64_t start_ns = 1'795'000'000'000'000'000;
   {
-    auto store = storage::RunStore::create(dir_ / "run", {0, "csv", start_ns, {}, "", storage::RunStatus::kRunning},
+    auto store = storage::RunStore::create(dir_ / "run", {0, "csv", start_ns, {}, "", storage::RunStatus::kRunning, 1.0, std::nullopt},
                                            storage::RunStore::CreateMode::kNew);
     const auto device = store.add_device({0, "adam", "modbus-tcp", "generic", "127.0.0.1:502"});
     const auto formula = store.add_channel({0, device, name, "thermocouple", "degC", "K", {}, {}});

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
+#include <signal.h>
 
 #include "sim/synthetic_pair.h"
 #include "storage/database.h"
@@ -42,8 +43,11 @@ class ProcessCli : public ::testing::Test {
   void SetUp() override { make_run(true); }
 
   void make_run(bool with_reference) {
-    auto store = storage::RunStore::create(run_dir(), {0, "synthetic", kOriginNs, std::nullopt, "", {}},
-                                           storage::RunStore::CreateMode::kNew);
+    // Samples begin 15 s before the heater is switched off: the run declares that moment its origin.
+    storage::RunInfo info{0, "synthetic", at_ns(-15), std::nullopt, "", {}, 1.0, "heater off"};
+    auto store = storage::RunStore::create(run_dir(), info, storage::RunStore::CreateMode::kNew);
+    const storage::Event heater_off{0, std::nullopt, kOriginNs, "marker", "heater off"};
+    store.write_events({&heater_off, 1});
     const auto device = store.add_device({0, "daq", "modbus-tcp", "generic", "sim"});
     for (const auto& [name, x, y] :
          {std::tuple{"tc1", kCentreX + kRadius, kCentreY}, std::tuple{"tc2", kCentreX, kCentreY - kRadius}}) {
@@ -91,9 +95,9 @@ class ProcessCli : public ::testing::Test {
 };
 
 TEST_F(ProcessCli, ProbesOnlyStoresShiftsFitsAndAgreement) {
-  const auto run = bosfuse("process --probes-only " + grid_);
+  const auto run = bosfuse("process --mode probes " + grid_);
   ASSERT_EQ(run.exit_code, 0) << run.output;
-  EXPECT_NE(run.output.find("frame 8/8"), std::string::npos) << "progress on stderr: " << run.output;
+  EXPECT_NE(run.output.find("8/8 "), std::string::npos) << "progress on stderr: " << run.output;
   const storage::ProcessingStore results(run_dir());
   const auto probes = results.probes();
   ASSERT_EQ(probes.size(), 2u);
@@ -126,15 +130,15 @@ TEST_F(ProcessCli, ProbesOnlyStoresShiftsFitsAndAgreement) {
 
 TEST_F(ProcessCli, FullFieldsEqualProbesAtTheProbePointsAndWriteFieldFiles) {
   auto probe_samples = [&](const std::string& args) {
-    EXPECT_EQ(bosfuse("process --probes-only " + args).exit_code, 0);
+    EXPECT_EQ(bosfuse("process --mode probes " + args).exit_code, 0);
     std::vector<std::vector<storage::ProbeSampleRecord>> samples;
     const storage::ProcessingStore results(run_dir());
     for (const auto& p : results.probes()) samples.push_back(results.probe_samples(p.id));
     return samples;
   };
   const auto probe_mode = probe_samples(grid_ + " --probe-context -1");
-  const auto fast_probe_mode = probe_samples(grid_);
-  const auto run = bosfuse("process " + grid_);
+  const auto fast_probe_mode = probe_samples(grid_ + " --probe-context 1");
+  const auto run = bosfuse("process --mode full " + grid_);
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("degC per px"), std::string::npos) << "the set-up's sensitivity is printed";
   const storage::ProcessingStore results(run_dir());
@@ -185,11 +189,11 @@ TEST_F(ProcessCli, AMaskedHolderIsNotEvaluatedAndTheTemperatureFieldIsFilledTher
   }
   const auto missing = bosfuse("process " + grid_ + " --mask nope.png");
   EXPECT_NE(missing.exit_code, 0);
-  EXPECT_NE(missing.output.find("nope.png: no such file"), std::string::npos) << missing.output;
+  EXPECT_NE(missing.output.find("mask 'nope.png': no such file in the run folder"), std::string::npos) << missing.output;
 }
 
 TEST_F(ProcessCli, CalibrationGivesDegreesPerPixelAndProbeTemperatures) {
-  ASSERT_EQ(bosfuse("process --probes-only " + grid_).exit_code, 0);
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
   const auto calibrate = bosfuse("calibrate");
   ASSERT_EQ(calibrate.exit_code, 0) << calibrate.output;
   double slope = 0;
@@ -208,7 +212,7 @@ TEST_F(ProcessCli, CalibrationGivesDegreesPerPixelAndProbeTemperatures) {
       EXPECT_NEAR(c.at("reference_temperature_c").get<double>(), 20, 0.2);
     }
   }
-  const auto again = bosfuse("process --probes-only " + grid_);
+  const auto again = bosfuse("process --mode probes " + grid_);
   ASSERT_EQ(again.exit_code, 0) << again.output;
   RecordProperty("calibrate_output", calibrate.output);  // readable with --gtest_output=xml
   RecordProperty("process_output", again.output);
@@ -226,7 +230,7 @@ TEST_F(ProcessCli, CalibrationGivesDegreesPerPixelAndProbeTemperatures) {
 }
 
 TEST_F(ProcessCli, AnOffsetThatTheRecordCannotFixIsNotEstimated) {
-  ASSERT_EQ(bosfuse("process --probes-only " + grid_).exit_code, 0);
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
   // The frames see only the smooth decay: shifting it in time only rescales it.
   const auto calibrate = bosfuse("calibrate --estimate-offset 2");
   ASSERT_EQ(calibrate.exit_code, 0) << calibrate.output;
@@ -247,7 +251,7 @@ TEST_F(ProcessCli, CalibrateBeforeProcessAndARunWithoutReferenceAreExplained) {
   channels_.clear();
   points_.clear();
   make_run(false);
-  const auto run = bosfuse("process --probes-only");
+  const auto run = bosfuse("process --mode probes");
   EXPECT_NE(run.exit_code, 0);
   EXPECT_NE(run.output.find("no reference frame"), std::string::npos) << run.output;
 }
@@ -272,7 +276,7 @@ TEST_F(ProcessCli, AFramePathLeadingOutOfTheRunIsRefusedByName) {
     points_.clear();
     make_run(true);
     move_frame_out(run_dir(), stored, stored.empty());
-    const auto run = bosfuse("process --probes-only " + grid_);
+    const auto run = bosfuse("process --mode probes " + grid_);
     EXPECT_NE(run.exit_code, 0) << stored << ": " << run.output;
     const std::string named = stored.empty() ? "frame 4: stored path 'frames/f3.png' refused: a symlink along it leads"
                                              : "frame 4: stored path '" + stored + "' refused";
@@ -283,7 +287,7 @@ TEST_F(ProcessCli, AFramePathLeadingOutOfTheRunIsRefusedByName) {
 
 TEST_F(ProcessCli, TheCameraOffsetMovesProbeTimesOntoTheHostClock) {
   auto probe_t0 = [&](const std::string& extra) {
-    EXPECT_EQ(bosfuse("process --probes-only " + grid_ + extra).exit_code, 0);
+    EXPECT_EQ(bosfuse("process --mode probes " + grid_ + extra).exit_code, 0);
     const storage::ProcessingStore results(run_dir());
     for (const auto& fit : results.fits()) {
       if (fit.subject == storage::FitSubject::kProbe) {
@@ -315,6 +319,88 @@ TEST_F(ProcessCli, GeometryFileIsUsedAndItsMistakesAreNamed) {
   const auto negative = bosfuse("process " + grid_ + " --geometry " + bad.string());
   EXPECT_NE(negative.exit_code, 0);
   EXPECT_NE(negative.output.find("z_d_m"), std::string::npos) << negative.output;
+}
+
+// Everything a processing stored, comparable (field files by content).
+struct StoredResults {
+  std::vector<std::vector<storage::ProbeSampleRecord>> samples;
+  std::vector<std::string> fits, agreements, fields;
+
+  explicit StoredResults(const std::filesystem::path& run) {
+    const storage::ProcessingStore results(run);
+    for (const auto& p : results.probes()) samples.push_back(results.probe_samples(p.id));
+    for (const auto& f : results.fits()) fits.push_back(f.json);
+    for (const auto& a : results.agreements()) agreements.push_back(a.json);
+    for (const auto& f : results.fields()) {
+      std::ifstream in(run / f.path);
+      fields.emplace_back(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+  }
+  bool operator==(const StoredResults& o) const {
+    auto same_samples = [](const auto& a, const auto& b) {
+      return a.frame_id == b.frame_id && a.u_px == b.u_px && a.v_px == b.v_px && a.temperature_c == b.temperature_c;
+    };
+    if (samples.size() != o.samples.size()) return false;
+    for (std::size_t p = 0; p < samples.size(); ++p) {
+      if (!std::equal(samples[p].begin(), samples[p].end(), o.samples[p].begin(), o.samples[p].end(), same_samples)) {
+        return false;
+      }
+    }
+    return fits == o.fits && agreements == o.agreements && fields == o.fields;
+  }
+};
+
+std::int64_t staged_frames(const std::filesystem::path& run) {
+  storage::Database db((run / "run.sqlite").string(), storage::Database::Mode::kReadOnly);
+  auto stmt = db.prepare("SELECT COUNT(*) FROM staged_frames");
+  stmt.step();
+  return stmt.column_int64(0);
+}
+
+// A processing slow enough (full fields on a 2 px grid, ~0.1 s a frame) to be
+// caught in the middle.
+const std::vector<std::string> kSlowOptions = {"--mode", "full", "--step", "2", "-q"};
+
+testing::BackgroundProcess start_slow_process(const std::filesystem::path& run) {
+  std::vector<std::string> argv{kBosfuse, "process", run.string()};
+  argv.insert(argv.end(), kSlowOptions.begin(), kSlowOptions.end());
+  return testing::BackgroundProcess(argv);
+}
+
+TEST_F(ProcessCli, AKilledProcessLeavesThePreviousResultsAndResumeCompletesThem) {
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  const StoredResults previous(run_dir());
+  std::filesystem::copy(run_dir(), dir_.path() / "copy", std::filesystem::copy_options::recursive);
+
+  auto process = start_slow_process(run_dir());
+  ASSERT_TRUE(testing::wait_for([&] { return staged_frames(run_dir()) >= 2; }, std::chrono::seconds(60)));
+  process.send_signal(SIGKILL);
+  EXPECT_EQ(process.wait_exit(std::chrono::seconds(5)), -1) << "killed by the signal";
+  ASSERT_LT(staged_frames(run_dir()), 8) << "it finished before it could be killed";
+  EXPECT_TRUE(StoredResults(run_dir()) == previous) << "the previous results changed";
+
+  const auto resumed = bosfuse("process --resume");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_NE(resumed.output.find("done before the resume"), std::string::npos) << resumed.output;
+  std::string options;
+  for (const auto& o : kSlowOptions) options += " " + o;
+  ASSERT_EQ(testing::run_command(kBosfuse + " process " + (dir_.path() / "copy").string() + options, 120).exit_code,
+            0);
+  EXPECT_TRUE(StoredResults(run_dir()) == StoredResults(dir_.path() / "copy"))
+      << "a resumed processing differs from an uninterrupted one";
+}
+
+TEST_F(ProcessCli, CtrlCStopsProcessingPromptlyAndResumeIsOffered) {
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  const StoredResults previous(run_dir());
+  auto process = start_slow_process(run_dir());
+  ASSERT_TRUE(testing::wait_for([&] { return staged_frames(run_dir()) >= 1; }, std::chrono::seconds(60)));
+  const auto interrupted = std::chrono::steady_clock::now();
+  process.send_signal(SIGINT);
+  EXPECT_EQ(process.wait_exit(std::chrono::seconds(10)), 5) << "kExitStopped";
+  EXPECT_LT(std::chrono::steady_clock::now() - interrupted, std::chrono::seconds(3)) << "not prompt";
+  EXPECT_TRUE(StoredResults(run_dir()) == previous);
+  EXPECT_EQ(bosfuse("process --resume").exit_code, 0);
 }
 
 }  // namespace

@@ -13,7 +13,7 @@
 #include <sstream>
 
 #include "report/html.h"
-#include "report/test_run.h"
+#include "tests/support/synthetic_run.h"
 #include "tests/support/browser.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
@@ -67,13 +67,15 @@ TEST_F(ReportCli, BrowserCheckTellsRenderedFromBrokenAndBlankImages) {
 }
 
 TEST_F(ReportCli, MakesAReportThatABrowserRendersCompletely) {
-  const report::testrun::Truth truth;
-  report::testrun::create_run(dir_ / "run", true, truth);
+  const testrun::Truth truth;
+  testrun::create_run(dir_ / "run", true, truth);
   const fs::path out = dir_ / "out";
-  ASSERT_TRUE(cv::imwrite((dir_ / "holder-mask.png").string(), report::testrun::holder_mask(truth)));
+  ASSERT_TRUE(cv::imwrite((dir_ / "holder-mask.png").string(), testrun::holder_mask(truth)));
+  const auto processed = testing::run_command(
+      kBosfuse + " process " + shell_quote(dir_ / "run") + " --mask " + shell_quote(dir_ / "holder-mask.png"), 120);
+  ASSERT_EQ(processed.exit_code, 0) << processed.output;
   const auto made = testing::run_command(kBosfuse + " report " + shell_quote(dir_ / "run") + " -o " + shell_quote(out) +
-                                             " --map-times 10,60 --contour 0.05 --px-per-mm 30 --mask " +
-                                             shell_quote(dir_ / "holder-mask.png"),
+                                             " --map-times 10,60 --contour 0.05 --px-per-mm 30",
                                          120);
   ASSERT_EQ(made.exit_code, 0) << made.output;
   EXPECT_NE(made.output.find("report.html"), std::string::npos) << made.output;
@@ -86,23 +88,27 @@ TEST_F(ReportCli, MakesAReportThatABrowserRendersCompletely) {
     EXPECT_TRUE(fs::exists(out / name)) << name;
   }
   const auto json = nlohmann::json::parse(read_text(out / "report.json"));
-  ASSERT_EQ(json["series"].size(), 2u);
+  ASSERT_EQ(json["series"].size(), 4u) << "two thermocouples and the BOS probes at them";
   for (int c = 0; c < 2; ++c) {
     const auto& k = json["series"][c]["fit"]["parameters"]["k_per_s"];
     EXPECT_NEAR(k["value"].get<double>(), truth.k_per_s[c], 0.02 * truth.k_per_s[c]) << "tc" << c;
     EXPECT_LT(k["interval"]["low"].get<double>(), k["interval"]["high"].get<double>());
     EXPECT_EQ(json["series"][c]["samples"].get<int>(), truth.samples - truth.bad_samples);
   }
-  ASSERT_EQ(json["maps"].size(), 2u);
-  EXPECT_NEAR(json["maps"][0]["max"].get<double>(), truth.frame_peak_px[0], 0.2 * truth.frame_peak_px[0]);
-  EXPECT_GT(json["maps"][0]["masked_cells"].get<int>(), 10) << "the holder's region is masked";
+  std::vector<nlohmann::json> displacement_maps;
+  for (const auto& m : json["maps"]) {
+    if (m["unit"] == "px") displacement_maps.push_back(m);
+  }
+  ASSERT_EQ(displacement_maps.size(), 2u);
+  EXPECT_NEAR(displacement_maps[0]["max"].get<double>(), truth.frame_peak_px[0], 0.2 * truth.frame_peak_px[0]);
+  EXPECT_GT(displacement_maps[0]["masked_cells"].get<int>(), 10) << "the holder's region is masked";
   EXPECT_GT(json["image_quality"]["q_mod"].get<double>(), 0.9);
   const std::string html = read_text(out / "report.html");
   EXPECT_EQ(html.find("http://"), std::string::npos);
   EXPECT_EQ(html.find("https://"), std::string::npos);
-  EXPECT_NE(html.find("Not processed yet"), std::string::npos) << "no BOS probes yet: the report must say so";
+  EXPECT_EQ(html.find("Not processed yet"), std::string::npos);
   const std::size_t figures = json["figures"].size();
-  EXPECT_EQ(figures, 5u);  // overview, two curves, two maps
+  EXPECT_EQ(figures, 11u);  // overview, four curves, two displacement and two temperature maps, two Bland–Altman
 
   if (!testing::have_chromium()) GTEST_FAIL() << "chromium is not installed (scripts/debian-packages.txt lists it)";
 
@@ -142,9 +148,9 @@ TEST_F(ReportCli, MakesAReportThatABrowserRendersCompletely) {
 // series, the agreement table, temperature maps; the map axes take the
 // image scale from the run's [geometry].
 TEST_F(ReportCli, AProcessedRunGetsProbesAgreementAndTemperatureMaps) {
-  report::testrun::Truth truth;
+  testrun::Truth truth;
   truth.config_toml = "[geometry]\npx_per_mm_flow = 25\n";
-  report::testrun::create_run(dir_ / "run", true, truth);
+  testrun::create_run(dir_ / "run", true, truth);
   const auto processed = testing::run_command(kBosfuse + " process " + shell_quote(dir_ / "run"), 120);
   ASSERT_EQ(processed.exit_code, 0) << processed.output;
   const fs::path out = dir_ / "out";
@@ -188,7 +194,7 @@ TEST_F(ReportCli, AProcessedRunGetsProbesAgreementAndTemperatureMaps) {
 }
 
 TEST_F(ReportCli, RunWithoutFramesGetsAReportWithoutMapsAndANote) {
-  report::testrun::create_run(dir_ / "run", false);
+  testrun::create_run(dir_ / "run", false);
   const auto made =
       testing::run_command(kBosfuse + " report " + shell_quote(dir_ / "run") + " -o " + shell_quote(dir_ / "out"), 120);
   ASSERT_EQ(made.exit_code, 0) << made.output;
@@ -199,7 +205,7 @@ TEST_F(ReportCli, RunWithoutFramesGetsAReportWithoutMapsAndANote) {
 }
 
 TEST_F(ReportCli, BadArgumentsAreRefusedWithAReason) {
-  report::testrun::create_run(dir_ / "run", false);
+  testrun::create_run(dir_ / "run", false);
   const auto no_out = testing::run_command(kBosfuse + " report " + shell_quote(dir_ / "run"));
   EXPECT_NE(no_out.exit_code, 0);
   EXPECT_NE(no_out.output.find("--out"), std::string::npos) << no_out.output;

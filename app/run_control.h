@@ -20,6 +20,7 @@ enum ExitStatus : int {
   kExitFailure = 1,
   kExitIncompleteRun = 3,  // the run was recorded, but records read could not be committed
   kExitDeviceSilent = 4,   // the run was recorded, but a device delivered nothing or a camera lost frames
+  kExitStopped = 5,        // stopped on request before it finished (process: `--resume` continues)
 };
 
 // A failure with its own exit status; main() prints the message and exits with it.

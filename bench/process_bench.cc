@@ -70,7 +70,7 @@ void BM_ProcessProbes(benchmark::State& state) {
 }
 BENCHMARK(BM_ProcessProbes)->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// `bosfuse process --probes-only` by default: one node of context around each
+// `bosfuse process --mode probes` by default: one node of context around each
 // probe (--probe-context 1); within ~0.01-0.02 px of the full field rather than
 // equal to it.
 void BM_ProcessProbesOneNodeContext(benchmark::State& state) {

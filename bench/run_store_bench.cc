@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 
 struct ScratchRun {
   ScratchRun() : dir(fs::temp_directory_path() / ("bosfuse-bench-" + std::to_string(std::random_device{}()))) {
-    store.emplace(storage::RunStore::create(dir, {0, "bench", 0, {}, "", storage::RunStatus::kRunning},
+    store.emplace(storage::RunStore::create(dir, {0, "bench", 0, {}, "", storage::RunStatus::kRunning, 1.0, std::nullopt},
                                             storage::RunStore::CreateMode::kNew));
     const auto device = store->add_device({0, "bench", "modbus-tcp", "adam-6018", ""});
     for (int i = 0; i < 8; ++i) {

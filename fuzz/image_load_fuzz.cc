@@ -1,7 +1,7 @@
 // Image loading. The input is an image file's bytes (seeds: tiny PNG, JPEG,
 // TIFF, PGM and BMP images at 8 and 16 bits, one JPEG with EXIF capture
 // time). They are loaded the ways bosfuse loads images: written to a file
-// and read with app::read_image() (app/image_io.cc, what `bosfuse evaluate`
+// and read with pipeline::read_image() (pipeline/image_io.cc, what `bosfuse evaluate`
 // and `quality` use; compiled into this target since app/ is no library),
 // decoded from memory with cv::imdecode(IMREAD_UNCHANGED) as the watched-
 // folder camera does, and searched for an EXIF capture time with
@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "acquisition/exif_time.h"
-#include "app/image_io.h"
+#include "pipeline/image_io.h"
 #include "fuzz/fuzz_support.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
@@ -48,7 +48,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   cv::Mat from_file;
   bool file_ok = false;
   try {
-    from_file = bosfuse::app::read_image(path, "image");
+    from_file = bosfuse::pipeline::read_image(path, "image");
     FUZZ_CHECK(!from_file.empty());
     file_ok = true;
   } catch (const std::exception& e) {

@@ -11,11 +11,11 @@
 #include <string_view>
 
 #include "acquisition/clock.h"
-#include "report/experiment_time.h"
 #include "report/field_csv.h"
 #include "report/hdf5_writer.h"
 #include "report/html.h"
 #include "storage/processing_store.h"
+#include "storage/experiment_clock.h"
 #include "storage/run_paths.h"
 
 #ifndef BOSFUSE_VERSION
@@ -228,11 +228,12 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
     throw std::runtime_error(fmt::format("cannot write '{}': no folder '{}'", hdf5_path.string(), folder.string()));
   }
   const auto run = store.run();
+  const storage::ExperimentClock clock = storage::experiment_clock(store);
   const storage::ProcessingStore results(store.dir());
   auto rows = results.fields();
   if (rows.empty()) {
     throw NoStoredFields(fmt::format(
-        "the run '{}' has no stored fields: run `bosfuse process RUN` first (full fields, not --probes-only)",
+        "the run '{}' has no stored fields: run `bosfuse process RUN --mode full` first",
         store.dir().string()));
   }
   std::map<std::int64_t, storage::FrameRecord> frame_by_id;
@@ -271,7 +272,7 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
                       "store), grid coordinates under /grids; see docs/REPORT.md, Field export");
     out.set_attribute("/", "displacement_convention", kDisplacementConvention);
     out.set_attribute("/", "coordinates", kCoordinates);
-    out.set_attribute("/", "time", "t_s: " + experiment_time_basis(run));
+    out.set_attribute("/", "time", "t_s: " + clock.basis());
     if (options.px_per_mm) out.set_attribute("/", "px_per_mm", *options.px_per_mm);
     out.create_group("/grids");
 
@@ -295,7 +296,7 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
         ExportedFrame f;
         f.group = fmt::format("/{}/frame_{:06d}", kind.name, frame.id);
         f.frame_id = frame.id;
-        f.t_s = experiment_time_s(run, frame.t_ns);
+        f.t_s = clock.seconds(frame.t_ns);
         f.grid = grid_of(field, grids, out, options.px_per_mm);
         f.rows = field.rows();
         f.cols = field.cols();

@@ -9,7 +9,7 @@
 //
 // Each frame's fields are 2-D arrays shaped [ny, nx] (row = y, image
 // coordinates, DESIGN.md) with `units` on every dataset, experiment time
-// `t_s` (experiment_time.h) on every frame; the grid's coordinates are
+// `t_s` (experiment seconds, storage/experiment_clock.h) on every frame; the grid's coordinates are
 // stored once per distinct grid. Both files are written under temporary
 // names and renamed at the end, so a failed export leaves no half file.
 
@@ -35,7 +35,7 @@ struct FieldExportResult {
   std::size_t grids = 0;
 };
 
-// The run has no stored field (not processed, or processed with --probes-only).
+// The run has no stored field (not processed, or processed in probe mode).
 class NoStoredFields : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

@@ -7,10 +7,10 @@
 #include <fstream>
 #include <limits>
 
-#include "report/experiment_time.h"
+#include "storage/experiment_clock.h"
 #include "report/hdf5_writer.h"
 #include "report/test_readers.h"
-#include "report/test_run.h"
+#include "tests/support/synthetic_run.h"
 #include "storage/processing_store.h"
 #include "tests/support/temp_dir.h"
 
@@ -140,15 +140,6 @@ class FieldExport : public ::testing::Test {
   std::vector<storage::FrameRecord> frames_;
 };
 
-TEST(ExperimentTime, IsSecondsSinceTheRunStarted) {
-  storage::RunInfo run;
-  run.started_ns = 1'795'000'000'000'000'000;
-  EXPECT_DOUBLE_EQ(experiment_time_s(run, run.started_ns + 10'003'000'000), 10.003);
-  EXPECT_DOUBLE_EQ(experiment_time_s(run, run.started_ns - 500'000'000), -0.5) << "before the origin: negative";
-  EXPECT_NE(experiment_time_basis(run).find("since the run started (2026-11-18T11:06:40.000Z"), std::string::npos)
-      << experiment_time_basis(run);
-}
-
 TEST_F(FieldExport, KnownFieldsRoundTripThroughTheHdf5CApi) {
   store_fields();
   const auto result = export_to(dir_ / "fields.h5");
@@ -163,14 +154,14 @@ TEST_F(FieldExport, KnownFieldsRoundTripThroughTheHdf5CApi) {
   EXPECT_EQ(string_attribute(f, "/", "run_name"), "synthetic cooling");
   EXPECT_EQ(string_attribute(f, "/", "bosfuse_version"), "0.1.0");
   EXPECT_NE(string_attribute(f, "/", "displacement_convention").find("(x + u, y + v)"), std::string::npos);
-  EXPECT_NE(string_attribute(f, "/", "time").find("since the run started"), std::string::npos);
+  EXPECT_NE(string_attribute(f, "/", "time").find("experiment seconds since the first sample"), std::string::npos);
   EXPECT_EQ(number_attribute<double>(f, "/", "px_per_mm"), 30.0);
   EXPECT_EQ(number_attribute<std::int64_t>(f, "/", "layout_version"), 1);
 
-  const auto run_info = storage::RunStore::open(run()).run();
+  const auto clock = storage::experiment_clock(storage::RunStore::open(run()));
   for (int k = 0; k < 2; ++k) {
     const std::string d = group("displacement", k);
-    EXPECT_EQ(number_attribute<double>(f, d, "t_s"), experiment_time_s(run_info, frames_[1 + k].t_ns));
+    EXPECT_EQ(number_attribute<double>(f, d, "t_s"), clock.seconds(frames_[1 + k].t_ns));
     EXPECT_NEAR(number_attribute<double>(f, d, "t_s"), truth_.frame_times_s[k] + 0.003, 1e-9);
     EXPECT_EQ(number_attribute<std::int64_t>(f, d, "frame_id"), frames_[1 + k].id);
     EXPECT_EQ(string_attribute(f, d, "frame_path"), frames_[1 + k].path);
@@ -318,7 +309,7 @@ TEST_F(FieldExport, ARunWithoutStoredFieldsSaysToProcessItFirst) {
     export_to(dir_ / "fields.h5");
     FAIL() << "exported nothing without an error";
   } catch (const NoStoredFields& e) {
-    EXPECT_NE(std::string(e.what()).find("run `bosfuse process RUN` first"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("run `bosfuse process RUN --mode full` first"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(fs::exists(dir_ / "fields.h5"));
   EXPECT_FALSE(fs::exists(dir_ / "fields.xmf"));

@@ -12,11 +12,12 @@
 #include <opencv2/imgcodecs.hpp>
 #include <set>
 
-#include "acquisition/image_file.h"
 #include "fitting/fit_json.h"
 #include "fusion/image_quality.h"
+#include "pipeline/processing_settings.h"
 #include "report/field_csv.h"
 #include "storage/processing_store.h"
+#include "storage/experiment_clock.h"
 #include "storage/run_paths.h"
 
 namespace bosfuse::report {
@@ -24,40 +25,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::optional<std::int64_t> first_sample_ns(const storage::RunStore& store) {
-  std::optional<std::int64_t> first;
-  for (const auto& summary : store.channel_summaries()) {
-    if (summary.first_ns && (!first || *summary.first_ns < *first)) first = summary.first_ns;
-  }
-  return first;
-}
-
-double seconds_since(std::int64_t t_ns, std::int64_t origin_ns) { return static_cast<double>(t_ns - origin_ns) * 1e-9; }
-
-cv::Mat read_frame(const storage::RunStore& store, const storage::FrameRecord& frame) {
-  fs::path path;
-  try {
-    path = storage::resolve_in_run(store.dir(), frame.path);
-  } catch (const storage::StorageError& e) {
-    throw std::runtime_error("cannot read frame " + std::to_string(frame.id) + ": " + e.what());
-  }
-  if (!fs::is_regular_file(path)) {
-    throw std::runtime_error("cannot read frame " + std::to_string(frame.id) + " ('" + path.string() +
-                             "'): no such file");
-  }
-  cv::Mat image = acquisition::read_image_file(path);
-  if (image.empty())
-    throw std::runtime_error("cannot read frame " + std::to_string(frame.id) + " ('" + path.string() + "')");
-  return image;
-}
-
 using json = nlohmann::json;
 
-// A fit stored by `bosfuse process`, its origin moved to the report's time
-// base. No residuals are stored.
-fitting::NewtonFit stored_fit(const storage::FitRecord& record, std::int64_t origin_ns) {
+// A fit stored by `bosfuse process`, its origin on the report's clock (a
+// fit stored before version 4 has its own origin, on the same scale). No
+// residuals are stored.
+fitting::NewtonFit stored_fit(const storage::FitRecord& record, const storage::ExperimentClock& clock) {
   fitting::NewtonFit fit = fitting::fit_from_json(json::parse(record.json));
-  fit.origin_s = seconds_since(record.origin_t_ns, origin_ns);
+  fit.origin_s = clock.seconds(record.origin_t_ns);
   return fit;
 }
 
@@ -102,137 +77,161 @@ MapField read_displacement_csv(const fs::path& path) {
   return map;
 }
 
-// What `bosfuse process` stored, for the report.
-struct StoredResults {
-  bool probes = false;
-  bool temperature_maps = false;
-  bool displacement_maps = false;
-};
+// Everything a run's processing stored, read into the report.
+struct StoredReader {
+  const storage::RunStore& store;
+  const storage::ProcessingStore* results;  // null: none could be read
+  const storage::ExperimentClock& clock;
+  const RunReportOptions& options;
+  ReportInput& input;
 
-// Adds the stored probe series (with their fits), agreements and, at the
-// requested times, the stored field files as maps.
-StoredResults load_stored_results(const storage::RunStore& store, std::int64_t origin_ns,
-                                  const std::vector<storage::FrameRecord>& frames, const RunReportOptions& options,
-                                  ReportInput& input) {
-  StoredResults loaded;
-  std::optional<storage::ProcessingStore> results;
-  try {
-    results.emplace(store.dir());
-  } catch (const std::exception& e) {
-    input.notes.push_back(std::string("Stored processing results could not be read: ") + e.what());
-    return loaded;
-  }
-  std::map<std::int64_t, std::string> channel_names;
-  for (const auto& c : store.channels()) channel_names[c.id] = c.name;
-  std::map<std::int64_t, storage::FitRecord> probe_fits;
-  for (const auto& f : results->fits()) {
-    if (f.subject == storage::FitSubject::kProbe) probe_fits[f.subject_id] = f;
-  }
-  std::map<std::int64_t, std::string> probe_names;
-  bool any_shift = false;
-  for (const auto& probe : results->probes()) {
-    CurveSeries s;
-    s.name = probe.name + " (BOS)";
-    probe_names[probe.id] = s.name;
-    s.kind = SeriesKind::kBosProbe;
-    s.image_px = cv::Point2d(probe.x_px, probe.y_px);
-    const auto samples = results->probe_samples(probe.id);
-    const bool has_temperature =
-        std::any_of(samples.begin(), samples.end(), [](const auto& p) { return p.valid && p.temperature_c; });
-    any_shift = any_shift || !has_temperature;
-    for (const auto& p : samples) {
-      const std::optional<double> value = has_temperature ? p.temperature_c : std::optional<double>(p.shift_px);
-      if (!p.valid || !value || !std::isfinite(*value)) {
-        ++s.excluded_samples;
-        continue;
-      }
-      s.time_s.push_back(seconds_since(p.t_ns, origin_ns));
-      s.temperature_c.push_back(*value);
+  std::map<std::int64_t, storage::FitRecord> fits(storage::FitSubject subject) const {
+    std::map<std::int64_t, storage::FitRecord> out;
+    if (!results) return out;
+    for (const auto& f : results->fits()) {
+      if (f.subject == subject) out[f.subject_id] = f;
     }
-    if (const auto f = probe_fits.find(probe.id); f != probe_fits.end()) {
-      try {
-        s.fit = stored_fit(f->second, origin_ns);
-      } catch (const std::exception& e) {
-        input.notes.push_back(
-            fmt::format("The stored fit of probe {} could not be read ({}); it is refitted.", probe.name, e.what()));
-      }
-    }
-    input.series.push_back(std::move(s));
-    loaded.probes = true;
+    return out;
   }
-  if (any_shift) {
-    input.notes.push_back(
-        "Some BOS probes have no temperature (no calibration): their series are the shift magnitude in px, not °C "
-        "(run bosfuse calibrate, then bosfuse process).");
-  }
-  for (const auto& a : results->agreements()) {
+
+  void attach_fit(CurveSeries& s, const std::map<std::int64_t, storage::FitRecord>& fits, std::int64_t id) const {
+    const auto f = fits.find(id);
+    if (f == fits.end()) return;
     try {
-      AgreementEntry entry;
-      const auto tc = channel_names.find(a.channel_id);
-      const auto probe = probe_names.find(a.probe_id);
-      entry.thermocouple = tc != channel_names.end() ? tc->second : fmt::format("channel {}", a.channel_id);
-      entry.probe = probe != probe_names.end() ? probe->second : fmt::format("probe {}", a.probe_id);
-      entry.agreement = fitting::agreement_from_json(json::parse(a.json));
-      input.agreements.push_back(std::move(entry));
+      s.fit = stored_fit(f->second, clock);
     } catch (const std::exception& e) {
-      input.notes.push_back(fmt::format("A stored agreement could not be read: {}", e.what()));
+      input.notes.push_back(fmt::format("The stored fit of {} could not be read: {}", s.name, e.what()));
     }
   }
 
-  // Field files at the requested times: the nearest frame that has one.
-  std::map<std::int64_t, storage::FrameRecord> frame_by_id;
-  for (const auto& f : frames) frame_by_id[f.id] = f;
-  cv::Size image_size;
-  if (!frames.empty()) image_size = cv::Size(frames.front().width_px, frames.front().height_px);
-  const auto fields = results->fields();
-  auto add_maps = [&](const std::string& kind, std::vector<MapField>& maps) {
-    std::vector<std::pair<storage::FieldRecord, std::int64_t>> candidates;  // field, frame time
-    for (const auto& f : fields) {
-      const auto frame = frame_by_id.find(f.frame_id);
-      if (f.kind == kind && frame != frame_by_id.end()) candidates.emplace_back(f, frame->second.t_ns);
+  void thermocouples() const {
+    const auto channel_fits = fits(storage::FitSubject::kChannel);
+    for (const auto& channel : store.channels()) {
+      if (channel.kind != "thermocouple" && !channel_fits.count(channel.id)) continue;
+      CurveSeries s;
+      s.name = channel.name;
+      s.kind = SeriesKind::kThermocouple;
+      if (channel.image_x_px && channel.image_y_px) s.image_px = cv::Point2d(*channel.image_x_px, *channel.image_y_px);
+      for (const auto& sample : store.read_samples(channel.id)) {
+        if (sample.status != storage::SampleStatus::kOk || !sample.value) {
+          ++s.excluded_samples;
+          continue;
+        }
+        s.time_s.push_back(clock.seconds(sample.t_ns));
+        s.temperature_c.push_back(*sample.value);
+      }
+      attach_fit(s, channel_fits, channel.id);
+      input.series.push_back(std::move(s));
     }
-    if (candidates.empty()) return false;
+    if (input.series.empty()) input.notes.push_back("The run has no thermocouple channels.");
+  }
+
+  std::map<std::int64_t, std::string> probes() const {
+    const auto probe_fits = fits(storage::FitSubject::kProbe);
+    std::map<std::int64_t, std::string> names;
+    bool any_shift = false;
+    for (const auto& probe : results->probes()) {
+      CurveSeries s;
+      s.name = probe.name + " (BOS)";
+      names[probe.id] = s.name;
+      s.kind = SeriesKind::kBosProbe;
+      s.image_px = cv::Point2d(probe.x_px, probe.y_px);
+      const auto samples = results->probe_samples(probe.id);
+      const bool has_temperature =
+          std::any_of(samples.begin(), samples.end(), [](const auto& p) { return p.valid && p.temperature_c; });
+      any_shift = any_shift || !has_temperature;
+      if (!has_temperature) s.unit = "px";
+      for (const auto& p : samples) {
+        const std::optional<double> value = has_temperature ? p.temperature_c : std::optional<double>(p.shift_px);
+        if (!p.valid || !value || !std::isfinite(*value)) {
+          ++s.excluded_samples;
+          continue;
+        }
+        s.time_s.push_back(clock.seconds(p.t_ns));
+        s.temperature_c.push_back(*value);
+      }
+      attach_fit(s, probe_fits, probe.id);
+      input.series.push_back(std::move(s));
+    }
+    if (any_shift) {
+      input.notes.push_back(
+          "Some BOS probes have no temperature (no calibration): their series are the shift magnitude in px, not °C "
+          "(run bosfuse calibrate, then bosfuse process).");
+    }
+    return names;
+  }
+
+  void agreements(const std::map<std::int64_t, std::string>& probe_names) const {
+    std::map<std::int64_t, std::string> channel_names;
+    for (const auto& c : store.channels()) channel_names[c.id] = c.name;
+    for (const auto& a : results->agreements()) {
+      try {
+        AgreementEntry entry;
+        const auto tc = channel_names.find(a.channel_id);
+        const auto probe = probe_names.find(a.probe_id);
+        entry.thermocouple = tc != channel_names.end() ? tc->second : fmt::format("channel {}", a.channel_id);
+        entry.probe = probe != probe_names.end() ? probe->second : fmt::format("probe {}", a.probe_id);
+        entry.agreement = fitting::agreement_from_json(json::parse(a.json));
+        input.agreements.push_back(std::move(entry));
+      } catch (const std::exception& e) {
+        input.notes.push_back(fmt::format("A stored agreement could not be read: {}", e.what()));
+      }
+    }
+  }
+
+  // The stored field files nearest the requested times, as maps.
+  void maps(const std::string& kind, std::vector<MapField>& out) const {
+    std::map<std::int64_t, storage::FrameRecord> frame_by_id;
+    for (const auto& f : store.frames()) frame_by_id[f.id] = f;
+    std::vector<std::pair<storage::FieldRecord, double>> candidates;  // field, frame time
+    for (const auto& f : results->fields()) {
+      const auto frame = frame_by_id.find(f.frame_id);
+      if (f.kind == kind && frame != frame_by_id.end()) candidates.emplace_back(f, clock.seconds(frame->second.t_ns));
+    }
+    if (candidates.empty()) return;
+    const cv::Size image_size(frame_by_id.begin()->second.width_px, frame_by_id.begin()->second.height_px);
     std::set<std::int64_t> done;
     for (double t : options.map_times_s) {
       const auto nearest = std::min_element(candidates.begin(), candidates.end(), [&](const auto& a, const auto& b) {
-        return std::abs(seconds_since(a.second, origin_ns) - t) < std::abs(seconds_since(b.second, origin_ns) - t);
+        return std::abs(a.second - t) < std::abs(b.second - t);
       });
       if (!done.insert(nearest->first.frame_id).second) continue;
-      const double frame_t = seconds_since(nearest->second, origin_ns);
       try {
         const fs::path path = storage::resolve_in_run(store.dir(), nearest->first.path);
         MapField map = kind == "temperature" ? read_temperature_csv(path) : read_displacement_csv(path);
-        map.time_s = frame_t;
+        map.time_s = nearest->second;
         map.image_size_px = image_size;
         map.source = fmt::format("stored {} field of frame {} ({}), nearest to the requested t = {:g} s", kind,
                                  nearest->first.frame_id, nearest->first.path, t);
-        maps.push_back(std::move(map));
+        out.push_back(std::move(map));
       } catch (const std::exception& e) {
-        input.notes.push_back(fmt::format("No stored {} map at t = {:.1f} s: {}", kind, frame_t, e.what()));
+        input.notes.push_back(fmt::format("No stored {} map at t = {:.1f} s: {}", kind, nearest->second, e.what()));
       }
     }
-    return !maps.empty();
-  };
-  loaded.temperature_maps = add_maps("temperature", input.temperature_maps);
-  loaded.displacement_maps = add_maps("displacement", input.displacement_maps);
-  return loaded;
+  }
+};
+
+// What the processing found and with which settings, from its stored row.
+void processing_record(const storage::ProcessingRecord& p, ReportInput& input) {
+  const auto summary = json::parse(p.summary_json);
+  if (summary.contains("quality")) {
+    const auto& q = summary.at("quality");
+    QualityInfo quality;
+    quality.index = {q.at("q_l").get<double>(),          q.at("q_c").get<double>(),
+                     q.at("q_mod").get<double>(),        q.at("mean_image").get<double>(),
+                     q.at("mean_reference").get<double>(), q.at("std_image").get<double>(),
+                     q.at("std_reference").get<double>()};
+    quality.compared = fmt::format("Last frame {} (t = {:.1f} s) against reference frame {}",
+                                   q.at("frame_id").get<std::int64_t>(), q.at("t_s").get<double>(),
+                                   q.at("reference_frame_id").get<std::int64_t>());
+    input.quality = quality;
+  }
+  const auto settings = pipeline::settings_from_json(json::parse(p.settings_json));
+  input.notes.push_back(fmt::format("Processed on {} (processing {}): {}.", storage::format_iso8601_utc(p.started_ns, 0),
+                                    p.id, pipeline::describe(settings)));
 }
 
 }  // namespace
-
-std::string iso8601_utc(std::int64_t t_ns) {
-  std::int64_t seconds = t_ns / 1'000'000'000;
-  std::int64_t rest = t_ns % 1'000'000'000;
-  if (rest < 0) {
-    rest += 1'000'000'000;
-    --seconds;
-  }
-  const std::time_t t = static_cast<std::time_t>(seconds);
-  std::tm fields{};
-  gmtime_r(&t, &fields);
-  return fmt::format("{:04d}-{:02d}-{:02d}T{:02d}:{:02d}:{:02d}.{:03d}Z", fields.tm_year + 1900, fields.tm_mon + 1,
-                     fields.tm_mday, fields.tm_hour, fields.tm_min, fields.tm_sec, rest / 1'000'000);
-}
 
 MapField displacement_magnitude_map(const fusion::DisplacementField& field, cv::Size image_size_px) {
   if (field.rows <= 0 || field.cols <= 0 || field.size() != static_cast<std::size_t>(field.rows) * field.cols) {
@@ -268,111 +267,48 @@ ReportInput build_report_input(const storage::RunStore& store, const RunReportOp
   const auto run = store.run();
   input.run_name = run.name;
   input.run_dir = store.dir().string();
-  input.started_utc = iso8601_utc(run.started_ns);
+  input.started_utc = storage::format_iso8601_utc(run.started_ns, 3);
   input.status = std::string(storage::to_string(run.status));
+  const storage::ExperimentClock clock = storage::experiment_clock(store);
+  input.time_basis = clock.basis();
+  if (!clock.note.empty()) input.notes.push_back("Time: " + clock.note + ".");
   input.px_per_mm = options.px_per_mm;
-
-  const auto frames = store.frames();
-  std::int64_t origin_ns = run.started_ns;
-  if (const auto first = first_sample_ns(store)) {
-    origin_ns = *first;
-  } else if (!frames.empty()) {
-    origin_ns = frames.front().t_ns;
-  }
-
-  auto progress = [&](const std::string& line) {
-    if (options.on_progress) options.on_progress(line);
-  };
-  // Thermocouples.
-  for (const auto& channel : store.channels()) {
-    if (channel.kind != "thermocouple") continue;
-    CurveSeries s;
-    s.name = channel.name;
-    s.kind = SeriesKind::kThermocouple;
-    if (channel.image_x_px && channel.image_y_px) s.image_px = cv::Point2d(*channel.image_x_px, *channel.image_y_px);
-    for (const auto& sample : store.read_samples(channel.id)) {
-      if (sample.status != storage::SampleStatus::kOk || !sample.value) {
-        ++s.excluded_samples;
-        continue;
-      }
-      s.time_s.push_back(seconds_since(sample.t_ns, origin_ns));
-      s.temperature_c.push_back(*sample.value);
-    }
-    input.series.push_back(std::move(s));
-  }
-  if (input.series.empty()) input.notes.push_back("The run has no thermocouple channels.");
-  const StoredResults stored = load_stored_results(store, origin_ns, frames, options, input);
-  progress(fmt::format("fitting {} series", input.series.size()));
-  fit_missing(input, options.fit);
-
-  // Frames: reference, measurements nearest the chosen times, quality of the last one.
-  if (frames.empty()) {
-    input.displacement_maps_note = "the run has no frames";
-    return input;
-  }
-  auto reference_it = std::find_if(frames.begin(), frames.end(), [](const auto& f) { return f.is_reference; });
-  if (reference_it == frames.end()) {
-    reference_it = frames.begin();
-    input.notes.push_back(
-        fmt::format("No frame is marked as the reference; the first frame ({}) is used.", reference_it->path));
-  }
-  const storage::FrameRecord reference = *reference_it;
-  std::vector<storage::FrameRecord> measurements;
-  for (const auto& f : frames) {
-    if (f.id != reference.id) measurements.push_back(f);
-  }
-  if (measurements.empty()) {
-    input.displacement_maps_note = "the run has a reference frame but no measurement frame";
-    return input;
-  }
-  cv::Mat reference_image;
   try {
-    reference_image = read_frame(store, reference);
+    if (!input.px_per_mm) input.px_per_mm = pipeline::stored_px_per_mm(store.dir());
   } catch (const std::exception& e) {
-    input.displacement_maps_note = e.what();
-    return input;
+    input.notes.push_back(std::string("Map axes in px: the run's geometry could not be read: ") + e.what());
   }
 
-  if (!options.mask.empty() && options.mask.size() != reference_image.size()) {
-    input.displacement_maps_note = fmt::format("the mask is {}×{} px but the frames are {}×{} px", options.mask.cols,
-                                               options.mask.rows, reference_image.cols, reference_image.rows);
-    return input;
-  }
-  std::set<std::int64_t> done;
-  for (double t : stored.displacement_maps ? std::vector<double>{} : options.map_times_s) {
-    const auto nearest = std::min_element(measurements.begin(), measurements.end(), [&](const auto& a, const auto& b) {
-      return std::abs(seconds_since(a.t_ns, origin_ns) - t) < std::abs(seconds_since(b.t_ns, origin_ns) - t);
-    });
-    if (!done.insert(nearest->id).second) continue;  // two times chose the same frame
-    const double frame_t = seconds_since(nearest->t_ns, origin_ns);
-    progress(fmt::format("evaluating frame {} (t = {:.1f} s) against reference frame {}", nearest->id, frame_t,
-                         reference.id));
-    try {
-      const cv::Mat image = read_frame(store, *nearest);
-      const auto result = fusion::evaluate_displacement(reference_image, image, options.evaluator, options.mask);
-      MapField map = displacement_magnitude_map(result.field, reference_image.size());
-      map.time_s = frame_t;
-      map.source = fmt::format("frame {} ({}) against reference frame {}, nearest to the requested t = {:g} s; {}",
-                               nearest->id, nearest->path, reference.id, t, result.summary.BriefReport());
-      input.displacement_maps.push_back(std::move(map));
-    } catch (const std::exception& e) {
-      input.notes.push_back(fmt::format("No displacement map at t = {:.1f} s: {}", frame_t, e.what()));
-    }
-  }
-  if (input.displacement_maps.empty() && input.displacement_maps_note.empty()) {
-    input.displacement_maps_note = "no map time was requested, or every evaluation failed (see the notes above)";
-  }
-
-  const auto& last = *std::max_element(measurements.begin(), measurements.end(),
-                                       [](const auto& a, const auto& b) { return a.t_ns < b.t_ns; });
+  std::optional<storage::ProcessingStore> results;
   try {
-    QualityInfo quality;
-    quality.index = fusion::modified_quality_index(read_frame(store, last), reference_image);
-    quality.compared = fmt::format("Last frame {} (t = {:.1f} s) against reference frame {}", last.id,
-                                   seconds_since(last.t_ns, origin_ns), reference.id);
-    input.quality = quality;
+    results.emplace(store.dir());
   } catch (const std::exception& e) {
-    input.notes.push_back(std::string("No image quality index: ") + e.what());
+    input.notes.push_back(std::string("Stored processing results could not be read: ") + e.what());
+  }
+  const StoredReader reader{store, results ? &*results : nullptr, clock, options, input};
+  if (!results) {
+    reader.thermocouples();
+    return input;
+  }
+  const auto processing = results->current_processing();
+  const bool processed = processing || !results->fits().empty();
+  if (!processed) {
+    input.notes.push_back(fmt::format(
+        "The run is not processed yet: no fits, BOS probes or maps are stored. Run `bosfuse process {}`, then "
+        "this report again.",
+        store.dir().string()));
+  }
+  reader.thermocouples();
+  reader.agreements(reader.probes());
+  if (processing) processing_record(*processing, input);
+  reader.maps("temperature", input.temperature_maps);
+  reader.maps("displacement", input.displacement_maps);
+  if (input.displacement_maps.empty()) {
+    input.displacement_maps_note = store.frames().empty() ? "the run has no frames"
+                                   : processed
+                                       ? "the run was processed in probe mode (no fields): `bosfuse process RUN "
+                                         "--mode full` stores them"
+                                       : "the run is not processed yet: run `bosfuse process RUN`";
   }
   return input;
 }

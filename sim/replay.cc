@@ -172,6 +172,25 @@ ModbusSimServer::Options replay_module_options(const ReplayDevice& device, int p
   return options;
 }
 
+namespace {
+
+// The recorded experiment file's optical set-up and clock alignment, so the
+// replayed run processes like the recorded one. A file that does not parse
+// (a damaged run) gives nothing to copy; the replay still runs.
+void copy_processing_tables(const std::string& recorded_toml, toml::table& document) {
+  toml::table recorded;
+  try {
+    recorded = toml::parse(recorded_toml);
+  } catch (const toml::parse_error&) {
+    return;
+  }
+  for (const char* name : {"geometry", "alignment"}) {
+    if (const toml::table* table = recorded[name].as_table()) document.insert(name, *table);
+  }
+}
+
+}  // namespace
+
 std::string replay_experiment_toml(const RecordedRun& run, const std::vector<int>& ports, double speed) {
   // Built as a toml++ table, not by hand: names come from a recorded run and
   // may hold any character (control characters, quotes, non-ASCII), which
@@ -188,7 +207,10 @@ std::string replay_experiment_toml(const RecordedRun& run, const std::vector<int
                                   {"speed", speed},
                                   {"reference_frames", 0}});
   }
-  toml::table document{{"run", toml::table{{"name", "replay of " + run.run.name}}}};
+  toml::table run_table{{"name", "replay of " + run.run.name}, {"time_scale", run.run.time_scale * speed}};
+  if (run.run.origin_event) run_table.insert("origin", *run.run.origin_event);
+  toml::table document{{"run", std::move(run_table)}};
+  copy_processing_tables(run.run.config_toml, document);
   if (!devices.empty()) document.insert("devices", std::move(devices));
   if (!cameras.empty()) document.insert("cameras", std::move(cameras));
   std::ostringstream toml;

@@ -47,7 +47,10 @@ RecordedRun inspect_recorded_run(const std::filesystem::path& dir);
 ModbusSimServer::Options replay_module_options(const ReplayDevice& device, int port);
 
 // The experiment file of a replay at `speed` with the devices' modules on
-// `ports` (same order as run.devices).
+// `ports` (same order as run.devices). It keeps what makes the replay the
+// same experiment: the recorded run's [geometry] and [alignment], its
+// declared origin, and its time scale times `speed` (a run recorded at 16×
+// replayed at 10× is 160 experiment seconds per recorded second).
 std::string replay_experiment_toml(const RecordedRun& run, const std::vector<int>& ports, double speed);
 
 }  // namespace bosfuse::sim

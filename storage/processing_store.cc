@@ -1,5 +1,7 @@
 #include "storage/processing_store.h"
 
+#include <string_view>
+
 #include "storage/run_store.h"
 #include "storage/schema.h"
 
@@ -84,6 +86,179 @@ std::int64_t ProcessingStore::add_field(const FieldRecord& f) {
   return db_.last_insert_rowid();
 }
 
+std::int64_t ProcessingStore::begin_processing(const std::string& settings_json, std::int64_t started_ns) {
+  db_.prepare("INSERT INTO processings (run_id, started_ns, status, settings_json) VALUES (?, ?, 'running', ?)")
+      .bind_all(run_id_, started_ns, settings_json)
+      .run();
+  return db_.last_insert_rowid();
+}
+
+std::int64_t ProcessingStore::add_inherited_settings(const std::string& settings_json, std::int64_t created_ns) {
+  db_.prepare(
+         "INSERT INTO processings (run_id, started_ns, finished_ns, status, settings_json) "
+         "VALUES (?1, ?2, ?2, 'inherited', ?3)")
+      .bind_all(run_id_, created_ns, settings_json)
+      .run();
+  return db_.last_insert_rowid();
+}
+
+std::optional<ProcessingRecord> ProcessingStore::processing_where(const char* condition) const {
+  if (!has_processings()) return std::nullopt;
+  auto stmt = db_.prepare(std::string("SELECT id, started_ns, finished_ns, status, settings_json, summary_json "
+                                      "FROM processings WHERE run_id = ? AND ") +
+                          condition + " ORDER BY id DESC LIMIT 1");
+  stmt.bind(1, run_id_);
+  if (!stmt.step()) return std::nullopt;
+  return ProcessingRecord{stmt.column_int64(0), stmt.column_int64(1), stmt.column_optional_int64(2),
+                          stmt.column_text(3),  stmt.column_text(4),  stmt.column_text(5)};
+}
+
+std::optional<ProcessingRecord> ProcessingStore::current_processing() const {
+  return processing_where("status = 'complete'");
+}
+
+std::optional<ProcessingRecord> ProcessingStore::latest_settings() const {
+  return processing_where("status IN ('complete', 'inherited')");
+}
+
+std::optional<ProcessingRecord> ProcessingStore::unfinished_processing() const {
+  return processing_where("status = 'running'");
+}
+
+void ProcessingStore::abandon_processing(std::int64_t processing_id) {
+  Transaction transaction(db_);
+  for (const char* sql :
+       {"DELETE FROM staged_probe_samples WHERE probe_id IN (SELECT id FROM staged_probe_series WHERE processing_id = ?1)",
+        "DELETE FROM staged_probe_series WHERE processing_id = ?1",
+        "DELETE FROM staged_fields WHERE processing_id = ?1", "DELETE FROM staged_frames WHERE processing_id = ?1",
+        "UPDATE processings SET status = 'abandoned' WHERE id = ?1 AND status = 'running'"}) {
+    db_.prepare(sql).bind(1, processing_id).run();
+  }
+  transaction.commit();
+}
+
+std::int64_t ProcessingStore::stage_probe(std::int64_t processing_id, const ProbeSeriesRecord& p) {
+  auto existing = db_.prepare("SELECT id FROM staged_probe_series WHERE processing_id = ? AND name = ?");
+  if (existing.bind_all(processing_id, p.name).step()) return existing.column_int64(0);
+  db_.prepare(
+         "INSERT INTO staged_probe_series (processing_id, channel_id, name, x_px, y_px) VALUES (?, ?, ?, ?, ?)")
+      .bind_all(processing_id, p.channel_id, p.name, p.x_px, p.y_px)
+      .run();
+  return db_.last_insert_rowid();
+}
+
+std::vector<ProbeSeriesRecord> ProcessingStore::staged_probes(std::int64_t processing_id) const {
+  auto stmt = db_.prepare(
+      "SELECT id, channel_id, name, x_px, y_px FROM staged_probe_series WHERE processing_id = ? ORDER BY id");
+  stmt.bind(1, processing_id);
+  std::vector<ProbeSeriesRecord> out;
+  while (stmt.step()) {
+    out.push_back({stmt.column_int64(0), stmt.column_optional_int64(1), stmt.column_text(2), stmt.column_double(3),
+                   stmt.column_double(4)});
+  }
+  return out;
+}
+
+namespace {
+
+std::vector<ProbeSampleRecord> read_probe_samples(Statement& stmt) {
+  std::vector<ProbeSampleRecord> out;
+  while (stmt.step()) {
+    out.push_back({stmt.column_int64(0), stmt.column_int64(1), stmt.column_int64(2), stmt.column_double(3),
+                   stmt.column_double(4), stmt.column_double(5), stmt.column_optional_double(6),
+                   stmt.column_int64(7) != 0});
+  }
+  return out;
+}
+
+std::vector<FieldRecord> read_fields(Statement& stmt) {
+  std::vector<FieldRecord> out;
+  while (stmt.step()) {
+    out.push_back(
+        {stmt.column_int64(0), stmt.column_int64(1), stmt.column_text(2), stmt.column_text(3), stmt.column_text(4)});
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<ProbeSampleRecord> ProcessingStore::staged_probe_samples(std::int64_t probe_id) const {
+  auto stmt = db_.prepare(
+      "SELECT probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid FROM staged_probe_samples "
+      "WHERE probe_id = ? ORDER BY t_ns, frame_id");
+  stmt.bind(1, probe_id);
+  return read_probe_samples(stmt);
+}
+
+std::vector<FieldRecord> ProcessingStore::staged_fields(std::int64_t processing_id) const {
+  auto stmt = db_.prepare(
+      "SELECT 0, frame_id, kind, path, json FROM staged_fields WHERE processing_id = ? ORDER BY frame_id, kind");
+  stmt.bind(1, processing_id);
+  return read_fields(stmt);
+}
+
+void ProcessingStore::stage_frame(std::int64_t processing_id, std::int64_t frame_id, const std::string& json,
+                                  std::span<const ProbeSampleRecord> samples, std::span<const FieldRecord> fields) {
+  Transaction transaction(db_);
+  auto sample = db_.prepare(
+      "INSERT INTO staged_probe_samples (probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid) "
+      "VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
+  for (const ProbeSampleRecord& s : samples) {
+    sample.bind_all(s.probe_id, s.frame_id, s.t_ns, s.u_px, s.v_px, s.shift_px, s.temperature_c, s.valid ? 1 : 0);
+    sample.run();
+  }
+  auto field = db_.prepare(
+      "INSERT INTO staged_fields (processing_id, frame_id, kind, path, json) VALUES (?, ?, ?, ?, ?)");
+  for (const FieldRecord& f : fields) {
+    field.bind_all(processing_id, frame_id, f.kind, f.path, f.json);
+    field.run();
+  }
+  db_.prepare("INSERT INTO staged_frames (processing_id, frame_id, json) VALUES (?, ?, ?)")
+      .bind_all(processing_id, frame_id, json)
+      .run();
+  transaction.commit();
+}
+
+std::vector<std::int64_t> ProcessingStore::staged_frame_ids(std::int64_t processing_id) const {
+  auto stmt = db_.prepare("SELECT frame_id FROM staged_frames WHERE processing_id = ? ORDER BY frame_id");
+  stmt.bind(1, processing_id);
+  std::vector<std::int64_t> out;
+  while (stmt.step()) out.push_back(stmt.column_int64(0));
+  return out;
+}
+
+void ProcessingStore::complete_processing(std::int64_t processing_id, std::span<const FitRecord> fits,
+                                          std::span<const AgreementRecord> agreements,
+                                          const std::string& summary_json, std::int64_t finished_ns) {
+  Transaction transaction(db_);
+  clear_results();
+  for (const char* sql :
+       {"INSERT INTO probe_series (id, run_id, channel_id, name, x_px, y_px) "
+        "SELECT id, ?2, channel_id, name, x_px, y_px FROM staged_probe_series WHERE processing_id = ?1",
+        "INSERT INTO probe_samples (probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid) "
+        "SELECT s.probe_id, s.frame_id, s.t_ns, s.u_px, s.v_px, s.shift_px, s.temperature_c, s.valid "
+        "FROM staged_probe_samples s JOIN staged_probe_series p ON p.id = s.probe_id WHERE p.processing_id = ?1",
+        "INSERT INTO fields (run_id, frame_id, kind, path, json) "
+        "SELECT ?2, frame_id, kind, path, json FROM staged_fields WHERE processing_id = ?1"}) {
+    auto stmt = db_.prepare(sql);
+    stmt.bind(1, processing_id);
+    if (std::string_view(sql).find("?2") != std::string_view::npos) stmt.bind(2, run_id_);
+    stmt.run();
+  }
+  for (const FitRecord& f : fits) add_fit(f);
+  for (const AgreementRecord& a : agreements) add_agreement(a);
+  for (const char* sql :
+       {"DELETE FROM staged_probe_samples WHERE probe_id IN (SELECT id FROM staged_probe_series WHERE processing_id = ?1)",
+        "DELETE FROM staged_probe_series WHERE processing_id = ?1",
+        "DELETE FROM staged_fields WHERE processing_id = ?1", "DELETE FROM staged_frames WHERE processing_id = ?1"}) {
+    db_.prepare(sql).bind(1, processing_id).run();
+  }
+  db_.prepare("UPDATE processings SET status = 'complete', finished_ns = ?2, summary_json = ?3 WHERE id = ?1")
+      .bind_all(processing_id, finished_ns, summary_json)
+      .run();
+  transaction.commit();
+}
+
 std::vector<ProbeSeriesRecord> ProcessingStore::probes() const {
   if (!has_results_tables()) return {};
   auto stmt = db_.prepare("SELECT id, channel_id, name, x_px, y_px FROM probe_series WHERE run_id = ? ORDER BY id");
@@ -102,13 +277,7 @@ std::vector<ProbeSampleRecord> ProcessingStore::probe_samples(std::int64_t probe
       "SELECT probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid FROM probe_samples "
       "WHERE probe_id = ? ORDER BY t_ns, frame_id");
   stmt.bind(1, probe_id);
-  std::vector<ProbeSampleRecord> out;
-  while (stmt.step()) {
-    out.push_back({stmt.column_int64(0), stmt.column_int64(1), stmt.column_int64(2), stmt.column_double(3),
-                   stmt.column_double(4), stmt.column_double(5), stmt.column_optional_double(6),
-                   stmt.column_int64(7) != 0});
-  }
-  return out;
+  return read_probe_samples(stmt);
 }
 
 std::vector<FitRecord> ProcessingStore::fits() const {
@@ -148,12 +317,7 @@ std::vector<FieldRecord> ProcessingStore::fields() const {
   if (!has_results_tables()) return {};
   auto stmt = db_.prepare("SELECT id, frame_id, kind, path, json FROM fields WHERE run_id = ? ORDER BY frame_id, kind");
   stmt.bind(1, run_id_);
-  std::vector<FieldRecord> out;
-  while (stmt.step()) {
-    out.push_back(
-        {stmt.column_int64(0), stmt.column_int64(1), stmt.column_text(2), stmt.column_text(3), stmt.column_text(4)});
-  }
-  return out;
+  return read_fields(stmt);
 }
 
 }  // namespace bosfuse::storage

@@ -66,6 +66,18 @@ struct CalibrationRecord {
   std::string json;
 };
 
+// One `bosfuse process` of the run: the settings it used (JSON owned by
+// pipeline/), its state and, when complete, a summary of what it found.
+// `inherited` rows carry settings a replay copied from the recorded run.
+struct ProcessingRecord {
+  std::int64_t id = 0;
+  std::int64_t started_ns = 0;
+  std::optional<std::int64_t> finished_ns;
+  std::string status;  // running, complete, abandoned, inherited
+  std::string settings_json;
+  std::string summary_json;
+};
+
 struct FieldRecord {
   std::int64_t id = 0;
   std::int64_t frame_id = 0;
@@ -92,6 +104,33 @@ class ProcessingStore {
   std::int64_t add_calibration(const CalibrationRecord& calibration);
   std::int64_t add_field(const FieldRecord& field);
 
+  // Processings (schema version 4). The results above are the current
+  // ones; a processing writes its own aside ("staged") and replaces them
+  // only when it completes, in one transaction.
+  std::int64_t begin_processing(const std::string& settings_json, std::int64_t started_ns);
+  std::int64_t add_inherited_settings(const std::string& settings_json, std::int64_t created_ns);
+  std::optional<ProcessingRecord> current_processing() const;  // the newest complete one
+  std::optional<ProcessingRecord> latest_settings() const;     // the newest complete or inherited one
+  std::optional<ProcessingRecord> unfinished_processing() const;  // the newest still `running`
+  // Drops what `processing_id` staged and marks it abandoned.
+  void abandon_processing(std::int64_t processing_id);
+  // A staged probe series; an existing one of that name is returned as is (resume).
+  std::int64_t stage_probe(std::int64_t processing_id, const ProbeSeriesRecord& probe);
+  std::vector<ProbeSeriesRecord> staged_probes(std::int64_t processing_id) const;
+  std::vector<ProbeSampleRecord> staged_probe_samples(std::int64_t probe_id) const;  // in time order
+  std::vector<FieldRecord> staged_fields(std::int64_t processing_id) const;
+  // One frame's results, in one transaction: after a crash a frame is
+  // either wholly staged or not at all.
+  void stage_frame(std::int64_t processing_id, std::int64_t frame_id, const std::string& json,
+                   std::span<const ProbeSampleRecord> samples, std::span<const FieldRecord> fields);
+  std::vector<std::int64_t> staged_frame_ids(std::int64_t processing_id) const;
+  // Replaces the current results by what `processing_id` staged plus these
+  // fits and agreements (their probe ids are the staged ones, which are
+  // kept), and marks it complete; all in one transaction.
+  void complete_processing(std::int64_t processing_id, std::span<const FitRecord> fits,
+                           std::span<const AgreementRecord> agreements, const std::string& summary_json,
+                           std::int64_t finished_ns);
+
   std::vector<ProbeSeriesRecord> probes() const;
   std::vector<ProbeSampleRecord> probe_samples(std::int64_t probe_id) const;  // in time order
   std::vector<FitRecord> fits() const;
@@ -101,6 +140,8 @@ class ProcessingStore {
 
  private:
   bool has_results_tables() const { return version_ >= 2; }
+  bool has_processings() const { return version_ >= 4; }
+  std::optional<ProcessingRecord> processing_where(const char* condition) const;
 
   mutable Database db_;
   std::int64_t run_id_ = 0;

@@ -13,7 +13,8 @@ struct Fixture {
   testing::TempDir dir;
   std::filesystem::path run_dir = dir.path() / "run";
   RunStore store =
-      RunStore::create(run_dir, {0, "r", 1'000, std::nullopt, "", RunStatus::kRunning}, RunStore::CreateMode::kNew);
+      RunStore::create(run_dir, {0, "r", 1'000, std::nullopt, "", RunStatus::kRunning, 1.0, std::nullopt},
+                       RunStore::CreateMode::kNew);
   std::int64_t device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", "127.0.0.1:502"});
   std::int64_t channel = store.add_channel({0, device, "tc0", "thermocouple", "degC", "K", 120.5, 80.0});
   std::int64_t reference = store.add_frame({0, std::nullopt, 1'000, std::nullopt, "frames/0.png", 64, 48, 8, true});
@@ -77,15 +78,21 @@ TEST(ProcessingStore, AVersionOneStoreReadsAsEmptyAndIsMigratedWhenWritten) {
   Fixture f;
   {
     Database db((f.run_dir / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
-    for (const char* table : {"probe_samples", "agreements", "fits", "probe_series", "calibrations", "fields"}) {
+    for (const char* table : {"staged_probe_samples", "staged_probe_series", "staged_fields", "staged_frames",
+                              "processings", "probe_samples", "agreements", "fits", "probe_series", "calibrations",
+                              "fields"}) {
       db.execute(std::string("DROP TABLE ") + table);
     }
+    db.execute("ALTER TABLE runs DROP COLUMN time_scale");
+    db.execute("ALTER TABLE runs DROP COLUMN origin_event");
     db.execute("ALTER TABLE runs DROP COLUMN alive_ns");
     db.execute("ALTER TABLE runs DROP COLUMN planned_end_ns");
     db.execute("DELETE FROM schema_version WHERE version >= 2");
   }
   EXPECT_TRUE(ProcessingStore(f.run_dir).probes().empty());
   EXPECT_FALSE(ProcessingStore(f.run_dir).latest_calibration().has_value());
+  EXPECT_FALSE(ProcessingStore(f.run_dir).current_processing().has_value());
+  EXPECT_DOUBLE_EQ(RunStore::open(f.run_dir).run().time_scale, 1.0) << "an old store read-only: recorded in real time";
   ProcessingStore writer(f.run_dir, true);
   EXPECT_NO_THROW(writer.add_probe({0, std::nullopt, "p", 1, 2}));
   EXPECT_THROW(ProcessingStore(f.dir.path() / "nothing"), StorageError);

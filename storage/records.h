@@ -37,6 +37,12 @@ struct RunInfo {
   std::optional<std::int64_t> ended_ns;
   std::string config_toml;
   RunStatus status = RunStatus::kRunning;
+  // Seconds of the experiment per second of the record: N for a simulation
+  // or replay recorded N times faster than it happened, else 1.
+  double time_scale = 1;
+  // The marker event (kind "marker", this message) that is the experiment's
+  // t = 0, e.g. "heater off"; none: the run's first sample.
+  std::optional<std::string> origin_event;
 };
 
 struct DeviceInfo {
@@ -83,7 +89,7 @@ struct Event {
   std::int64_t id = 0;
   std::optional<std::int64_t> device_id;
   std::int64_t t_ns = 0;
-  std::string kind;  // started, stopped, appended, connect, disconnect, reconnect, hotplug, gap, error
+  std::string kind;  // started, stopped, appended, marker, connect, disconnect, reconnect, hotplug, gap, error
   std::string message;
 };
 

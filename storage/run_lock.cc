@@ -13,8 +13,8 @@
 
 namespace bosfuse::storage {
 
-std::optional<RunLock> RunLock::try_acquire(const std::filesystem::path& run_dir) {
-  const std::string path = (run_dir / kFileName).string();
+std::optional<RunLock> RunLock::try_acquire(const std::filesystem::path& run_dir, const std::string& file_name) {
+  const std::string path = (run_dir / file_name).string();
   const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd < 0) throw StorageError("cannot open '" + path + "': " + std::strerror(errno));
   RunLock lock(fd);
@@ -28,8 +28,8 @@ std::optional<RunLock> RunLock::try_acquire(const std::filesystem::path& run_dir
   return lock;
 }
 
-std::string RunLock::holder(const std::filesystem::path& run_dir) {
-  std::ifstream in(run_dir / kFileName);
+std::string RunLock::holder(const std::filesystem::path& run_dir, const std::string& file_name) {
+  std::ifstream in(run_dir / file_name);
   std::string line;
   std::getline(in, line);
   return line;

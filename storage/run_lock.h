@@ -18,9 +18,12 @@ class RunLock {
 
   // The lock, or nothing when another process holds it. Throws StorageError
   // when the lock file cannot be made at all (read-only folder).
-  static std::optional<RunLock> try_acquire(const std::filesystem::path& run_dir);
+  // `file_name` names another lock of the run (e.g. "process.lock", held
+  // while a processing writes the run's results).
+  static std::optional<RunLock> try_acquire(const std::filesystem::path& run_dir,
+                                            const std::string& file_name = kFileName);
   // Who holds the lock, as its holder wrote it ("pid 1234 on host"), or "".
-  static std::string holder(const std::filesystem::path& run_dir);
+  static std::string holder(const std::filesystem::path& run_dir, const std::string& file_name = kFileName);
 
   RunLock(RunLock&& other) noexcept;
   RunLock& operator=(RunLock&& other) noexcept;

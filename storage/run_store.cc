@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <system_error>
@@ -23,6 +24,8 @@ RunInfo read_run(Statement& stmt) {
   run.ended_ns = stmt.column_optional_int64(3);
   run.config_toml = stmt.column_text(4);
   run.status = run_status_from_string(stmt.column_text(5));
+  run.time_scale = stmt.column_double(6);
+  run.origin_event = stmt.column_optional_text(7);
   return run;
 }
 
@@ -181,14 +184,24 @@ void RunStore::close_if_abandoned(const fs::path& run_dir) {
 }
 
 std::int64_t RunStore::insert_run(const RunInfo& info) {
-  db_.prepare("INSERT INTO runs (name, started_ns, config_toml, status) VALUES (?, ?, ?, 'running')")
-      .bind_all(info.name, info.started_ns, info.config_toml)
+  if (!(info.time_scale > 0) || !std::isfinite(info.time_scale)) {
+    throw StorageError("a run's time scale must be a positive number, not " + std::to_string(info.time_scale));
+  }
+  db_.prepare(
+         "INSERT INTO runs (name, started_ns, config_toml, status, time_scale, origin_event) "
+         "VALUES (?, ?, ?, 'running', ?, ?)")
+      .bind_all(info.name, info.started_ns, info.config_toml, info.time_scale, info.origin_event)
       .run();
   return db_.last_insert_rowid();
 }
 
 RunInfo RunStore::run() const {
-  auto stmt = db_.prepare("SELECT id, name, started_ns, ended_ns, config_toml, status FROM runs ORDER BY id LIMIT 1");
+  // A store of an older schema opened read-only has neither column: it was
+  // recorded in real time from its first sample.
+  auto stmt = db_.prepare(schema_version(db_) >= 4 ? "SELECT id, name, started_ns, ended_ns, config_toml, status, "
+                                                     "time_scale, origin_event FROM runs ORDER BY id LIMIT 1"
+                                                   : "SELECT id, name, started_ns, ended_ns, config_toml, status, "
+                                                     "1.0, NULL FROM runs ORDER BY id LIMIT 1");
   if (!stmt.step()) throw StorageError("run store '" + db_.path() + "' has no run");
   return read_run(stmt);
 }
@@ -293,6 +306,18 @@ void RunStore::finish(RunStatus status, std::int64_t ended_ns) {
   db_.prepare("UPDATE runs SET status = ?, ended_ns = ? WHERE id = ?")
       .bind_all(to_string(status), ended_ns, run_id_)
       .run();
+}
+
+std::optional<std::int64_t> RunStore::first_sample_ns() const {
+  auto stmt = db_.prepare("SELECT MIN(t_ns) FROM samples");
+  stmt.step();
+  return stmt.column_optional_int64(0);
+}
+
+std::optional<std::int64_t> RunStore::marker_ns(const std::string& message) const {
+  auto stmt = db_.prepare("SELECT MIN(t_ns) FROM events WHERE run_id = ? AND kind = 'marker' AND message = ?");
+  stmt.bind_all(run_id_, message).step();
+  return stmt.column_optional_int64(0);
 }
 
 std::vector<DeviceInfo> RunStore::devices() const {

@@ -91,6 +91,10 @@ class RunStore {
   std::vector<ChannelSummary> channel_summaries() const;
   // The newest t_ns of any sample, frame or event; nothing for an empty run.
   std::optional<std::int64_t> last_record_ns() const;
+  // The oldest sample's t_ns, whatever its status; nothing without samples.
+  std::optional<std::int64_t> first_sample_ns() const;
+  // The first marker event (kind "marker") with this message.
+  std::optional<std::int64_t> marker_ns(const std::string& message) const;
 
  private:
   RunStore(std::filesystem::path dir, Database::Mode mode);

@@ -18,7 +18,7 @@ using namespace std::chrono_literals;
 
 struct Fixture {
   testing::TempDir dir;
-  RunStore store = RunStore::create(dir.path() / "run", {0, "t", 0, {}, "", RunStatus::kRunning},
+  RunStore store = RunStore::create(dir.path() / "run", {0, "t", 0, {}, "", RunStatus::kRunning, 1.0, std::nullopt},
                                     RunStore::CreateMode::kNew);
   std::int64_t device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", ""});
   std::int64_t channel = store.add_channel({0, device, "tc0", "thermocouple", "degC", "K", {}, {}});

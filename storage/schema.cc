@@ -142,7 +142,62 @@ ALTER TABLE runs ADD COLUMN alive_ns INTEGER;
 ALTER TABLE runs ADD COLUMN planned_end_ns INTEGER;
 )sql";
 
-constexpr std::array<Migration, 3> kMigrations = {{{1, kSchemaV1}, {2, kSchemaV2}, {3, kSchemaV3}}};
+// Version 4: a run is a self-describing record. Its time scale and declared
+// origin make every command read it in experiment seconds; each `process`
+// is a row of `processings` holding the settings it used, and its results
+// are written aside (staged_*) while it runs, so an interrupted process
+// never mixes with the results it is replacing and can be resumed. On
+// success the staged rows replace the current results in one transaction.
+constexpr std::string_view kSchemaV4 = R"sql(
+ALTER TABLE runs ADD COLUMN time_scale REAL NOT NULL DEFAULT 1 CHECK (time_scale > 0);
+ALTER TABLE runs ADD COLUMN origin_event TEXT;
+CREATE TABLE processings (
+  id            INTEGER PRIMARY KEY,
+  run_id        INTEGER NOT NULL REFERENCES runs(id),
+  started_ns    INTEGER NOT NULL,
+  finished_ns   INTEGER,
+  status        TEXT    NOT NULL CHECK (status IN ('running', 'complete', 'abandoned', 'inherited')),
+  settings_json TEXT    NOT NULL,
+  summary_json  TEXT    NOT NULL DEFAULT '{}'
+);
+CREATE TABLE staged_frames (
+  processing_id INTEGER NOT NULL REFERENCES processings(id),
+  frame_id      INTEGER NOT NULL REFERENCES frames(id),
+  json          TEXT    NOT NULL,
+  PRIMARY KEY (processing_id, frame_id)
+);
+CREATE TABLE staged_probe_series (
+  id            INTEGER PRIMARY KEY,
+  processing_id INTEGER NOT NULL REFERENCES processings(id),
+  channel_id    INTEGER REFERENCES channels(id),
+  name          TEXT    NOT NULL,
+  x_px          REAL    NOT NULL,
+  y_px          REAL    NOT NULL,
+  UNIQUE (processing_id, name)
+);
+CREATE TABLE staged_probe_samples (
+  probe_id      INTEGER NOT NULL REFERENCES staged_probe_series(id) ON DELETE CASCADE,
+  frame_id      INTEGER NOT NULL REFERENCES frames(id),
+  t_ns          INTEGER NOT NULL,
+  u_px          REAL    NOT NULL,
+  v_px          REAL    NOT NULL,
+  shift_px      REAL    NOT NULL,
+  temperature_c REAL,
+  valid         INTEGER NOT NULL CHECK (valid IN (0, 1)),
+  PRIMARY KEY (probe_id, frame_id)
+);
+CREATE TABLE staged_fields (
+  processing_id INTEGER NOT NULL REFERENCES processings(id),
+  frame_id      INTEGER NOT NULL REFERENCES frames(id),
+  kind          TEXT    NOT NULL CHECK (kind IN ('displacement', 'temperature')),
+  path          TEXT    NOT NULL,
+  json          TEXT    NOT NULL,
+  PRIMARY KEY (processing_id, frame_id, kind)
+);
+)sql";
+
+constexpr std::array<Migration, 4> kMigrations = {
+    {{1, kSchemaV1}, {2, kSchemaV2}, {3, kSchemaV3}, {4, kSchemaV4}}};
 static_assert(kMigrations.back().version == kSchemaVersion);
 static_assert(kSampleStatusCount == 7, "update the sample_status rows of the schema");
 

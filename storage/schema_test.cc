@@ -28,7 +28,9 @@ TEST(Schema, EmptyFileIsMigratedToTheCurrentVersion) {
   EXPECT_EQ(schema_version(db), kSchemaVersion);
   EXPECT_EQ(table_names(db), (std::vector<std::string>{"agreements", "calibrations", "channels", "devices", "events",
                                                        "fields", "fits", "frames", "probe_samples", "probe_series",
-                                                       "runs", "sample_status", "samples", "schema_version"}));
+                                                       "processings", "runs", "sample_status", "samples",
+                                                       "schema_version", "staged_fields", "staged_frames",
+                                                       "staged_probe_samples", "staged_probe_series"}));
 }
 
 TEST(Schema, MigratingTwiceChangesNothing) {
@@ -58,12 +60,13 @@ TEST(Schema, ForwardMigrationAppliesOnlyNewerSteps) {
   testing::TempDir dir;
   Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
   migrate(db);
-  const std::array<Migration, 4> future = {{schema_migrations()[0],
+  const std::array<Migration, 5> future = {{schema_migrations()[0],
                                             schema_migrations()[1],
                                             schema_migrations()[2],
-                                            {4, "ALTER TABLE runs ADD COLUMN operator TEXT NOT NULL DEFAULT ''"}}};
-  EXPECT_EQ(migrate(db, future), 3);
-  EXPECT_EQ(schema_version(db), 4);
+                                            schema_migrations()[3],
+                                            {5, "ALTER TABLE runs ADD COLUMN operator TEXT NOT NULL DEFAULT ''"}}};
+  EXPECT_EQ(migrate(db, future), 4);
+  EXPECT_EQ(schema_version(db), 5);
   EXPECT_NO_THROW(db.execute("SELECT operator FROM runs"));
 }
 
@@ -84,12 +87,13 @@ TEST(Schema, FailedMigrationLeavesTheStoreAsItWas) {
   testing::TempDir dir;
   Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
   migrate(db);
-  const std::array<Migration, 4> broken = {{schema_migrations()[0],
+  const std::array<Migration, 5> broken = {{schema_migrations()[0],
                                             schema_migrations()[1],
                                             schema_migrations()[2],
-                                            {4, "CREATE TABLE extra (x); THIS IS NOT SQL"}}};
+                                            schema_migrations()[3],
+                                            {5, "CREATE TABLE extra (x); THIS IS NOT SQL"}}};
   EXPECT_THROW(migrate(db, broken), StorageError);
-  EXPECT_EQ(schema_version(db), 3);
+  EXPECT_EQ(schema_version(db), 4);
   auto stmt = db.prepare("SELECT 1 FROM sqlite_master WHERE name = 'extra'");
   EXPECT_FALSE(stmt.step()) << "a failed migration left a table behind";
 }

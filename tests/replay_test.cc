@@ -25,7 +25,7 @@ const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
 // an open input and an out-of-range reading among them) and three frames.
 void make_recorded_run(const fs::path& dir, bool close_it, const std::string& tc0_name = "tc0") {
   const std::int64_t start = acquisition::utc_now_ns();
-  auto store = storage::RunStore::create(dir, {0, "cooling", start, {}, "# recorded", storage::RunStatus::kRunning},
+  auto store = storage::RunStore::create(dir, {0, "cooling", start, {}, "# recorded", storage::RunStatus::kRunning, 1.0, std::nullopt},
                                          storage::RunStore::CreateMode::kNew);
   const auto adam = store.add_device({0, "adam", "modbus-tcp", "adam-6018", "10.0.0.5:502"});
   const auto tc0 = store.add_channel({0, adam, tc0_name, "thermocouple", "degC", "K", 612.0, 388.0});

@@ -165,7 +165,7 @@ TEST(UmockdevHid, UnplugAndReplugAreEventsAndTheRunGoesOn) {
   bed.script(0, join(usb_tc_setup(), usb_tc_poll(80.0f, 21.0f, 22.0f, 0), usb_tc_poll(79.0f, 21.0f, 22.0f, 0)));
 
   testing::TempDir dir;
-  auto store = storage::RunStore::create(dir / "run", {0, "t", 0, {}, "", storage::RunStatus::kRunning},
+  auto store = storage::RunStore::create(dir / "run", {0, "t", 0, {}, "", storage::RunStatus::kRunning, 1.0, std::nullopt},
                                          storage::RunStore::CreateMode::kNew);
   const HidDeviceConfig config = hid_config(kUsbTcToml);
   auto device = make_device(config);

@@ -20,7 +20,7 @@ using acquisition::ModbusEndpoint;
 using acquisition::ModbusTransport;
 
 inline storage::RunInfo run_info(const std::string& config_text) {
-  return {0, "test-run", acquisition::utc_now_ns(), std::nullopt, config_text, storage::RunStatus::kRunning};
+  return {0, "test-run", acquisition::utc_now_ns(), std::nullopt, config_text, storage::RunStatus::kRunning, 1.0, std::nullopt};
 }
 
 inline sim::ModbusSimServer::Options module_options(const std::string& profile, int inputs, ModbusEndpoint endpoint) {

@@ -1,4 +1,4 @@
-#include "app/image_io.h"
+#include "pipeline/image_io.h"
 
 #include "acquisition/image_file.h"
 
@@ -6,7 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 
-namespace bosfuse::app {
+namespace bosfuse::pipeline {
 
 cv::Mat read_image(const std::string& path, const std::string& role) {
   if (!std::filesystem::exists(path)) throw std::runtime_error(role + " " + path + ": no such file");
@@ -26,4 +26,4 @@ void write_image(const std::string& path, const cv::Mat& image) {
   if (!written) throw std::runtime_error(path + ": cannot write image");
 }
 
-}  // namespace bosfuse::app
+}  // namespace bosfuse::pipeline

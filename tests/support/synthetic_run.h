@@ -1,11 +1,12 @@
 #pragma once
-// A small synthetic run on disk for the report tests: two thermocouple
+// A small synthetic run on disk for the report, pipeline and CLI tests: two thermocouple
 // channels following known Newton curves with noise (and a few samples
 // without a temperature), and, optionally, a reference frame and two
 // measurement frames rendered by sim/synthetic_pair.h with a known
 // displacement (the gradient of a Gaussian bump, a hot spot seen in BOS).
 
 #include <filesystem>
+#include <optional>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <stdexcept>
@@ -15,7 +16,7 @@
 #include "sim/synthetic_pair.h"
 #include "storage/run_store.h"
 
-namespace bosfuse::report::testrun {
+namespace bosfuse::testrun {
 
 struct Truth {
   std::int64_t start_ns = 1'795'000'000'000'000'000;  // 2026-11-18T11:06:40Z
@@ -33,6 +34,8 @@ struct Truth {
   double frame_peak_px[2] = {1.0, 0.5};
   cv::Rect holder_px{104, 150, 48, 42};  // the heater's holder, hidden by the mask (as in the paper)
   std::string config_toml;               // the run's stored experiment config
+  double time_scale = 1;                 // experiment seconds per recorded second
+  std::optional<std::string> origin_event;  // declared origin (a marker the test writes), else the first sample
 };
 
 // The holder mask as an 8-bit PNG of the frames' size: 255 under the holder.
@@ -43,8 +46,14 @@ inline cv::Mat holder_mask(const Truth& truth = {}) {
 }
 
 inline void create_run(const std::filesystem::path& dir, bool with_frames, const Truth& truth = {}) {
-  storage::RunInfo info{
-      0, "synthetic cooling", truth.start_ns, std::nullopt, truth.config_toml, storage::RunStatus::kRunning};
+  storage::RunInfo info{0,
+                        "synthetic cooling",
+                        truth.start_ns,
+                        std::nullopt,
+                        truth.config_toml,
+                        storage::RunStatus::kRunning,
+                        truth.time_scale,
+                        truth.origin_event};
   auto store = storage::RunStore::create(dir, info, storage::RunStore::CreateMode::kNew);
   const auto device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", "127.0.0.1:502"});
   std::mt19937 random(11);
@@ -97,4 +106,4 @@ inline void create_run(const std::filesystem::path& dir, bool with_frames, const
                truth.start_ns + static_cast<std::int64_t>(truth.samples) * 1'000'000'000);
 }
 
-}  // namespace bosfuse::report::testrun
+}  // namespace bosfuse::testrun

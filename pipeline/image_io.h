@@ -6,10 +6,10 @@
 #include <opencv2/core.hpp>
 #include <string>
 
-namespace bosfuse::app {
+namespace bosfuse::pipeline {
 
 // Any depth and channel count OpenCV reads (8/16-bit grey or colour).
 cv::Mat read_image(const std::string& path, const std::string& role);
 void write_image(const std::string& path, const cv::Mat& image);
 
-}  // namespace bosfuse::app
+}  // namespace bosfuse::pipeline

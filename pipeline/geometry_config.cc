@@ -1,11 +1,11 @@
-#include "app/geometry_config.h"
+#include "pipeline/geometry_config.h"
 
 #include <fstream>
 #include <sstream>
 
 #include "acquisition/toml_reader.h"
 
-namespace bosfuse::app {
+namespace bosfuse::pipeline {
 namespace {
 
 using acquisition::TomlReader;
@@ -88,4 +88,4 @@ GeometryConfig resolve_geometry_config(const std::string& geometry_file, const s
   return defaults;
 }
 
-}  // namespace bosfuse::app
+}  // namespace bosfuse::pipeline

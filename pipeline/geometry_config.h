@@ -12,7 +12,7 @@
 #include "fusion/bos_geometry.h"
 #include "fusion/temperature_field.h"
 
-namespace bosfuse::app {
+namespace bosfuse::pipeline {
 
 struct GeometryConfig {
   fusion::BosGeometryOptions geometry;
@@ -28,4 +28,4 @@ std::optional<GeometryConfig> parse_geometry_config(const std::string& text, con
 // --geometry FILE when given, else the run's config, else defaults.
 GeometryConfig resolve_geometry_config(const std::string& geometry_file, const std::string& run_config_toml);
 
-}  // namespace bosfuse::app
+}  // namespace bosfuse::pipeline

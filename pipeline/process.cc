@@ -1,0 +1,474 @@
+#include "acquisition/clock.h"
+#include "pipeline/process.h"
+
+#include <fmt/format.h>
+#include <glog/logging.h>
+
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "fitting/agreement.h"
+#include "fitting/fit_json.h"
+#include "fitting/newton_fit.h"
+#include "fusion/bos_geometry.h"
+#include "fusion/image_quality.h"
+#include "fusion/temperature_field.h"
+#include "fusion/time_alignment.h"
+#include "pipeline/image_io.h"
+#include "pipeline/run_selection.h"
+#include "storage/processing_store.h"
+#include "storage/run_lock.h"
+#include "storage/run_paths.h"
+#include "storage/run_store.h"
+
+namespace bosfuse::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::ordered_json;
+using storage::ChannelInfo;
+using storage::FrameRecord;
+
+json number_or_null(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
+
+// The shared fit layout plus what was fitted and on which time base.
+json fit_json(const fitting::NewtonFit& fit, const std::string& quantity, const std::string& unit,
+              const storage::ExperimentClock& clock) {
+  json j = fitting::to_json(fit);
+  j["quantity"] = quantity;
+  j["unit"] = unit;
+  j["time_basis"] = clock.basis();
+  return j;
+}
+
+// °C per px of shift for a channel, from the run's newest calibration.
+struct ChannelCalibration {
+  double slope_c_per_px = 0;
+  double reference_temperature_c = 0;
+  double camera_offset_s = 0;  // the offset the calibration was made with
+};
+
+std::map<std::int64_t, ChannelCalibration> stored_calibration(const storage::ProcessingStore& results) {
+  std::map<std::int64_t, ChannelCalibration> out;
+  const auto record = results.latest_calibration();
+  if (!record) return out;
+  const json j = json::parse(record->json);
+  for (const auto& c : j.at("channels")) {
+    if (!c.at("ok").get<bool>()) continue;
+    out[c.at("channel_id").get<std::int64_t>()] = {c.at("slope_c_per_px").get<double>(),
+                                                   c.at("reference_temperature_c").get<double>(),
+                                                   c.value("camera_offset_s", 0.0)};
+  }
+  return out;
+}
+
+// The displacement grid interpolated bilinearly at a point; valid only when
+// every node it uses is.
+struct PointShift {
+  double u_px = 0, v_px = 0;
+  bool valid = false;
+};
+
+PointShift shift_at(const fusion::DisplacementField& field, cv::Point2d p) {
+  const auto& origin = field.at(0, 0);
+  const double step = field.cols > 1 ? field.at(0, 1).x_px - origin.x_px : 1.0;
+  const double fx = (p.x - origin.x_px) / step, fy = (p.y - origin.y_px) / step;
+  if (!(fx >= 0 && fy >= 0 && fx <= field.cols - 1 && fy <= field.rows - 1)) return {};
+  const int c0 = std::min(static_cast<int>(fx), std::max(field.cols - 2, 0));
+  const int r0 = std::min(static_cast<int>(fy), std::max(field.rows - 2, 0));
+  const double ax = fx - c0, ay = fy - r0;
+  PointShift out{0, 0, true};
+  for (int dr = 0; dr <= 1; ++dr) {
+    for (int dc = 0; dc <= 1; ++dc) {
+      const double w = (dr ? ay : 1 - ay) * (dc ? ax : 1 - ax);
+      if (w <= 1e-12) continue;
+      const auto& v = field.at(std::min(r0 + dr, field.rows - 1), std::min(c0 + dc, field.cols - 1));
+      out.u_px += w * v.u_px;
+      out.v_px += w * v.v_px;
+      out.valid = out.valid && v.valid();
+    }
+  }
+  return out;
+}
+
+json evaluation_json(const fusion::EvaluationSummary& s) {
+  return {{"method", s.method},
+          {"vectors", s.vectors},
+          {"valid", s.valid},
+          {"masked", s.masked},
+          {"no_texture", s.no_texture},
+          {"no_peak", s.no_peak},
+          {"outliers_replaced", s.outliers_replaced},
+          {"seconds", s.seconds}};
+}
+
+std::string boundary_text(const fusion::TemperatureFieldOptions& o) {
+  std::string open;
+  for (const auto& [flag, name] :
+       {std::pair{o.open_top, "top"}, {o.open_bottom, "bottom"}, {o.open_left, "left"}, {o.open_right, "right"}}) {
+    if (flag) open += std::string(open.empty() ? "" : ", ") + name;
+  }
+  return open.empty() ? "ambient air on the field's border" : "ambient air on the border except the open " + open;
+}
+
+// What every frame's evaluation needs besides the frame itself.
+struct FrameContext {
+  fs::path run_dir;
+  std::string fields_dir;  // relative to the run folder
+  std::vector<ChannelInfo> channels;
+  std::vector<cv::Point2d> points;
+  std::vector<std::int64_t> probe_ids;  // staged, one per channel
+  cv::Mat reference;
+  cv::Mat mask;
+  ProcessingSettings settings;
+  std::optional<fusion::BosGeometry> geometry;
+  std::map<std::int64_t, ChannelCalibration> calibration;
+};
+
+// Everything measured at the probes of one frame, and the field rows.
+struct FrameResult {
+  std::vector<PointShift> shifts;
+  std::vector<std::optional<double>> model_temperature_c;
+  std::vector<storage::FieldRecord> fields;
+  json summary;
+};
+
+FrameResult evaluate_full(const FrameContext& ctx, const FrameRecord& frame, const cv::Mat& measurement) {
+  FrameResult out;
+  const auto evaluated = fusion::evaluate_displacement(ctx.reference, measurement, ctx.settings.evaluator, ctx.mask);
+  out.summary = evaluation_json(evaluated.summary);
+  const std::string stem = fmt::format("{}/frame_{:06d}", ctx.fields_dir, frame.id);
+  fusion::write_csv(evaluated.field, ctx.run_dir / (stem + "_displacement.csv"));
+  out.fields.push_back({0, frame.id, "displacement", stem + "_displacement.csv", out.summary.dump()});
+  std::optional<fusion::TemperatureFieldResult> temperature;
+  if (evaluated.field.rows >= 3 && evaluated.field.cols >= 3) {
+    const auto& field_options = ctx.settings.geometry.temperature_field;
+    temperature = fusion::recover_temperature_field(evaluated.field, *ctx.geometry, field_options);
+    fusion::write_csv(temperature->field, ctx.run_dir / (stem + "_temperature.csv"));
+    const auto& s = temperature->summary;
+    out.fields.push_back({0, frame.id, "temperature", stem + "_temperature.csv",
+                          json{{"min_c", number_or_null(s.min_c)},
+                               {"max_c", number_or_null(s.max_c)},
+                               {"unmeasured_nodes", s.unmeasured_nodes},
+                               {"unphysical_nodes", s.unphysical_nodes},
+                               {"boundary", boundary_text(field_options)}}
+                              .dump()});
+  }
+  for (const auto& p : ctx.points) {
+    out.shifts.push_back(shift_at(evaluated.field, p));
+    out.model_temperature_c.push_back(temperature ? temperature->field.temperature_at(p.x, p.y) : std::nullopt);
+  }
+  return out;
+}
+
+FrameResult evaluate_probes(const FrameContext& ctx, const cv::Mat& measurement) {
+  FrameResult out;
+  if (ctx.points.empty()) return out;
+  const auto evaluated =
+      fusion::probe_displacement(ctx.reference, measurement, ctx.points, ctx.settings.evaluator, ctx.mask);
+  out.summary = evaluation_json(evaluated.summary);
+  for (const auto& v : evaluated.field.vectors) {
+    out.shifts.push_back({v.u_px, v.v_px, v.valid()});
+    out.model_temperature_c.push_back(std::nullopt);
+  }
+  return out;
+}
+
+std::optional<double> probe_temperature_c(const std::map<std::int64_t, ChannelCalibration>& calibration,
+                                          std::int64_t channel_id, double shift_px, std::optional<double> model_c) {
+  const auto cal = calibration.find(channel_id);
+  if (cal == calibration.end()) return model_c;
+  return cal->second.reference_temperature_c + cal->second.slope_c_per_px * shift_px;
+}
+
+// Evaluates one frame and stages its results in one transaction.
+void process_frame(const FrameContext& ctx, const FrameRecord& frame, storage::ProcessingStore& results,
+                   std::int64_t processing_id) {
+  const cv::Mat measurement = load_frame(ctx.run_dir, frame);
+  const FrameResult r = ctx.settings.probes_only ? evaluate_probes(ctx, measurement)
+                                                 : evaluate_full(ctx, frame, measurement);
+  std::vector<storage::ProbeSampleRecord> samples;
+  for (std::size_t p = 0; p < ctx.channels.size(); ++p) {
+    const PointShift& s = r.shifts[p];
+    const double shift = std::hypot(s.u_px, s.v_px);
+    const auto t_c = probe_temperature_c(ctx.calibration, ctx.channels[p].id, shift, r.model_temperature_c[p]);
+    samples.push_back({ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift, s.valid ? t_c : std::nullopt,
+                       s.valid});
+  }
+  results.stage_frame(processing_id, frame.id, r.summary.dump(), samples, r.fields);
+}
+
+// Ambient for the physical model when the geometry does not give it: the
+// thermocouples at the reference frame, which was taken without the flow.
+double ambient_from_thermocouples(const std::vector<TimeSeries>& series, double reference_t_s, double fallback_c) {
+  double sum = 0;
+  int count = 0;
+  for (const auto& s : series) {
+    const std::vector<double> at{reference_t_s};
+    const auto aligned = fusion::align_to_frames(s.t_s, s.value, at);
+    if (aligned.ok(0)) sum += aligned.value[0], ++count;
+  }
+  return count ? sum / count : fallback_c;
+}
+
+// The probe series a Newton fit sees: temperatures when every valid sample
+// has one, else the shift; experiment seconds on the host clock (frame time
+// + the camera offset).
+struct ProbeSeries {
+  fitting::CleanSeries series;
+  std::string quantity;  // temperature_c or shift_px
+};
+
+ProbeSeries probe_fit_series(const std::vector<storage::ProbeSampleRecord>& samples,
+                             const storage::ExperimentClock& clock, double offset_s) {
+  bool all_have_temperature = true;
+  for (const auto& s : samples) {
+    if (s.valid) all_have_temperature = all_have_temperature && s.temperature_c.has_value();
+  }
+  std::vector<double> t, y;
+  for (const auto& s : samples) {
+    if (!s.valid) continue;
+    t.push_back(clock.seconds(s.t_ns) + offset_s);
+    y.push_back(all_have_temperature ? *s.temperature_c : s.shift_px);
+  }
+  return {fitting::clean_series(t, y, 0.0), all_have_temperature ? "temperature_c" : "shift_px"};
+}
+
+fitting::NewtonFit fit_at_origin(const fitting::CleanSeries& series) {
+  fitting::NewtonFitOptions options;
+  options.origin_s = 0.0;
+  return fitting::fit_newton(series, options);
+}
+
+// A shift series is not a temperature: then only the two k are compared.
+fitting::Agreement agree(const fitting::NewtonFit& tc_fit, const fitting::CleanSeries& tc_series,
+                         const fitting::NewtonFit& probe_fit, const ProbeSeries& probe, const std::string& name) {
+  fitting::AgreementOptions options;
+  options.label_a = "thermocouple " + name;
+  options.label_b = "BOS probe at " + name;
+  return fitting::compare_fits(tc_fit, probe_fit, tc_series,
+                               probe.quantity == "shift_px" ? fitting::CleanSeries{} : probe.series, options);
+}
+
+// The processing this call carries on: a new one with resolved settings,
+// or (resume) the interrupted one with its own.
+struct Processing {
+  std::int64_t id = 0;
+  ProcessingSettings settings;
+  std::string note;
+};
+
+void remove_fields_except(const fs::path& run_dir, const std::string& keep) {
+  std::error_code ignored;
+  const fs::path fields = run_dir / "fields";
+  if (!fs::is_directory(fields)) return;
+  for (const auto& entry : fs::directory_iterator(fields, ignored)) {
+    if (entry.path().filename() != keep) fs::remove_all(entry.path(), ignored);
+  }
+}
+
+Processing start_processing(const fs::path& run_dir, const ProcessOptions& options,
+                            storage::ProcessingStore& results) {
+  const auto unfinished = results.unfinished_processing();
+  if (options.resume) {
+    if (!unfinished) throw std::runtime_error("nothing to resume: the run has no interrupted processing");
+    if (!options.overrides.empty()) {
+      throw std::runtime_error("--resume continues with the interrupted processing's own settings; run without "
+                               "--resume to process with other settings");
+    }
+    Processing p{unfinished->id, settings_from_json(nlohmann::json::parse(unfinished->settings_json)), ""};
+    p.settings.source = fmt::format("the interrupted processing {}'s settings", unfinished->id);
+    return p;
+  }
+  Processing p;
+  if (unfinished) {
+    results.abandon_processing(unfinished->id);
+    std::error_code ignored;
+    fs::remove_all(run_dir / "fields" / fmt::format("p{}", unfinished->id), ignored);
+    p.note = fmt::format("an interrupted processing ({}) was discarded; `process --resume` continues one instead\n",
+                         unfinished->id);
+  }
+  p.settings = resolve_settings(run_dir, options.overrides);
+  p.id = results.begin_processing(to_json(p.settings).dump(), acquisition::utc_now_ns());
+  return p;
+}
+
+struct FitsAndAgreements {
+  std::vector<storage::FitRecord> fits;
+  std::vector<storage::AgreementRecord> agreements;
+  std::string text;
+};
+
+FitsAndAgreements fit_everything(const storage::RunStore& store, const storage::ProcessingStore& results,
+                                 const FrameContext& ctx, std::int64_t processing_id,
+                                 const storage::ExperimentClock& clock) {
+  FitsAndAgreements out;
+  std::map<std::int64_t, std::pair<fitting::NewtonFit, fitting::CleanSeries>> tc_fits;
+  for (const auto& c : fitted_channels(store.channels())) {
+    // Newton's law holds from the origin on (before it the heater may still be on).
+    const TimeSeries tc = within(channel_series(store, c.id, clock), 0.0, INFINITY);
+    auto series = fitting::clean_series(tc.t_s, tc.value, 0.0);
+    auto fit = fit_at_origin(series);
+    out.fits.push_back({0, storage::FitSubject::kChannel, c.id, clock.origin_ns, fit.ok(),
+                        fit_json(fit, "temperature_c", "degC", clock).dump()});
+    tc_fits[c.id] = {std::move(fit), std::move(series)};
+  }
+  const auto probes = results.staged_probes(processing_id);
+  for (std::size_t p = 0; p < probes.size(); ++p) {
+    const ChannelInfo& c = ctx.channels[p];
+    const auto cal = ctx.calibration.find(c.id);
+    const double offset_s =
+        cal != ctx.calibration.end() ? cal->second.camera_offset_s : ctx.settings.geometry.camera_offset_s;
+    const ProbeSeries probe = probe_fit_series(results.staged_probe_samples(probes[p].id), clock, offset_s);
+    const auto probe_fit = fit_at_origin(probe.series);
+    out.fits.push_back({0, storage::FitSubject::kProbe, probes[p].id, clock.origin_ns, probe_fit.ok(),
+                        fit_json(probe_fit, probe.quantity, probe.quantity == "shift_px" ? "px" : "degC", clock)
+                            .dump()});
+    const auto& [tc_fit, tc_series] = tc_fits.at(c.id);
+    const auto agreement = agree(tc_fit, tc_series, probe_fit, probe, c.name);
+    json j = fitting::to_json(agreement);
+    j["probe_quantity"] = probe.quantity;
+    out.agreements.push_back({0, c.id, probes[p].id, j.dump()});
+    out.text += fmt::format("{}: thermocouple k = {:.4g} 1/s, BOS probe ({}) k = {:.4g} 1/s\n", c.name,
+                            tc_fit.k_per_s.value, probe.quantity, probe_fit.k_per_s.value) +
+                agreement.brief_report();
+  }
+  return out;
+}
+
+json quality_json(const FrameContext& ctx, const RunFrames& frames, const storage::ExperimentClock& clock) {
+  const FrameRecord& last = frames.measurements.back();
+  const auto q = fusion::modified_quality_index(load_frame(ctx.run_dir, last), ctx.reference);
+  return {{"frame_id", last.id},
+          {"reference_frame_id", frames.reference.id},
+          {"t_s", clock.seconds(last.t_ns)},
+          {"q_l", q.q_l},
+          {"q_c", q.q_c},
+          {"q_mod", q.q_mod},
+          {"mean_image", q.mean_image},
+          {"mean_reference", q.mean_reference},
+          {"std_image", q.std_image},
+          {"std_reference", q.std_reference}};
+}
+
+FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& store,
+                           storage::ProcessingStore& results, const Processing& processing,
+                           const RunFrames& frames, const storage::ExperimentClock& clock) {
+  FrameContext ctx;
+  ctx.run_dir = run_dir;
+  ctx.fields_dir = fmt::format("fields/p{}", processing.id);
+  ctx.settings = processing.settings;
+  ctx.channels = positioned_channels(store.channels());
+  if (ctx.settings.probes_only && ctx.channels.empty()) {
+    throw std::runtime_error(
+        "no channel of the run has an image position (image_x_px, image_y_px): nothing to evaluate in probe mode");
+  }
+  for (const auto& c : ctx.channels) {
+    ctx.points.emplace_back(*c.image_x_px, *c.image_y_px);
+    ctx.probe_ids.push_back(results.stage_probe(processing.id, {0, c.id, c.name, *c.image_x_px, *c.image_y_px}));
+  }
+  auto& geometry = ctx.settings.geometry;
+  if (!geometry.ambient_given) {
+    std::vector<TimeSeries> series;
+    for (const auto& c : ctx.channels) series.push_back(channel_series(store, c.id, clock));
+    geometry.geometry.ambient_temperature_c = ambient_from_thermocouples(
+        series, clock.seconds(frames.reference.t_ns) + geometry.camera_offset_s,
+        geometry.geometry.ambient_temperature_c);
+  }
+  ctx.geometry.emplace(geometry.geometry);
+  ctx.calibration = stored_calibration(results);
+  ctx.reference = load_frame(run_dir, frames.reference);
+  if (!ctx.settings.mask.empty()) {
+    ctx.mask = read_image(storage::resolve_in_run(run_dir, ctx.settings.mask).string(), "mask");
+  }
+  if (!ctx.settings.probes_only) fs::create_directories(run_dir / ctx.fields_dir);
+  return ctx;
+}
+
+std::string temperature_source(const FrameContext& ctx) {
+  return !ctx.calibration.empty()        ? "calibration"
+         : !ctx.settings.probes_only ? "physical model"
+                                         : "none (probe fits on the shift; run bosfuse calibrate)";
+}
+
+}  // namespace
+
+ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options) {
+  FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres' own logging; the fit summaries say it better
+  const auto start = std::chrono::steady_clock::now();
+  if (!storage::RunStore::holds_run(run_dir)) throw std::runtime_error("'" + run_dir.string() + "' holds no bosfuse run");
+  const auto lock = storage::RunLock::try_acquire(run_dir, "process.lock");
+  if (!lock) {
+    throw std::runtime_error("another bosfuse is processing " + run_dir.string() + " (" +
+                             storage::RunLock::holder(run_dir, "process.lock") + ")");
+  }
+  storage::ProcessingStore results(run_dir, true);
+  const auto store = storage::RunStore::open(run_dir);
+  const storage::ExperimentClock clock = storage::experiment_clock(store);
+  Processing processing = start_processing(run_dir, options, results);
+  // Every pass run, as in the full field; with the exact context (-1) a probe
+  // then equals the full field at its point.
+  processing.settings.evaluator.xcorr.convergence_px = 0;
+  const RunFrames frames = split_frames(store.frames());
+  const FrameContext ctx = frame_context(run_dir, store, results, processing, frames, clock);
+
+  ProcessReport report;
+  report.processing_id = processing.id;
+  report.frames = frames.measurements.size();
+  report.probes = ctx.channels.size();
+  report.temperature_source = temperature_source(ctx);
+  const auto staged = results.staged_frame_ids(processing.id);
+  const std::set<std::int64_t> done(staged.begin(), staged.end());
+  report.frames_resumed = done.size();
+  auto progress = [&](std::size_t n, const std::string& line, bool frame = false) {
+    if (options.progress) options.progress({n, report.frames, line, frame});
+  };
+  progress(done.size(), fmt::format("processing {} ({}), settings from {}; times in {}", run_dir.string(),
+                                    ctx.settings.probes_only ? "probe mode" : "full fields",
+                                    ctx.settings.source, clock.basis()));
+  if (!ctx.settings.probes_only) {
+    progress(done.size(), "geometry from " + ctx.settings.geometry.source + ":\n" + ctx.geometry->brief_report());
+  }
+  std::size_t n = done.size();
+  for (const FrameRecord& frame : frames.measurements) {
+    if (done.count(frame.id)) continue;
+    if (options.stop && options.stop->load()) {
+      report.text = processing.note + fmt::format("stopped after {} of {} frames; the run's earlier results are "
+                                                  "unchanged; `bosfuse process {} --resume` continues\n",
+                                                  n, report.frames, run_dir.string());
+      return report;
+    }
+    process_frame(ctx, frame, results, processing.id);
+    progress(++n, fmt::format("frame {} (t = {:.2f} s) evaluated", frame.id, clock.seconds(frame.t_ns)), true);
+  }
+
+  const FitsAndAgreements fitted = fit_everything(store, results, ctx, processing.id, clock);
+  for (const auto& f : fitted.fits) report.fits_ok += f.ok ? 1 : 0;
+  report.fits = fitted.fits.size();
+  report.agreements = fitted.agreements.size();
+  const json summary = {{"frames", report.frames},
+                        {"probes", report.probes},
+                        {"temperature_source", report.temperature_source},
+                        {"time_basis", clock.basis()},
+                        {"quality", quality_json(ctx, frames, clock)}};
+  results.complete_processing(processing.id, fitted.fits, fitted.agreements, summary.dump(), acquisition::utc_now_ns());
+  remove_fields_except(run_dir, fmt::format("p{}", processing.id));
+  report.complete = true;
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report.text = processing.note +
+                fmt::format("{} frames{}, {} probes ({}), temperatures from {}; {} of {} fits ok, {} agreements, "
+                            "{:.1f} s; times in {}\n",
+                            report.frames,
+                            report.frames_resumed ? fmt::format(" ({} done before the resume)", report.frames_resumed)
+                                                  : "",
+                            report.probes, ctx.settings.probes_only ? "probe mode" : "full fields",
+                            report.temperature_source, report.fits_ok, report.fits, report.agreements, report.seconds,
+                            clock.basis()) +
+                fitted.text;
+  return report;
+}
+
+}  // namespace bosfuse::pipeline

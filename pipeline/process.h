@@ -1,0 +1,65 @@
+#pragma once
+// process_run: what `bosfuse process` does to a run, callable in-process by
+// the command line, the demo and the benchmarks.
+//
+// Every non-reference frame is evaluated against the run's reference frame
+// (run_selection.h) — the full displacement field, or only windows at the
+// thermocouples' image positions (probe mode). Full fields are written as
+// CSV under RUN/fields/p<processing>/ together with the temperature field of
+// the physical model (bos_geometry.h, temperature_field.h). Probe
+// temperatures come from the run's newest calibration when there is one,
+// else from the model's field (full mode), else the probe's Newton fit is
+// made on its shift. Every thermocouple and every probe series gets a Newton
+// fit, each thermocouple–probe pair an agreement, and the last frame an
+// image quality index against the reference. All times are experiment
+// seconds from the run's one origin (storage/experiment_clock.h), and every
+// fit has t = 0 there.
+//
+// The settings used (processing_settings.h) are stored with the results.
+// Results are written aside, one frame per transaction, while the work goes
+// on; they replace the run's current results in one transaction only when
+// every frame is done. A processing that is interrupted (Ctrl-C, a crash,
+// kill -9) leaves the current results as they were, and `resume` continues
+// it with its own settings from the first frame it had not finished.
+
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include "pipeline/processing_settings.h"
+
+namespace bosfuse::pipeline {
+
+struct ProcessProgress {
+  std::size_t done = 0;  // frames evaluated so far (resumed ones included)
+  std::size_t total = 0;
+  std::string line;    // what just happened, in words
+  bool frame = false;  // a frame was just evaluated; else `line` is a note (settings, geometry)
+};
+
+struct ProcessOptions {
+  SettingsOverrides overrides;  // on top of the run's stored settings
+  bool resume = false;          // continue the run's interrupted processing (no overrides allowed)
+  std::function<void(const ProcessProgress&)> progress;  // may be empty
+  const std::atomic<bool>* stop = nullptr;  // when it becomes true: stop after the current frame, resumable
+};
+
+struct ProcessReport {
+  std::int64_t processing_id = 0;
+  bool complete = false;  // false: stopped on request; the run's earlier results are untouched
+  std::size_t frames = 0;
+  std::size_t frames_resumed = 0;  // already done by the interrupted processing this one continued
+  std::size_t probes = 0;
+  std::size_t fits_ok = 0;
+  std::size_t fits = 0;
+  std::size_t agreements = 0;
+  std::string temperature_source;  // calibration, physical model, none
+  double seconds = 0;
+  std::string text;  // what a person reads at the end
+};
+
+ProcessReport process_run(const std::filesystem::path& run_dir, const ProcessOptions& options);
+
+}  // namespace bosfuse::pipeline

@@ -1,0 +1,223 @@
+#include "pipeline/process.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "storage/processing_store.h"
+#include "storage/run_store.h"
+#include "tests/support/synthetic_run.h"
+#include "tests/support/temp_dir.h"
+
+namespace bosfuse::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+ProcessReport process(const fs::path& run, SettingsOverrides overrides = {}, bool resume = false,
+                      const std::atomic<bool>* stop = nullptr,
+                      std::function<void(const ProcessProgress&)> progress = {}) {
+  ProcessOptions options;
+  options.overrides = std::move(overrides);
+  options.resume = resume;
+  options.stop = stop;
+  options.progress = std::move(progress);
+  return process_run(run, options);
+}
+
+json current_settings(const fs::path& run) {
+  const auto p = storage::ProcessingStore(run).current_processing();
+  return p ? json::parse(p->settings_json) : json();
+}
+
+// Everything a processing stored, in a comparable form (field files by content).
+struct Results {
+  std::vector<std::pair<std::string, std::vector<storage::ProbeSampleRecord>>> probes;
+  std::vector<std::string> fits, agreements;
+  std::vector<std::string> field_files;
+
+  explicit Results(const fs::path& run) {
+    const storage::ProcessingStore results(run);
+    for (const auto& p : results.probes()) probes.emplace_back(p.name, results.probe_samples(p.id));
+    for (const auto& f : results.fits()) fits.push_back(f.json);
+    for (const auto& a : results.agreements()) agreements.push_back(a.json);
+    for (const auto& f : results.fields()) {
+      std::ifstream in(run / f.path);
+      field_files.emplace_back(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+  }
+};
+
+void expect_equal(const Results& a, const Results& b) {
+  ASSERT_EQ(a.probes.size(), b.probes.size());
+  for (std::size_t p = 0; p < a.probes.size(); ++p) {
+    EXPECT_EQ(a.probes[p].first, b.probes[p].first);
+    ASSERT_EQ(a.probes[p].second.size(), b.probes[p].second.size());
+    for (std::size_t i = 0; i < a.probes[p].second.size(); ++i) {
+      const auto &x = a.probes[p].second[i], &y = b.probes[p].second[i];
+      EXPECT_EQ(x.frame_id, y.frame_id);
+      EXPECT_EQ(x.u_px, y.u_px);
+      EXPECT_EQ(x.v_px, y.v_px);
+      EXPECT_EQ(x.temperature_c, y.temperature_c);
+    }
+  }
+  EXPECT_EQ(a.fits, b.fits);
+  EXPECT_EQ(a.agreements, b.agreements);
+  EXPECT_EQ(a.field_files, b.field_files);
+}
+
+class Process : public ::testing::Test {
+ protected:
+  void SetUp() override { testrun::create_run(run(), true, truth_); }
+  fs::path run() const { return dir_ / "run"; }
+
+  testing::TempDir dir_;
+  testrun::Truth truth_;
+};
+
+TEST_F(Process, StoresItsSettingsReusesThemWithoutOptionsAndOptionsOverrideThem) {
+  cv::imwrite((run() / "holder.png").string(), testrun::holder_mask(truth_));
+  SettingsOverrides first;
+  first.mask = "holder.png";
+  first.passes = 2;
+  ASSERT_TRUE(process(run(), first).complete);
+  const json stored = current_settings(run());
+  EXPECT_EQ(stored.at("mask"), "holder.png");
+  EXPECT_EQ(stored.at("passes"), 2);
+  EXPECT_EQ(stored.at("window_px"), 16) << "the default";
+  EXPECT_EQ(stored.at("mode"), "full");
+  const Results before(run());
+
+  const auto again = process(run());
+  ASSERT_TRUE(again.complete);
+  EXPECT_EQ(current_settings(run()), stored) << "no options: the stored settings";
+  const Results repeated(run());
+  EXPECT_EQ(repeated.fits, before.fits) << "the same settings give the same results";
+  EXPECT_EQ(repeated.field_files, before.field_files);
+
+  SettingsOverrides step;
+  step.step_px = 16;
+  ASSERT_TRUE(process(run(), step).complete);
+  const json changed = current_settings(run());
+  EXPECT_EQ(changed.at("step_px"), 16);
+  EXPECT_EQ(changed.at("mask"), "holder.png") << "what the options did not name is kept";
+  EXPECT_EQ(changed.at("passes"), 2);
+  EXPECT_EQ(fs::directory_iterator(run() / "fields")->path().filename(),
+            "p" + std::to_string(storage::ProcessingStore(run()).current_processing()->id))
+      << "only the current processing's field files are kept";
+}
+
+TEST_F(Process, AMaskOutsideTheRunIsCopiedIntoItAndARelativeOneMustBeInIt) {
+  cv::imwrite((dir_ / "holder.png").string(), testrun::holder_mask(truth_));
+  SettingsOverrides outside;
+  outside.mask = (dir_ / "holder.png").string();
+  ASSERT_TRUE(process(run(), outside).complete);
+  EXPECT_EQ(current_settings(run()).at("mask"), "masks/holder.png");
+  EXPECT_TRUE(fs::is_regular_file(run() / "masks/holder.png")) << "the run keeps its own copy";
+  SettingsOverrides escaping;
+  escaping.mask = "../holder.png";
+  EXPECT_THROW(process(run(), escaping), std::exception);
+  SettingsOverrides none;
+  none.mask = "";
+  ASSERT_TRUE(process(run(), none).complete);
+  EXPECT_FALSE(current_settings(run()).contains("mask"));
+}
+
+TEST_F(Process, AStoppedProcessingLeavesTheCurrentResultsAndResumeEqualsAnUninterruptedOne) {
+  ASSERT_TRUE(process(run()).complete);
+  const Results first(run());
+  fs::copy(run(), dir_ / "copy", fs::copy_options::recursive);
+
+  SettingsOverrides other;
+  other.passes = 2;
+  std::atomic<bool> stop{false};
+  const auto stopped =
+      process(run(), other, false, &stop, [&](const ProcessProgress& p) { stop = stop || p.done >= 1; });
+  EXPECT_FALSE(stopped.complete);
+  EXPECT_NE(stopped.text.find("--resume"), std::string::npos) << stopped.text;
+  expect_equal(Results(run()), first);  // the earlier results, untouched and readable
+  EXPECT_EQ(current_settings(run()).at("passes"), 3);
+
+  const auto resumed = process(run(), {}, true);
+  ASSERT_TRUE(resumed.complete);
+  EXPECT_EQ(resumed.frames_resumed, 1u);
+  EXPECT_EQ(current_settings(run()).at("passes"), 2) << "resumed with the interrupted processing's settings";
+  ASSERT_TRUE(process(dir_ / "copy", other).complete);
+  expect_equal(Results(run()), Results(dir_ / "copy"));
+}
+
+TEST_F(Process, ResumeNeedsAnInterruptedProcessingAndTakesNoOptions) {
+  try {
+    process(run(), {}, true);
+    FAIL() << "resumed nothing";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("nothing to resume"), std::string::npos) << e.what();
+  }
+  std::atomic<bool> stop{true};
+  EXPECT_FALSE(process(run(), {}, false, &stop).complete);
+  SettingsOverrides other;
+  other.passes = 2;
+  EXPECT_THROW(process(run(), other, true), std::runtime_error);
+  const auto fresh = process(run());  // not --resume: the interrupted one is discarded
+  ASSERT_TRUE(fresh.complete);
+  EXPECT_NE(fresh.text.find("was discarded"), std::string::npos) << fresh.text;
+}
+
+TEST(ProcessTime, FitsAreInExperimentSecondsFromTheDeclaredOriginAndScale) {
+  testing::TempDir dir;
+  testrun::Truth truth;
+  truth.time_scale = 10;  // recorded ten times faster than it happened
+  truth.origin_event = "heater off";
+  testrun::create_run(dir / "run", true, truth);
+  const std::int64_t heater_off_ns = truth.start_ns + 20'000'000'000;
+  {
+    auto store = storage::RunStore::open(dir / "run", true);
+    const storage::Event marker{0, std::nullopt, heater_off_ns, "marker", "heater off"};
+    store.write_events({&marker, 1});
+  }
+  ASSERT_TRUE(process(dir / "run").complete);
+  const storage::ProcessingStore results(dir / "run");
+  const auto channels = storage::RunStore::open(dir / "run").channels();
+  int checked = 0;
+  for (const auto& fit : results.fits()) {
+    if (fit.subject != storage::FitSubject::kChannel) continue;
+    const int c = fit.subject_id == channels[0].id ? 0 : 1;
+    const json j = json::parse(fit.json);
+    EXPECT_EQ(fit.origin_t_ns, heater_off_ns);
+    EXPECT_NEAR(j.at("parameters").at("k_per_s").at("value").get<double>(), truth.k_per_s[c] / 10,
+                0.02 * truth.k_per_s[c] / 10);
+    // T0 is the temperature at the origin, 20 recorded seconds into the run.
+    const double t0 = truth.ambient_c + (truth.t0_c[c] - truth.ambient_c) * std::exp(-truth.k_per_s[c] * 20);
+    EXPECT_NEAR(j.at("parameters").at("T0_c").at("value").get<double>(), t0, 0.2);
+    EXPECT_NE(j.at("time_basis").get<std::string>().find("since heater off"), std::string::npos);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2);
+}
+
+TEST(InheritSettings, ARunGetsAnotherRunsSettingsAndTheMaskTheyName) {
+  testing::TempDir dir;
+  testrun::Truth truth;
+  testrun::create_run(dir / "a", true, truth);
+  testrun::create_run(dir / "b", true, truth);
+  EXPECT_FALSE(inherit_settings(dir / "a", dir / "b")) << "nothing stored yet";
+  cv::imwrite((dir / "a/holder.png").string(), testrun::holder_mask(truth));
+  SettingsOverrides o;
+  o.mask = "holder.png";
+  o.window_px = 32;
+  o.step_px = 16;
+  ASSERT_TRUE(process(dir / "a", o).complete);
+  ASSERT_TRUE(inherit_settings(dir / "a", dir / "b"));
+  EXPECT_TRUE(fs::is_regular_file(dir / "b/holder.png"));
+  const auto settings = resolve_settings(dir / "b", {});
+  EXPECT_EQ(settings.evaluator.xcorr.window_px, 32);
+  EXPECT_EQ(settings.mask, "holder.png");
+  EXPECT_NE(settings.source.find("inherited"), std::string::npos) << settings.source;
+}
+
+}  // namespace
+}  // namespace bosfuse::pipeline

@@ -1,0 +1,222 @@
+#include "acquisition/clock.h"
+#include "pipeline/processing_settings.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <map>
+
+#include "storage/processing_store.h"
+#include "storage/run_paths.h"
+#include "storage/run_store.h"
+
+namespace bosfuse::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::ordered_json;
+
+const std::map<std::string, fusion::FlowAlgorithm> kFlowAlgorithms{{"dis", fusion::FlowAlgorithm::kDis},
+                                                                   {"farneback", fusion::FlowAlgorithm::kFarneback},
+                                                                   {"tvl1", fusion::FlowAlgorithm::kTvl1}};
+
+ProcessingSettings defaults() {
+  ProcessingSettings s;
+  s.evaluator.set_grid(16, 8);
+  return s;
+}
+
+json geometry_json(const GeometryConfig& g) {
+  const auto& o = g.geometry;
+  json edges = json::array();
+  const auto& f = g.temperature_field;
+  for (const auto& [open, name] :
+       {std::pair{f.open_top, "top"}, {f.open_bottom, "bottom"}, {f.open_left, "left"}, {f.open_right, "right"}}) {
+    if (open) edges.push_back(name);
+  }
+  return {{"wavelength_nm", o.wavelength_nm},
+          {"ambient_pressure_pa", o.ambient_pressure_pa},
+          {"ambient_temperature_c", o.ambient_temperature_c},
+          {"ambient_given", g.ambient_given},
+          {"z_d_m", o.z_d_m},
+          {"depth_m", o.depth_m},
+          {"magnification", o.magnification},
+          {"pixel_pitch_um", o.pixel_pitch_um},
+          {"px_per_mm_flow", o.px_per_mm_flow},
+          {"open_edges", edges},
+          {"camera_offset_s", g.camera_offset_s},
+          {"source", g.source}};
+}
+
+GeometryConfig geometry_from_json(const nlohmann::json& j) {
+  GeometryConfig g;
+  auto& o = g.geometry;
+  o.wavelength_nm = j.at("wavelength_nm").get<double>();
+  o.ambient_pressure_pa = j.at("ambient_pressure_pa").get<double>();
+  o.ambient_temperature_c = j.at("ambient_temperature_c").get<double>();
+  g.ambient_given = j.at("ambient_given").get<bool>();
+  o.z_d_m = j.at("z_d_m").get<double>();
+  o.depth_m = j.at("depth_m").get<double>();
+  o.magnification = j.at("magnification").get<double>();
+  o.pixel_pitch_um = j.at("pixel_pitch_um").get<double>();
+  o.px_per_mm_flow = j.at("px_per_mm_flow").get<double>();
+  for (const auto& edge : j.at("open_edges")) {
+    const auto name = edge.get<std::string>();
+    auto& f = g.temperature_field;
+    (name == "top" ? f.open_top : name == "bottom" ? f.open_bottom : name == "left" ? f.open_left : f.open_right) =
+        true;
+  }
+  g.camera_offset_s = j.at("camera_offset_s").get<double>();
+  g.source = j.at("source").get<std::string>();
+  return g;
+}
+
+// The mask as the run will store it: a path relative to the run folder.
+std::string mask_in_run(const fs::path& run_dir, const std::string& given) {
+  const fs::path path(given);
+  if (!path.is_absolute()) {
+    storage::resolve_in_run(run_dir, given);  // throws for a path that leads outside the run
+    if (!fs::is_regular_file(run_dir / path)) {
+      throw std::runtime_error("mask '" + given + "': no such file in the run folder " + run_dir.string() +
+                               " (a relative mask path is relative to the run folder)");
+    }
+    return given;
+  }
+  if (!fs::is_regular_file(path)) throw std::runtime_error("mask '" + given + "': no such file");
+  const fs::path relative = fs::weakly_canonical(path).lexically_relative(fs::weakly_canonical(run_dir));
+  if (!relative.empty() && *relative.begin() != "..") return relative.string();
+  // A file outside the run: the run keeps its own copy, so it stays self-describing.
+  const fs::path copy = fs::path("masks") / path.filename();
+  fs::create_directories(run_dir / "masks");
+  fs::copy_file(path, run_dir / copy, fs::copy_options::overwrite_existing);
+  return copy.string();
+}
+
+void apply(const SettingsOverrides& o, const fs::path& run_dir, const std::string& run_config,
+           ProcessingSettings& s) {
+  if (o.probes_only) s.probes_only = *o.probes_only;
+  if (o.method) {
+    if (*o.method != "xcorr" && *o.method != "flow") throw std::runtime_error("method must be xcorr or flow");
+    s.evaluator.method = *o.method == "flow" ? fusion::Method::kOpticalFlow : fusion::Method::kCrossCorrelation;
+  }
+  if (o.window_px || o.step_px || o.roi_px) {
+    s.evaluator.set_grid(o.window_px.value_or(s.evaluator.xcorr.window_px),
+                         o.step_px.value_or(s.evaluator.xcorr.step_px), o.roi_px.value_or(s.evaluator.xcorr.roi));
+  }
+  if (o.passes) s.evaluator.xcorr.passes = *o.passes;
+  if (o.probe_context_nodes) s.evaluator.xcorr.probe_context_nodes = *o.probe_context_nodes;
+  if (o.max_shift_px) s.evaluator.xcorr.max_shift_px = *o.max_shift_px;
+  if (o.mask) s.mask = o.mask->empty() ? std::string() : mask_in_run(run_dir, *o.mask);
+  if (o.geometry_file) s.geometry = resolve_geometry_config(*o.geometry_file, run_config);
+}
+
+}  // namespace
+
+bool SettingsOverrides::empty() const {
+  return !probes_only && !method && !window_px && !step_px && !passes && !probe_context_nodes && !max_shift_px &&
+         !roi_px && !mask && !geometry_file;
+}
+
+std::string ProcessingSettings::Validate() const {
+  if (auto problem = evaluator.Validate(); !problem.empty()) return problem;
+  return geometry.geometry.Validate();
+}
+
+json to_json(const ProcessingSettings& s) {
+  const auto& x = s.evaluator.xcorr;
+  json j = {{"mode", s.probes_only ? "probes" : "full"},
+            {"method", s.evaluator.method == fusion::Method::kOpticalFlow ? "flow" : "xcorr"},
+            {"flow_algorithm", fusion::to_string(s.evaluator.flow.algorithm)},
+            {"window_px", x.window_px},
+            {"step_px", x.step_px},
+            {"passes", x.passes},
+            {"max_shift_px", x.max_shift_px},
+            {"probe_context_nodes", x.probe_context_nodes}};
+  if (!x.roi.empty()) j["roi_px"] = {x.roi.x, x.roi.y, x.roi.width, x.roi.height};
+  if (!s.mask.empty()) j["mask"] = s.mask;
+  j["geometry"] = geometry_json(s.geometry);
+  return j;
+}
+
+ProcessingSettings settings_from_json(const nlohmann::json& j) {
+  try {
+    ProcessingSettings s = defaults();
+    s.probes_only = j.at("mode").get<std::string>() == "probes";
+    s.evaluator.method =
+        j.at("method").get<std::string>() == "flow" ? fusion::Method::kOpticalFlow : fusion::Method::kCrossCorrelation;
+    s.evaluator.flow.algorithm = kFlowAlgorithms.at(j.at("flow_algorithm").get<std::string>());
+    cv::Rect roi;
+    if (j.contains("roi_px")) {
+      const auto& r = j.at("roi_px");
+      roi = cv::Rect(r.at(0).get<int>(), r.at(1).get<int>(), r.at(2).get<int>(), r.at(3).get<int>());
+    }
+    s.evaluator.set_grid(j.at("window_px").get<int>(), j.at("step_px").get<int>(), roi);
+    s.evaluator.xcorr.passes = j.at("passes").get<int>();
+    s.evaluator.xcorr.max_shift_px = j.at("max_shift_px").get<double>();
+    s.evaluator.xcorr.probe_context_nodes = j.at("probe_context_nodes").get<int>();
+    s.mask = j.value("mask", std::string());
+    s.geometry = geometry_from_json(j.at("geometry"));
+    return s;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(std::string("stored processing settings are not of this bosfuse's layout: ") + e.what());
+  }
+}
+
+ProcessingSettings resolve_settings(const fs::path& run_dir, const SettingsOverrides& overrides) {
+  const storage::ProcessingStore results(run_dir);
+  const auto store = storage::RunStore::open(run_dir);
+  const std::string run_config = store.run().config_toml;
+  ProcessingSettings s;
+  if (const auto stored = results.latest_settings()) {
+    s = settings_from_json(nlohmann::json::parse(stored->settings_json));
+    s.source = fmt::format("the run's stored settings ({} processing {})",
+                           stored->status == "inherited" ? "inherited from the recorded run by" : "of", stored->id);
+  } else {
+    s = defaults();
+    s.geometry = resolve_geometry_config("", run_config);
+    s.source = "defaults, geometry from " + s.geometry.source;
+  }
+  if (!overrides.empty()) s.source += ", with the command line's options";
+  apply(overrides, run_dir, run_config, s);
+  if (const auto problem = s.Validate(); !problem.empty()) throw std::runtime_error(problem);
+  return s;
+}
+
+std::string describe(const ProcessingSettings& s) {
+  const auto& x = s.evaluator.xcorr;
+  std::string text = fmt::format("{}, {}, window {} px, step {} px, {} passes, largest shift {:g} px",
+                                 s.probes_only ? "probe mode" : "full fields",
+                                 s.evaluator.method == fusion::Method::kOpticalFlow ? "optical flow" : "cross-correlation",
+                                 x.window_px, x.step_px, x.passes, x.max_shift_px);
+  if (s.probes_only) text += fmt::format(", probe context {}", x.probe_context_nodes);
+  if (!x.roi.empty()) text += fmt::format(", ROI {},{} {}×{} px", x.roi.x, x.roi.y, x.roi.width, x.roi.height);
+  text += s.mask.empty() ? ", no mask" : ", mask " + s.mask;
+  return text + ", geometry from " + s.geometry.source;
+}
+
+std::optional<double> stored_px_per_mm(const fs::path& run_dir) {
+  std::optional<GeometryConfig> geometry;
+  if (const auto stored = storage::ProcessingStore(run_dir).latest_settings()) {
+    geometry = settings_from_json(nlohmann::json::parse(stored->settings_json)).geometry;
+  } else {
+    geometry = parse_geometry_config(storage::RunStore::open(run_dir).run().config_toml, "run config");
+  }
+  if (!geometry || geometry->source == "defaults") return std::nullopt;
+  return fusion::BosGeometry(geometry->geometry).px_per_m_flow() * 1e-3;
+}
+
+bool inherit_settings(const fs::path& from_run, const fs::path& to_run) {
+  const storage::ProcessingStore from(from_run);
+  const auto stored = from.latest_settings();
+  if (!stored) return false;
+  const ProcessingSettings settings = settings_from_json(nlohmann::json::parse(stored->settings_json));
+  if (!settings.mask.empty()) {
+    const fs::path source = storage::resolve_in_run(from_run, settings.mask);
+    fs::create_directories((to_run / settings.mask).parent_path());
+    fs::copy_file(source, to_run / settings.mask, fs::copy_options::overwrite_existing);
+  }
+  storage::ProcessingStore(to_run, true).add_inherited_settings(stored->settings_json, acquisition::utc_now_ns());
+  return true;
+}
+
+}  // namespace bosfuse::pipeline

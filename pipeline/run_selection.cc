@@ -1,0 +1,76 @@
+#include "pipeline/run_selection.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "pipeline/image_io.h"
+#include "storage/run_paths.h"
+
+namespace bosfuse::pipeline {
+
+RunFrames split_frames(const std::vector<storage::FrameRecord>& frames) {
+  RunFrames out;
+  bool found = false;
+  for (const auto& f : frames) {
+    if (f.is_reference && !found) {
+      out.reference = f;
+      found = true;
+    } else if (!f.is_reference) {
+      out.measurements.push_back(f);
+    }
+  }
+  if (!found) throw std::runtime_error("the run has no reference frame (a frame with is_reference = 1)");
+  if (out.measurements.empty()) throw std::runtime_error("the run has no frames to evaluate besides the reference");
+  return out;
+}
+
+std::vector<storage::ChannelInfo> positioned_channels(const std::vector<storage::ChannelInfo>& channels) {
+  std::vector<storage::ChannelInfo> out;
+  for (const auto& c : channels) {
+    if (c.image_x_px && c.image_y_px && std::isfinite(*c.image_x_px) && std::isfinite(*c.image_y_px)) out.push_back(c);
+  }
+  return out;
+}
+
+std::vector<storage::ChannelInfo> fitted_channels(const std::vector<storage::ChannelInfo>& channels) {
+  std::vector<storage::ChannelInfo> out;
+  const auto positioned = positioned_channels(channels);
+  for (const auto& c : channels) {
+    const bool has_position = std::any_of(positioned.begin(), positioned.end(), [&](const auto& p) { return p.id == c.id; });
+    if (c.kind == "thermocouple" || has_position) out.push_back(c);
+  }
+  return out;
+}
+
+TimeSeries channel_series(const storage::RunStore& store, std::int64_t channel_id,
+                          const storage::ExperimentClock& clock) {
+  TimeSeries s;
+  for (const auto& sample : store.read_samples(channel_id)) {
+    if (sample.status != storage::SampleStatus::kOk || !sample.value) continue;
+    s.t_s.push_back(clock.seconds(sample.t_ns));
+    s.value.push_back(*sample.value);
+  }
+  return s;
+}
+
+TimeSeries within(const TimeSeries& s, double from_s, double to_s) {
+  TimeSeries out;
+  for (std::size_t i = 0; i < s.t_s.size(); ++i) {
+    if (s.t_s[i] >= from_s && s.t_s[i] <= to_s) {
+      out.t_s.push_back(s.t_s[i]);
+      out.value.push_back(s.value[i]);
+    }
+  }
+  return out;
+}
+
+cv::Mat load_frame(const std::filesystem::path& run_dir, const storage::FrameRecord& frame) {
+  const std::string role = "frame " + std::to_string(frame.id);
+  try {
+    return read_image(storage::resolve_in_run(run_dir, frame.path).string(), role);
+  } catch (const storage::StorageError& e) {
+    throw std::runtime_error(role + ": " + e.what());
+  }
+}
+
+}  // namespace bosfuse::pipeline
