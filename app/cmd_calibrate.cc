@@ -21,7 +21,7 @@ struct CalibrateArgs {
 void add_calibrate(CLI::App& root) {
   auto args = std::make_shared<CalibrateArgs>();
   CLI::App* cmd = root.add_subcommand(
-      "calibrate", "Fit degC per px of shift at each thermocouple from a processed run and store it in the run");
+      "calibrate", "Fit °C per px of shift at each thermocouple from a processed run and store it in the run");
   cmd->add_option("run", args->run, "Run folder (processed: `bosfuse process RUN --mode probes` is enough)")
       ->required();
   cmd->add_option("--geometry", args->geometry, "TOML file whose [alignment] camera_offset_s is used");

@@ -20,6 +20,7 @@
 #include "acquisition/experiment_config.h"
 #include "acquisition/logger.h"
 #include "app/command.h"
+#include "app/output_stream.h"
 #include "app/progress_display.h"
 #include "app/run_control.h"
 #include "pipeline/process.h"
@@ -215,6 +216,7 @@ void write_truth(const std::filesystem::path& run_dir, const DemoArgs& args, con
 }
 
 void run_demo(const DemoArgs& args) {
+  refuse_standard_output(args.out, "--out", "the demo records a run, which is a folder");
   // A new folder per demo, so running it again never touches an earlier run.
   const std::filesystem::path run_dir =
       std::filesystem::path(args.out) / acquisition::format_compact_utc(acquisition::utc_now_ns());
@@ -237,22 +239,36 @@ void run_demo(const DemoArgs& args) {
             << "report:  " << (run_dir / "report" / "report.html").string() << "\n";
 }
 
+double seconds_within(const std::string& text, const char* option, double low_s, double high_s) {
+  const double s = std::chrono::duration<double>(parse_duration(text)).count();
+  if (s < low_s || s > high_s) {
+    throw std::runtime_error(fmt::format("{} {}: expected {:g} s to {:g} s", option, text, low_s, high_s));
+  }
+  return s;
+}
+
 void add_demo(CLI::App& root) {
   auto args = std::make_shared<DemoArgs>();
   CLI::App* cmd = root.add_subcommand(
       "demo", "Simulate a convection experiment and record it through the real device paths (no hardware needed)");
-  cmd->add_option("--out,-o", args->out, "Folder for demo runs (each run gets a new timestamped folder)")
+  cmd->add_option("--out,-o", args->out,
+                  "Folder for demo runs: each demo records a new run in a timestamped folder inside it, so an "
+                  "earlier run is never touched")
       ->capture_default_str();
-  cmd->add_option("--experiment-time", args->experiment_s, "Seconds of cooling to simulate")
-      ->check(CLI::Range(20.0, 3600.0))
+  auto experiment_time = std::make_shared<std::string>("4m");
+  auto frame_interval = std::make_shared<std::string>("10s");
+  cmd->add_option("--experiment-time", *experiment_time, "Cooling to simulate, experiment time (20s .. 1h)")
       ->capture_default_str();
-  cmd->add_option("--speed", args->speed, "Times faster than real time")
+  cmd->add_option("--speed", args->speed, "Times faster than real time (the run's time scale)")
       ->check(CLI::Range(1.0, 100.0))
       ->capture_default_str();
-  cmd->add_option("--frame-interval", args->frame_interval_s, "Experiment seconds between frames")
-      ->check(CLI::Range(1.0, 600.0))
+  cmd->add_option("--frame-interval", *frame_interval, "Experiment time between frames (1s .. 10m)")
       ->capture_default_str();
-  cmd->callback([args] { run_demo(*args); });
+  cmd->callback([args, experiment_time, frame_interval] {
+    args->experiment_s = seconds_within(*experiment_time, "--experiment-time", 20, 3600);
+    args->frame_interval_s = seconds_within(*frame_interval, "--frame-interval", 1, 600);
+    run_demo(*args);
+  });
 }
 
 BOSFUSE_COMMAND(add_demo);

@@ -10,16 +10,16 @@
 #include <sstream>
 
 #include "app/command.h"
-#include "app/displacement_map.h"
 #include "app/output_stream.h"
 #include "fusion/displacement_evaluator.h"
 #include "pipeline/image_io.h"
+#include "report/figures.h"
+#include "report/run_input.h"
 
 namespace bosfuse::app {
 namespace {
 
 using pipeline::read_image;
-using pipeline::write_image;
 
 struct EvaluateArgs {
   std::string reference, measurement, out = "-", map, mask, roi, method = "xcorr", flow = "dis", subpixel = "auto",
@@ -111,7 +111,11 @@ void evaluate(const EvaluateArgs& args) {
   OutputStream out(args.out);
   fusion::write_csv(result.field, out.stream());
   out.close();
-  if (!args.map.empty()) write_image(args.map, draw_displacement_map(result.field, {args.contour_px, 800}));
+  if (!args.map.empty()) {
+    report::MapField map = report::displacement_magnitude_map(result.field, reference.size());
+    map.source = args.measurement + " against " + args.reference;
+    report::write_map_figure(map, args.contour_px, {}, std::nullopt, {900, 650}, report::figure_base(args.map));
+  }
   spdlog::info("{}", result.summary.BriefReport());
 }
 

@@ -7,19 +7,19 @@
 #include <fmt/format.h>
 
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 
 #include "app/command.h"
-#include "app/displacement_map.h"
 #include "app/output_stream.h"
 #include "fusion/image_quality.h"
 #include "pipeline/image_io.h"
+#include "report/figures.h"
 
 namespace bosfuse::app {
 namespace {
 
 using pipeline::read_image;
-using pipeline::write_image;
 
 struct QualityArgs {
   std::string image, reference, map, json;
@@ -53,6 +53,20 @@ std::string quality_text(const QualityArgs& args, const fusion::QualityReport& r
       report.mean_local_q_mod, args.window_px);
 }
 
+// The local Q_mod as a map, one cell per window position (a large image's
+// map averaged down to at most 400 cells across, which a figure can show).
+void write_local_map(const fusion::QualityReport& report, const QualityArgs& args) {
+  report::MapField map;
+  map.quantity = "local Q_mod";
+  map.unit = "";
+  const double shrink = std::min(1.0, 400.0 / report.local_q_mod.cols);
+  cv::resize(report.local_q_mod, map.values, cv::Size(), shrink, shrink, cv::INTER_AREA);
+  map.step_px = 1.0 / shrink;
+  map.x0_px = map.y0_px = (args.window_px - 1) / 2.0 + (map.step_px - 1) / 2.0;
+  map.source = args.image + " against " + args.reference + fmt::format(", {} px windows", args.window_px);
+  report::write_map_figure(map, 0.1, {}, std::nullopt, {900, 650}, report::figure_base(args.map));
+}
+
 void quality(const QualityArgs& args) {
   if (!args.map.empty()) refuse_standard_output(args.map, "--map", "the image format comes from the file name (.png)");
   const cv::Mat image = read_image(args.image, "image");
@@ -67,7 +81,7 @@ void quality(const QualityArgs& args) {
     json->stream() << quality_json(args, report).dump(2) << "\n";
     json->close();
   }
-  if (!args.map.empty()) write_image(args.map, draw_scalar_map(report.local_q_mod, 0.0, 1.0, "local Q_mod"));
+  if (!args.map.empty()) write_local_map(report, args);
 }
 
 void add_quality(CLI::App& root) {

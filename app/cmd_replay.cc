@@ -10,6 +10,7 @@
 #include "acquisition/experiment_config.h"
 #include "acquisition/logger.h"
 #include "app/command.h"
+#include "app/output_stream.h"
 #include "app/run_control.h"
 #include "pipeline/processing_settings.h"
 #include "sim/replay.h"
@@ -65,6 +66,7 @@ void copy_markers(const sim::RecordedRun& recorded, double speed, std::int64_t s
 }
 
 void replay(const ReplayArgs& args) {
+  refuse_standard_output(args.out, "--out", "a run is a folder (run.sqlite, frames/)");
   const sim::RecordedRun recorded = sim::inspect_recorded_run(args.run);
   for (const std::string& problem : recorded.problems) spdlog::warn("{}: {}", args.run, problem);
   if (recorded.devices.empty() && recorded.cameras.empty()) throw std::runtime_error(args.run + ": nothing to replay");
@@ -110,9 +112,12 @@ void add_replay(CLI::App& root) {
   auto args = std::make_shared<ReplayArgs>();
   CLI::App* cmd = root.add_subcommand(
       "replay", "Record a recorded run again through simulated devices (Modbus on loopback, a replayed camera)");
-  cmd->add_option("run", args->run, "Recorded run folder")->required()->check(CLI::ExistingDirectory);
+  cmd->add_option("run", args->run, "Recorded run folder")->required();
   cmd->add_option("--out,-o", args->out, "New run folder to create")->required();
-  cmd->add_option("--speed", args->speed, "Replay N times faster than recorded")->check(CLI::Range(0.01, 10000.0));
+  cmd->add_option("--speed", args->speed, "Replay N times faster than recorded (the new run's time scale is the "
+                                          "recorded run's times N)")
+      ->check(CLI::Range(0.01, 10000.0))
+      ->capture_default_str();
   cmd->callback([args] { replay(*args); });
 }
 

@@ -4,12 +4,14 @@
 // stored (report/run_input.h): it never evaluates or fits on its own.
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <iostream>
 #include <memory>
 #include <sstream>
 
 #include "app/command.h"
+#include "app/output_stream.h"
 #include "report/report.h"
 #include "report/run_input.h"
 #include "storage/run_store.h"
@@ -49,6 +51,7 @@ std::vector<double> parse_times(const std::string& text) {
 }
 
 void make_report(const ReportArgs& args) {
+  refuse_standard_output(args.out, "--out", "a report is a folder of files (report.html, figures, CSV, JSON)");
   const auto store = storage::RunStore::open(args.run);
   report::RunReportOptions input_options;
   input_options.map_times_s = parse_times(args.map_times);
@@ -59,7 +62,7 @@ void make_report(const ReportArgs& args) {
   options.title = args.title;
   options.displacement_contour_px = args.contour_px;
   options.temperature_contour_c = args.contour_c;
-  std::cerr << "drawing the figures and writing " << args.out << " ...\n";
+  spdlog::info("drawing the figures and writing {} ...", args.out);
   const auto files = report::write_report(input, options, args.out);
   for (const auto& s : input.series) {
     if (s.fit && s.fit->ok()) {
@@ -78,7 +81,7 @@ void add_report(CLI::App& root) {
   auto args = std::make_shared<ReportArgs>();
   CLI::App* cmd = root.add_subcommand(
       "report", "Cooling-curve report of a run: self-contained HTML, figures as PNG/SVG, data as CSV/JSON");
-  cmd->add_option("run", args->run, "Run folder (holding run.sqlite)")->required()->check(CLI::ExistingDirectory);
+  cmd->add_option("run", args->run, "Run folder (holding run.sqlite)")->required();
   cmd->add_option("--out,-o", args->out, "Folder to write the report into (created if needed)")->required();
   cmd->add_option("--map-times", args->map_times,
                   "Times of the maps, experiment seconds, comma-separated (the nearest frame with a stored field)")

@@ -9,6 +9,7 @@
 
 #include "acquisition/clock.h"
 #include "app/command.h"
+#include "storage/experiment_clock.h"
 #include "storage/run_store.h"
 
 namespace bosfuse::app {
@@ -28,8 +29,11 @@ void print_run(const storage::RunStore& store) {
                            store.dir().string(), status, acquisition::format_iso8601_utc(run.started_ns, 3),
                            time_or_dash(run.ended_ns));
   if (run.ended_ns) {
-    std::cout << fmt::format("duration  {:.1f} s\n", static_cast<double>(*run.ended_ns - run.started_ns) * 1e-9);
+    std::cout << fmt::format("duration  {:.1f} s recorded\n", static_cast<double>(*run.ended_ns - run.started_ns) * 1e-9);
   }
+  const storage::ExperimentClock clock = storage::experiment_clock(store);
+  std::cout << "time      " << clock.basis() << "\n";
+  if (!clock.note.empty()) std::cout << "          " << clock.note << "\n";
 }
 
 void print_channels(const storage::RunStore& store) {

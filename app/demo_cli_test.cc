@@ -119,7 +119,7 @@ void expect_report_states(const fs::path& report_dir, const StoredRates& stored)
 
 TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
   testing::TempDir dir;
-  const auto demo = bosfuse("demo --out " + quoted(dir / "demo") + " --experiment-time 150 --speed 10");
+  const auto demo = bosfuse("demo --out " + quoted(dir / "demo") + " --experiment-time 150s --speed 10");
   ASSERT_EQ(demo.exit_code, 0) << demo.output;
   ASSERT_EQ(std::distance(fs::directory_iterator(dir / "demo"), fs::directory_iterator()), 1);
   const fs::path run = fs::directory_iterator(dir / "demo")->path();
@@ -199,7 +199,7 @@ TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
 TEST(DemoCli, CtrlCStopsTheDemoPromptlyWithTheRunRecordedSoFar) {
   testing::TempDir dir;
   testing::BackgroundProcess demo(
-      {kBosfuse, "demo", "--out", (dir / "demo").string(), "--experiment-time", "600", "--speed", "10"});
+      {kBosfuse, "demo", "--out", (dir / "demo").string(), "--experiment-time", "10m", "--speed", "10"});
   const auto has_samples = [&] {
     if (!fs::is_directory(dir / "demo") || fs::directory_iterator(dir / "demo") == fs::directory_iterator()) {
       return false;

@@ -16,14 +16,4 @@ cv::Mat read_image(const std::string& path, const std::string& role) {
   return image;
 }
 
-void write_image(const std::string& path, const cv::Mat& image) {
-  bool written = false;
-  try {
-    written = cv::imwrite(path, image);
-  } catch (const cv::Exception& e) {
-    throw std::runtime_error(path + ": cannot write image: " + e.what());
-  }
-  if (!written) throw std::runtime_error(path + ": cannot write image");
-}
-
 }  // namespace bosfuse::pipeline

@@ -1,5 +1,5 @@
 #pragma once
-// Reading and writing images for the command line: file problems become
+// Reading images for the pipeline and the command line: file problems become
 // messages that name the file, so `bosfuse evaluate` can say which input was
 // unreadable instead of "empty image".
 
@@ -10,6 +10,5 @@ namespace bosfuse::pipeline {
 
 // Any depth and channel count OpenCV reads (8/16-bit grey or colour).
 cv::Mat read_image(const std::string& path, const std::string& role);
-void write_image(const std::string& path, const cv::Mat& image);
 
 }  // namespace bosfuse::pipeline

@@ -790,4 +790,12 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
   return files;
 }
 
+std::filesystem::path figure_base(const std::filesystem::path& png_path) {
+  if (png_path.extension() != ".png") {
+    throw std::invalid_argument("'" + png_path.string() + "': a figure is named by its PNG file (name.png); its SVG "
+                                "is written beside it");
+  }
+  return std::filesystem::path(png_path).replace_extension();
+}
+
 }  // namespace bosfuse::report

@@ -67,4 +67,8 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
                              std::optional<double> px_per_mm, const FigureSize& size,
                              const std::filesystem::path& base);
 
+// The base of a figure named by its PNG ("map.png" → "map"; the SVG goes
+// beside it). Throws std::invalid_argument for a name not ending in .png.
+std::filesystem::path figure_base(const std::filesystem::path& png_path);
+
 }  // namespace bosfuse::report
