@@ -17,47 +17,13 @@
 #include "app/command.h"
 #include "app/output_stream.h"
 #include "pipeline/processing_settings.h"
-#include "report/csv_cell.h"
 #include "report/field_export.h"
+#include "report/sample_csv.h"
 #include "storage/experiment_clock.h"
 #include "storage/run_store.h"
 
 namespace bosfuse::app {
 namespace {
-
-// Samples sharing a timestamp (one poll of one device) share a row; a cell
-// is empty where a channel has no ok sample at that time.
-void write_csv(const storage::RunStore& store, std::ostream& out) {
-  const auto channels = store.channels();
-  std::map<std::int64_t, std::size_t> column;
-  const storage::ExperimentClock clock = storage::experiment_clock(store);
-  out << "time_utc,t_s";
-  for (const auto& c : channels) {
-    column[c.id] = column.size();
-    out << "," << report::csv_text_cell(c.name + " [" + c.unit + "]");
-  }
-  out << "\n";
-  std::vector<std::string> cells(channels.size());
-  std::optional<std::int64_t> row_t;
-  const auto flush_row = [&] {
-    if (!row_t) return;
-    out << acquisition::format_iso8601_utc(*row_t, 6) << ","
-        << fmt::format("{:.6f}", clock.seconds(*row_t));
-    for (auto& cell : cells) {
-      out << "," << cell;
-      cell.clear();
-    }
-    out << "\n";
-  };
-  store.for_each_sample([&](const storage::Sample& s) {
-    if (row_t != s.t_ns) {
-      flush_row();
-      row_t = s.t_ns;
-    }
-    if (s.value) cells[column.at(s.channel_id)] = fmt::format("{}", *s.value);
-  });
-  flush_row();
-}
 
 struct ExportArgs {
   std::string run;
@@ -116,7 +82,7 @@ void add_export(CLI::App& root) {
     const auto store = storage::RunStore::open(args->run);
     if (!args->fields.empty()) return export_fields(*args, store);
     OutputStream out(args->out);
-    write_csv(store, out.stream());
+    report::write_samples_csv(store, out.stream());
     out.close();
   });
 }

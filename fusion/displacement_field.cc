@@ -6,6 +6,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "fusion/field_csv.h"
+
 namespace bosfuse::fusion {
 
 std::string to_string(VectorFlag flag) {
@@ -32,7 +34,7 @@ std::size_t DisplacementField::count(VectorFlag flag) const {
 }
 
 void write_csv(const DisplacementField& field, std::ostream& out) {
-  out << "x,y,u,v,valid,peak_ratio\n";
+  out << field_csv_header(kDisplacementColumns) << "\n";
   for (const auto& v : field.vectors) {
     // Enough digits for 0.001 px work; the centre is exact in half pixels.
     out << fmt::format("{:.1f},{:.1f},{:.5f},{:.5f},{},{:.3f}\n", v.x_px, v.y_px, v.u_px, v.v_px, v.valid() ? 1 : 0,

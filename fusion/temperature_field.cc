@@ -11,6 +11,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "fusion/field_csv.h"
+
 namespace bosfuse::fusion {
 namespace {
 
@@ -188,7 +190,7 @@ TemperatureFieldResult recover_temperature_field(const DisplacementField& displa
 void write_csv(const TemperatureField& field, const std::filesystem::path& path) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error(path.string() + ": cannot open for writing");
-  out << "x,y,temperature_c,measured\n";
+  out << field_csv_header(kTemperatureColumns) << "\n";
   for (int r = 0; r < field.rows; ++r) {
     for (int c = 0; c < field.cols; ++c) {
       const std::size_t i = field.index(r, c);

@@ -1,8 +1,7 @@
 // The fit CSV reader. `bosfuse fit FILE.csv` reads its two columns with
-// read_series(), which lives in an unnamed namespace of app/cmd_fit.cc (not
-// in a library); this target includes that file so it fuzzes the very code
-// the command runs, then hands the columns to the nearest library code, the
-// same way run_fit() does: fitting::clean_series and fitting::fit_newton
+// report::read_csv_series() (report/sample_csv.h, beside the writer of
+// `bosfuse export --csv`); this target fuzzes it, then hands the columns on
+// the way run_fit() does: fitting::clean_series and fitting::fit_newton
 // (the fit only for series of at most 64 rows, to keep executions fast).
 // The input is the CSV text, with the columns chosen as the command does
 // when no --time-column/--temperature-column is given.
@@ -21,15 +20,11 @@
 #include <sstream>
 #include <string>
 
-#include "app/cmd_fit.cc"  // NOLINT: fuzzes read_series() where it lives
+#include <glog/logging.h>
+
+#include "report/sample_csv.h"
 #include "fitting/series.h"
 #include "fuzz/fuzz_support.h"
-
-// app/main.cc defines the registry that BOSFUSE_COMMAND in cmd_fit.cc adds to.
-std::vector<bosfuse::app::CommandAdder>& bosfuse::app::command_registry() {
-  static std::vector<CommandAdder> registry;
-  return registry;
-}
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   FLAGS_minloglevel = google::GLOG_FATAL;  // as run_fit() does: Ceres' own logging is noise here
@@ -38,9 +33,9 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));
-  bosfuse::app::CsvSeries series;
+  bosfuse::report::CsvSeries series;
   try {
-    series = bosfuse::app::read_series(in, "", "");
+    series = bosfuse::report::read_csv_series(in, "", "");
   } catch (const std::exception& e) {
     FUZZ_CHECK(e.what()[0] != '\0');
     return 0;

@@ -11,7 +11,7 @@
 #include <string_view>
 
 #include "acquisition/clock.h"
-#include "report/field_csv.h"
+#include "fusion/field_csv.h"
 #include "report/hdf5_writer.h"
 #include "report/html.h"
 #include "storage/processing_store.h"
@@ -70,9 +70,9 @@ struct Kind {
 };
 
 const Kind kKinds[] = {
-    {"displacement", kDisplacementColumns, kDisplacementQuantities,
+    {"displacement", fusion::kDisplacementColumns, kDisplacementQuantities,
      "displacement fields of the measurement frames against the reference frame, one group per frame"},
-    {"temperature", kTemperatureColumns, kTemperatureQuantities,
+    {"temperature", fusion::kTemperatureColumns, kTemperatureQuantities,
      "temperature fields recovered from the displacement fields, one group per frame"},
 };
 
@@ -139,7 +139,7 @@ std::vector<std::uint8_t> as_flags(const cv::Mat& values) {
   return out;
 }
 
-std::size_t grid_of(const StoredFieldGrid& field, std::vector<Grid>& grids, hdf5::Writer& out,
+std::size_t grid_of(const fusion::StoredFieldGrid& field, std::vector<Grid>& grids, hdf5::Writer& out,
                     std::optional<double> px_per_mm) {
   for (std::size_t i = 0; i < grids.size(); ++i) {
     if (grids[i].x_px == field.x_px && grids[i].y_px == field.y_px) return i;
@@ -287,9 +287,9 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
           out.set_attribute(group, "description", kind.description);
         }
         const auto& frame = frame_by_id.at(row.frame_id);
-        StoredFieldGrid field;
+        fusion::StoredFieldGrid field;
         try {
-          field = read_stored_field(storage::resolve_in_run(store.dir(), row.path), kind.columns);
+          field = fusion::read_stored_field(storage::resolve_in_run(store.dir(), row.path), kind.columns);
         } catch (const std::exception& e) {
           throw std::runtime_error(fmt::format("stored {} field of frame {}: {}", kind.name, frame.id, e.what()));
         }

@@ -15,7 +15,7 @@
 #include "fitting/fit_json.h"
 #include "fusion/image_quality.h"
 #include "pipeline/processing_settings.h"
-#include "report/field_csv.h"
+#include "fusion/field_csv.h"
 #include "storage/processing_store.h"
 #include "storage/experiment_clock.h"
 #include "storage/run_paths.h"
@@ -36,9 +36,9 @@ fitting::NewtonFit stored_fit(const storage::FitRecord& record, const storage::E
   return fit;
 }
 
-// A stored field (report/field_csv.h) as a map on its grid: `value` at the
+// A stored field (fusion/field_csv.h) as a map on its grid: `value` at the
 // nodes where `shown` is non-zero and finite, masked elsewhere.
-MapField map_from_stored(const StoredFieldGrid& grid, const cv::Mat& value, const cv::Mat& shown) {
+MapField map_from_stored(const fusion::StoredFieldGrid& grid, const cv::Mat& value, const cv::Mat& shown) {
   MapField map;
   map.values = cv::Mat::zeros(grid.rows(), grid.cols(), CV_64F);
   map.mask = cv::Mat(grid.rows(), grid.cols(), CV_8U, cv::Scalar(255));
@@ -58,7 +58,7 @@ MapField map_from_stored(const StoredFieldGrid& grid, const cv::Mat& value, cons
 }
 
 MapField read_temperature_csv(const fs::path& path) {
-  const auto grid = read_stored_field(path, kTemperatureColumns);
+  const auto grid = fusion::read_stored_field(path, fusion::kTemperatureColumns);
   const cv::Mat& t = grid.column("temperature_c");
   // Unmeasured nodes that the field filled in are shown; only missing temperatures are masked.
   MapField map = map_from_stored(grid, t, cv::Mat(t.size(), CV_64F, cv::Scalar(1)));
@@ -68,7 +68,7 @@ MapField read_temperature_csv(const fs::path& path) {
 }
 
 MapField read_displacement_csv(const fs::path& path) {
-  const auto grid = read_stored_field(path, kDisplacementColumns);
+  const auto grid = fusion::read_stored_field(path, fusion::kDisplacementColumns);
   cv::Mat magnitude;
   cv::magnitude(grid.column("u"), grid.column("v"), magnitude);
   MapField map = map_from_stored(grid, magnitude, grid.column("valid"));

@@ -1,4 +1,4 @@
-#include "report/field_csv.h"
+#include "fusion/field_csv.h"
 
 #include <fmt/format.h>
 
@@ -10,7 +10,7 @@
 #include <map>
 #include <stdexcept>
 
-namespace bosfuse::report {
+namespace bosfuse::fusion {
 namespace {
 
 std::vector<std::string_view> split(std::string_view line) {
@@ -42,11 +42,16 @@ const cv::Mat& StoredFieldGrid::column(std::string_view name) const {
   return values[static_cast<std::size_t>(it - columns.begin())];
 }
 
+std::string field_csv_header(std::span<const std::string_view> value_columns) {
+  std::string header = "x,y";
+  for (const auto column : value_columns) header += "," + std::string(column);
+  return header;
+}
+
 StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<const std::string_view> value_columns) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(fmt::format("cannot read '{}'", path.string()));
-  std::string expected = "x,y";
-  for (const auto c : value_columns) expected += fmt::format(",{}", c);
+  const std::string expected = field_csv_header(value_columns);
   std::string line;
   std::getline(in, line);
   if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -107,4 +112,4 @@ StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<c
   return grid;
 }
 
-}  // namespace bosfuse::report
+}  // namespace bosfuse::fusion

@@ -1,9 +1,10 @@
 #pragma once
-// A field file written by `bosfuse process` (docs/SCHEMA.md, table `fields`),
-// read back onto its grid: displacement `x,y,u,v,valid,peak_ratio` or
-// temperature `x,y,temperature_c,measured`, one line per grid node. This is
-// the one reader of stored field files; the report's maps and the HDF5
-// export both use it, so a change of the CSV layout is made here once.
+// A field file (docs/SCHEMA.md, table `fields`) as write_csv() writes it
+// (displacement_field.h, temperature_field.h), read back onto its grid:
+// displacement `x,y,u,v,valid,peak_ratio` or temperature
+// `x,y,temperature_c,measured`, one line per grid node. The writers and this
+// one reader share the column names below, so the layout cannot drift
+// between them; the report's maps and the HDF5 export read through it.
 //
 // The grid is whatever distinct x and y values the file holds (ascending),
 // so it needs no step to be declared and a file with missing nodes still
@@ -17,7 +18,7 @@
 #include <string_view>
 #include <vector>
 
-namespace bosfuse::report {
+namespace bosfuse::fusion {
 
 struct StoredFieldGrid {
   std::vector<double> x_px;          // column positions, ascending (image coordinates, DESIGN.md)
@@ -35,10 +36,13 @@ struct StoredFieldGrid {
 inline constexpr std::string_view kDisplacementColumns[] = {"u", "v", "valid", "peak_ratio"};
 inline constexpr std::string_view kTemperatureColumns[] = {"temperature_c", "measured"};
 
+// The header line of a field file with these value columns ("x,y,u,v,...").
+std::string field_csv_header(std::span<const std::string_view> value_columns);
+
 // Reads `path`, whose header must be `x,y` followed by `value_columns`.
 // Throws std::runtime_error naming the file (and the line) when it cannot be
 // read, has another header, a short line or a cell that is not a number, or
 // holds no node.
 StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<const std::string_view> value_columns);
 
-}  // namespace bosfuse::report
+}  // namespace bosfuse::fusion

@@ -1,4 +1,4 @@
-#include "report/field_csv.h"
+#include "fusion/field_csv.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 
 #include "tests/support/temp_dir.h"
 
-namespace bosfuse::report {
+namespace bosfuse::fusion {
 namespace {
 
 std::string error_of(const std::filesystem::path& path, std::span<const std::string_view> columns) {
@@ -74,4 +74,4 @@ TEST(FieldCsv, MistakesNameTheFileAndLine) {
 }
 
 }  // namespace
-}  // namespace bosfuse::report
+}  // namespace bosfuse::fusion
