@@ -14,6 +14,7 @@
 #include "app/output_stream.h"
 #include "fusion/image_quality.h"
 #include "pipeline/image_io.h"
+#include "pipeline/quality_json.h"
 #include "report/figures.h"
 
 namespace bosfuse::app {
@@ -27,19 +28,12 @@ struct QualityArgs {
 };
 
 nlohmann::ordered_json quality_json(const QualityArgs& args, const fusion::QualityReport& report) {
-  const auto& g = report.global;
-  return {{"image", args.image},
-          {"reference", args.reference},
-          {"q_l", g.q_l},
-          {"q_c", g.q_c},
-          {"q_mod", g.q_mod},
-          {"universal_index", report.universal_index},
-          {"mean_local_q_mod", report.mean_local_q_mod},
-          {"window_px", args.window_px},
-          {"mean_image", g.mean_image},
-          {"mean_reference", g.mean_reference},
-          {"std_image", g.std_image},
-          {"std_reference", g.std_reference}};
+  nlohmann::ordered_json j = {{"image", args.image}, {"reference", args.reference}};
+  j.update(pipeline::to_json(report.global));
+  j["universal_index"] = report.universal_index;
+  j["mean_local_q_mod"] = report.mean_local_q_mod;
+  j["window_px"] = args.window_px;
+  return j;
 }
 
 std::string quality_text(const QualityArgs& args, const fusion::QualityReport& report) {

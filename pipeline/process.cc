@@ -18,6 +18,7 @@
 #include "fusion/temperature_field.h"
 #include "fusion/time_alignment.h"
 #include "pipeline/image_io.h"
+#include "pipeline/quality_json.h"
 #include "pipeline/run_selection.h"
 #include "storage/processing_store.h"
 #include "storage/run_lock.h"
@@ -341,17 +342,9 @@ FitsAndAgreements fit_everything(const storage::RunStore& store, const storage::
 
 json quality_json(const FrameContext& ctx, const RunFrames& frames, const storage::ExperimentClock& clock) {
   const FrameRecord& last = frames.measurements.back();
-  const auto q = fusion::modified_quality_index(load_frame(ctx.run_dir, last), ctx.reference);
-  return {{"frame_id", last.id},
-          {"reference_frame_id", frames.reference.id},
-          {"t_s", clock.seconds(last.t_ns)},
-          {"q_l", q.q_l},
-          {"q_c", q.q_c},
-          {"q_mod", q.q_mod},
-          {"mean_image", q.mean_image},
-          {"mean_reference", q.mean_reference},
-          {"std_image", q.std_image},
-          {"std_reference", q.std_reference}};
+  json j = {{"frame_id", last.id}, {"reference_frame_id", frames.reference.id}, {"t_s", clock.seconds(last.t_ns)}};
+  j.update(to_json(fusion::modified_quality_index(load_frame(ctx.run_dir, last), ctx.reference)));
+  return j;
 }
 
 FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& store,

@@ -15,6 +15,7 @@
 #include "fitting/fit_json.h"
 #include "fusion/image_quality.h"
 #include "pipeline/processing_settings.h"
+#include "pipeline/quality_json.h"
 #include "fusion/field_csv.h"
 #include "storage/processing_store.h"
 #include "storage/experiment_clock.h"
@@ -217,10 +218,7 @@ void processing_record(const storage::ProcessingRecord& p, ReportInput& input) {
   if (summary.contains("quality")) {
     const auto& q = summary.at("quality");
     QualityInfo quality;
-    quality.index = {q.at("q_l").get<double>(),          q.at("q_c").get<double>(),
-                     q.at("q_mod").get<double>(),        q.at("mean_image").get<double>(),
-                     q.at("mean_reference").get<double>(), q.at("std_image").get<double>(),
-                     q.at("std_reference").get<double>()};
+    quality.index = pipeline::quality_from_json(q);
     quality.compared = fmt::format("Last frame {} (t = {:.1f} s) against reference frame {}",
                                    q.at("frame_id").get<std::int64_t>(), q.at("t_s").get<double>(),
                                    q.at("reference_frame_id").get<std::int64_t>());

@@ -12,6 +12,44 @@ std::string database_path(const std::filesystem::path& dir) { return (dir / RunS
 
 const char* to_text(FitSubject subject) { return subject == FitSubject::kChannel ? "channel" : "probe"; }
 
+std::vector<ProbeSeriesRecord> read_probes(Statement& stmt) {
+  std::vector<ProbeSeriesRecord> out;
+  while (stmt.step()) {
+    out.push_back({stmt.column_int64(0), stmt.column_optional_int64(1), stmt.column_text(2), stmt.column_double(3),
+                   stmt.column_double(4)});
+  }
+  return out;
+}
+
+std::vector<ProbeSampleRecord> read_probe_samples(Statement& stmt) {
+  std::vector<ProbeSampleRecord> out;
+  while (stmt.step()) {
+    out.push_back({stmt.column_int64(0), stmt.column_int64(1), stmt.column_int64(2), stmt.column_double(3),
+                   stmt.column_double(4), stmt.column_double(5), stmt.column_optional_double(6),
+                   stmt.column_int64(7) != 0});
+  }
+  return out;
+}
+
+std::vector<FieldRecord> read_fields(Statement& stmt) {
+  std::vector<FieldRecord> out;
+  while (stmt.step()) {
+    out.push_back(
+        {stmt.column_int64(0), stmt.column_int64(1), stmt.column_text(2), stmt.column_text(3), stmt.column_text(4)});
+  }
+  return out;
+}
+
+// What a processing staged, dropped (abandoned, or moved into the results).
+void drop_staged(Database& db, std::int64_t processing_id) {
+  for (const char* sql :
+       {"DELETE FROM staged_probe_samples WHERE probe_id IN (SELECT id FROM staged_probe_series WHERE processing_id = ?1)",
+        "DELETE FROM staged_probe_series WHERE processing_id = ?1",
+        "DELETE FROM staged_fields WHERE processing_id = ?1", "DELETE FROM staged_frames WHERE processing_id = ?1"}) {
+    db.prepare(sql).bind(1, processing_id).run();
+  }
+}
+
 }  // namespace
 
 ProcessingStore::ProcessingStore(const std::filesystem::path& run_dir, bool writable)
@@ -127,13 +165,10 @@ std::optional<ProcessingRecord> ProcessingStore::unfinished_processing() const {
 
 void ProcessingStore::abandon_processing(std::int64_t processing_id) {
   Transaction transaction(db_);
-  for (const char* sql :
-       {"DELETE FROM staged_probe_samples WHERE probe_id IN (SELECT id FROM staged_probe_series WHERE processing_id = ?1)",
-        "DELETE FROM staged_probe_series WHERE processing_id = ?1",
-        "DELETE FROM staged_fields WHERE processing_id = ?1", "DELETE FROM staged_frames WHERE processing_id = ?1",
-        "UPDATE processings SET status = 'abandoned' WHERE id = ?1 AND status = 'running'"}) {
-    db_.prepare(sql).bind(1, processing_id).run();
-  }
+  drop_staged(db_, processing_id);
+  db_.prepare("UPDATE processings SET status = 'abandoned' WHERE id = ? AND status = 'running'")
+      .bind(1, processing_id)
+      .run();
   transaction.commit();
 }
 
@@ -151,36 +186,9 @@ std::vector<ProbeSeriesRecord> ProcessingStore::staged_probes(std::int64_t proce
   auto stmt = db_.prepare(
       "SELECT id, channel_id, name, x_px, y_px FROM staged_probe_series WHERE processing_id = ? ORDER BY id");
   stmt.bind(1, processing_id);
-  std::vector<ProbeSeriesRecord> out;
-  while (stmt.step()) {
-    out.push_back({stmt.column_int64(0), stmt.column_optional_int64(1), stmt.column_text(2), stmt.column_double(3),
-                   stmt.column_double(4)});
-  }
-  return out;
+  return read_probes(stmt);
 }
 
-namespace {
-
-std::vector<ProbeSampleRecord> read_probe_samples(Statement& stmt) {
-  std::vector<ProbeSampleRecord> out;
-  while (stmt.step()) {
-    out.push_back({stmt.column_int64(0), stmt.column_int64(1), stmt.column_int64(2), stmt.column_double(3),
-                   stmt.column_double(4), stmt.column_double(5), stmt.column_optional_double(6),
-                   stmt.column_int64(7) != 0});
-  }
-  return out;
-}
-
-std::vector<FieldRecord> read_fields(Statement& stmt) {
-  std::vector<FieldRecord> out;
-  while (stmt.step()) {
-    out.push_back(
-        {stmt.column_int64(0), stmt.column_int64(1), stmt.column_text(2), stmt.column_text(3), stmt.column_text(4)});
-  }
-  return out;
-}
-
-}  // namespace
 
 std::vector<ProbeSampleRecord> ProcessingStore::staged_probe_samples(std::int64_t probe_id) const {
   auto stmt = db_.prepare(
@@ -247,12 +255,7 @@ void ProcessingStore::complete_processing(std::int64_t processing_id, std::span<
   }
   for (const FitRecord& f : fits) add_fit(f);
   for (const AgreementRecord& a : agreements) add_agreement(a);
-  for (const char* sql :
-       {"DELETE FROM staged_probe_samples WHERE probe_id IN (SELECT id FROM staged_probe_series WHERE processing_id = ?1)",
-        "DELETE FROM staged_probe_series WHERE processing_id = ?1",
-        "DELETE FROM staged_fields WHERE processing_id = ?1", "DELETE FROM staged_frames WHERE processing_id = ?1"}) {
-    db_.prepare(sql).bind(1, processing_id).run();
-  }
+  drop_staged(db_, processing_id);
   db_.prepare("UPDATE processings SET status = 'complete', finished_ns = ?2, summary_json = ?3 WHERE id = ?1")
       .bind_all(processing_id, finished_ns, summary_json)
       .run();
@@ -263,12 +266,7 @@ std::vector<ProbeSeriesRecord> ProcessingStore::probes() const {
   if (!has_results_tables()) return {};
   auto stmt = db_.prepare("SELECT id, channel_id, name, x_px, y_px FROM probe_series WHERE run_id = ? ORDER BY id");
   stmt.bind(1, run_id_);
-  std::vector<ProbeSeriesRecord> out;
-  while (stmt.step()) {
-    out.push_back({stmt.column_int64(0), stmt.column_optional_int64(1), stmt.column_text(2), stmt.column_double(3),
-                   stmt.column_double(4)});
-  }
-  return out;
+  return read_probes(stmt);
 }
 
 std::vector<ProbeSampleRecord> ProcessingStore::probe_samples(std::int64_t probe_id) const {
