@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "storage/processing_store.h"
+#include "storage/run_lock.h"
 #include "storage/run_store.h"
 #include "tests/support/synthetic_run.h"
 #include "tests/support/temp_dir.h"
@@ -165,6 +166,18 @@ TEST_F(Process, ResumeNeedsAnInterruptedProcessingAndTakesNoOptions) {
   const auto fresh = process(run());  // not --resume: the interrupted one is discarded
   ASSERT_TRUE(fresh.complete);
   EXPECT_NE(fresh.text.find("was discarded"), std::string::npos) << fresh.text;
+}
+
+TEST_F(Process, ASecondProcessingOfTheRunIsRefusedWhileOneRuns) {
+  const auto held = storage::RunLock::try_acquire(run(), "process.lock");  // as a running `process` holds it
+  ASSERT_TRUE(held);
+  try {
+    process(run());
+    FAIL() << "two processings of one run at once";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("another bosfuse is processing"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(storage::ProcessingStore(run()).unfinished_processing()) << "the refused one left nothing behind";
 }
 
 TEST(ProcessTime, FitsAreInExperimentSecondsFromTheDeclaredOriginAndScale) {
