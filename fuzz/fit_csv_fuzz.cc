@@ -22,9 +22,10 @@
 
 #include <glog/logging.h>
 
-#include "report/sample_csv.h"
+#include "fitting/newton_fit.h"
 #include "fitting/series.h"
 #include "fuzz/fuzz_support.h"
+#include "report/sample_csv.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   FLAGS_minloglevel = google::GLOG_FATAL;  // as run_fit() does: Ceres' own logging is noise here
