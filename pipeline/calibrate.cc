@@ -1,11 +1,10 @@
-#include "acquisition/clock.h"
 #include "pipeline/calibrate.h"
 
 #include <fmt/format.h>
 
-#include <chrono>
 #include <nlohmann/json.hpp>
 
+#include "acquisition/clock.h"
 #include "fusion/calibration.h"
 #include "fusion/time_alignment.h"
 #include "pipeline/processing_settings.h"

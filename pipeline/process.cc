@@ -1,4 +1,3 @@
-#include "acquisition/clock.h"
 #include "pipeline/process.h"
 
 #include <fmt/format.h>
@@ -10,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "acquisition/clock.h"
 #include "fitting/agreement.h"
 #include "fitting/fit_json.h"
 #include "fitting/newton_fit.h"

@@ -1,11 +1,10 @@
-#include "acquisition/clock.h"
 #include "pipeline/processing_settings.h"
 
 #include <fmt/format.h>
 
-#include <chrono>
 #include <map>
 
+#include "acquisition/clock.h"
 #include "storage/processing_store.h"
 #include "storage/run_paths.h"
 #include "storage/run_store.h"

@@ -1,24 +1,19 @@
 #include "report/run_input.h"
 
 #include <fmt/format.h>
-#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cmath>
-#include <ctime>
-#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <set>
 
 #include "fitting/fit_json.h"
-#include "fusion/image_quality.h"
+#include "fusion/field_csv.h"
 #include "pipeline/processing_settings.h"
 #include "pipeline/quality_json.h"
-#include "fusion/field_csv.h"
-#include "storage/processing_store.h"
 #include "storage/experiment_clock.h"
+#include "storage/processing_store.h"
 #include "storage/run_paths.h"
 
 namespace bosfuse::report {
@@ -299,6 +294,12 @@ ReportInput build_report_input(const storage::RunStore& store, const RunReportOp
   reader.thermocouples();
   reader.agreements(reader.probes());
   if (processing) processing_record(*processing, input);
+  if (const auto unfinished = results->unfinished_processing()) {
+    input.notes.push_back(fmt::format(
+        "A later processing ({}) was interrupted; its partial results are not shown. `bosfuse process {} --resume` "
+        "completes it.",
+        unfinished->id, store.dir().string()));
+  }
   reader.maps("temperature", input.temperature_maps);
   reader.maps("displacement", input.displacement_maps);
   if (input.displacement_maps.empty()) {
