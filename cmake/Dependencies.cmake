@@ -27,5 +27,13 @@ find_package(CLI11 REQUIRED CONFIG)
 find_package(tomlplusplus REQUIRED)
 find_package(nlohmann_json REQUIRED)
 find_package(spdlog REQUIRED)
+# The live page (view/): cpp-httplib, which Debian ships as a compiled
+# library with a pkg-config file, and Chart.js, served from Debian's copy so
+# the page needs no network. The viewer also checks for the file at start.
+pkg_check_modules(HTTPLIB REQUIRED IMPORTED_TARGET cpp-httplib)
+set(BOSFUSE_CHARTJS_PATH /usr/share/javascript/chart.js/chart.min.js CACHE FILEPATH "Chart.js (UMD build) the live page serves")
+if(NOT EXISTS ${BOSFUSE_CHARTJS_PATH})
+  message(FATAL_ERROR "Chart.js not found at ${BOSFUSE_CHARTJS_PATH}: install Debian's libjs-chart.js")
+endif()
 find_package(GTest REQUIRED)
 find_package(benchmark REQUIRED)

@@ -1,0 +1,215 @@
+#include "view/live_server.h"
+
+#include <httplib.h>
+
+#include <atomic>
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "view/live_stream.h"
+#include "view/page.h"
+#include "view/run_watch.h"
+
+namespace bosfuse::view {
+namespace {
+
+// A silent stream says something this often, so a client that went away is
+// noticed (the write fails) and its slot freed.
+constexpr auto kKeepAlivePeriod = std::chrono::seconds(5);
+// Handler threads beyond the streams: the page, chart.js and /api/run stay
+// answerable while every stream slot is taken.
+constexpr int kSpareThreads = 4;
+
+std::string read_chartjs(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in || text.str().empty()) {
+    throw ViewError("cannot read Chart.js from " + path.string() +
+                    "; the page needs it (install Debian's libjs-chart.js)");
+  }
+  return text.str();
+}
+
+}  // namespace
+
+void parse_listen_address(const std::string& text, ViewOptions& options) {
+  const auto colon = text.rfind(':');
+  if (colon == std::string::npos) throw ViewError("--listen wants HOST:PORT, e.g. 127.0.0.1:8080, not '" + text + "'");
+  std::string host = text.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  int port = -1;
+  const std::string port_text = text.substr(colon + 1);
+  const auto [end, ec] = std::from_chars(port_text.data(), port_text.data() + port_text.size(), port);
+  if (ec != std::errc() || end != port_text.data() + port_text.size() || port < 0 || port > 65535) {
+    throw ViewError("--listen: '" + port_text + "' is not a port (0..65535)");
+  }
+  options.host = host.empty() ? "127.0.0.1" : host;
+  options.port = port;
+}
+
+struct LiveServer::Impl {
+  Impl(const std::filesystem::path& run_dir, ViewOptions opts)
+      : options(std::move(opts)),
+        chartjs(read_chartjs(options.chartjs_path.empty() ? std::filesystem::path(BOSFUSE_CHARTJS_PATH)
+                                                          : options.chartjs_path)),
+        watch(run_dir, options.poll_period) {
+    const std::size_t threads = static_cast<std::size_t>(options.max_clients + kSpareThreads);
+    server.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+    // httplib's default adds SO_REUSEPORT, with which a second viewer on the
+    // same port would bind too and take half the requests; SO_REUSEADDR alone
+    // still allows a restart while old connections linger in TIME_WAIT.
+    server.set_socket_options([](socket_t sock) {
+      int yes = 1;
+      setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+    });
+    route();
+  }
+
+  void route();
+  void stream_events(const httplib::Request& request, httplib::Response& response);
+  bool stream_step(LiveStream& stream, std::uint64_t& seen, std::chrono::steady_clock::time_point& last_write,
+                   httplib::DataSink& sink);
+
+  ViewOptions options;
+  std::string chartjs;
+  RunWatch watch;
+  httplib::Server server;
+  int port = 0;
+  std::atomic<int> clients{0};
+  std::atomic<bool> stopping{false};
+  std::atomic<bool> serving{false};
+};
+
+void LiveServer::Impl::route() {
+  server.Get("/", [](const httplib::Request&, httplib::Response& response) {
+    response.set_content(std::string(live_page_html()), "text/html; charset=utf-8");
+  });
+  server.Get("/chart.js", [this](const httplib::Request&, httplib::Response& response) {
+    response.set_content(chartjs, "text/javascript; charset=utf-8");
+  });
+  server.Get("/api/run", [this](const httplib::Request&, httplib::Response& response) {
+    response.set_content(watch.describe_json(), "application/json");
+  });
+  server.Get("/events", [this](const httplib::Request& request, httplib::Response& response) {
+    stream_events(request, response);
+  });
+  // Every other path and method: 404 with a fixed body, nothing read.
+  server.set_error_handler([](const httplib::Request&, httplib::Response& response) {
+    if (response.status == 404) response.set_content("not found\n", "text/plain");
+  });
+  server.set_default_headers({{"X-Content-Type-Options", "nosniff"}, {"Cache-Control", "no-store"}});
+}
+
+void LiveServer::Impl::stream_events(const httplib::Request& request, httplib::Response& response) {
+  TailCursor from;
+  if (request.has_header("Last-Event-ID")) {
+    const auto cursor = parse_cursor(request.get_header_value("Last-Event-ID"));
+    if (!cursor) {
+      response.status = 400;
+      response.set_content("Last-Event-ID is not an id this stream sent\n", "text/plain");
+      return;
+    }
+    from = *cursor;
+  }
+  if (clients.fetch_add(1) >= options.max_clients) {
+    clients.fetch_sub(1);
+    response.status = 503;
+    response.set_content("too many open streams (at most " + std::to_string(options.max_clients) + ")\n",
+                         "text/plain");
+    return;
+  }
+  auto stream = std::make_shared<LiveStream>(watch.run_dir(), from);
+  auto seen = std::make_shared<std::uint64_t>(0);
+  auto last_write = std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
+  auto opening = std::make_shared<bool>(true);
+  response.set_header("X-Accel-Buffering", "no");
+  response.set_chunked_content_provider(
+      "text/event-stream",
+      [this, stream, seen, last_write, opening](std::size_t, httplib::DataSink& sink) {
+        if (*opening) {  // how long a browser waits before reconnecting
+          *opening = false;
+          const std::string retry = "retry: 1000\n\n";
+          if (!sink.write(retry.data(), retry.size())) return false;
+        }
+        return stream_step(*stream, *seen, *last_write, sink);
+      },
+      [this](bool) { clients.fetch_sub(1); });
+}
+
+// One turn of a stream: what is new, else a wait for the watch to see
+// something (bounded, so stop() is noticed), else a keep-alive comment.
+bool LiveServer::Impl::stream_step(LiveStream& stream, std::uint64_t& seen,
+                                   std::chrono::steady_clock::time_point& last_write, httplib::DataSink& sink) {
+  if (stopping) return false;
+  const RunSnapshot snapshot = watch.snapshot();
+  std::string text;
+  try {
+    text = stream.next(snapshot);
+  } catch (const std::exception&) {
+    text.clear();  // the store was busy; the next turn reads it again
+  }
+  const auto now = std::chrono::steady_clock::now();
+  if (text.empty() && now - last_write >= kKeepAlivePeriod) text = ": keep-alive\n\n";
+  if (!text.empty()) {
+    last_write = now;
+    return sink.write(text.data(), text.size());
+  }
+  seen = watch.wait_for_change(snapshot.generation, options.poll_period * 5).generation;
+  return !stopping;
+}
+
+LiveServer::LiveServer(const std::filesystem::path& run_dir, ViewOptions options)
+    : impl_(std::make_unique<Impl>(run_dir, std::move(options))) {}
+
+LiveServer::~LiveServer() { stop(); }
+
+int LiveServer::listen() {
+  auto& server = impl_->server;
+  const auto& options = impl_->options;
+  errno = 0;
+  if (options.port == 0) {
+    impl_->port = server.bind_to_any_port(options.host);
+    if (impl_->port < 0) throw ViewError("cannot listen on " + options.host + ": " + std::strerror(errno));
+  } else {
+    if (!server.bind_to_port(options.host, options.port)) {
+      const std::string address = options.host + ":" + std::to_string(options.port);
+      if (errno == EADDRINUSE) {
+        throw ViewError("cannot listen on " + address + ": the port is in use (choose another with --listen)");
+      }
+      throw ViewError("cannot listen on " + address +
+                      ": the port is in use, or the address is not one of this host's (" + std::strerror(errno) + ")");
+    }
+    impl_->port = options.port;
+  }
+  return impl_->port;
+}
+
+std::string LiveServer::url() const {
+  const std::string& host = impl_->options.host;
+  const bool ipv6 = host.find(':') != std::string::npos;
+  return "http://" + (ipv6 ? "[" + host + "]" : host) + ":" + std::to_string(impl_->port) + "/";
+}
+
+void LiveServer::serve() {
+  impl_->serving = true;
+  if (impl_->stopping) return;
+  impl_->server.listen_after_bind();
+}
+
+// httplib's stop() does nothing before its loop runs, so a stop that comes
+// just after serve() began waits (briefly, bounded) for the loop to start.
+void LiveServer::stop() {
+  if (!impl_) return;
+  impl_->stopping = true;
+  for (int i = 0; i < 100 && impl_->serving && !impl_->server.is_running(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  impl_->server.stop();
+}
+
+}  // namespace bosfuse::view

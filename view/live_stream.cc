@@ -1,0 +1,74 @@
+#include "view/live_stream.h"
+
+#include <nlohmann/json.hpp>
+
+namespace bosfuse::view {
+
+std::string sse_message(std::string_view type, std::string_view id, std::string_view data) {
+  std::string message;
+  message.reserve(type.size() + id.size() + data.size() + 24);
+  message.append("event: ").append(type).append("\n");
+  if (!id.empty()) message.append("id: ").append(id).append("\n");
+  message.append("data: ").append(data).append("\n\n");
+  return message;
+}
+
+LiveStream::LiveStream(const std::filesystem::path& run_dir, TailCursor from) : tail_(run_dir), cursor_(from) {}
+
+// Neither message carries an id: they restate the run, they are not records
+// a reconnecting client could miss.
+std::string LiveStream::clock_and_status(const RunSnapshot& snapshot) {
+  std::string out;
+  const storage::ExperimentClock& clock = snapshot.clock;
+  const std::string clock_json = nlohmann::json{{"basis", clock.basis()},
+                                                {"origin", clock.origin_name},
+                                                {"origin_utc", storage::format_iso8601_utc(clock.origin_ns, 3)},
+                                                {"time_scale", clock.time_scale},
+                                                {"note", clock.note}}
+                                     .dump();
+  if (clock_json != sent_clock_) {
+    out += sse_message("clock", "", clock_json);
+    sent_clock_ = clock_json;
+  }
+  if (snapshot.status != sent_status_) {
+    out += sse_message("status", "", nlohmann::json{{"status", snapshot.status}}.dump());
+    sent_status_ = snapshot.status;
+  }
+  return out;
+}
+
+std::string LiveStream::next(const RunSnapshot& snapshot) {
+  std::string out = clock_and_status(snapshot);
+  const storage::ExperimentClock& clock = snapshot.clock;
+  for (const storage::Event& event : tail_.events_after(cursor_.event_id, kRowsPerRead)) {
+    cursor_.event_id = event.id;
+    nlohmann::json data{{"t_s", clock.seconds(event.t_ns)}, {"kind", event.kind}, {"message", event.message}};
+    if (event.device_id) {
+      data["device_id"] = *event.device_id;
+      const auto name = snapshot.device_names.find(*event.device_id);
+      if (name != snapshot.device_names.end()) data["device"] = name->second;
+    }
+    out += sse_message("event", format_cursor(cursor_), data.dump());
+  }
+  for (const TailSample& row : tail_.samples_after(cursor_.sample_rowid, kRowsPerRead)) {
+    cursor_.sample_rowid = row.rowid;
+    nlohmann::json data{{"t_s", clock.seconds(row.sample.t_ns)},
+                        {"channel", row.sample.channel_id},
+                        {"status", storage::to_string(row.sample.status)}};
+    if (row.sample.value) data["value"] = *row.sample.value;
+    out += sse_message("sample", format_cursor(cursor_), data.dump());
+  }
+  // Frames as counts: the page shows how many and when the last came.
+  const auto frames = tail_.frames_after(cursor_.frame_id, kRowsPerRead);
+  if (!frames.empty()) {
+    cursor_.frame_id = frames.back().id;
+    const nlohmann::json data{{"count", tail_.frame_count_through(cursor_.frame_id)},
+                              {"last_t_s", clock.seconds(frames.back().t_ns)},
+                              {"width_px", frames.back().width_px},
+                              {"height_px", frames.back().height_px}};
+    out += sse_message("frames", format_cursor(cursor_), data.dump());
+  }
+  return out;
+}
+
+}  // namespace bosfuse::view

@@ -1,0 +1,125 @@
+#include "view/run_tail.h"
+
+#include <charconv>
+
+#include "storage/run_store.h"
+
+namespace bosfuse::view {
+namespace {
+
+std::string database_path(const std::filesystem::path& run_dir) {
+  return (run_dir / storage::RunStore::kDatabaseFileName).string();
+}
+
+bool read_number(const char*& at, const char* end, std::int64_t& value) {
+  const auto [next, ec] = std::from_chars(at, end, value);
+  if (ec != std::errc() || value < 0) return false;
+  at = next;
+  return true;
+}
+
+}  // namespace
+
+std::string format_cursor(const TailCursor& cursor) {
+  return std::to_string(cursor.sample_rowid) + "-" + std::to_string(cursor.event_id) + "-" +
+         std::to_string(cursor.frame_id);
+}
+
+std::optional<TailCursor> parse_cursor(const std::string& text) {
+  TailCursor cursor;
+  const char* at = text.data();
+  const char* end = at + text.size();
+  if (!read_number(at, end, cursor.sample_rowid) || at == end || *at++ != '-') return std::nullopt;
+  if (!read_number(at, end, cursor.event_id) || at == end || *at++ != '-') return std::nullopt;
+  if (!read_number(at, end, cursor.frame_id) || at != end) return std::nullopt;
+  return cursor;
+}
+
+RunTail::RunTail(const std::filesystem::path& run_dir)
+    : db_(database_path(run_dir), storage::Database::Mode::kReadOnly),
+      head_(db_.prepare("SELECT (SELECT COALESCE(MAX(rowid), 0) FROM samples), "
+                        "(SELECT COALESCE(MAX(id), 0) FROM events), (SELECT COALESCE(MAX(id), 0) FROM frames)")),
+      samples_(db_.prepare("SELECT rowid, channel_id, t_ns, device_t_ns, value, raw, status FROM samples "
+                           "WHERE rowid > ? ORDER BY rowid LIMIT ?")),
+      events_(db_.prepare("SELECT id, device_id, t_ns, kind, message FROM events WHERE id > ? ORDER BY id LIMIT ?")),
+      frames_(db_.prepare("SELECT id, device_id, t_ns, device_t_ns, path, width_px, height_px, bit_depth, "
+                          "is_reference FROM frames WHERE id > ? ORDER BY id LIMIT ?")),
+      frame_count_(db_.prepare("SELECT COUNT(*) FROM frames WHERE id <= ?")),
+      status_(db_.prepare("SELECT status FROM runs ORDER BY id LIMIT 1")) {}
+
+TailCursor RunTail::head() {
+  head_.reset();
+  head_.step();
+  TailCursor cursor{head_.column_int64(0), head_.column_int64(1), head_.column_int64(2)};
+  head_.reset();  // ends the read transaction, so the writer's WAL can be checkpointed
+  return cursor;
+}
+
+std::vector<TailSample> RunTail::samples_after(std::int64_t after_rowid, int limit) {
+  std::vector<TailSample> rows;
+  samples_.reset();
+  samples_.bind(1, after_rowid).bind(2, limit);
+  while (samples_.step()) {
+    TailSample row;
+    row.rowid = samples_.column_int64(0);
+    row.sample.channel_id = samples_.column_int64(1);
+    row.sample.t_ns = samples_.column_int64(2);
+    row.sample.device_t_ns = samples_.column_optional_int64(3);
+    row.sample.value = samples_.column_optional_double(4);
+    row.sample.raw = samples_.column_optional_double(5);
+    row.sample.status = static_cast<storage::SampleStatus>(samples_.column_int64(6));
+    rows.push_back(std::move(row));
+  }
+  samples_.reset();
+  return rows;
+}
+
+std::vector<storage::Event> RunTail::events_after(std::int64_t after_id, int limit) {
+  std::vector<storage::Event> rows;
+  events_.reset();
+  events_.bind(1, after_id).bind(2, limit);
+  while (events_.step()) {
+    rows.push_back({events_.column_int64(0), events_.column_optional_int64(1), events_.column_int64(2),
+                    events_.column_text(3), events_.column_text(4)});
+  }
+  events_.reset();
+  return rows;
+}
+
+std::vector<storage::FrameRecord> RunTail::frames_after(std::int64_t after_id, int limit) {
+  std::vector<storage::FrameRecord> rows;
+  frames_.reset();
+  frames_.bind(1, after_id).bind(2, limit);
+  while (frames_.step()) {
+    storage::FrameRecord frame;
+    frame.id = frames_.column_int64(0);
+    frame.device_id = frames_.column_optional_int64(1);
+    frame.t_ns = frames_.column_int64(2);
+    frame.device_t_ns = frames_.column_optional_int64(3);
+    frame.path = frames_.column_text(4);
+    frame.width_px = static_cast<int>(frames_.column_int64(5));
+    frame.height_px = static_cast<int>(frames_.column_int64(6));
+    frame.bit_depth = static_cast<int>(frames_.column_int64(7));
+    frame.is_reference = frames_.column_int64(8) != 0;
+    rows.push_back(std::move(frame));
+  }
+  frames_.reset();
+  return rows;
+}
+
+std::int64_t RunTail::frame_count_through(std::int64_t frame_id) {
+  frame_count_.reset();
+  frame_count_.bind(1, frame_id).step();
+  const std::int64_t count = frame_count_.column_int64(0);
+  frame_count_.reset();
+  return count;
+}
+
+std::string RunTail::run_status() {
+  status_.reset();
+  std::string status = status_.step() ? status_.column_text(0) : "unknown";
+  status_.reset();
+  return status;
+}
+
+}  // namespace bosfuse::view
