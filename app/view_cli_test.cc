@@ -1,0 +1,160 @@
+// `bosfuse view` as a user runs it, read by an independent HTTP client
+// (curl) while the test records into the run.
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "storage/run_store.h"
+#include "tests/support/subprocess.h"
+#include "tests/support/temp_dir.h"
+#include "view/test_sse.h"
+
+namespace bosfuse {
+namespace {
+
+using namespace std::chrono_literals;
+
+const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+
+// A loopback port free right now (the kernel's choice, released at once).
+int free_port() {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t length = sizeof address;
+  if (bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 ||
+      getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) != 0) {
+    close(fd);
+    throw std::runtime_error("no free loopback port");
+  }
+  close(fd);
+  return ntohs(address.sin_port);
+}
+
+class ViewCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    writer_.emplace(storage::RunStore::create(run_dir(), {.name = "view-cli", .started_ns = 1'000'000'000},
+                                              storage::RunStore::CreateMode::kNew));
+    const auto device = writer_->add_device({.name = "adam", .kind = "modbus-tcp"});
+    channel_ = writer_->add_channel({.device_id = device, .name = "tc0", .kind = "thermocouple", .unit = "degC"});
+    port_ = free_port();
+  }
+
+  std::string run_dir() const { return (dir_ / "run").string(); }
+  std::string url(const std::string& path) const { return "http://127.0.0.1:" + std::to_string(port_) + path; }
+  std::unique_ptr<testing::BackgroundProcess> start_view() {
+    auto view = std::make_unique<testing::BackgroundProcess>(std::vector<std::string>{
+        kBosfuse, "view", run_dir(), "--listen", "127.0.0.1:" + std::to_string(port_)});
+    const bool up = testing::wait_for(
+        [&] { return testing::run_command("curl -sf -o /dev/null " + url("/api/run"), 5).exit_code == 0; }, 10s);
+    if (!up) throw std::runtime_error("bosfuse view did not answer within 10 s");
+    return view;
+  }
+  // Samples numbered first.., the value being the number, one batch every 10 ms.
+  void write_samples(int first, int count) {
+    for (int i = first; i < first + count; i += 5) {
+      std::vector<storage::Sample> batch;
+      for (int k = i; k < std::min(i + 5, first + count); ++k) {
+        batch.push_back({channel_, 2'000'000'000LL + k * 10'000'000LL, {}, static_cast<double>(k), {}, {}});
+      }
+      writer_->write_samples(batch);
+      std::this_thread::sleep_for(10ms);
+    }
+  }
+  // /events for `seconds`, as curl received it.
+  std::vector<view::testing::SseMessage> curl_events(double seconds, const std::string& last_event_id = "") {
+    std::string command = "curl -sN --max-time " + std::to_string(seconds) + " ";
+    if (!last_event_id.empty()) command += "-H 'Last-Event-ID: " + last_event_id + "' ";
+    const auto result = testing::run_command(command + url("/events"), static_cast<int>(seconds) + 10);
+    EXPECT_EQ(result.exit_code, 28) << "curl ends the stream at its time limit: " << result.output;
+    return view::testing::parse_sse(result.output);
+  }
+  static std::vector<double> values(const std::vector<view::testing::SseMessage>& messages) {
+    std::vector<double> out;
+    for (const auto& m : messages) {
+      if (m.type == "sample") out.push_back(nlohmann::json::parse(m.data).at("value").get<double>());
+    }
+    return out;
+  }
+
+  testing::TempDir dir_;
+  std::optional<storage::RunStore> writer_;
+  std::int64_t channel_ = 0;
+  int port_ = 0;
+};
+
+TEST_F(ViewCli, CurlReadsEverySampleOnceAcrossAReconnectWhileTheRunIsRecorded) {
+  write_samples(0, 50);
+  const auto view = start_view();
+  std::thread recording([&] { write_samples(50, 350); });  // about 0.7 s of batches
+  const auto first = curl_events(0.4);
+  const auto last = std::find_if(first.rbegin(), first.rend(), [](auto& m) { return !m.id.empty(); });
+  ASSERT_NE(last, first.rend());
+  const auto second = curl_events(2.5, last->id);
+  recording.join();
+  std::vector<double> seen = values(first);
+  EXPECT_LT(seen.size(), 400u) << "the first connection should end while the run is still written";
+  const std::vector<double> rest = values(second);
+  seen.insert(seen.end(), rest.begin(), rest.end());
+  const auto stored = writer_->read_samples(channel_);
+  ASSERT_EQ(seen.size(), stored.size());
+  for (std::size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i], *stored[i].value) << "at " << i;
+}
+
+TEST_F(ViewCli, PrintsItsUrlAndStopsOnCtrlC) {
+  const std::string out = (dir_ / "out.txt").string();
+  testing::BackgroundProcess view({"/bin/sh", "-c",
+                                   "exec " + kBosfuse + " view " + run_dir() + " --listen 127.0.0.1:" +
+                                       std::to_string(port_) + " > " + out});
+  ASSERT_TRUE(testing::wait_for(
+      [&] {
+        std::ifstream in(out);
+        std::string line;
+        return std::getline(in, line) && line == url("/");
+      },
+      10s));
+  view.send_signal(SIGINT);
+  EXPECT_EQ(view.wait_exit(5s), 0);
+}
+
+TEST_F(ViewCli, AnswersOnlyItsOwnRoutes) {
+  const auto view = start_view();
+  for (const char* path : {"/run.sqlite", "/..%2frun.sqlite", "/etc/passwd", "/api/run/x"}) {
+    const auto result = testing::run_command("curl -s -o /dev/null -w '%{http_code}' '" + url(path) + "'");
+    EXPECT_EQ(result.output, "404") << path;
+  }
+  EXPECT_EQ(testing::run_command("curl -s -o /dev/null -w '%{http_code}' " + url("/chart.js")).output, "200");
+}
+
+TEST_F(ViewCli, SaysThePortIsInUse) {
+  const auto view = start_view();
+  const auto second = testing::run_command(kBosfuse + " view " + run_dir() + " --listen 127.0.0.1:" +
+                                           std::to_string(port_));
+  EXPECT_NE(second.exit_code, 0);
+  EXPECT_NE(second.output.find("in use"), std::string::npos) << second.output;
+}
+
+TEST_F(ViewCli, RefusesAFolderThatIsNotARunOrIsDamaged) {
+  const auto empty = testing::run_command(kBosfuse + " view " + (dir_ / "nothing").string());
+  EXPECT_EQ(empty.exit_code, 1);
+  EXPECT_NE(empty.output.find("holds no bosfuse run"), std::string::npos) << empty.output;
+  std::filesystem::create_directories(dir_ / "damaged");
+  std::ofstream(dir_ / "damaged" / "run.sqlite") << "not a database";
+  const auto damaged = testing::run_command(kBosfuse + " view " + (dir_ / "damaged").string());
+  EXPECT_EQ(damaged.exit_code, 1);
+  EXPECT_NE(damaged.output.find("not a readable bosfuse run"), std::string::npos) << damaged.output;
+}
+
+}  // namespace
+}  // namespace bosfuse
