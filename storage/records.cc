@@ -1,5 +1,7 @@
 #include "storage/records.h"
 
+#include "storage/database.h"
+
 #include <array>
 #include <stdexcept>
 #include <string>
@@ -23,5 +25,13 @@ RunStatus run_status_from_string(std::string_view text) {
 }
 
 std::string_view to_string(SampleStatus status) { return kSampleStatusNames.at(static_cast<int>(status)); }
+
+SampleStatus sample_status_from_code(std::int64_t code) {
+  if (code < 0 || code >= kSampleStatusCount) {
+    throw StorageError("a sample has status code " + std::to_string(code) + ", which no status has (0.." +
+                       std::to_string(kSampleStatusCount - 1) + "): the run store is damaged");
+  }
+  return static_cast<SampleStatus>(code);
+}
 
 }  // namespace bosfuse::storage

@@ -29,6 +29,10 @@ enum class SampleStatus : int {
 };
 inline constexpr int kSampleStatusCount = 7;
 std::string_view to_string(SampleStatus status);
+// The status a stored code stands for. The schema's foreign key keeps codes
+// valid, but a damaged or forged file need not honour it: a code no
+// SampleStatus has throws StorageError.
+SampleStatus sample_status_from_code(std::int64_t code);
 
 struct RunInfo {
   std::int64_t id = 0;

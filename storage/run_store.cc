@@ -29,20 +29,10 @@ RunInfo read_run(Statement& stmt) {
   return run;
 }
 
-// The schema's foreign key keeps status codes valid, but a damaged or
-// forged file need not honour it: a code no SampleStatus has is refused.
-SampleStatus status_from_code(std::int64_t code) {
-  if (code < 0 || code >= kSampleStatusCount) {
-    throw StorageError("a sample has status code " + std::to_string(code) + ", which no status has (0.." +
-                       std::to_string(kSampleStatusCount - 1) + "): the run store is damaged");
-  }
-  return static_cast<SampleStatus>(code);
-}
-
 Sample read_sample(const Statement& stmt) {
   return {stmt.column_int64(0),           stmt.column_int64(1),
           stmt.column_optional_int64(2),  stmt.column_optional_double(3),
-          stmt.column_optional_double(4), status_from_code(stmt.column_int64(5))};
+          stmt.column_optional_double(4), sample_status_from_code(stmt.column_int64(5))};
 }
 
 void bind_range(Statement& stmt, int first_index, TimeRange range) {

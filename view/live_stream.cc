@@ -2,7 +2,34 @@
 
 #include <nlohmann/json.hpp>
 
+#include <charconv>
+
 namespace bosfuse::view {
+namespace {
+
+bool read_number(const char*& at, const char* end, std::int64_t& value) {
+  const auto [next, ec] = std::from_chars(at, end, value);
+  if (ec != std::errc() || value < 0) return false;
+  at = next;
+  return true;
+}
+
+}  // namespace
+
+std::string format_cursor(const TailCursor& cursor) {
+  return std::to_string(cursor.sample_rowid) + "-" + std::to_string(cursor.event_id) + "-" +
+         std::to_string(cursor.frame_id);
+}
+
+std::optional<TailCursor> parse_cursor(const std::string& text) {
+  TailCursor cursor;
+  const char* at = text.data();
+  const char* end = at + text.size();
+  if (!read_number(at, end, cursor.sample_rowid) || at == end || *at++ != '-') return std::nullopt;
+  if (!read_number(at, end, cursor.event_id) || at == end || *at++ != '-') return std::nullopt;
+  if (!read_number(at, end, cursor.frame_id) || at != end) return std::nullopt;
+  return cursor;
+}
 
 std::string sse_message(std::string_view type, std::string_view id, std::string_view data) {
   std::string message;
@@ -50,7 +77,7 @@ std::string LiveStream::next(const RunSnapshot& snapshot) {
     }
     out += sse_message("event", format_cursor(cursor_), data.dump());
   }
-  for (const TailSample& row : tail_.samples_after(cursor_.sample_rowid, kRowsPerRead)) {
+  for (const storage::TailSample& row : tail_.samples_after(cursor_.sample_rowid, kRowsPerRead)) {
     cursor_.sample_rowid = row.rowid;
     nlohmann::json data{{"t_s", clock.seconds(row.sample.t_ns)},
                         {"channel", row.sample.channel_id},

@@ -9,13 +9,19 @@
 // `clock` message says so before any record timed by it.
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <string_view>
 
-#include "view/run_tail.h"
 #include "view/run_watch.h"
 
 namespace bosfuse::view {
+
+// A cursor as the stream's event id, "S-E-F" (sample rowid, event id, frame
+// id), e.g. "1200-3-17"; parse_cursor() reads it back and returns nothing
+// for anything else (a client's Last-Event-ID header is input like any other).
+std::string format_cursor(const TailCursor& cursor);
+std::optional<TailCursor> parse_cursor(const std::string& text);
 
 // One SSE message; `data` must be one line (compact JSON is).
 std::string sse_message(std::string_view type, std::string_view id, std::string_view data);

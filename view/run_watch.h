@@ -19,9 +19,12 @@
 
 #include "storage/experiment_clock.h"
 #include "storage/run_store.h"
-#include "view/run_tail.h"
+#include "storage/run_tail.h"
 
 namespace bosfuse::view {
+
+using storage::RunTail;
+using storage::TailCursor;
 
 struct RunSnapshot {
   std::uint64_t generation = 0;  // grows whenever anything below changed

@@ -1,33 +1,21 @@
-#include "view/run_tail.h"
+#include "storage/run_tail.h"
 
 #include <gtest/gtest.h>
 
 #include "storage/run_store.h"
 #include "tests/support/temp_dir.h"
 
-namespace bosfuse::view {
+namespace bosfuse::storage {
 namespace {
-
-TEST(TailCursor, RoundTripsThroughItsText) {
-  const TailCursor cursor{1200, 3, 17};
-  EXPECT_EQ(format_cursor(cursor), "1200-3-17");
-  EXPECT_EQ(parse_cursor("1200-3-17"), cursor);
-}
-
-TEST(TailCursor, RefusesAnythingElse) {
-  for (const char* text : {"", "1-2", "1-2-3-4", "a-b-c", "-1-2-3", "1--2-3", "1-2-3 ", "99999999999999999999-0-0"}) {
-    EXPECT_FALSE(parse_cursor(text)) << text;
-  }
-}
 
 TEST(RunTail, ReadsRowsAfterTheCursorInCommitOrder) {
   testing::TempDir dir;
-  auto writer = storage::RunStore::create(dir / "run", {.name = "t", .started_ns = 1000}, storage::RunStore::CreateMode::kNew);
+  auto writer = RunStore::create(dir / "run", {.name = "t", .started_ns = 1000}, RunStore::CreateMode::kNew);
   const auto device = writer.add_device({.name = "d", .kind = "modbus-tcp"});
   const auto channel = writer.add_channel({.device_id = device, .name = "tc0", .kind = "thermocouple", .unit = "degC"});
   // The second batch is older in time but newer in commit: the tail follows commits.
-  const std::vector<storage::Sample> first{{channel, 5000, {}, 1.0, {}, {}}, {channel, 6000, {}, 2.0, {}, {}}};
-  const std::vector<storage::Sample> second{{channel, 4000, {}, 3.0, {}, {}}};
+  const std::vector<Sample> first{{channel, 5000, {}, 1.0, {}, {}}, {channel, 6000, {}, 2.0, {}, {}}};
+  const std::vector<Sample> second{{channel, 4000, {}, 3.0, {}, {}}};
   writer.write_samples(first);
   writer.write_samples(second);
 
@@ -45,4 +33,4 @@ TEST(RunTail, ReadsRowsAfterTheCursorInCommitOrder) {
 }
 
 }  // namespace
-}  // namespace bosfuse::view
+}  // namespace bosfuse::storage

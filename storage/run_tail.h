@@ -1,6 +1,6 @@
 #pragma once
 // RunTail reads what a run committed after a point, in commit order, for a
-// live reader that must see every row once: samples by SQLite's rowid of
+// live reader that must see every row once (`bosfuse view`): samples by SQLite's rowid of
 // `samples` (the table has no id column, and the rowid of an append-only
 // table only grows), events and frames by their ids. A TailCursor is how
 // far a reader got; it is what the live stream sends as its event id, so a
@@ -20,7 +20,7 @@
 #include "storage/database.h"
 #include "storage/records.h"
 
-namespace bosfuse::view {
+namespace bosfuse::storage {
 
 struct TailCursor {
   std::int64_t sample_rowid = 0;
@@ -30,14 +30,9 @@ struct TailCursor {
   bool operator==(const TailCursor&) const = default;
 };
 
-// "S-E-F", e.g. "1200-3-17"; parse_cursor() reads it back and returns
-// nothing for anything else (a client's header is input like any other).
-std::string format_cursor(const TailCursor& cursor);
-std::optional<TailCursor> parse_cursor(const std::string& text);
-
 struct TailSample {
   std::int64_t rowid = 0;
-  storage::Sample sample;
+  Sample sample;
 };
 
 class RunTail {
@@ -48,20 +43,20 @@ class RunTail {
   TailCursor head();
   // At most `limit` rows after `after`, oldest first.
   std::vector<TailSample> samples_after(std::int64_t after_rowid, int limit);
-  std::vector<storage::Event> events_after(std::int64_t after_id, int limit);
-  std::vector<storage::FrameRecord> frames_after(std::int64_t after_id, int limit);
+  std::vector<Event> events_after(std::int64_t after_id, int limit);
+  std::vector<FrameRecord> frames_after(std::int64_t after_id, int limit);
   // How many frames have an id up to `frame_id`.
   std::int64_t frame_count_through(std::int64_t frame_id);
   std::string run_status();
 
  private:
-  storage::Database db_;
-  storage::Statement head_;
-  storage::Statement samples_;
-  storage::Statement events_;
-  storage::Statement frames_;
-  storage::Statement frame_count_;
-  storage::Statement status_;
+  Database db_;
+  Statement head_;
+  Statement samples_;
+  Statement events_;
+  Statement frames_;
+  Statement frame_count_;
+  Statement status_;
 };
 
-}  // namespace bosfuse::view
+}  // namespace bosfuse::storage

@@ -1,42 +1,18 @@
-#include "view/run_tail.h"
-
-#include <charconv>
+#include "storage/run_tail.h"
 
 #include "storage/run_store.h"
 
-namespace bosfuse::view {
+namespace bosfuse::storage {
 namespace {
 
 std::string database_path(const std::filesystem::path& run_dir) {
-  return (run_dir / storage::RunStore::kDatabaseFileName).string();
-}
-
-bool read_number(const char*& at, const char* end, std::int64_t& value) {
-  const auto [next, ec] = std::from_chars(at, end, value);
-  if (ec != std::errc() || value < 0) return false;
-  at = next;
-  return true;
+  return (run_dir / RunStore::kDatabaseFileName).string();
 }
 
 }  // namespace
 
-std::string format_cursor(const TailCursor& cursor) {
-  return std::to_string(cursor.sample_rowid) + "-" + std::to_string(cursor.event_id) + "-" +
-         std::to_string(cursor.frame_id);
-}
-
-std::optional<TailCursor> parse_cursor(const std::string& text) {
-  TailCursor cursor;
-  const char* at = text.data();
-  const char* end = at + text.size();
-  if (!read_number(at, end, cursor.sample_rowid) || at == end || *at++ != '-') return std::nullopt;
-  if (!read_number(at, end, cursor.event_id) || at == end || *at++ != '-') return std::nullopt;
-  if (!read_number(at, end, cursor.frame_id) || at != end) return std::nullopt;
-  return cursor;
-}
-
 RunTail::RunTail(const std::filesystem::path& run_dir)
-    : db_(database_path(run_dir), storage::Database::Mode::kReadOnly),
+    : db_(database_path(run_dir), Database::Mode::kReadOnly),
       head_(db_.prepare("SELECT (SELECT COALESCE(MAX(rowid), 0) FROM samples), "
                         "(SELECT COALESCE(MAX(id), 0) FROM events), (SELECT COALESCE(MAX(id), 0) FROM frames)")),
       samples_(db_.prepare("SELECT rowid, channel_id, t_ns, device_t_ns, value, raw, status FROM samples "
@@ -67,15 +43,15 @@ std::vector<TailSample> RunTail::samples_after(std::int64_t after_rowid, int lim
     row.sample.device_t_ns = samples_.column_optional_int64(3);
     row.sample.value = samples_.column_optional_double(4);
     row.sample.raw = samples_.column_optional_double(5);
-    row.sample.status = static_cast<storage::SampleStatus>(samples_.column_int64(6));
+    row.sample.status = sample_status_from_code(samples_.column_int64(6));
     rows.push_back(std::move(row));
   }
   samples_.reset();
   return rows;
 }
 
-std::vector<storage::Event> RunTail::events_after(std::int64_t after_id, int limit) {
-  std::vector<storage::Event> rows;
+std::vector<Event> RunTail::events_after(std::int64_t after_id, int limit) {
+  std::vector<Event> rows;
   events_.reset();
   events_.bind(1, after_id).bind(2, limit);
   while (events_.step()) {
@@ -86,12 +62,12 @@ std::vector<storage::Event> RunTail::events_after(std::int64_t after_id, int lim
   return rows;
 }
 
-std::vector<storage::FrameRecord> RunTail::frames_after(std::int64_t after_id, int limit) {
-  std::vector<storage::FrameRecord> rows;
+std::vector<FrameRecord> RunTail::frames_after(std::int64_t after_id, int limit) {
+  std::vector<FrameRecord> rows;
   frames_.reset();
   frames_.bind(1, after_id).bind(2, limit);
   while (frames_.step()) {
-    storage::FrameRecord frame;
+    FrameRecord frame;
     frame.id = frames_.column_int64(0);
     frame.device_id = frames_.column_optional_int64(1);
     frame.t_ns = frames_.column_int64(2);
@@ -122,4 +98,4 @@ std::string RunTail::run_status() {
   return status;
 }
 
-}  // namespace bosfuse::view
+}  // namespace bosfuse::storage
