@@ -38,6 +38,13 @@ if(_bosfuse_san_flags)
   # -g1 (line tables) is enough for the sanitizers' stack traces and keeps
   # the objects and the links of the test binaries much smaller than -g.
   add_compile_options(${_bosfuse_san_flags} -fno-omit-frame-pointer ${BOSFUSE_SANITIZE_OPT} -g1)
+  # Eigen allocates through its own aligned malloc when __SANITIZE_ADDRESS__
+  # is defined, but the Debian Ceres library we link was built without it
+  # and holds instantiations of the same Eigen templates (sparse orderings)
+  # that use plain malloc; mixing the two frees memory the other allocated.
+  # glibc's malloc (and ASan's) is 16-byte aligned on x86-64, as Eigen needs
+  # there, so every unit uses it, as the Ceres library does.
+  add_compile_definitions(EIGEN_MALLOC_ALREADY_ALIGNED=1)
   add_link_options(${_bosfuse_san_flags})
   message(STATUS "bosfuse: sanitizers ${BOSFUSE_SANITIZE} (${BOSFUSE_SANITIZE_OPT} -g1)")
 endif()
@@ -51,6 +58,7 @@ if(BOSFUSE_FUZZ)
   add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
                       -fno-omit-frame-pointer ${BOSFUSE_SANITIZE_OPT} -g1)
   add_link_options(-fsanitize=address,undefined)
+  add_compile_definitions(EIGEN_MALLOC_ALREADY_ALIGNED=1)  # as for BOSFUSE_SANITIZE above
   message(STATUS "bosfuse: libFuzzer targets (fuzz/), libraries with fuzzer-no-link,address,undefined")
 endif()
 
