@@ -1,0 +1,117 @@
+// The live page in a real browser while a run is being recorded: `bosfuse
+// acquire` logs a simulated Modbus module, `bosfuse view` serves the run,
+// and headless Chromium (Debian's chromium, driven over the DevTools
+// protocol by tests/support/cdp_wait.py) must see the thermocouple values
+// appear and grow while the run goes on, and the device go "disconnected"
+// when its module is stopped.
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "sim/modbus_server.h"
+#include "tests/support/browser.h"
+#include "tests/support/modbus_fixture.h"
+#include "tests/support/subprocess.h"
+#include "tests/support/temp_dir.h"
+
+namespace bosfuse {
+namespace {
+
+using namespace std::chrono_literals;
+
+const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+const std::string kCdpWait = std::string(BOSFUSE_SOURCE_DIR) + "/tests/support/cdp_wait.py";
+
+// `text` as one /bin/sh word, whatever quotes it holds.
+std::string sh_word(const std::string& text) {
+  std::string out = "'";
+  for (const char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+// Waits in the page until `expression` is truthy; its value as JSON, or a failure.
+nlohmann::json wait_in_page(int devtools_port, const std::string& url, const std::string& expression, int seconds) {
+  const auto result = testing::run_command("/usr/bin/python3 " + kCdpWait + " " + std::to_string(devtools_port) + " " +
+                                               url + " " + std::to_string(seconds) + " " +
+                                               sh_word(expression),
+                                           seconds + 30);
+  if (result.exit_code != 0) {
+    ADD_FAILURE() << "the page never showed " << expression << ": " << result.output;
+    return nullptr;
+  }
+  return nlohmann::json::parse(result.output);
+}
+
+// The number of points per thermocouple series once each has at least `at_least`.
+std::string points_per_series(int at_least) {
+  return "(() => { if (typeof series === 'undefined') return null;"
+         " const n = [...series.values()].map(d => d.data.filter(p => p.y !== null).length);"
+         " return n.length === 2 && n.every(x => x >= " +
+         std::to_string(at_least) + ") ? n : null; })()";
+}
+
+TEST(ViewBrowser, ValuesAppearAndGrowWhileRecordingAndAStoppedModuleShowsDisconnected) {
+  ASSERT_TRUE(testing::have_chromium()) << "chromium is not installed (scripts/debian-packages.txt lists it)";
+  testing::TempDir dir;
+  acquisition::ModbusEndpoint endpoint;
+  endpoint.port = 0;
+  sim::ModbusSimServer module(sim::module_server_options({}, endpoint));
+  module.start();
+  std::ofstream(dir / "exp.toml") << "[run]\nname = \"live\"\n\n[[devices]]\nname = \"adam\"\nprofile = \"adam-6018\"\n"
+                                     "host = \"127.0.0.1\"\nport = "
+                                  << module.port()
+                                  << "\npoll_period_s = 0.1\ntimeout_s = 0.2\n\n[[devices.channels]]\nname = \"tc0\"\n"
+                                     "input = 0\n\n[[devices.channels]]\nname = \"tc1\"\ninput = 1\n";
+  const std::string run = (dir / "run").string();
+  testing::BackgroundProcess acquire({kBosfuse, "acquire", (dir / "exp.toml").string(), "--out", run, "-q"});
+  ASSERT_TRUE(testing::wait_for([&] { return std::filesystem::exists(dir / "run/run.sqlite"); }, 10s));
+
+  const int view_port = testing::unused_loopback_port();
+  const std::string url = "http://127.0.0.1:" + std::to_string(view_port) + "/";
+  testing::BackgroundProcess view({kBosfuse, "view", run, "--listen", "127.0.0.1:" + std::to_string(view_port)});
+  ASSERT_TRUE(testing::wait_for(
+      [&] { return testing::run_command("curl -sf -o /dev/null " + url + "api/run", 5).exit_code == 0; }, 10s));
+
+  const int devtools_port = testing::unused_loopback_port();
+  testing::BackgroundProcess browser({"chromium", "--headless", "--no-sandbox", "--disable-gpu",
+                                      "--disable-dev-shm-usage", "--no-first-run",
+                                      "--user-data-dir=" + (dir / "chromium-profile").string(),
+                                      "--remote-debugging-address=127.0.0.1",
+                                      "--remote-debugging-port=" + std::to_string(devtools_port), "about:blank"});
+  ASSERT_TRUE(testing::wait_for(
+      [&] {
+        return testing::run_command("curl -sf -o /dev/null http://127.0.0.1:" + std::to_string(devtools_port) +
+                                        "/json/version",
+                                    5)
+                   .exit_code == 0;
+      },
+      30s));
+
+  // Values appear on the page while the run goes on ...
+  const auto first = wait_in_page(devtools_port, url, points_per_series(3), 30);
+  ASSERT_TRUE(first.is_array()) << first;
+  EXPECT_EQ(wait_in_page(devtools_port, url,
+                         "(() => { const t = document.getElementById('link').textContent; "
+                         "return t === 'live' ? t : null; })()",
+                         10),
+            "live");
+  // ... and keep coming (a second tab: what it shows grows past the first one's count).
+  const int seen = first[0].get<int>();
+  const auto later = wait_in_page(devtools_port, url, points_per_series(seen + 10), 30);
+  ASSERT_TRUE(later.is_array()) << later;
+
+  // The module stops: the device is shown disconnected.
+  module.stop();
+  const auto devices = wait_in_page(
+      devtools_port, url,
+      "(() => { const t = document.getElementById('devices').textContent; "
+      "return t.includes('disconnected') ? t : null; })()",
+      30);
+  ASSERT_TRUE(devices.is_string()) << devices;
+  EXPECT_NE(devices.get<std::string>().find("adam"), std::string::npos) << devices;
+}
+
+}  // namespace
+}  // namespace bosfuse
