@@ -45,12 +45,28 @@ std::int64_t span_ns(std::int64_t later, std::int64_t earlier) {
   return span;
 }
 
-std::chrono::nanoseconds median_interval(const std::vector<storage::Sample>& samples) {
+// The poll period a replay uses: the mean interval between recorded
+// samples, leaving out gaps of more than three median intervals (an outage,
+// which a replay does not reproduce). Polls a loaded logger skipped are in
+// the mean, so the replay spreads the samples over the time they took: with
+// the median alone a record with skipped polls replays compressed, and its
+// cooling rate comes out too high.
+std::chrono::nanoseconds typical_interval(const std::vector<storage::Sample>& samples) {
   std::vector<std::int64_t> gaps;
   for (std::size_t i = 1; i < samples.size(); ++i) gaps.push_back(span_ns(samples[i].t_ns, samples[i - 1].t_ns));
   if (gaps.empty()) return std::chrono::seconds(1);
-  std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
-  return std::chrono::nanoseconds(std::max<std::int64_t>(gaps[gaps.size() / 2], 1'000'000));
+  std::vector<std::int64_t> sorted = gaps;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+  const std::int64_t median = sorted[sorted.size() / 2];
+  double sum = 0;
+  std::size_t count = 0;
+  for (const std::int64_t gap : gaps) {
+    if (gap > 3 * median) continue;
+    sum += static_cast<double>(gap);
+    ++count;
+  }
+  const auto mean = static_cast<std::int64_t>(sum / static_cast<double>(count));
+  return std::chrono::nanoseconds(std::max<std::int64_t>(mean, 1'000'000));
 }
 
 std::string number(double value) {
@@ -143,7 +159,7 @@ RecordedRun inspect_recorded_run(const fs::path& dir) {
       recorded.problems.push_back("device " + device.name + " has no samples; not replayed");
       continue;
     }
-    replay.period = median_interval(replay.samples.front());
+    replay.period = typical_interval(replay.samples.front());
     recorded.devices.push_back(std::move(replay));
   }
   inspect_frames(store, recorded);

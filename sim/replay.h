@@ -10,8 +10,9 @@
 // statuses open-circuit and out-of-range (served as their codes); every
 // frame's pixels and reference flag, with its original time as the camera's
 // own time. Other statuses (timeout, bad-reply, invalid-value, disabled) come
-// back as invalid-value, and timing follows the recorded poll periods and
-// frame times divided by the speed-up.
+// back as invalid-value, and timing follows the recorded poll periods (the
+// mean interval between samples, outages left out) and frame times divided
+// by the speed-up.
 
 #include <filesystem>
 #include <string>
@@ -26,7 +27,7 @@ struct ReplayDevice {
   std::string name;
   std::vector<storage::ChannelInfo> channels;
   std::vector<std::vector<storage::Sample>> samples;         // per channel, in time order
-  std::chrono::nanoseconds period{std::chrono::seconds(1)};  // the recorded poll period
+  std::chrono::nanoseconds period{std::chrono::seconds(1)};  // mean recorded interval, outages left out
 };
 
 struct RecordedRun {

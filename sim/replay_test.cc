@@ -77,5 +77,28 @@ TEST(InspectRecordedRun, TimesCenturiesApartAreRefusedAsDamaged) {
   }
 }
 
+// A loaded logger skipped a poll (a 2 s gap in a 1 s record) and the device
+// was away for a minute: the replay polls at the mean interval of the
+// record without the outage, so the skipped poll does not compress time.
+TEST(InspectRecordedRun, TheReplayPeriodIsTheMeanIntervalWithoutOutages) {
+  testing::TempDir dir;
+  {
+    auto store = storage::RunStore::create(dir / "run", {0, "gaps", 0, {}, "", storage::RunStatus::kRunning, 1.0, {}},
+                                           storage::RunStore::CreateMode::kNew);
+    const auto device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", ""});
+    const auto channel = store.add_channel({0, device, "tc0", "thermocouple", "degC", "K", {}, {}});
+    std::vector<storage::Sample> samples;
+    for (const double t_s : {0.0, 1.0, 2.0, 4.0, 5.0, 6.0, 66.0, 67.0}) {
+      samples.push_back({channel, static_cast<std::int64_t>(t_s * 1e9), {}, 20.0, {}, storage::SampleStatus::kOk});
+    }
+    store.write_samples(samples);
+    store.finish(storage::RunStatus::kComplete, 67'000'000'000);
+  }
+  const RecordedRun run = inspect_recorded_run(dir / "run");
+  ASSERT_EQ(run.devices.size(), 1u);
+  // Gaps 1, 1, 2, 1, 1, (60 left out), 1: mean 7/6 s.
+  EXPECT_NEAR(std::chrono::duration<double>(run.devices[0].period).count(), 7.0 / 6.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace bosfuse::sim
