@@ -171,8 +171,11 @@ TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
     ASSERT_TRUE(by_replay.k.count(name)) << name;
     EXPECT_NEAR(by_replay.k.at(name).value, k.value, k.high - k.value) << name << ": outside the demo's interval";
   }
+  // The RMS difference moves with the timing jitter of a loaded machine (by
+  // up to ~0.11 °C measured), while a replay that lost the geometry or the
+  // mask is off by degrees.
   for (const auto& [name, rms] : by_demo.rms_difference_c) {
-    EXPECT_NEAR(by_replay.rms_difference_c.at(name), rms, 0.1) << name;
+    EXPECT_NEAR(by_replay.rms_difference_c.at(name), rms, 0.2) << name;
   }
   ASSERT_EQ(bosfuse("report " + quoted(replay) + " -o " + quoted(dir / "replay-report")).exit_code, 0);
   expect_report_states(dir / "replay-report", by_replay);
