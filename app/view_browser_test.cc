@@ -2,8 +2,9 @@
 // acquire` logs a simulated Modbus module, `bosfuse view` serves the run,
 // and headless Chromium (Debian's chromium, driven over the DevTools
 // protocol by tests/support/cdp_wait.py) must see the thermocouple values
-// appear and grow while the run goes on, and the device go "disconnected"
-// when its module is stopped.
+// appear and grow while the run goes on, each device's counts of readings
+// and the age of its last value, and the device go "disconnected" (with
+// failed readings counted) when its module is stopped.
 
 #include <gtest/gtest.h>
 
@@ -97,6 +98,13 @@ TEST(ViewBrowser, ValuesAppearAndGrowWhileRecordingAndAStoppedModuleShowsDisconn
                          "return t === 'live' ? t : null; })()",
                          10),
             "live");
+  // Each device counts its readings and says how old its last value is.
+  const auto counted = wait_in_page(devtools_port, url,
+                                    "(() => { const t = document.getElementById('devices').textContent;"
+                                    " const m = t.match(/readings ok (\\d+), failed \\d+; last value \\d+ s ago/);"
+                                    " return m && Number(m[1]) >= 6 ? t : null; })()",
+                                    20);
+  ASSERT_TRUE(counted.is_string()) << counted;
   // ... and keep coming (a second tab: what it shows grows past the first one's count).
   const int seen = first[0].get<int>();
   const auto later = wait_in_page(devtools_port, url, points_per_series(seen + 10), 30);
@@ -107,7 +115,7 @@ TEST(ViewBrowser, ValuesAppearAndGrowWhileRecordingAndAStoppedModuleShowsDisconn
   const auto devices = wait_in_page(
       devtools_port, url,
       "(() => { const t = document.getElementById('devices').textContent; "
-      "return t.includes('disconnected') ? t : null; })()",
+      "return t.includes('disconnected') && /failed [1-9]/.test(t) ? t : null; })()",
       30);
   ASSERT_TRUE(devices.is_string()) << devices;
   EXPECT_NE(devices.get<std::string>().find("adam"), std::string::npos) << devices;

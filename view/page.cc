@@ -62,10 +62,24 @@ function addSeries(c) {
 }
 function deviceRow(id, name) {
   if (devices.has(id)) return devices.get(id);
-  const tr = document.createElement('tr'), a = document.createElement('td'), b = document.createElement('td');
+  const tr = document.createElement('tr'), a = document.createElement('td'), b = document.createElement('td'),
+        c = document.createElement('td');
   a.textContent = name; b.textContent = 'ok'; b.className = 'ok';
-  tr.append(a, b); $('devices').append(tr);
-  const d = {cell: b}; devices.set(id, d); return d;
+  tr.append(a, b, c); $('devices').append(tr);
+  const d = {cell: b, counts: c, ok: 0, failed: 0, lastOkMs: null}; devices.set(id, d); return d;
+}
+// Readings (one per channel and poll) that gave a value or a failure status,
+// and how long ago the device last gave a value (wall clock of this page).
+function showCounts(d) {
+  const age = d.lastOkMs === null ? 'no value yet' : 'last value ' + ((Date.now() - d.lastOkMs) / 1000).toFixed(0) + ' s ago';
+  d.counts.textContent = 'readings ok ' + d.ok + ', failed ' + d.failed + '; ' + age;
+}
+function countReading(s) {
+  const c = run.channels.find(x => x.id === s.channel);
+  if (!c) return;
+  const d = deviceRow(c.device_id, c.device);
+  if (s.status === 'ok') { d.ok++; d.lastOkMs = Date.now(); } else { d.failed++; }
+  showCounts(d);
 }
 function onEvent(e) {
   const li = document.createElement('li');
@@ -79,6 +93,7 @@ function onEvent(e) {
 }
 function onSample(s) {
   if (s.t_s > lastT) lastT = s.t_s;
+  countReading(s);
   const ds = series.get(s.channel);
   if (!ds) { if (!run.channels.some(c => c.id === s.channel)) loadRun(); return; }
   ds.data.push({x: s.t_s, y: s.status === 'ok' ? s.value : null});
@@ -117,6 +132,7 @@ function connect() {
 function restart() {
   source.close(); clockBasis = null; lastT = 0;
   for (const ds of series.values()) ds.data = [];
+  for (const d of devices.values()) { d.ok = 0; d.failed = 0; d.lastOkMs = null; }
   $('events').replaceChildren();
   connect();
 }
@@ -128,6 +144,7 @@ async function start() {
                y: {title: {display: true, text: '°C'}}},
       plugins: {decimation: {enabled: true, algorithm: 'lttb', samples: 1000}}}});
   $('window').onchange = scheduleRedraw;
+  setInterval(() => { for (const d of devices.values()) showCounts(d); }, 1000);
   await loadRun();
   connect();
 }
