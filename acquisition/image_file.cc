@@ -171,6 +171,21 @@ ImageLimits ImageLimits::from_environment() {
   return limits;
 }
 
+// BMP: the DIB header's width and height (16-bit in the old core header,
+// else 32-bit, little-endian; a negative height is a top-down image).
+std::optional<DeclaredSize> bmp_header_size(std::span<const std::uint8_t> bytes) {
+  const auto le = [&](std::size_t at, int n) {
+    std::uint32_t v = 0;
+    for (int i = n - 1; i >= 0; --i) v = (v << 8) | bytes[at + static_cast<std::size_t>(i)];
+    return v;
+  };
+  if (bytes.size() < 26) return std::nullopt;
+  if (le(14, 4) == 12) return DeclaredSize{le(18, 2), le(20, 2)};
+  const auto width = static_cast<std::int32_t>(le(18, 4));
+  const auto height = static_cast<std::int32_t>(le(22, 4));
+  return DeclaredSize{std::abs(static_cast<std::int64_t>(width)), std::abs(static_cast<std::int64_t>(height))};
+}
+
 std::optional<DeclaredSize> declared_image_size(std::span<const std::uint8_t> bytes) {
   if (starts_with(bytes, "\x89PNG\r\n\x1a\n"sv)) {
     png_uint_32 width = 0, height = 0;
@@ -181,6 +196,8 @@ std::optional<DeclaredSize> declared_image_size(std::span<const std::uint8_t> by
   } else if (starts_with(bytes, "II*\0"sv) || starts_with(bytes, "MM\0*"sv) || starts_with(bytes, "II+\0"sv) ||
              starts_with(bytes, "MM\0+"sv)) {
     return tiff_header_size(bytes);
+  } else if (starts_with(bytes, "BM"sv)) {
+    return bmp_header_size(bytes);
   }
   return std::nullopt;
 }
