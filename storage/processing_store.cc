@@ -2,13 +2,12 @@
 
 #include <string_view>
 
+#include "storage/record_rows.h"
 #include "storage/run_store.h"
 #include "storage/schema.h"
 
 namespace bosfuse::storage {
 namespace {
-
-std::string database_path(const std::filesystem::path& dir) { return (dir / RunStore::kDatabaseFileName).string(); }
 
 const char* to_text(FitSubject subject) { return subject == FitSubject::kChannel ? "channel" : "probe"; }
 

@@ -7,14 +7,13 @@
 #include <sstream>
 #include <system_error>
 
+#include "storage/record_rows.h"
 #include "storage/schema.h"
 
 namespace bosfuse::storage {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string database_path(const fs::path& dir) { return (dir / RunStore::kDatabaseFileName).string(); }
 
 RunInfo read_run(Statement& stmt) {
   RunInfo run;
@@ -27,12 +26,6 @@ RunInfo read_run(Statement& stmt) {
   run.time_scale = stmt.column_double(6);
   run.origin_event = stmt.column_optional_text(7);
   return run;
-}
-
-Sample read_sample(const Statement& stmt) {
-  return {stmt.column_int64(0),           stmt.column_int64(1),
-          stmt.column_optional_int64(2),  stmt.column_optional_double(3),
-          stmt.column_optional_double(4), sample_status_from_code(stmt.column_int64(5))};
 }
 
 void bind_range(Statement& stmt, int first_index, TimeRange range) {
@@ -361,10 +354,7 @@ std::vector<Event> RunStore::events(TimeRange range) const {
   stmt.bind(1, run_id_);
   bind_range(stmt, 2, range);
   std::vector<Event> out;
-  while (stmt.step()) {
-    out.push_back({stmt.column_int64(0), stmt.column_optional_int64(1), stmt.column_int64(2), stmt.column_text(3),
-                   stmt.column_text(4)});
-  }
+  while (stmt.step()) out.push_back(read_event(stmt));
   return out;
 }
 
@@ -374,12 +364,7 @@ std::vector<FrameRecord> RunStore::frames(TimeRange range) const {
       "WHERE t_ns BETWEEN ? AND ? ORDER BY t_ns, id");
   bind_range(stmt, 1, range);
   std::vector<FrameRecord> out;
-  while (stmt.step()) {
-    out.push_back({stmt.column_int64(0), stmt.column_optional_int64(1), stmt.column_int64(2),
-                   stmt.column_optional_int64(3), stmt.column_text(4), static_cast<int>(stmt.column_int64(5)),
-                   static_cast<int>(stmt.column_int64(6)), static_cast<int>(stmt.column_int64(7)),
-                   stmt.column_int64(8) != 0});
-  }
+  while (stmt.step()) out.push_back(read_frame(stmt));
   return out;
 }
 

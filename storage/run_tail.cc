@@ -1,15 +1,8 @@
 #include "storage/run_tail.h"
 
-#include "storage/run_store.h"
+#include "storage/record_rows.h"
 
 namespace bosfuse::storage {
-namespace {
-
-std::string database_path(const std::filesystem::path& run_dir) {
-  return (run_dir / RunStore::kDatabaseFileName).string();
-}
-
-}  // namespace
 
 RunTail::RunTail(const std::filesystem::path& run_dir)
     : db_(database_path(run_dir), Database::Mode::kReadOnly),
@@ -36,15 +29,7 @@ std::vector<TailSample> RunTail::samples_after(std::int64_t after_rowid, int lim
   samples_.reset();
   samples_.bind(1, after_rowid).bind(2, limit);
   while (samples_.step()) {
-    TailSample row;
-    row.rowid = samples_.column_int64(0);
-    row.sample.channel_id = samples_.column_int64(1);
-    row.sample.t_ns = samples_.column_int64(2);
-    row.sample.device_t_ns = samples_.column_optional_int64(3);
-    row.sample.value = samples_.column_optional_double(4);
-    row.sample.raw = samples_.column_optional_double(5);
-    row.sample.status = sample_status_from_code(samples_.column_int64(6));
-    rows.push_back(std::move(row));
+    rows.push_back({samples_.column_int64(0), read_sample(samples_, 1)});
   }
   samples_.reset();
   return rows;
@@ -54,10 +39,7 @@ std::vector<Event> RunTail::events_after(std::int64_t after_id, int limit) {
   std::vector<Event> rows;
   events_.reset();
   events_.bind(1, after_id).bind(2, limit);
-  while (events_.step()) {
-    rows.push_back({events_.column_int64(0), events_.column_optional_int64(1), events_.column_int64(2),
-                    events_.column_text(3), events_.column_text(4)});
-  }
+  while (events_.step()) rows.push_back(read_event(events_));
   events_.reset();
   return rows;
 }
@@ -66,19 +48,7 @@ std::vector<FrameRecord> RunTail::frames_after(std::int64_t after_id, int limit)
   std::vector<FrameRecord> rows;
   frames_.reset();
   frames_.bind(1, after_id).bind(2, limit);
-  while (frames_.step()) {
-    FrameRecord frame;
-    frame.id = frames_.column_int64(0);
-    frame.device_id = frames_.column_optional_int64(1);
-    frame.t_ns = frames_.column_int64(2);
-    frame.device_t_ns = frames_.column_optional_int64(3);
-    frame.path = frames_.column_text(4);
-    frame.width_px = static_cast<int>(frames_.column_int64(5));
-    frame.height_px = static_cast<int>(frames_.column_int64(6));
-    frame.bit_depth = static_cast<int>(frames_.column_int64(7));
-    frame.is_reference = frames_.column_int64(8) != 0;
-    rows.push_back(std::move(frame));
-  }
+  while (frames_.step()) rows.push_back(read_frame(frames_));
   frames_.reset();
   return rows;
 }
