@@ -10,6 +10,7 @@
 #include "app/command.h"
 #include "app/output_stream.h"
 #include "app/run_control.h"
+#include "app/served_view.h"
 #include "storage/run_store.h"
 
 namespace bosfuse::app {
@@ -20,6 +21,7 @@ struct AcquireArgs {
   std::string out;
   std::string duration;
   bool append = false;
+  std::string live;  // --live HOST:PORT; empty: no live page
 };
 
 // A run that looks fine but lacks a device's data: said at the end, where a
@@ -54,6 +56,7 @@ void acquire(const AcquireArgs& args) {
   if (options.duration) store.set_planned_end(info.started_ns + options.duration->count());
   acquisition::Logger logger(store, options);
   logger.add_devices(config);
+  const auto live = start_live_view(args.out, args.live);
   spdlog::info("logging {} devices into {} ({})", config.device_count(), args.out,
                args.duration.empty() ? "until Ctrl-C" : "for " + args.duration);
   const auto summary = logger.run(stop_requested_by_signal());
@@ -76,6 +79,7 @@ void add_acquire(CLI::App& root) {
   cmd->add_option("--out,-o", args->out, "Run folder to create")->required();
   cmd->add_option("--duration", args->duration, "Stop after this long (30s, 10m, 2h); default: until Ctrl-C");
   cmd->add_flag("--append", args->append, "Continue the run already in the folder instead of refusing it");
+  add_live_option(*cmd, args->live);
   cmd->callback([args] { acquire(*args); });
 }
 

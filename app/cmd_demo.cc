@@ -23,6 +23,7 @@
 #include "app/output_stream.h"
 #include "app/progress_display.h"
 #include "app/run_control.h"
+#include "app/served_view.h"
 #include "pipeline/process.h"
 #include "report/report.h"
 #include "report/run_input.h"
@@ -40,6 +41,7 @@ struct DemoArgs {
   double experiment_s = 240;     // cooling time simulated
   double speed = 16;             // times faster than real time
   double frame_interval_s = 10;  // experiment time between frames
+  std::string live;              // --live HOST:PORT; empty: no live page
 };
 
 // The paper's experiment at a scale that runs in seconds: a 20 mm heater
@@ -99,6 +101,7 @@ std::string demo_experiment(const DemoSetup& setup, int port, double poll_period
 struct Recording {
   std::filesystem::path run_dir;
   acquisition::Logger::Summary summary;
+  std::unique_ptr<ServedView> live;  // kept serving through processing and report
 };
 
 // Simulates the experiment and logs it through the real paths.
@@ -124,6 +127,7 @@ Recording record_demo(const DemoArgs& args, const DemoSetup& setup, const std::f
   options.on_progress = [&](const std::string& line) { display.note(line); };
   acquisition::Logger logger(store, options);
   logger.add_devices(config);
+  auto live = start_live_view(run_dir, args.live);
   sim::PatternOptions pattern;
   pattern.width_px = setup.scene.width_px;
   pattern.height_px = setup.scene.height_px;
@@ -140,7 +144,7 @@ Recording record_demo(const DemoArgs& args, const DemoSetup& setup, const std::f
       "logging thermocouples over Modbus TCP (127.0.0.1:{}) and frames from the virtual camera",
       args.experiment_s, setup.scene.initial_c, setup.scene.ambient_c, scene->initial_cooling_rate_per_s(), args.speed,
       server.port()));
-  Recording recording{run_dir, logger.run(stop_requested_by_signal())};
+  Recording recording{run_dir, logger.run(stop_requested_by_signal()), std::move(live)};
   server.stop();
   return recording;
 }
@@ -257,6 +261,7 @@ void add_demo(CLI::App& root) {
       ->capture_default_str();
   auto experiment_time = std::make_shared<std::string>("4m");
   auto frame_interval = std::make_shared<std::string>("10s");
+  add_live_option(*cmd, args->live);
   cmd->add_option("--experiment-time", *experiment_time, "Cooling to simulate, experiment time (20s .. 1h)")
       ->capture_default_str();
   cmd->add_option("--speed", args->speed, "Times faster than real time (the run's time scale)")

@@ -4,44 +4,26 @@
 
 #include <chrono>
 #include <iostream>
-#include <optional>
 #include <thread>
 
 #include "app/command.h"
 #include "app/run_control.h"
-#include "storage/database.h"
-#include "view/live_server.h"
+#include "app/served_view.h"
 
 namespace bosfuse::app {
 namespace {
 
 struct ViewArgs {
   std::string run;
-  std::string listen = "127.0.0.1:8080";
+  std::string listen = kDefaultListen;
 };
 
 void view_run(const ViewArgs& args) {
-  view::ViewOptions options;
-  view::parse_listen_address(args.listen, options);
   std::atomic<bool>& stop = stop_requested_by_signal();
-  std::optional<view::LiveServer> opened;
-  try {
-    opened.emplace(args.run, options);
-  } catch (const storage::StorageError& e) {
-    throw std::runtime_error("cannot view '" + args.run + "': it is not a readable bosfuse run (" + e.what() + ")");
-  }
-  view::LiveServer& server = *opened;
-  server.listen();
-  std::thread serving([&server] { server.serve(); });
-  std::cout << server.url() << std::endl;  // flushed: a script may wait for it
-  if (options.host != "127.0.0.1" && options.host != "::1" && options.host != "localhost") {
-    std::cerr << "warning: listening on " << options.host
-              << ", not loopback: anyone who can reach this host can read the run\n";
-  }
+  const ServedView served(args.run, args.listen);
+  std::cout << served.url() << std::endl;  // flushed: a script may wait for it
   std::cerr << "serving " << args.run << " read-only; Ctrl-C stops\n";
   while (!stop) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  server.stop();
-  serving.join();
 }
 
 void add_view(CLI::App& root) {

@@ -1,10 +1,14 @@
-// The live page in a real browser while a run is being recorded: `bosfuse
-// acquire` logs a simulated Modbus module, `bosfuse view` serves the run,
-// and headless Chromium (Debian's chromium, driven over the DevTools
-// protocol by tests/support/cdp_wait.py) must see the thermocouple values
-// appear and grow while the run goes on, each device's counts of readings
-// and the age of its last value, and the device go "disconnected" (with
-// failed readings counted) when its module is stopped.
+// The live page in a real browser while a run is being recorded, seen by
+// headless Chromium (Debian's chromium, driven over the DevTools protocol
+// by tests/support/cdp_wait.py):
+// - `bosfuse acquire` logs a simulated Modbus module and `bosfuse view`
+//   serves the run: the thermocouple values appear and grow, each device's
+//   polls are counted with the age of its last value, and the device goes
+//   "disconnected" (failed polls counted) when its module is stopped;
+// - `bosfuse demo --live` records the simulated experiment (Modbus module
+//   and virtual camera) with the viewer inside the logger: the live BOS
+//   temperature at each thermocouple appears and changes beside the
+//   thermocouple's curve, with the latest frame and its quality index.
 
 #include <gtest/gtest.h>
 
@@ -45,6 +49,24 @@ nlohmann::json wait_in_page(int devtools_port, const std::string& url, const std
   return nlohmann::json::parse(result.output);
 }
 
+bool answers(const std::string& url) { return testing::run_command("curl -sf -o /dev/null " + url, 5).exit_code == 0; }
+
+// Headless Chromium with its DevTools protocol on a free loopback port.
+struct Browser {
+  explicit Browser(const std::filesystem::path& dir)
+      : devtools_port(testing::unused_loopback_port()),
+        process({"chromium", "--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                 "--no-first-run", "--user-data-dir=" + (dir / "chromium-profile").string(),
+                 "--remote-debugging-address=127.0.0.1", "--remote-debugging-port=" + std::to_string(devtools_port),
+                 "about:blank"}) {}
+  bool ready() const {
+    return testing::wait_for(
+        [&] { return answers("http://127.0.0.1:" + std::to_string(devtools_port) + "/json/version"); }, 30s);
+  }
+  int devtools_port;
+  testing::BackgroundProcess process;
+};
+
 // The number of points per thermocouple series once each has at least `at_least`.
 std::string points_per_series(int at_least) {
   return "(() => { if (typeof series === 'undefined') return null;"
@@ -72,23 +94,11 @@ TEST(ViewBrowser, ValuesAppearAndGrowWhileRecordingAndAStoppedModuleShowsDisconn
   const int view_port = testing::unused_loopback_port();
   const std::string url = "http://127.0.0.1:" + std::to_string(view_port) + "/";
   testing::BackgroundProcess view({kBosfuse, "view", run, "--listen", "127.0.0.1:" + std::to_string(view_port)});
-  ASSERT_TRUE(testing::wait_for(
-      [&] { return testing::run_command("curl -sf -o /dev/null " + url + "api/run", 5).exit_code == 0; }, 10s));
+  ASSERT_TRUE(testing::wait_for([&] { return answers(url + "api/run"); }, 10s));
 
-  const int devtools_port = testing::unused_loopback_port();
-  testing::BackgroundProcess browser({"chromium", "--headless", "--no-sandbox", "--disable-gpu",
-                                      "--disable-dev-shm-usage", "--no-first-run",
-                                      "--user-data-dir=" + (dir / "chromium-profile").string(),
-                                      "--remote-debugging-address=127.0.0.1",
-                                      "--remote-debugging-port=" + std::to_string(devtools_port), "about:blank"});
-  ASSERT_TRUE(testing::wait_for(
-      [&] {
-        return testing::run_command("curl -sf -o /dev/null http://127.0.0.1:" + std::to_string(devtools_port) +
-                                        "/json/version",
-                                    5)
-                   .exit_code == 0;
-      },
-      30s));
+  const Browser browser(dir.path());
+  ASSERT_TRUE(browser.ready());
+  const int devtools_port = browser.devtools_port;
 
   // Values appear on the page while the run goes on ...
   const auto first = wait_in_page(devtools_port, url, points_per_series(3), 30);
@@ -98,10 +108,10 @@ TEST(ViewBrowser, ValuesAppearAndGrowWhileRecordingAndAStoppedModuleShowsDisconn
                          "return t === 'live' ? t : null; })()",
                          10),
             "live");
-  // Each device counts its readings and says how old its last value is.
+  // Each device counts its polls and says how old its last value is.
   const auto counted = wait_in_page(devtools_port, url,
                                     "(() => { const t = document.getElementById('devices').textContent;"
-                                    " const m = t.match(/readings ok (\\d+), failed \\d+; last value \\d+ s ago/);"
+                                    " const m = t.match(/polls ok (\\d+), failed \\d+, skipped \\d+; last value \\d+ s ago/);"
                                     " return m && Number(m[1]) >= 6 ? t : null; })()",
                                     20);
   ASSERT_TRUE(counted.is_string()) << counted;
@@ -119,6 +129,54 @@ TEST(ViewBrowser, ValuesAppearAndGrowWhileRecordingAndAStoppedModuleShowsDisconn
       30);
   ASSERT_TRUE(devices.is_string()) << devices;
   EXPECT_NE(devices.get<std::string>().find("adam"), std::string::npos) << devices;
+}
+
+TEST(ViewBrowser, TheLiveBosTemperatureAppearsAndChangesBesideTheThermocouplesWhileTheDemoRecords) {
+  ASSERT_TRUE(testing::have_chromium()) << "chromium is not installed (scripts/debian-packages.txt lists it)";
+  testing::TempDir dir;
+  const int view_port = testing::unused_loopback_port();
+  const std::string url = "http://127.0.0.1:" + std::to_string(view_port) + "/";
+  // 4 min of cooling at 8x: 30 s of recording, a frame every 1.25 s.
+  testing::BackgroundProcess demo({kBosfuse, "demo", "--out", (dir / "demo").string(), "--experiment-time", "4m",
+                                   "--speed", "8", "--live", "127.0.0.1:" + std::to_string(view_port)});
+  ASSERT_TRUE(testing::wait_for([&] { return answers(url + "api/run"); }, 20s));
+  const Browser browser(dir.path());
+  ASSERT_TRUE(browser.ready());
+
+  // The BOS temperature at both thermocouples appears, each value within a
+  // few degrees of the thermocouple's latest reading (the plume is at
+  // 40-50 °C, the room at 22 °C) ...
+  const auto first = wait_in_page(
+      browser.devtools_port, url,
+      "(() => { if (typeof bosSeries === 'undefined' || bosSeries.size !== 2) return null;"
+      " const pairs = [...bosSeries.entries()].map(([c, d]) => {"
+      "   const v = d.data.filter(p => p.y !== null); return [v.length, v.length ? v[v.length - 1].y : null, lastValue(c)]; });"
+      " return pairs.every(([n, bos, tc]) => n >= 2 && tc !== null) ? pairs : null; })()",
+      40);
+  ASSERT_TRUE(first.is_array()) << first;
+  for (const auto& pair : first) {
+    const double bos_c = pair[1].get<double>(), tc_c = pair[2].get<double>();
+    EXPECT_GT(bos_c, 30.0) << first;
+    EXPECT_NEAR(bos_c, tc_c, 3.0) << first;  // measured: within 1 °C
+  }
+  // ... and changes while the run goes on, as the plume cools.
+  const auto changing = wait_in_page(
+      browser.devtools_port, url,
+      "(() => { const v = [...bosSeries.values()].map(d => d.data.filter(p => p.y !== null).map(p => p.y));"
+      " return v.every(a => a.length >= 5 && Math.max(...a) - Math.min(...a) > 0.5) ? v : null; })()",
+      40);
+  ASSERT_TRUE(changing.is_array()) << changing;
+  // The latest frame is drawn with the probes, and its quality index shown.
+  const auto frame = wait_in_page(
+      browser.devtools_port, url,
+      "(() => { const c = document.getElementById('frame-view'), q = document.getElementById('q-mod').textContent;"
+      " const rows = document.getElementById('bos-rows').textContent;"
+      " return c.width === 480 && q !== '–' && rows.includes('tc-35mm') ? [c.width, c.height, Number(q), rows] : null;"
+      " })()",
+      20);
+  ASSERT_TRUE(frame.is_array()) << frame;
+  EXPECT_EQ(frame[1], 440);
+  EXPECT_GT(frame[2].get<double>(), 0.6) << "the virtual camera's frames are as good as the reference";
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "sim/modbus_server.h"
 #include "storage/run_store.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
@@ -154,6 +155,55 @@ TEST_F(ViewCli, RefusesAFolderThatIsNotARunOrIsDamaged) {
   const auto damaged = testing::run_command(kBosfuse + " view " + (dir_ / "damaged").string());
   EXPECT_EQ(damaged.exit_code, 1);
   EXPECT_NE(damaged.output.find("not a readable bosfuse run"), std::string::npos) << damaged.output;
+}
+
+// `acquire --live`: the viewer inside the logger, over the run it records.
+class AcquireLive : public ViewCli {
+ protected:
+  void SetUp() override {
+    ViewCli::SetUp();
+    acquisition::ModbusEndpoint endpoint;
+    endpoint.port = 0;
+    module_.emplace(sim::module_server_options({}, endpoint));
+    module_->start();
+    std::ofstream(dir_ / "exp.toml") << "[run]\nname = \"live\"\n\n[[devices]]\nname = \"adam\"\nprofile = "
+                                        "\"adam-6018\"\nhost = \"127.0.0.1\"\nport = "
+                                     << module_->port()
+                                     << "\npoll_period_s = 0.05\ntimeout_s = 0.2\n\n[[devices.channels]]\nname = "
+                                        "\"tc0\"\ninput = 0\n";
+  }
+  std::string acquire_command(const std::string& duration) const {
+    return kBosfuse + " acquire " + (dir_ / "exp.toml").string() + " --out " + (dir_ / "logged").string() +
+           " --duration " + duration + " --live 127.0.0.1:" + std::to_string(port_);
+  }
+  std::optional<sim::ModbusSimServer> module_;
+};
+
+TEST_F(AcquireLive, PrintsTheUrlOfTheRunItRecordsAndServesItsSamplesLive) {
+  const std::string err = (dir_ / "err.txt").string();
+  testing::BackgroundProcess acquire({"/bin/sh", "-c", "exec " + acquire_command("4s") + " 2> " + err});
+  ASSERT_TRUE(testing::wait_for(
+      [&] {
+        std::ifstream in(err);
+        const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        return text.find("live view: " + url("/")) != std::string::npos;
+      },
+      10s));
+  const auto run = testing::run_command("curl -sf " + url("/api/run"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(nlohmann::json::parse(run.output).at("name"), "live");
+  EXPECT_GE(values(curl_events(1.0)).size(), 5u) << "samples arrive while the logger records";
+  EXPECT_EQ(acquire.wait_exit(15s), 0);
+}
+
+TEST_F(AcquireLive, APortInUseIsSaidAndTheRecordingGoesOnWithoutThePage) {
+  const auto view = start_view();  // another viewer holds the port
+  const auto result = testing::run_command(acquire_command("1s"), 20);
+  EXPECT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("live view not started, recording goes on without it"), std::string::npos)
+      << result.output;
+  EXPECT_NE(result.output.find("in use"), std::string::npos) << result.output;
+  EXPECT_FALSE(storage::RunStore::open(dir_ / "logged").read_samples(1).empty());
 }
 
 }  // namespace

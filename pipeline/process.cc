@@ -16,8 +16,8 @@
 #include "fusion/bos_geometry.h"
 #include "fusion/image_quality.h"
 #include "fusion/temperature_field.h"
-#include "fusion/time_alignment.h"
 #include "pipeline/image_io.h"
+#include "pipeline/probe_calibration.h"
 #include "pipeline/quality_json.h"
 #include "pipeline/run_selection.h"
 #include "storage/processing_store.h"
@@ -43,27 +43,6 @@ json fit_json(const fitting::NewtonFit& fit, const std::string& quantity, const 
   j["unit"] = unit;
   j["time_basis"] = clock.basis();
   return j;
-}
-
-// °C per px of shift for a channel, from the run's newest calibration.
-struct ChannelCalibration {
-  double slope_c_per_px = 0;
-  double reference_temperature_c = 0;
-  double camera_offset_s = 0;  // the offset the calibration was made with
-};
-
-std::map<std::int64_t, ChannelCalibration> stored_calibration(const storage::ProcessingStore& results) {
-  std::map<std::int64_t, ChannelCalibration> out;
-  const auto record = results.latest_calibration();
-  if (!record) return out;
-  const json j = json::parse(record->json);
-  for (const auto& c : j.at("channels")) {
-    if (!c.at("ok").get<bool>()) continue;
-    out[c.at("channel_id").get<std::int64_t>()] = {c.at("slope_c_per_px").get<double>(),
-                                                   c.at("reference_temperature_c").get<double>(),
-                                                   c.value("camera_offset_s", 0.0)};
-  }
-  return out;
 }
 
 // The displacement grid interpolated bilinearly at a point; valid only when
@@ -178,13 +157,6 @@ FrameResult evaluate_probes(const FrameContext& ctx, const cv::Mat& measurement)
   return out;
 }
 
-std::optional<double> probe_temperature_c(const std::map<std::int64_t, ChannelCalibration>& calibration,
-                                          std::int64_t channel_id, double shift_px, std::optional<double> model_c) {
-  const auto cal = calibration.find(channel_id);
-  if (cal == calibration.end()) return model_c;
-  return cal->second.reference_temperature_c + cal->second.slope_c_per_px * shift_px;
-}
-
 // Evaluates one frame and stages its results in one transaction.
 void process_frame(const FrameContext& ctx, const FrameRecord& frame, storage::ProcessingStore& results,
                    std::int64_t processing_id) {
@@ -195,24 +167,12 @@ void process_frame(const FrameContext& ctx, const FrameRecord& frame, storage::P
   for (std::size_t p = 0; p < ctx.channels.size(); ++p) {
     const PointShift& s = r.shifts[p];
     const double shift = std::hypot(s.u_px, s.v_px);
-    const auto t_c = probe_temperature_c(ctx.calibration, ctx.channels[p].id, shift, r.model_temperature_c[p]);
+    auto t_c = calibrated_temperature_c(ctx.calibration, ctx.channels[p].id, shift);
+    if (!t_c) t_c = r.model_temperature_c[p];
     samples.push_back({ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift, s.valid ? t_c : std::nullopt,
                        s.valid});
   }
   results.stage_frame(processing_id, frame.id, r.summary.dump(), samples, r.fields);
-}
-
-// Ambient for the physical model when the geometry does not give it: the
-// thermocouples at the reference frame, which was taken without the flow.
-double ambient_from_thermocouples(const std::vector<TimeSeries>& series, double reference_t_s, double fallback_c) {
-  double sum = 0;
-  int count = 0;
-  for (const auto& s : series) {
-    const std::vector<double> at{reference_t_s};
-    const auto aligned = fusion::align_to_frames(s.t_s, s.value, at);
-    if (aligned.ok(0)) sum += aligned.value[0], ++count;
-  }
-  return count ? sum / count : fallback_c;
 }
 
 // The probe series a Newton fit sees: temperatures when every valid sample
@@ -365,10 +325,8 @@ FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& sto
   }
   auto& geometry = ctx.settings.geometry;
   if (!geometry.ambient_given) {
-    std::vector<TimeSeries> series;
-    for (const auto& c : ctx.channels) series.push_back(channel_series(store, c.id, clock));
     geometry.geometry.ambient_temperature_c = ambient_from_thermocouples(
-        series, clock.seconds(frames.reference.t_ns) + geometry.camera_offset_s,
+        store, ctx.channels, clock, clock.seconds(frames.reference.t_ns) + geometry.camera_offset_s,
         geometry.geometry.ambient_temperature_c);
   }
   ctx.geometry.emplace(geometry.geometry);

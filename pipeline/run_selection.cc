@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "fusion/time_alignment.h"
 #include "pipeline/image_io.h"
 #include "storage/run_paths.h"
 
@@ -51,6 +52,19 @@ TimeSeries channel_series(const storage::RunStore& store, std::int64_t channel_i
     s.value.push_back(*sample.value);
   }
   return s;
+}
+
+double ambient_from_thermocouples(const storage::RunStore& store, const std::vector<storage::ChannelInfo>& channels,
+                                  const storage::ExperimentClock& clock, double t_s, double fallback_c) {
+  const std::vector<double> at{t_s};
+  double sum = 0;
+  int count = 0;
+  for (const auto& c : channels) {
+    const TimeSeries s = channel_series(store, c.id, clock);
+    const auto aligned = fusion::align_to_frames(s.t_s, s.value, at);
+    if (aligned.ok(0)) sum += aligned.value[0], ++count;
+  }
+  return count ? sum / count : fallback_c;
 }
 
 TimeSeries within(const TimeSeries& s, double from_s, double to_s) {

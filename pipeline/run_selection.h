@@ -37,6 +37,13 @@ struct TimeSeries {
 TimeSeries channel_series(const storage::RunStore& store, std::int64_t channel_id,
                           const storage::ExperimentClock& clock);
 
+// The air's temperature at `t_s` from the channels' readings (their mean,
+// each interpolated at t_s), for the physical model when the geometry does
+// not give an ambient: at the reference frame, taken without the flow, the
+// thermocouples read ambient air. `fallback_c` when none has a value there.
+double ambient_from_thermocouples(const storage::RunStore& store, const std::vector<storage::ChannelInfo>& channels,
+                                  const storage::ExperimentClock& clock, double t_s, double fallback_c);
+
 // The part of `s` with from_s ≤ t ≤ to_s.
 TimeSeries within(const TimeSeries& s, double from_s, double to_s);
 

@@ -2,6 +2,8 @@
 
 #include <httplib.h>
 
+#include <nlohmann/json.hpp>
+
 #include <atomic>
 #include <cerrno>
 #include <charconv>
@@ -10,6 +12,7 @@
 #include <sstream>
 #include <thread>
 
+#include "view/live_bos.h"
 #include "view/live_stream.h"
 #include "view/page.h"
 #include "view/run_watch.h"
@@ -23,6 +26,8 @@ constexpr auto kKeepAlivePeriod = std::chrono::seconds(5);
 // Handler threads beyond the streams: the page, chart.js and /api/run stay
 // answerable while every stream slot is taken.
 constexpr int kSpareThreads = 4;
+// Reads of a stream that fail in a row before the page is told the run cannot be read.
+constexpr int kFailuresBeforeError = 3;
 
 std::string read_chartjs(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -33,6 +38,11 @@ std::string read_chartjs(const std::filesystem::path& path) {
                     "; the page needs it (install Debian's libjs-chart.js)");
   }
   return text.str();
+}
+
+std::string unreadable_run_message(const std::exception& e) {
+  return std::string("the run cannot be read now (") + e.what() +
+         "); if this persists its database is damaged — the viewer keeps trying";
 }
 
 }  // namespace
@@ -57,7 +67,8 @@ struct LiveServer::Impl {
       : options(std::move(opts)),
         chartjs(read_chartjs(options.chartjs_path.empty() ? std::filesystem::path(BOSFUSE_CHARTJS_PATH)
                                                           : options.chartjs_path)),
-        watch(run_dir, options.poll_period) {
+        watch(run_dir, options.poll_period),
+        bos(watch) {
     const std::size_t threads = static_cast<std::size_t>(options.max_clients + kSpareThreads);
     server.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
     // httplib's default adds SO_REUSEPORT, with which a second viewer on the
@@ -70,14 +81,26 @@ struct LiveServer::Impl {
     route();
   }
 
+  // One client's stream and what the server keeps about it.
+  struct StreamState {
+    StreamState(const std::filesystem::path& run_dir, TailCursor from, const LiveBos* bos)
+        : stream(run_dir, from, bos) {}
+    LiveStream stream;
+    std::chrono::steady_clock::time_point last_write = std::chrono::steady_clock::now();
+    bool opening = true;
+    int failures = 0;  // reads that failed in a row
+    bool error_sent = false;
+  };
+
   void route();
   void stream_events(const httplib::Request& request, httplib::Response& response);
-  bool stream_step(LiveStream& stream, std::uint64_t& seen, std::chrono::steady_clock::time_point& last_write,
-                   httplib::DataSink& sink);
+  std::string read_stream(StreamState& state, const RunSnapshot& snapshot);
+  bool stream_step(StreamState& state, httplib::DataSink& sink);
 
   ViewOptions options;
   std::string chartjs;
   RunWatch watch;
+  LiveBos bos;
   httplib::Server server;
   int port = 0;
   std::atomic<int> clients{0};
@@ -93,7 +116,20 @@ void LiveServer::Impl::route() {
     response.set_content(chartjs, "text/javascript; charset=utf-8");
   });
   server.Get("/api/run", [this](const httplib::Request&, httplib::Response& response) {
-    response.set_content(watch.describe_json(), "application/json");
+    try {
+      response.set_content(watch.describe_json(), "application/json");
+    } catch (const std::exception& e) {  // the run was damaged while served: say so, keep serving
+      response.status = 500;
+      response.set_content(nlohmann::json{{"error", unreadable_run_message(e)}}.dump(), "application/json");
+    }
+  });
+  server.Get("/frame.png", [this](const httplib::Request&, httplib::Response& response) {
+    const std::string png = bos.latest_frame_png();
+    if (png.empty()) {
+      response.status = 404;
+      return;
+    }
+    response.set_content(png, "image/png");
   });
   server.Get("/events", [this](const httplib::Request& request, httplib::Response& response) {
     stream_events(request, response);
@@ -123,43 +159,59 @@ void LiveServer::Impl::stream_events(const httplib::Request& request, httplib::R
                          "text/plain");
     return;
   }
-  auto stream = std::make_shared<LiveStream>(watch.run_dir(), from);
-  auto seen = std::make_shared<std::uint64_t>(0);
-  auto last_write = std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
-  auto opening = std::make_shared<bool>(true);
+  std::shared_ptr<StreamState> state;
+  try {
+    state = std::make_shared<StreamState>(watch.run_dir(), from, &bos);
+  } catch (const std::exception& e) {
+    clients.fetch_sub(1);
+    response.status = 500;
+    response.set_content(unreadable_run_message(e) + "\n", "text/plain");
+    return;
+  }
   response.set_header("X-Accel-Buffering", "no");
   response.set_chunked_content_provider(
       "text/event-stream",
-      [this, stream, seen, last_write, opening](std::size_t, httplib::DataSink& sink) {
-        if (*opening) {  // how long a browser waits before reconnecting
-          *opening = false;
+      [this, state](std::size_t, httplib::DataSink& sink) {
+        if (state->opening) {  // how long a browser waits before reconnecting
+          state->opening = false;
           const std::string retry = "retry: 1000\n\n";
           if (!sink.write(retry.data(), retry.size())) return false;
         }
-        return stream_step(*stream, *seen, *last_write, sink);
+        return stream_step(*state, sink);
       },
       [this](bool) { clients.fetch_sub(1); });
 }
 
+// What the run says now, or, when it cannot be read several turns running
+// (a busy store reads fine at the next turn; a damaged one never does), a
+// `run-error` message once; an empty one when it reads again.
+std::string LiveServer::Impl::read_stream(StreamState& state, const RunSnapshot& snapshot) {
+  try {
+    std::string text = state.stream.next(snapshot);
+    if (!state.error_sent) return text;
+    state.error_sent = false;
+    return sse_message("run-error", "", R"({"error":""})") + text;
+  } catch (const std::exception& e) {
+    if (++state.failures < kFailuresBeforeError || state.error_sent) return {};
+    state.error_sent = true;
+    state.failures = 0;
+    return sse_message("run-error", "", nlohmann::json{{"error", unreadable_run_message(e)}}.dump());
+  }
+}
+
 // One turn of a stream: what is new, else a wait for the watch to see
 // something (bounded, so stop() is noticed), else a keep-alive comment.
-bool LiveServer::Impl::stream_step(LiveStream& stream, std::uint64_t& seen,
-                                   std::chrono::steady_clock::time_point& last_write, httplib::DataSink& sink) {
+bool LiveServer::Impl::stream_step(StreamState& state, httplib::DataSink& sink) {
   if (stopping) return false;
   const RunSnapshot snapshot = watch.snapshot();
-  std::string text;
-  try {
-    text = stream.next(snapshot);
-  } catch (const std::exception&) {
-    text.clear();  // the store was busy; the next turn reads it again
-  }
+  std::string text = read_stream(state, snapshot);
   const auto now = std::chrono::steady_clock::now();
-  if (text.empty() && now - last_write >= kKeepAlivePeriod) text = ": keep-alive\n\n";
+  if (text.empty() && now - state.last_write >= kKeepAlivePeriod) text = ": keep-alive\n\n";
   if (!text.empty()) {
-    last_write = now;
+    state.last_write = now;
     return sink.write(text.data(), text.size());
   }
-  seen = watch.wait_for_change(snapshot.generation, options.poll_period * 5).generation;
+  watch.wait_for_change(snapshot.generation, options.poll_period * 5);
   return !stopping;
 }
 

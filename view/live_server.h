@@ -7,7 +7,8 @@
 //   /           the page (view/page.h)
 //   /chart.js   Debian's Chart.js, read once at start
 //   /api/run    the run's name, status, time basis, channels and devices (JSON)
-//   /events     the records as Server-Sent Events (view/live_stream.h)
+//   /frame.png  the newest live-evaluated frame, downscaled (view/live_bos.h)
+//   /events     the records and live BOS results as Server-Sent Events (view/live_stream.h)
 //
 // Use: construct (throws ViewError or storage::StorageError with a message
 // for the user), listen(), then serve() on a thread of its own until stop().
@@ -30,7 +31,7 @@ struct ViewOptions {
   std::string host = "127.0.0.1";
   int port = 8080;  // 0: any free port
   std::chrono::milliseconds poll_period{100};
-  int max_clients = 8;  // open /events streams; one more is refused with 503
+  int max_clients = 16;  // open /events streams; one more is refused with 503
   std::filesystem::path chartjs_path;  // empty: Debian's libjs-chart.js
 };
 

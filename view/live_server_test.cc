@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <httplib.h>
 
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -119,6 +120,38 @@ TEST_F(Viewer, AnswersOtherPathsWith404) {
     EXPECT_EQ(response->status, 404) << path;
     EXPECT_EQ(response->body, "not found\n") << path;
   }
+}
+
+// Overwrites every byte of the run's database and its log with text.
+void damage(const std::filesystem::path& run) {
+  for (const char* name : {"run.sqlite", "run.sqlite-wal"}) {
+    const auto path = run / name;
+    if (!std::filesystem::exists(path)) continue;
+    const std::string garbage(std::filesystem::file_size(path), 'x');
+    std::fstream(path, std::ios::in | std::ios::out | std::ios::binary).write(garbage.data(), garbage.size());
+  }
+}
+
+TEST_F(Viewer, ARunDamagedWhileServedIsSaidOnTheApiAndTheStreamAndTheServerGoesOn) {
+  write_samples(0, 20);
+  start();
+  writer_.reset();
+  damage(dir_ / "run");
+  auto c = client();
+  const auto run = c.Get("/api/run");
+  ASSERT_TRUE(run);
+  EXPECT_EQ(run->status, 500);
+  const std::string error = nlohmann::json::parse(run->body).at("error");
+  EXPECT_NE(error.find("the run cannot be read now"), std::string::npos) << error;
+  EXPECT_NE(error.find("damaged"), std::string::npos) << error;
+  const auto events = c.Get("/events");
+  ASSERT_TRUE(events);
+  EXPECT_EQ(events->status, 500);
+  EXPECT_NE(events->body.find("the run cannot be read now"), std::string::npos) << events->body;
+  const auto page = c.Get("/");  // the page still comes, and shows /api/run's error
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  EXPECT_NE(page->body.find("showRunError(body.error)"), std::string::npos);
 }
 
 TEST_F(Viewer, StreamsEverySampleInCommitOrderWhileTheRunIsWritten) {

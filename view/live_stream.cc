@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <charconv>
+#include <cmath>
 
 namespace bosfuse::view {
 namespace {
@@ -40,7 +41,8 @@ std::string sse_message(std::string_view type, std::string_view id, std::string_
   return message;
 }
 
-LiveStream::LiveStream(const std::filesystem::path& run_dir, TailCursor from) : tail_(run_dir), cursor_(from) {}
+LiveStream::LiveStream(const std::filesystem::path& run_dir, TailCursor from, const LiveBos* bos)
+    : tail_(run_dir), cursor_(from), bos_(bos) {}
 
 // Neither message carries an id: they restate the run, they are not records
 // a reconnecting client could miss.
@@ -60,6 +62,55 @@ std::string LiveStream::clock_and_status(const RunSnapshot& snapshot) {
   if (snapshot.status != sent_status_) {
     out += sse_message("status", "", nlohmann::json{{"status", snapshot.status}}.dump());
     sent_status_ = snapshot.status;
+  }
+  return out;
+}
+
+namespace {
+
+nlohmann::json finite_or_null(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(); }
+
+nlohmann::json bos_json(const LiveBosResult& r, const storage::ExperimentClock& clock, double camera_offset_s) {
+  nlohmann::json probes = nlohmann::json::array();
+  for (const auto& p : r.frame.probes) {
+    nlohmann::json probe{{"channel", p.channel_id},      {"name", p.name},
+                         {"x_px", p.position_px.x},      {"y_px", p.position_px.y},
+                         {"u_px", finite_or_null(p.u_px)}, {"v_px", finite_or_null(p.v_px)},
+                         {"shift_px", finite_or_null(p.shift_px)}, {"valid", p.valid}};
+    if (p.temperature_c && std::isfinite(*p.temperature_c)) probe["t_c"] = *p.temperature_c;
+    probes.push_back(std::move(probe));
+  }
+  const auto& q = r.frame.quality;
+  return {{"frame_id", r.frame.frame.id},
+          {"t_s", clock.seconds(r.frame.frame.t_ns) + camera_offset_s},
+          {"width_px", r.frame.frame.width_px},
+          {"height_px", r.frame.frame.height_px},
+          {"probes", probes},
+          {"quality", {{"q_l", finite_or_null(q.q_l)}, {"q_c", finite_or_null(q.q_c)}, {"q_mod", finite_or_null(q.q_mod)}}},
+          {"decode_ms", r.frame.decode_seconds * 1e3},
+          {"evaluate_ms", r.frame.evaluate_seconds * 1e3},
+          {"evaluated", r.evaluated},
+          {"skipped", r.skipped}};
+}
+
+}  // namespace
+
+std::string LiveStream::live_bos(const storage::ExperimentClock& clock) {
+  std::string out;
+  if (!bos_) return out;
+  const LiveBosState state = bos_->state();
+  const std::string state_json = nlohmann::json{{"state", state.state},
+                                                {"temperature_source", state.temperature_source},
+                                                {"evaluated", state.evaluated},
+                                                {"skipped", state.skipped}}
+                                     .dump();
+  for (const LiveBosResult& r : bos_->results_from(bos_sent_)) {
+    out += sse_message("bos", "", bos_json(r, clock, state.camera_offset_s).dump());
+    ++bos_sent_;
+  }
+  if (state_json != sent_bos_state_) {
+    out += sse_message("bos-state", "", state_json);
+    sent_bos_state_ = state_json;
   }
   return out;
 }
@@ -95,7 +146,7 @@ std::string LiveStream::next(const RunSnapshot& snapshot) {
                               {"height_px", frames.back().height_px}};
     out += sse_message("frames", format_cursor(cursor_), data.dump());
   }
-  return out;
+  return out + live_bos(clock);
 }
 
 }  // namespace bosfuse::view

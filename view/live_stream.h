@@ -13,6 +13,7 @@
 #include <string>
 #include <string_view>
 
+#include "view/live_bos.h"
 #include "view/run_watch.h"
 
 namespace bosfuse::view {
@@ -31,7 +32,9 @@ class LiveStream {
   // Rows read per call of next(), per table: bounds each write to a client.
   static constexpr int kRowsPerRead = 2000;
 
-  LiveStream(const std::filesystem::path& run_dir, TailCursor from);
+  // `bos`, when given, adds the live BOS results (`bos` and `bos-state`
+  // messages, without ids: the whole series is sent on every connection).
+  LiveStream(const std::filesystem::path& run_dir, TailCursor from, const LiveBos* bos = nullptr);
 
   // The next part of the stream, given the run as `snapshot` sees it; empty
   // when the client has everything the run committed.
@@ -40,11 +43,15 @@ class LiveStream {
 
  private:
   std::string clock_and_status(const RunSnapshot& snapshot);
+  std::string live_bos(const storage::ExperimentClock& clock);
 
   RunTail tail_;
   TailCursor cursor_;
   std::string sent_clock_;
   std::string sent_status_;
+  const LiveBos* bos_;
+  std::size_t bos_sent_ = 0;
+  std::string sent_bos_state_;
 };
 
 }  // namespace bosfuse::view

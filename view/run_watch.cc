@@ -49,6 +49,14 @@ RunSnapshot RunWatch::wait_for_change(std::uint64_t seen, std::chrono::milliseco
   return snapshot_;
 }
 
+void RunWatch::notify() {
+  {
+    std::lock_guard lock(mutex_);
+    ++snapshot_.generation;
+  }
+  changed_.notify_all();
+}
+
 void RunWatch::poll_until_stopped() {
   std::unique_lock lock(mutex_);
   while (!stopping_) {

@@ -45,6 +45,9 @@ class RunWatch {
   RunSnapshot snapshot() const;
   // The snapshot once its generation differs from `seen`, or after `limit`.
   RunSnapshot wait_for_change(std::uint64_t seen, std::chrono::milliseconds limit) const;
+  // Wakes every waiter as if the run had changed: another source of the
+  // streams' content (view/live_bos.h) has something new.
+  void notify();
   // The run's name, status, time basis, channels with units and devices, as JSON text.
   std::string describe_json() const;
 

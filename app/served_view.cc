@@ -1,0 +1,54 @@
+#include "app/served_view.h"
+
+#include <iostream>
+
+#include "storage/database.h"
+
+namespace bosfuse::app {
+
+ServedView::ServedView(const std::filesystem::path& run, const std::string& listen) {
+  view::ViewOptions options;
+  view::parse_listen_address(listen, options);
+  try {
+    server_.emplace(run, options);
+  } catch (const storage::StorageError& e) {
+    throw std::runtime_error("cannot view '" + run.string() + "': it is not a readable bosfuse run (" + e.what() + ")");
+  }
+  server_->listen();
+  serving_ = std::thread([this] { server_->serve(); });
+  if (options.host != "127.0.0.1" && options.host != "::1" && options.host != "localhost") {
+    std::cerr << "warning: listening on " << options.host
+              << ", not loopback: anyone who can reach this host can read the run\n";
+  }
+}
+
+ServedView::~ServedView() {
+  server_->stop();
+  if (serving_.joinable()) serving_.join();
+}
+
+std::unique_ptr<ServedView> start_live_view(const std::filesystem::path& run, const std::string& listen) {
+  if (listen.empty()) return nullptr;
+  try {
+    auto served = std::make_unique<ServedView>(run, listen);
+    std::cerr << "live view: " << served->url() << std::endl;
+    return served;
+  } catch (const std::exception& e) {
+    std::cerr << "live view not started, recording goes on without it: " << e.what() << std::endl;
+    return nullptr;
+  }
+}
+
+void add_live_option(CLI::App& command, std::string& listen) {
+  command
+      .add_option_function<std::vector<std::string>>(
+          "--live",
+          [&listen](const std::vector<std::string>& values) {
+            listen = values.empty() || values.front().empty() ? kDefaultListen : values.front();
+          },
+          std::string("Serve the live page of the run while recording, on HOST:PORT (") + kDefaultListen +
+              " when not given); loopback unless you say otherwise")
+      ->expected(0, 1);
+}
+
+}  // namespace bosfuse::app
