@@ -11,6 +11,8 @@ namespace {
 
 std::string describe(cv::Size size) { return fmt::format("{}x{}", size.width, size.height); }
 
+}  // namespace
+
 double full_scale(int depth) {
   switch (depth) {
     case CV_8U:
@@ -25,8 +27,6 @@ double full_scale(int depth) {
       return 1.0;  // float images are taken as scaled already
   }
 }
-
-}  // namespace
 
 cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn_colour) {
   if (image.empty()) throw std::invalid_argument(name + ": the image is empty (unreadable file or no pixels)");

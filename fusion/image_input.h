@@ -18,6 +18,10 @@ namespace bosfuse::fusion {
 // `warn_colour` false: convert colour silently (the caller warned once).
 cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn_colour = true);
 
+// The value of full scale of an image depth: 255 for 8-bit, 65535 for
+// 16-bit, 1 for float (taken as scaled already).
+double full_scale(int depth);
+
 // Throws std::invalid_argument naming the problem: empty images, sizes that
 // differ, or a mask whose size is not the images'.
 void check_image_pair(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask = {});

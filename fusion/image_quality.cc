@@ -41,22 +41,39 @@ std::string QualityOptions::Validate() const {
   return {};
 }
 
-QualityIndex modified_quality_index(const cv::Mat& image, const cv::Mat& reference) {
-  const cv::Mat x = to_grey_unit_float(image, "image");
-  const cv::Mat y = to_grey_unit_float(reference, "reference");
-  cv::Scalar mean_x, std_x, mean_y, std_y;
-  cv::meanStdDev(x, mean_x, std_x);  // population σ, accumulated in double
-  cv::meanStdDev(y, mean_y, std_y);
-  const double nx = double(x.total()), ny = double(y.total());
+GreyMoments grey_moments(const cv::Mat& image, const std::string& name) {
+  if (image.empty()) throw std::invalid_argument(name + ": the image is empty (unreadable file or no pixels)");
+  cv::Mat grey = image;
+  double scale = full_scale(image.depth());
+  if (image.depth() == CV_32F || image.depth() == CV_64F) {
+    grey = to_grey_unit_float(image, name);  // NaNs patched, colour converted
+    scale = 1.0;
+  } else if (image.channels() == 3 || image.channels() == 4) {
+    spdlog::warn("{}: colour image ({} channels) converted to grey", name, image.channels());
+    cv::cvtColor(image, grey, image.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
+  } else if (image.channels() != 1) {
+    throw std::invalid_argument(fmt::format("{}: {} channels, expected grey or colour", name, image.channels()));
+  }
+  cv::Scalar mean, std_dev;
+  cv::meanStdDev(grey, mean, std_dev);  // population σ, accumulated in double
+  const double n = double(grey.total());
+  return {mean[0] / scale, n > 1 ? std_dev[0] / scale * std::sqrt(n / (n - 1)) : 0.0};
+}
+
+QualityIndex modified_quality_index(const GreyMoments& image, const GreyMoments& reference) {
   QualityIndex q;
-  q.mean_image = mean_x[0];
-  q.mean_reference = mean_y[0];
-  q.std_image = nx > 1 ? std_x[0] * std::sqrt(nx / (nx - 1)) : 0.0;
-  q.std_reference = ny > 1 ? std_y[0] * std::sqrt(ny / (ny - 1)) : 0.0;
+  q.mean_image = image.mean;
+  q.mean_reference = reference.mean;
+  q.std_image = image.std;
+  q.std_reference = reference.std;
   q.q_l = similarity(q.mean_image, q.mean_reference);
   q.q_c = similarity(q.std_image, q.std_reference);
   q.q_mod = q.q_l * q.q_c;
   return q;
+}
+
+QualityIndex modified_quality_index(const cv::Mat& image, const cv::Mat& reference) {
+  return modified_quality_index(grey_moments(image, "image"), grey_moments(reference, "reference"));
 }
 
 QualityReport assess_quality(const cv::Mat& image, const cv::Mat& reference, const QualityOptions& options) {

@@ -47,6 +47,17 @@ struct QualityReport {
 // Global Q_L, Q_C, Q_mod over whole images, which may differ in size.
 QualityIndex modified_quality_index(const cv::Mat& image, const cv::Mat& reference);
 
+// What the global index compares of one image: its grey levels' mean and
+// sample standard deviation, of full scale. Computed on the image as stored
+// (8 or 16 bit) without a float copy, so a live check can prepare its
+// reference's once and compare every frame with it.
+struct GreyMoments {
+  double mean = 0;
+  double std = 0;
+};
+GreyMoments grey_moments(const cv::Mat& image, const std::string& name = "image");
+QualityIndex modified_quality_index(const GreyMoments& image, const GreyMoments& reference);
+
 // Everything, sliding-window measures included. A reference of another size
 // is resized to the image's (with a warning): a printed pattern file rarely
 // matches the camera's pixel count.

@@ -1,5 +1,7 @@
 #include "fusion/image_quality.h"
 
+#include "fusion/image_input.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -87,6 +89,24 @@ TEST(ImageQuality, SixteenBitImagesScaleToFullScale) {
   cv::Mat p16;
   p.convertTo(p16, CV_16U, 257.0);
   EXPECT_NEAR(modified_quality_index(p16, p).q_mod, 1.0, 1e-6);
+}
+
+TEST(ImageQuality, MomentsOfTheStoredImageEqualThoseOfItsFloatCopy) {
+  cv::Mat image8(64, 80, CV_8U), image16(64, 80, CV_16U), colour(64, 80, CV_8UC3);
+  cv::randu(image8, 0, 256);
+  cv::randu(image16, 0, 65536);
+  cv::randu(colour, 0, 256);
+  for (const cv::Mat& image : {image8, image16, colour}) {
+    const cv::Mat unit = to_grey_unit_float(image, "image");
+    cv::Scalar mean, std_dev;
+    cv::meanStdDev(unit, mean, std_dev);
+    const double n = double(unit.total());
+    const GreyMoments m = grey_moments(image);
+    EXPECT_NEAR(m.mean, mean[0], 1e-6);
+    EXPECT_NEAR(m.std, std_dev[0] * std::sqrt(n / (n - 1)), 1e-6);
+  }
+  EXPECT_DOUBLE_EQ(modified_quality_index(grey_moments(image8), grey_moments(image16)).q_mod,
+                   modified_quality_index(image8, image16).q_mod);
 }
 
 }  // namespace
