@@ -9,6 +9,7 @@ namespace bosfuse::acquisition {
 std::string DevicePoller::Options::Validate() const {
   if (period <= std::chrono::nanoseconds::zero()) return "poll period must be positive";
   if (poll_count && *poll_count < 1) return "poll count must be at least 1";
+  if (skipped_event_interval <= std::chrono::nanoseconds::zero()) return "skipped-poll event interval must be positive";
   return ConnectionKeeper::Backoff{backoff_initial, backoff_max}.Validate();
 }
 
@@ -114,8 +115,20 @@ void DevicePoller::count_missed_ticks(SteadyTime deadline, SteadyTime next) {
   const bool deadline_on_schedule = (deadline - schedule_origin_) % options_.period == std::chrono::nanoseconds(0);
   const std::int64_t skipped = (next - deadline) / options_.period - 1;
   if (!deadline_on_schedule || skipped <= 0) return;
+  skipped_unreported_ += skipped;
   std::lock_guard lock(stats_mutex_);
   stats_.missed_ticks += skipped;
+}
+
+// Stats are this process's; the events put skipped polls in the run, where
+// another process (the live page) and a later reader see them.
+void DevicePoller::report_skipped(bool at_stop) {
+  if (skipped_unreported_ == 0) return;
+  const SteadyTime now = std::chrono::steady_clock::now();
+  if (!at_stop && last_skipped_event_ && now - *last_skipped_event_ < options_.skipped_event_interval) return;
+  record_event("skipped", std::to_string(skipped_unreported_) + " polls skipped (device too slow)");
+  skipped_unreported_ = 0;
+  last_skipped_event_ = now;
 }
 
 bool DevicePoller::poll_count_reached() const {
@@ -124,8 +137,14 @@ bool DevicePoller::poll_count_reached() const {
 }
 
 void DevicePoller::loop() {
+  poll_until_done();
+  report_skipped(true);
+}
+
+void DevicePoller::poll_until_done() {
   SteadyTime deadline = std::max(schedule_origin_, std::chrono::steady_clock::now());
   while (wait_until(deadline)) {
+    report_skipped(false);
     for (const std::string& notice : source_->take_notices()) record_event("hotplug", notice);
     if (!ensure_connected()) {
       deadline = std::chrono::steady_clock::now() + connection_.backoff();

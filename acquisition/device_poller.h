@@ -6,9 +6,11 @@
 // RunWriter. A failed poll stores samples with the failure's status (timeout
 // when the link broke, bad-reply when the device answered nonsense); the
 // outage is recorded once and retried with exponential backoff, and its end
-// is recorded with the length of the gap. One dead device never stalls the
-// others: each has its own thread (a DeviceWorker), and the shared writer
-// never blocks on a device.
+// is recorded with the length of the gap. Polls skipped because one overran
+// are recorded too ("skipped" events), gathered so that a device always too
+// slow for its period adds one event per interval, not one per poll. One
+// dead device never stalls the others: each has its own thread (a
+// DeviceWorker), and the shared writer never blocks on a device.
 
 #include <chrono>
 #include <mutex>
@@ -32,6 +34,9 @@ class DevicePoller : public DeviceWorker {
     std::chrono::milliseconds backoff_initial{250};
     std::chrono::milliseconds backoff_max{10'000};
     std::optional<std::int64_t> poll_count;  // stop after this many polls (ok or failed)
+    // At most one "skipped" event per interval, with the count since the
+    // last; the rest when the poller stops.
+    std::chrono::nanoseconds skipped_event_interval = std::chrono::seconds(10);
     std::string Validate() const;
   };
 
@@ -55,11 +60,13 @@ class DevicePoller : public DeviceWorker {
 
  private:
   void loop() override;
+  void poll_until_done();
   void close_device() noexcept override;
   bool ensure_connected();
   bool poll_once();  // false when the device failed
   void note_failure(const DeviceError& failure, std::int64_t t_ns);
   void count_missed_ticks(SteadyTime deadline, SteadyTime next);
+  void report_skipped(bool at_stop);
   SteadyTime next_tick_after(SteadyTime now) const;
   SteadyTime next_attempt(bool poll_ok) const;
   bool poll_count_reached() const;
@@ -70,6 +77,8 @@ class DevicePoller : public DeviceWorker {
   Options options_;
   SteadyTime schedule_origin_;
   ConnectionKeeper connection_;  // used on the worker thread only
+  std::int64_t skipped_unreported_ = 0;  // worker thread only, like the next
+  std::optional<SteadyTime> last_skipped_event_;
 
   mutable std::mutex stats_mutex_;
   Stats stats_;

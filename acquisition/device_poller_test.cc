@@ -86,9 +86,13 @@ struct Harness {
     writer.flush();
     return poller->stats();
   }
+  // Without "skipped": a loaded machine can make any poller skip a poll;
+  // the tests of skipped polls read those events themselves.
   std::vector<std::string> event_kinds() const {
     std::vector<std::string> kinds;
-    for (const auto& e : store.events()) kinds.push_back(e.kind);
+    for (const auto& e : store.events()) {
+      if (e.kind != "skipped") kinds.push_back(e.kind);
+    }
     return kinds;
   }
 };
@@ -109,6 +113,63 @@ TEST(DevicePoller, FixedScheduleDoesNotDriftWhenReadsTakeTime) {
   const double span_s = static_cast<double>(samples.back().t_ns - samples.front().t_ns) * 1e-9;
   const double ticks = static_cast<double>(samples.size() - 1 + static_cast<std::size_t>(stats.missed_ticks));
   EXPECT_NEAR(span_s, 0.020 * ticks, 0.03) << stats.missed_ticks << " ticks skipped";
+}
+
+// What the run says about skipped polls: the "skipped" events' counts.
+std::vector<std::int64_t> skipped_counts(const storage::RunStore& store,
+                                         std::vector<std::int64_t>* times_ns = nullptr) {
+  std::vector<std::int64_t> counts;
+  for (const auto& e : store.events()) {
+    if (e.kind != "skipped") continue;
+    const auto space = e.message.find(' ');
+    EXPECT_EQ(e.message.substr(space), " polls skipped (device too slow)") << e.message;
+    EXPECT_TRUE(e.device_id.has_value());
+    counts.push_back(std::stoll(e.message.substr(0, space)));
+    if (times_ns) times_ns->push_back(e.t_ns);
+  }
+  return counts;
+}
+
+std::int64_t sum(const std::vector<std::int64_t>& counts) {
+  std::int64_t total = 0;
+  for (const std::int64_t n : counts) total += n;
+  return total;
+}
+
+// Polls a device too slow for its period skipped are in the run, not only
+// in this process's stats: reported at once, then at most once per
+// interval (10 s here, longer than the run), the rest at the stop.
+TEST(DevicePoller, PollsSkippedByASlowDeviceAreRecordedAsEvents) {
+  Harness h;
+  auto source = std::make_unique<ScriptedSource>();
+  source->read_time = 50ms;  // a 20 ms period: two or three ticks missed per poll
+  const auto stats = h.run(std::move(source), {20ms, 250ms, 10s, {}}, 500ms);
+  ASSERT_GE(stats.missed_ticks, 10) << "the source was not too slow";
+  const auto counts = skipped_counts(h.store);
+  ASSERT_EQ(counts.size(), 2u) << "the first skips at once, the rest at the stop";
+  EXPECT_EQ(sum(counts), stats.missed_ticks) << "the events do not add up to the polls skipped";
+  EXPECT_EQ(h.store.events().back().kind, "skipped") << "the rest was not told at the stop";
+}
+
+TEST(DevicePoller, SkippedPollEventsAreSpacedByTheirInterval) {
+  Harness h;
+  auto source = std::make_unique<ScriptedSource>();
+  source->read_time = 25ms;
+  DevicePoller::Options options{10ms, 250ms, 10s, {}};
+  options.skipped_event_interval = 200ms;
+  const auto stats = h.run(std::move(source), options, 1100ms);
+  std::vector<std::int64_t> times_ns;
+  const auto counts = skipped_counts(h.store, &times_ns);
+  EXPECT_EQ(sum(counts), stats.missed_ticks);
+  ASSERT_GE(counts.size(), 3u);
+  EXPECT_LE(counts.size(), 8u) << "one event per skipped poll, not per interval";
+  for (std::size_t i = 1; i + 1 < times_ns.size(); ++i) {  // the last one is the stop's
+    EXPECT_GE(times_ns[i] - times_ns[i - 1], 190'000'000) << "event " << i << " came too soon";
+  }
+  storage::RunWriter writer(h.store);
+  options.skipped_event_interval = 0ms;
+  EXPECT_THROW(DevicePoller(std::make_unique<ScriptedSource>(), h.device, h.channels, writer, options),
+               std::invalid_argument);
 }
 
 TEST(DevicePoller, StatusesPassThroughAndOpenCircuitHasNoValue) {

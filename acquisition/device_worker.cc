@@ -14,7 +14,7 @@ constexpr std::chrono::milliseconds kFirstRestartPause{250};
 constexpr std::chrono::milliseconds kLongestRestartPause{10'000};
 
 bool is_trouble(const std::string& kind) {
-  return kind == "disconnect" || kind == "error" || kind == "bad-reply" || kind == "abandoned";
+  return kind == "disconnect" || kind == "error" || kind == "bad-reply" || kind == "abandoned" || kind == "skipped";
 }
 
 }  // namespace
