@@ -5,6 +5,29 @@
 #include "acquisition/clock.h"
 
 namespace bosfuse::acquisition {
+namespace {
+
+// How long a wait for the next poll goes without checking for stale channels.
+constexpr std::chrono::seconds kStaleCheckInterval{1};
+
+AlarmMonitor watch_alarms(const std::string& device, const std::vector<storage::ChannelInfo>& channels,
+                          const std::vector<std::int64_t>& channel_ids, const std::vector<AlarmLimits>& limits) {
+  if (limits.empty()) return AlarmMonitor({}, utc_now_ns());
+  if (limits.size() != channels.size() || channel_ids.size() != channels.size()) {
+    throw std::invalid_argument("device " + device + ": alarm limits do not match its channels");
+  }
+  std::vector<AlarmMonitor::Channel> watched;
+  for (std::size_t i = 0; i < channels.size(); ++i) {
+    watched.push_back({channel_ids[i], channels[i].name, channels[i].unit, limits[i]});
+  }
+  try {
+    return AlarmMonitor(watched, utc_now_ns());
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("device " + device + ": " + e.what());
+  }
+}
+
+}  // namespace
 
 std::string DevicePoller::Options::Validate() const {
   if (period <= std::chrono::nanoseconds::zero()) return "poll period must be positive";
@@ -22,7 +45,8 @@ DevicePoller::DevicePoller(std::unique_ptr<ThermocoupleSource> source, std::int6
       options_(options),
       schedule_origin_(std::chrono::steady_clock::now()),
       connection_({options.backoff_initial, options.backoff_max},
-                  [this](const std::string& kind, const std::string& message) { record_event(kind, message); }) {
+                  [this](const std::string& kind, const std::string& message) { record_event(kind, message); }),
+      alarms_(watch_alarms(name(), channels_, channel_ids_, options_.alarms)) {
   if (const std::string problem = options_.Validate(); !problem.empty()) {
     throw std::invalid_argument("device " + name() + ": " + problem);
   }
@@ -100,6 +124,7 @@ bool DevicePoller::poll_once() {
     }
   }
   push(samples);
+  for (const storage::Sample& s : samples) report_alarms(alarms_.add_sample(s.channel_id, s.t_ns, s.status, s.value));
   const auto recovery = failure ? ConnectionKeeper::Recovery::kNone : connection_.succeeded();
   if (failure) note_failure(*failure, t_ns);
   std::lock_guard lock(stats_mutex_);
@@ -141,9 +166,26 @@ void DevicePoller::loop() {
   report_skipped(true);
 }
 
+void DevicePoller::report_alarms(const std::vector<AlarmTransition>& transitions) {
+  for (const AlarmTransition& t : transitions) {
+    // The callback's owner may be gone once the poller is abandoned.
+    if (store_event(t.event_kind(), t.message) && options_.on_alarm) options_.on_alarm(name() + ": " + t.message);
+  }
+}
+
+bool DevicePoller::wait_watching(SteadyTime deadline) {
+  for (;;) {
+    const SteadyTime wake =
+        alarms_.empty() ? deadline : std::min(deadline, std::chrono::steady_clock::now() + kStaleCheckInterval);
+    if (!wait_until(wake)) return false;
+    report_alarms(alarms_.check_stale(utc_now_ns()));
+    if (wake == deadline) return true;
+  }
+}
+
 void DevicePoller::poll_until_done() {
   SteadyTime deadline = std::max(schedule_origin_, std::chrono::steady_clock::now());
-  while (wait_until(deadline)) {
+  while (wait_watching(deadline)) {
     report_skipped(false);
     for (const std::string& notice : source_->take_notices()) record_event("hotplug", notice);
     if (!ensure_connected()) {

@@ -11,15 +11,24 @@
 // slow for its period adds one event per interval, not one per poll. One
 // dead device never stalls the others: each has its own thread (a
 // DeviceWorker), and the shared writer never blocks on a device.
+//
+// Channels with alarm limits are watched by an AlarmMonitor on the same
+// thread: every sample is judged as it is pushed, and staleness on every
+// poll attempt and at least once a second in between, so a device that
+// fails, or is waiting out a reconnection backoff, still goes stale on
+// time. Each alarm raised or cleared is an "alarm" or "alarm-cleared"
+// event and a line to Options::on_alarm.
 
 #include <chrono>
-#include <mutex>
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "acquisition/alarm_monitor.h"
 #include "acquisition/connection_keeper.h"
 #include "acquisition/device_worker.h"
 #include "acquisition/thermocouple_source.h"
@@ -37,6 +46,11 @@ class DevicePoller : public DeviceWorker {
     // At most one "skipped" event per interval, with the count since the
     // last; the rest when the poller stops.
     std::chrono::nanoseconds skipped_event_interval = std::chrono::seconds(10);
+    // One per channel, in channel_infos() order; empty when none has any.
+    std::vector<AlarmLimits> alarms = {};
+    // Called on the device's thread with "<device>: <event message>" for
+    // each alarm raised or cleared; never once the poller is abandoned.
+    std::function<void(const std::string&)> on_alarm = {};
     std::string Validate() const;
   };
 
@@ -61,6 +75,8 @@ class DevicePoller : public DeviceWorker {
  private:
   void loop() override;
   void poll_until_done();
+  bool wait_watching(SteadyTime deadline);
+  void report_alarms(const std::vector<AlarmTransition>& transitions);
   void close_device() noexcept override;
   bool ensure_connected();
   bool poll_once();  // false when the device failed
@@ -77,8 +93,9 @@ class DevicePoller : public DeviceWorker {
   Options options_;
   SteadyTime schedule_origin_;
   ConnectionKeeper connection_;  // used on the worker thread only
-  std::int64_t skipped_unreported_ = 0;  // worker thread only, like the next
+  std::int64_t skipped_unreported_ = 0;  // worker thread only, like the next two
   std::optional<SteadyTime> last_skipped_event_;
+  AlarmMonitor alarms_;
 
   mutable std::mutex stats_mutex_;
   Stats stats_;

@@ -37,7 +37,8 @@ inline ModbusEndpoint loopback_tcp(int port = 0) {
 
 inline acquisition::Logger::Summary log_for(storage::RunStore& store, const acquisition::ExperimentConfig& config,
                                             std::chrono::milliseconds duration,
-                                            std::function<void(const std::string&)> on_progress = {}) {
+                                            std::function<void(const std::string&)> on_progress = {},
+                                            std::function<void(const std::string&)> on_alarm = {}) {
   acquisition::Logger::Options options;
   options.duration = duration;
   options.writer.flush_interval = 50ms;
@@ -45,6 +46,7 @@ inline acquisition::Logger::Summary log_for(storage::RunStore& store, const acqu
   options.backoff_max = 200ms;
   options.on_progress = std::move(on_progress);
   options.progress_interval = 200ms;
+  options.on_alarm = std::move(on_alarm);
   acquisition::Logger logger(store, options);
   logger.add_devices(config);
   std::atomic<bool> stop{false};
