@@ -5,10 +5,34 @@
 #include "acquisition/clock.h"
 
 namespace bosfuse::acquisition {
+namespace {
+
+// How long a wait for the next poll goes without checking for stale channels.
+constexpr std::chrono::seconds kStaleCheckInterval{1};
+
+AlarmMonitor watch_alarms(const std::string& device, const std::vector<storage::ChannelInfo>& channels,
+                          const std::vector<std::int64_t>& channel_ids, const std::vector<AlarmLimits>& limits) {
+  if (limits.empty()) return AlarmMonitor({}, utc_now_ns());
+  if (limits.size() != channels.size() || channel_ids.size() != channels.size()) {
+    throw std::invalid_argument("device " + device + ": alarm limits do not match its channels");
+  }
+  std::vector<AlarmMonitor::Channel> watched;
+  for (std::size_t i = 0; i < channels.size(); ++i) {
+    watched.push_back({channel_ids[i], channels[i].name, channels[i].unit, limits[i]});
+  }
+  try {
+    return AlarmMonitor(watched, utc_now_ns());
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("device " + device + ": " + e.what());
+  }
+}
+
+}  // namespace
 
 std::string DevicePoller::Options::Validate() const {
   if (period <= std::chrono::nanoseconds::zero()) return "poll period must be positive";
   if (poll_count && *poll_count < 1) return "poll count must be at least 1";
+  if (skipped_event_interval <= std::chrono::nanoseconds::zero()) return "skipped-poll event interval must be positive";
   return ConnectionKeeper::Backoff{backoff_initial, backoff_max}.Validate();
 }
 
@@ -21,7 +45,8 @@ DevicePoller::DevicePoller(std::unique_ptr<ThermocoupleSource> source, std::int6
       options_(options),
       schedule_origin_(std::chrono::steady_clock::now()),
       connection_({options.backoff_initial, options.backoff_max},
-                  [this](const std::string& kind, const std::string& message) { record_event(kind, message); }) {
+                  [this](const std::string& kind, const std::string& message) { record_event(kind, message); }),
+      alarms_(watch_alarms(name(), channels_, channel_ids_, options_.alarms)) {
   if (const std::string problem = options_.Validate(); !problem.empty()) {
     throw std::invalid_argument("device " + name() + ": " + problem);
   }
@@ -99,6 +124,7 @@ bool DevicePoller::poll_once() {
     }
   }
   push(samples);
+  for (const storage::Sample& s : samples) report_alarms(alarms_.add_sample(s.channel_id, s.t_ns, s.status, s.value));
   const auto recovery = failure ? ConnectionKeeper::Recovery::kNone : connection_.succeeded();
   if (failure) note_failure(*failure, t_ns);
   std::lock_guard lock(stats_mutex_);
@@ -114,8 +140,20 @@ void DevicePoller::count_missed_ticks(SteadyTime deadline, SteadyTime next) {
   const bool deadline_on_schedule = (deadline - schedule_origin_) % options_.period == std::chrono::nanoseconds(0);
   const std::int64_t skipped = (next - deadline) / options_.period - 1;
   if (!deadline_on_schedule || skipped <= 0) return;
+  skipped_unreported_ += skipped;
   std::lock_guard lock(stats_mutex_);
   stats_.missed_ticks += skipped;
+}
+
+// Stats are this process's; the events put skipped polls in the run, where
+// another process (the live page) and a later reader see them.
+void DevicePoller::report_skipped(bool at_stop) {
+  if (skipped_unreported_ == 0) return;
+  const SteadyTime now = std::chrono::steady_clock::now();
+  if (!at_stop && last_skipped_event_ && now - *last_skipped_event_ < options_.skipped_event_interval) return;
+  record_event("skipped", std::to_string(skipped_unreported_) + " polls skipped (device too slow)");
+  skipped_unreported_ = 0;
+  last_skipped_event_ = now;
 }
 
 bool DevicePoller::poll_count_reached() const {
@@ -124,8 +162,31 @@ bool DevicePoller::poll_count_reached() const {
 }
 
 void DevicePoller::loop() {
+  poll_until_done();
+  report_skipped(true);
+}
+
+void DevicePoller::report_alarms(const std::vector<AlarmTransition>& transitions) {
+  for (const AlarmTransition& t : transitions) {
+    // The callback's owner may be gone once the poller is abandoned.
+    if (store_event(t.event_kind(), t.message) && options_.on_alarm) options_.on_alarm(name() + ": " + t.message);
+  }
+}
+
+bool DevicePoller::wait_watching(SteadyTime deadline) {
+  for (;;) {
+    const SteadyTime wake =
+        alarms_.empty() ? deadline : std::min(deadline, std::chrono::steady_clock::now() + kStaleCheckInterval);
+    if (!wait_until(wake)) return false;
+    report_alarms(alarms_.check_stale(utc_now_ns()));
+    if (wake == deadline) return true;
+  }
+}
+
+void DevicePoller::poll_until_done() {
   SteadyTime deadline = std::max(schedule_origin_, std::chrono::steady_clock::now());
-  while (wait_until(deadline)) {
+  while (wait_watching(deadline)) {
+    report_skipped(false);
     for (const std::string& notice : source_->take_notices()) record_event("hotplug", notice);
     if (!ensure_connected()) {
       deadline = std::chrono::steady_clock::now() + connection_.backoff();

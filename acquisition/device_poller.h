@@ -6,18 +6,29 @@
 // RunWriter. A failed poll stores samples with the failure's status (timeout
 // when the link broke, bad-reply when the device answered nonsense); the
 // outage is recorded once and retried with exponential backoff, and its end
-// is recorded with the length of the gap. One dead device never stalls the
-// others: each has its own thread (a DeviceWorker), and the shared writer
-// never blocks on a device.
+// is recorded with the length of the gap. Polls skipped because one overran
+// are recorded too ("skipped" events), gathered so that a device always too
+// slow for its period adds one event per interval, not one per poll. One
+// dead device never stalls the others: each has its own thread (a
+// DeviceWorker), and the shared writer never blocks on a device.
+//
+// Channels with alarm limits are watched by an AlarmMonitor on the same
+// thread: every sample is judged as it is pushed, and staleness on every
+// poll attempt and at least once a second in between, so a device that
+// fails, or is waiting out a reconnection backoff, still goes stale on
+// time. Each alarm raised or cleared is an "alarm" or "alarm-cleared"
+// event and a line to Options::on_alarm.
 
 #include <chrono>
-#include <mutex>
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "acquisition/alarm_monitor.h"
 #include "acquisition/connection_keeper.h"
 #include "acquisition/device_worker.h"
 #include "acquisition/thermocouple_source.h"
@@ -32,6 +43,14 @@ class DevicePoller : public DeviceWorker {
     std::chrono::milliseconds backoff_initial{250};
     std::chrono::milliseconds backoff_max{10'000};
     std::optional<std::int64_t> poll_count;  // stop after this many polls (ok or failed)
+    // At most one "skipped" event per interval, with the count since the
+    // last; the rest when the poller stops.
+    std::chrono::nanoseconds skipped_event_interval = std::chrono::seconds(10);
+    // One per channel, in channel_infos() order; empty when none has any.
+    std::vector<AlarmLimits> alarms = {};
+    // Called on the device's thread with "<device>: <event message>" for
+    // each alarm raised or cleared; never once the poller is abandoned.
+    std::function<void(const std::string&)> on_alarm = {};
     std::string Validate() const;
   };
 
@@ -55,11 +74,15 @@ class DevicePoller : public DeviceWorker {
 
  private:
   void loop() override;
+  void poll_until_done();
+  bool wait_watching(SteadyTime deadline);
+  void report_alarms(const std::vector<AlarmTransition>& transitions);
   void close_device() noexcept override;
   bool ensure_connected();
   bool poll_once();  // false when the device failed
   void note_failure(const DeviceError& failure, std::int64_t t_ns);
   void count_missed_ticks(SteadyTime deadline, SteadyTime next);
+  void report_skipped(bool at_stop);
   SteadyTime next_tick_after(SteadyTime now) const;
   SteadyTime next_attempt(bool poll_ok) const;
   bool poll_count_reached() const;
@@ -70,6 +93,9 @@ class DevicePoller : public DeviceWorker {
   Options options_;
   SteadyTime schedule_origin_;
   ConnectionKeeper connection_;  // used on the worker thread only
+  std::int64_t skipped_unreported_ = 0;  // worker thread only, like the next two
+  std::optional<SteadyTime> last_skipped_event_;
+  AlarmMonitor alarms_;
 
   mutable std::mutex stats_mutex_;
   Stats stats_;

@@ -3,10 +3,12 @@
 
 #include "acquisition/device_poller.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <atomic>
+#include <functional>
 #include <mutex>
 #include <thread>
 
@@ -86,9 +88,13 @@ struct Harness {
     writer.flush();
     return poller->stats();
   }
+  // Without "skipped": a loaded machine can make any poller skip a poll;
+  // the tests of skipped polls read those events themselves.
   std::vector<std::string> event_kinds() const {
     std::vector<std::string> kinds;
-    for (const auto& e : store.events()) kinds.push_back(e.kind);
+    for (const auto& e : store.events()) {
+      if (e.kind != "skipped") kinds.push_back(e.kind);
+    }
     return kinds;
   }
 };
@@ -109,6 +115,143 @@ TEST(DevicePoller, FixedScheduleDoesNotDriftWhenReadsTakeTime) {
   const double span_s = static_cast<double>(samples.back().t_ns - samples.front().t_ns) * 1e-9;
   const double ticks = static_cast<double>(samples.size() - 1 + static_cast<std::size_t>(stats.missed_ticks));
   EXPECT_NEAR(span_s, 0.020 * ticks, 0.03) << stats.missed_ticks << " ticks skipped";
+}
+
+// What the run says about skipped polls: the "skipped" events' counts.
+std::vector<std::int64_t> skipped_counts(const storage::RunStore& store,
+                                         std::vector<std::int64_t>* times_ns = nullptr) {
+  std::vector<std::int64_t> counts;
+  for (const auto& e : store.events()) {
+    if (e.kind != "skipped") continue;
+    const auto space = e.message.find(' ');
+    EXPECT_EQ(e.message.substr(space), " polls skipped (device too slow)") << e.message;
+    EXPECT_TRUE(e.device_id.has_value());
+    counts.push_back(std::stoll(e.message.substr(0, space)));
+    if (times_ns) times_ns->push_back(e.t_ns);
+  }
+  return counts;
+}
+
+std::int64_t sum(const std::vector<std::int64_t>& counts) {
+  std::int64_t total = 0;
+  for (const std::int64_t n : counts) total += n;
+  return total;
+}
+
+// Polls a device too slow for its period skipped are in the run, not only
+// in this process's stats: reported at once, then at most once per
+// interval (10 s here, longer than the run), the rest at the stop.
+TEST(DevicePoller, PollsSkippedByASlowDeviceAreRecordedAsEvents) {
+  Harness h;
+  auto source = std::make_unique<ScriptedSource>();
+  source->read_time = 50ms;  // a 20 ms period: two or three ticks missed per poll
+  const auto stats = h.run(std::move(source), {20ms, 250ms, 10s, {}}, 500ms);
+  ASSERT_GE(stats.missed_ticks, 10) << "the source was not too slow";
+  const auto counts = skipped_counts(h.store);
+  ASSERT_EQ(counts.size(), 2u) << "the first skips at once, the rest at the stop";
+  EXPECT_EQ(sum(counts), stats.missed_ticks) << "the events do not add up to the polls skipped";
+  EXPECT_EQ(h.store.events().back().kind, "skipped") << "the rest was not told at the stop";
+}
+
+TEST(DevicePoller, SkippedPollEventsAreSpacedByTheirInterval) {
+  Harness h;
+  auto source = std::make_unique<ScriptedSource>();
+  source->read_time = 25ms;
+  DevicePoller::Options options{10ms, 250ms, 10s, {}};
+  options.skipped_event_interval = 200ms;
+  const auto stats = h.run(std::move(source), options, 1100ms);
+  std::vector<std::int64_t> times_ns;
+  const auto counts = skipped_counts(h.store, &times_ns);
+  EXPECT_EQ(sum(counts), stats.missed_ticks);
+  ASSERT_GE(counts.size(), 3u);
+  EXPECT_LE(counts.size(), 8u) << "one event per skipped poll, not per interval";
+  for (std::size_t i = 1; i + 1 < times_ns.size(); ++i) {  // the last one is the stop's
+    EXPECT_GE(times_ns[i] - times_ns[i - 1], 190'000'000) << "event " << i << " came too soon";
+  }
+  storage::RunWriter writer(h.store);
+  options.skipped_event_interval = 0ms;
+  EXPECT_THROW(DevicePoller(std::make_unique<ScriptedSource>(), h.device, h.channels, writer, options),
+               std::invalid_argument);
+}
+
+// Lines given to on_alarm, from the poller's thread.
+struct AlarmLines {
+  std::mutex mutex;
+  std::vector<std::string> lines;
+  std::function<void(const std::string&)> callback() {
+    return [this](const std::string& line) {
+      std::lock_guard lock(mutex);
+      lines.push_back(line);
+    };
+  }
+  std::vector<std::string> taken() {
+    std::lock_guard lock(mutex);
+    return lines;
+  }
+};
+
+std::vector<std::string> alarm_events(const storage::RunStore& store) {
+  std::vector<std::string> out;
+  for (const auto& e : store.events()) {
+    if (e.kind == "alarm" || e.kind == "alarm-cleared") out.push_back(e.kind + " " + e.message);
+  }
+  return out;
+}
+
+// Channel a reads 0, 1, 2, ... (one more each poll); b is open-circuit.
+TEST(DevicePoller, AlarmsAreRunEventsAndLinesToTheCallback) {
+  Harness h;
+  AlarmLines lines;
+  DevicePoller::Options options{20ms, 250ms, 10s, {}};
+  options.alarms = {AlarmLimits{{}, 5.0, {}, {}}, AlarmLimits{{}, {}, {}, 0.2}};
+  options.on_alarm = lines.callback();
+  h.run(std::make_unique<ScriptedSource>(), options, 500ms);
+  // In either order: a slow machine may delay the seventh poll past 0.2 s.
+  auto alarms = alarm_events(h.store);
+  std::sort(alarms.begin(), alarms.end());
+  ASSERT_EQ(alarms.size(), 2u) << ::testing::PrintToString(alarms);
+  EXPECT_EQ(alarms[0], "alarm a: high 6.0 degC above the limit 5 degC");
+  EXPECT_THAT(alarms[1], ::testing::MatchesRegex(R"(alarm b: stale no value for 0\.[2-9] s \(limit 0\.2 s\))"));
+  for (const auto& e : h.store.events()) EXPECT_EQ(e.device_id, h.device) << e.kind;
+  auto lines_given = lines.taken();
+  std::sort(lines_given.begin(), lines_given.end());
+  ASSERT_EQ(lines_given.size(), 2u);
+  EXPECT_EQ(lines_given[0], "scripted: a: high 6.0 degC above the limit 5 degC");
+  EXPECT_EQ(lines_given[1], "scripted: " + alarms[1].substr(6));
+}
+
+// Stale is checked while the poller waits, not only when it polls: a device
+// that cannot be reached, with 2 s between attempts, is stale on time.
+TEST(DevicePoller, AChannelGoesStaleWhileItsDeviceCannotBeReached) {
+  Harness h;
+  auto source = std::make_unique<ScriptedSource>();
+  source->connect_failures_left = 1000;
+  AlarmLines lines;
+  DevicePoller::Options options{20ms, 2s, 2s, {}};
+  options.alarms = {AlarmLimits{{}, {}, {}, 0.3}, AlarmLimits{}};
+  options.on_alarm = lines.callback();
+  const auto stats = h.run(std::move(source), options, 1500ms);
+  EXPECT_EQ(stats.connect_failures, 1) << "attempts were not 2 s apart";
+  const auto alarms = alarm_events(h.store);
+  ASSERT_EQ(alarms.size(), 1u) << ::testing::PrintToString(alarms);
+  EXPECT_EQ(alarms[0].substr(0, 28), "alarm a: stale no value for ") << alarms[0];
+  EXPECT_EQ(lines.taken().size(), 1u);
+}
+
+TEST(DevicePoller, AlarmLimitsMustFitTheChannels) {
+  Harness h;
+  storage::RunWriter writer(h.store);
+  DevicePoller::Options options{20ms, 20ms, 80ms, {}};
+  options.alarms = {AlarmLimits{{}, 5.0, {}, {}}};  // two channels
+  EXPECT_THROW(DevicePoller(std::make_unique<ScriptedSource>(), h.device, h.channels, writer, options),
+               std::invalid_argument);
+  options.alarms = {AlarmLimits{{}, 5.0, {}, {}}, AlarmLimits{5.0, 1.0, {}, {}}};
+  try {
+    DevicePoller(std::make_unique<ScriptedSource>(), h.device, h.channels, writer, options);
+    ADD_FAILURE() << "limits with low above high were taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "device scripted: channel b: alarm_high: must be above alarm_low (5)");
+  }
 }
 
 TEST(DevicePoller, StatusesPassThroughAndOpenCircuitHasNoValue) {

@@ -14,7 +14,7 @@ constexpr std::chrono::milliseconds kFirstRestartPause{250};
 constexpr std::chrono::milliseconds kLongestRestartPause{10'000};
 
 bool is_trouble(const std::string& kind) {
-  return kind == "disconnect" || kind == "error" || kind == "bad-reply" || kind == "abandoned";
+  return kind == "disconnect" || kind == "error" || kind == "bad-reply" || kind == "abandoned" || kind == "skipped";
 }
 
 }  // namespace
@@ -102,12 +102,15 @@ void DeviceWorker::push(const storage::FrameRecord& frame) {
   if (!abandoned_) writer_.push(frame);
 }
 
+bool DeviceWorker::store_event(const std::string& kind, const std::string& message) {
+  std::lock_guard sink(sink_mutex_);
+  if (abandoned_) return false;
+  writer_.push(storage::Event{0, device_id_, utc_now_ns(), kind, message});
+  return true;
+}
+
 void DeviceWorker::record_event(const std::string& kind, const std::string& message) {
-  {
-    std::lock_guard sink(sink_mutex_);
-    if (abandoned_) return;
-    writer_.push(storage::Event{0, device_id_, utc_now_ns(), kind, message});
-  }
+  if (!store_event(kind, message)) return;
   if (is_trouble(kind)) {
     spdlog::warn("{}: {}", name_, message);
   } else {

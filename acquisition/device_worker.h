@@ -66,6 +66,9 @@ class DeviceWorker : public std::enable_shared_from_this<DeviceWorker> {
   void push(const storage::FrameRecord& frame);
   // Stores a device event and logs it (a warning when something went wrong).
   void record_event(const std::string& kind, const std::string& message);
+  // Stores a device event only, for events the caller reports its own way.
+  // False when it was dropped because the worker is abandoned.
+  bool store_event(const std::string& kind, const std::string& message);
 
  private:
   void run() noexcept;

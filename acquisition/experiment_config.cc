@@ -49,14 +49,24 @@ void read_position(const TomlReader& r, Channel& c) {
   }
 }
 
-// What a channel measures and where it is in the image: the keys every
-// kind of channel shares.
+template <typename Channel>
+void read_alarms(const TomlReader& r, Channel& c) {
+  c.alarms.low = r.optional_number("alarm_low");
+  c.alarms.high = r.optional_number("alarm_high");
+  c.alarms.rate_per_min = r.optional_number("alarm_rate_per_min");
+  c.alarms.stale_s = r.optional_number("alarm_stale_s");
+  if (const auto problem = c.alarms.problem()) r.fail(problem->key, problem->message);
+}
+
+// What a channel measures, where it is in the image and when it is alarming:
+// the keys every kind of channel shares.
 template <typename Channel>
 void read_channel_identity(const TomlReader& r, Channel& c) {
   c.name = r.string("name");
   if (auto kind = r.optional_string("kind")) c.kind = *kind;
   if (auto unit = r.optional_string("unit")) c.unit = *unit;
   read_position(r, c);
+  read_alarms(r, c);
 }
 
 // `emf_type` marks a channel that delivers millivolts from a thermocouple;
@@ -304,6 +314,7 @@ UsbTc32Channel read_usb_tc32_channel(const TomlReader& r) {
     r.fail("tc_type", "the USB-TC-32 takes types J, K, T, E, R, S, B or N");
   c.tc_type = type[0];
   read_position(r, c);
+  read_alarms(r, c);
   r.reject_unknown_keys();
   return c;
 }
@@ -374,6 +385,13 @@ CameraConfig read_camera(const TomlReader& r) {
   return c;
 }
 
+// A millivolt channel is recorded (and alarmed) in °C once converted. A
+// device built in code may have no emf_inputs at all.
+std::string recorded_unit(const std::string& unit, const std::vector<std::optional<EmfInput>>& emf_inputs,
+                          std::size_t channel) {
+  return channel < emf_inputs.size() && emf_inputs[channel] ? "degC" : unit;
+}
+
 }  // namespace
 
 ExperimentConfig parse_experiment(std::string_view text, const std::string& source_name) {
@@ -427,6 +445,29 @@ ExperimentConfig load_experiment(const std::filesystem::path& path) {
   std::ostringstream text;
   text << in.rdbuf();
   return parse_experiment(text.str(), path.string());
+}
+
+std::vector<ChannelAlarmLimits> alarm_limits(const ExperimentConfig& config) {
+  std::vector<ChannelAlarmLimits> out;
+  const auto add = [&](const std::string& device, const std::string& channel, const std::string& unit,
+                       const AlarmLimits& limits) {
+    if (limits.any()) out.push_back({device, channel, unit, limits});
+  };
+  for (const ModbusDeviceConfig& d : config.modbus_devices) {
+    for (std::size_t i = 0; i < d.channels.size(); ++i) {
+      add(d.name, d.channels[i].name, recorded_unit(d.channels[i].unit, d.emf_inputs, i), d.channels[i].alarms);
+    }
+  }
+  for (const HidDeviceConfig& d : config.hid_devices) {
+    const auto& channels = d.protocol.channels;
+    for (std::size_t i = 0; i < channels.size(); ++i) {
+      add(d.name, channels[i].name, recorded_unit(channels[i].unit, d.emf_inputs, i), channels[i].alarms);
+    }
+  }
+  for (const UsbDeviceConfig& d : config.usb_devices) {
+    for (const UsbTc32Channel& c : d.channels) add(d.name, c.name, "degC", c.alarms);
+  }
+  return out;
 }
 
 void check_hosts_resolve(const ExperimentConfig& config) {

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "acquisition/alarm_limits.h"
 #include "acquisition/emf_conversion.h"
 #include "acquisition/frame_recorder.h"
 #include "acquisition/hid_device.h"
@@ -89,6 +90,19 @@ ExperimentConfig parse_experiment(std::string_view text, const std::string& sour
 // The run a logger records with this experiment file, started at `started_ns`.
 storage::RunInfo run_info(const ExperimentConfig& config, std::int64_t started_ns);
 ExperimentConfig load_experiment(const std::filesystem::path& path);  // throws ConfigError
+
+// A channel's alarm limits with what a reader needs to show them.
+struct ChannelAlarmLimits {
+  std::string device;
+  std::string channel;
+  std::string unit;  // as recorded: °C for a millivolt channel with emf_type
+  AlarmLimits limits;
+};
+
+// Every channel of `config` that has alarm limits: Modbus devices, then HID,
+// then USB, each in file order. The live page reads them from a run's
+// stored experiment file (parse_experiment(run.config_toml, ...)).
+std::vector<ChannelAlarmLimits> alarm_limits(const ExperimentConfig& config);
 
 // Throws ConfigError, naming the key and line, for a Modbus TCP host name
 // that does not resolve: at the start of logging a name that does not

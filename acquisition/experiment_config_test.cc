@@ -247,6 +247,83 @@ TEST(ExperimentConfig, DuplicateNamesAreRefused) {
   EXPECT_NE(error_of(device + channel + device + channel).find("duplicate device name"), std::string::npos);
 }
 
+TEST(ExperimentConfig, ChannelsOfEveryKindTakeAlarmLimits) {
+  const std::string text =
+      "[[devices]]\nname = \"adam\"\nprofile = \"adam-6018\"\nhost = \"localhost\"\n"
+      "[[devices.channels]]\nname = \"T1\"\ninput = 0\nalarm_low = -5\nalarm_high = 80.5\n"
+      "alarm_rate_per_min = 10\nalarm_stale_s = 30\n"
+      "[[devices.channels]]\nname = \"T2\"\ninput = 1\n"
+      "[[devices]]\nname = \"g\"\nprofile = \"generic\"\ntransport = \"tcp\"\nhost = \"localhost\"\n"
+      "[[devices.channels]]\nname = \"mv\"\nregister = \"input\"\naddress = 0\nunit = \"mV\"\n"
+      "emf_type = \"K\"\ncold_junction_c = 20\nalarm_high = 300\n"
+      "[[devices]]\nname = \"room\"\nkind = \"hid\"\nprofile = \"temper\"\n"
+      "[[devices.channels]]\nname = \"air\"\nalarm_stale_s = 5\n"
+      "[[devices]]\nname = \"tc32\"\nkind = \"usb\"\nprofile = \"usb-tc-32\"\n"
+      "[[devices.channels]]\nname = \"a\"\ninput = 3\nalarm_low = 0\n";
+  const ExperimentConfig config = parse_experiment(text, "exp.toml");
+  const AlarmLimits& t1 = config.modbus_devices[0].channels[0].alarms;
+  EXPECT_EQ(t1.low, -5.0);
+  EXPECT_EQ(t1.high, 80.5);
+  EXPECT_EQ(t1.rate_per_min, 10.0);
+  EXPECT_EQ(t1.stale_s, 30.0);
+  EXPECT_TRUE(t1.any());
+  EXPECT_FALSE(config.modbus_devices[0].channels[1].alarms.any());
+  EXPECT_EQ(config.hid_devices[0].protocol.channels[0].alarms.stale_s, 5.0);
+  EXPECT_EQ(config.usb_devices[0].channels[0].alarms.low, 0.0);
+
+  // What the live page lists: only channels with limits, in the unit they
+  // are recorded in (a millivolt channel converted with emf_type is in °C).
+  const auto listed = alarm_limits(config);
+  ASSERT_EQ(listed.size(), 4u);
+  EXPECT_EQ(listed[0].device, "adam");
+  EXPECT_EQ(listed[0].channel, "T1");
+  EXPECT_EQ(listed[0].unit, "degC");
+  EXPECT_EQ(listed[0].limits.high, 80.5);
+  EXPECT_EQ(listed[1].channel, "mv");
+  EXPECT_EQ(listed[1].unit, "degC");
+  EXPECT_EQ(listed[1].limits.high, 300.0);
+  EXPECT_EQ(listed[2].device, "room");
+  EXPECT_EQ(listed[2].limits.stale_s, 5.0);
+  EXPECT_EQ(listed[3].device, "tc32");
+  EXPECT_EQ(listed[3].limits.low, 0.0);
+  // The stored text of a run reads back to the same list.
+  EXPECT_EQ(alarm_limits(parse_experiment(config.source_text, "run")).size(), 4u);
+}
+
+TEST(ExperimentConfig, BadAlarmLimitsNameTheKeyAndLine) {
+  const std::string channel =
+      "[[devices]]\nname = \"a\"\nprofile = \"adam-6018\"\nhost = \"localhost\"\n"
+      "[[devices.channels]]\nname = \"t\"\ninput = 0\n";  // its keys from line 8
+  EXPECT_EQ(error_of(channel + "alarm_low = 80\nalarm_high = 20\n"),
+            "exp.toml:9: devices[0].channels[0].alarm_high: must be above alarm_low (80)");
+  EXPECT_EQ(error_of(channel + "alarm_low = 50\nalarm_high = 50\n"),
+            "exp.toml:9: devices[0].channels[0].alarm_high: must be above alarm_low (50)");
+  EXPECT_EQ(error_of(channel + "alarm_rate_per_min = 0\n"),
+            "exp.toml:8: devices[0].channels[0].alarm_rate_per_min: expected a positive rate of change "
+            "(the channel's unit per minute)");
+  EXPECT_EQ(error_of(channel + "alarm_rate_per_min = -3\n").substr(0, 54),
+            "exp.toml:8: devices[0].channels[0].alarm_rate_per_min:");
+  EXPECT_EQ(error_of(channel + "alarm_stale_s = 0\n"),
+            "exp.toml:8: devices[0].channels[0].alarm_stale_s: expected a number of seconds above 0, at most a year");
+  EXPECT_EQ(error_of(channel + "alarm_stale_s = 1e300\n").substr(0, 49),
+            "exp.toml:8: devices[0].channels[0].alarm_stale_s:");
+  EXPECT_EQ(error_of(channel + "alarm_high = nan\n"),
+            "exp.toml:8: devices[0].channels[0].alarm_high: expected a finite number");
+  EXPECT_EQ(error_of(channel + "alarm_low = -inf\n"),
+            "exp.toml:8: devices[0].channels[0].alarm_low: expected a finite number");
+  EXPECT_EQ(error_of(channel + "alarm_high = \"80\"\n"),
+            "exp.toml:8: devices[0].channels[0].alarm_high: expected a number");
+  EXPECT_EQ(error_of(channel + "alarm_hihg = 80\n"),
+            "exp.toml:8: devices[0].channels[0].alarm_hihg: unknown key (a typo?)");
+  // The same checks for the other kinds of device.
+  EXPECT_EQ(error_of("[[devices]]\nname = \"u\"\nkind = \"usb\"\nprofile = \"usb-tc-32\"\n"
+                     "[[devices.channels]]\nname = \"a\"\ninput = 3\nalarm_stale_s = -1\n"),
+            "exp.toml:8: devices[0].channels[0].alarm_stale_s: expected a number of seconds above 0, at most a year");
+  EXPECT_EQ(error_of("[[devices]]\nname = \"r\"\nkind = \"hid\"\nprofile = \"temper\"\n"
+                     "[[devices.channels]]\nname = \"air\"\nalarm_high = 1\nalarm_low = 2\n"),
+            "exp.toml:7: devices[0].channels[0].alarm_high: must be above alarm_low (2)");
+}
+
 TEST(ExperimentConfig, MissingFileIsReported) { EXPECT_THROW(load_experiment("/nonexistent/exp.toml"), ConfigError); }
 
 }  // namespace

@@ -25,6 +25,7 @@
 #include <string_view>
 #include <vector>
 
+#include "acquisition/alarm_limits.h"
 #include "acquisition/modbus_channel.h"
 
 namespace bosfuse::acquisition {
@@ -52,6 +53,7 @@ struct HidChannel {
   std::optional<double> valid_min;
   std::optional<double> valid_max;
   int burnout_bit = -1;  // bit of the device's burnout bitmap, if it has one
+  AlarmLimits alarms{};
 
   std::string Validate() const;
   std::size_t reply_size() const;  // bytes the reply must have at least

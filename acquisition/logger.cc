@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <sstream>
 #include <thread>
 
@@ -14,6 +15,15 @@ namespace bosfuse::acquisition {
 namespace {
 
 constexpr auto kStopCheckInterval = std::chrono::milliseconds(20);
+
+// One per channel, or none when no channel has limits.
+template <typename Channel>
+std::vector<AlarmLimits> alarm_limits_of(const std::vector<Channel>& channels) {
+  std::vector<AlarmLimits> limits;
+  for (const Channel& c : channels) limits.push_back(c.alarms);
+  const bool any = std::any_of(limits.begin(), limits.end(), [](const AlarmLimits& l) { return l.any(); });
+  return any ? limits : std::vector<AlarmLimits>{};
+}
 
 }  // namespace
 
@@ -81,23 +91,24 @@ void Logger::wait_for_end(const std::atomic<bool>& stop_requested,
 Logger::Logger(storage::RunStore& store, Options options) : store_(store), options_(std::move(options)) {}
 
 void Logger::add_source(std::unique_ptr<ThermocoupleSource> source, std::chrono::nanoseconds period,
-                        std::optional<std::int64_t> poll_count) {
-  sources_.push_back({std::move(source), period, poll_count});
+                        std::optional<std::int64_t> poll_count, std::vector<AlarmLimits> alarms) {
+  sources_.push_back({std::move(source), period, poll_count, std::move(alarms)});
 }
 
 void Logger::add_devices(const ExperimentConfig& config) {
   for (const ModbusDeviceConfig& d : config.modbus_devices) {
     add_source(with_emf_conversion(std::make_unique<ModbusDevice>(d.name, d.profile, d.endpoint, d.channels, d.timeout),
                                    d.emf_inputs),
-               d.poll_period, d.poll_count);
+               d.poll_period, d.poll_count, alarm_limits_of(d.channels));
   }
   for (const HidDeviceConfig& d : config.hid_devices) {
     add_source(with_emf_conversion(std::make_unique<HidDevice>(d.name, d.profile, d.match, d.protocol, d.timeout),
                                    d.emf_inputs),
-               d.poll_period, d.poll_count);
+               d.poll_period, d.poll_count, alarm_limits_of(d.protocol.channels));
   }
   for (const UsbDeviceConfig& d : config.usb_devices) {
-    add_source(std::make_unique<UsbTc32Device>(d.name, d.serial, d.channels, d.timeout), d.poll_period, d.poll_count);
+    add_source(std::make_unique<UsbTc32Device>(d.name, d.serial, d.channels, d.timeout), d.poll_period, d.poll_count,
+               alarm_limits_of(d.channels));
   }
   for (const CameraConfig& c : config.cameras) {
     std::unique_ptr<FrameSource> source;
@@ -153,8 +164,10 @@ std::vector<std::shared_ptr<DevicePoller>> Logger::make_pollers(storage::RunWrit
       channel.device_id = device_id;
       channel_ids.push_back(store_.add_channel(channel));
     }
-    const DevicePoller::Options poll_options{pending.period, options_.backoff_initial, options_.backoff_max,
-                                             pending.poll_count};
+    DevicePoller::Options poll_options{pending.period, options_.backoff_initial, options_.backoff_max,
+                                       pending.poll_count};
+    poll_options.alarms = std::move(pending.alarms);
+    poll_options.on_alarm = options_.on_alarm;
     pollers.push_back(
         std::make_shared<DevicePoller>(std::move(pending.source), device_id, channel_ids, writer, poll_options));
   }

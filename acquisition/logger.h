@@ -34,6 +34,10 @@ class Logger {
     // readings, so a user watching the run sees it is alive.
     std::function<void(const std::string&)> on_progress;
     std::chrono::milliseconds progress_interval{5'000};
+    // Called, from the devices' threads, with one line for each alarm raised
+    // or cleared ("adam: T1: high 85.2 degC above the limit 80 degC"); the
+    // run has them as "alarm" and "alarm-cleared" events either way.
+    std::function<void(const std::string&)> on_alarm;
   };
 
   struct DeviceSummary {
@@ -60,9 +64,11 @@ class Logger {
 
   Logger(storage::RunStore& store, Options options);
 
-  // Adds a device polled every `period`, `poll_count` times when given. Call before run().
+  // Adds a device polled every `period`, `poll_count` times when given,
+  // its channels watched against `alarms` (one per channel, in
+  // channel_infos() order, or none). Call before run().
   void add_source(std::unique_ptr<ThermocoupleSource> source, std::chrono::nanoseconds period,
-                  std::optional<std::int64_t> poll_count = std::nullopt);
+                  std::optional<std::int64_t> poll_count = std::nullopt, std::vector<AlarmLimits> alarms = {});
   // Adds a camera whose frames are stored under frames/<name>/. Call before run().
   void add_camera(std::unique_ptr<FrameSource> source, std::string name, FrameRecorder::Options options);
   // Adds every device and camera of an experiment file.
@@ -78,6 +84,7 @@ class Logger {
     std::unique_ptr<ThermocoupleSource> source;
     std::chrono::nanoseconds period;
     std::optional<std::int64_t> poll_count;
+    std::vector<AlarmLimits> alarms;
   };
 
   Summary run_devices(const std::atomic<bool>& stop_requested);

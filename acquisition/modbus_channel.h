@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "acquisition/alarm_limits.h"
 #include "acquisition/register_codec.h"
 #include "storage/records.h"
 
@@ -55,6 +56,8 @@ struct ModbusChannel {
   std::vector<double> out_of_range_codes;
   std::optional<double> valid_min;  // engineering units; outside is out-of-range
   std::optional<double> valid_max;
+
+  AlarmLimits alarms{};  // judged on the decoded value, not on the registers
 
   std::string Validate() const;  // empty when valid, else what is wrong
   int register_count() const { return acquisition::register_count(type); }

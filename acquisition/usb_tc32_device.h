@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "acquisition/alarm_limits.h"
 #include "acquisition/thermocouple_source.h"
 #include "acquisition/usb_tc32_protocol.h"
 
@@ -30,6 +31,7 @@ struct UsbTc32Channel {
   char tc_type = 'K';
   std::optional<double> image_x_px;
   std::optional<double> image_y_px;
+  AlarmLimits alarms{};
 };
 
 struct LibusbContextFree {

@@ -50,6 +50,7 @@ void acquire(const AcquireArgs& args) {
   acquisition::Logger::Options options;
   if (!args.duration.empty()) options.duration = parse_duration(args.duration);
   options.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
+  options.on_alarm = [](const std::string& line) { spdlog::warn("{}", line); };
   const storage::RunInfo info = acquisition::run_info(config, acquisition::utc_now_ns());
   auto store = storage::RunStore::create(
       args.out, info, args.append ? storage::RunStore::CreateMode::kAppend : storage::RunStore::CreateMode::kNew);

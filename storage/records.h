@@ -93,7 +93,9 @@ struct Event {
   std::int64_t id = 0;
   std::optional<std::int64_t> device_id;
   std::int64_t t_ns = 0;
-  std::string kind;  // started, stopped, appended, marker, connect, disconnect, reconnect, hotplug, gap, error
+  // started, stopped, appended, marker, connect, disconnect, reconnect, hotplug, gap, error, skipped,
+  // alarm, alarm-cleared (docs/SCHEMA.md)
+  std::string kind;
   std::string message;
 };
 
