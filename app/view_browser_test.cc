@@ -3,8 +3,10 @@
 // by tests/support/cdp_wait.py):
 // - `bosfuse acquire` logs a simulated Modbus module and `bosfuse view`
 //   serves the run: the thermocouple values appear and grow, each device's
-//   polls are counted with the age of its last value, and the device goes
-//   "disconnected" (failed polls counted) when its module is stopped;
+//   polls are counted with the age of its last value, an alarm limit of the
+//   experiment file is shown with its active alarm, and the device goes
+//   "disconnected" (failed polls counted, a staleness alarm raised) when its
+//   module is stopped;
 // - `bosfuse demo --live` records the simulated experiment (Modbus module
 //   and virtual camera) with the viewer inside the logger: the live BOS
 //   temperature at each thermocouple appears and changes beside the
@@ -86,7 +88,8 @@ TEST(ViewBrowser, ValuesAppearAndGrowWhileRecordingAndAStoppedModuleShowsDisconn
                                      "host = \"127.0.0.1\"\nport = "
                                   << module.port()
                                   << "\npoll_period_s = 0.1\ntimeout_s = 0.2\n\n[[devices.channels]]\nname = \"tc0\"\n"
-                                     "input = 0\n\n[[devices.channels]]\nname = \"tc1\"\ninput = 1\n";
+                                     "input = 0\nalarm_high = 50  # the module starts at 80 °C\n\n[[devices.channels]]\n"
+                                     "name = \"tc1\"\ninput = 1\nalarm_stale_s = 2\n";
   const std::string run = (dir / "run").string();
   testing::BackgroundProcess acquire({kBosfuse, "acquire", (dir / "exp.toml").string(), "--out", run, "-q"});
   ASSERT_TRUE(testing::wait_for([&] { return std::filesystem::exists(dir / "run/run.sqlite"); }, 10s));
@@ -115,6 +118,13 @@ TEST(ViewBrowser, ValuesAppearAndGrowWhileRecordingAndAStoppedModuleShowsDisconn
                                     " return m && Number(m[1]) >= 6 ? t : null; })()",
                                     20);
   ASSERT_TRUE(counted.is_string()) << counted;
+  // The alarm the experiment file asked for is active, with its limit shown.
+  const auto alarm = wait_in_page(devtools_port, url,
+                                  "(() => { const a = document.getElementById('alarms').textContent,"
+                                  " l = document.getElementById('limits').textContent;"
+                                  " return a.includes('tc0: high') && l.includes('tc0: high 50 °C') ? [a, l] : null; })()",
+                                  20);
+  ASSERT_TRUE(alarm.is_array()) << alarm;
   // ... and keep coming (a second tab: what it shows grows past the first one's count).
   const int seen = first[0].get<int>();
   const auto later = wait_in_page(devtools_port, url, points_per_series(seen + 10), 30);
@@ -129,6 +139,12 @@ TEST(ViewBrowser, ValuesAppearAndGrowWhileRecordingAndAStoppedModuleShowsDisconn
       30);
   ASSERT_TRUE(devices.is_string()) << devices;
   EXPECT_NE(devices.get<std::string>().find("adam"), std::string::npos) << devices;
+  // ... and the channel with a staleness limit raises its alarm.
+  const auto stale = wait_in_page(
+      devtools_port, url,
+      "(() => { const a = document.getElementById('alarms').textContent; return a.includes('tc1: stale') ? a : null; })()",
+      30);
+  ASSERT_TRUE(stale.is_string()) << stale;
 }
 
 TEST(ViewBrowser, TheLiveBosTemperatureAppearsAndChangesBesideTheThermocouplesWhileTheDemoRecords) {

@@ -170,7 +170,7 @@ class AcquireLive : public ViewCli {
                                         "\"adam-6018\"\nhost = \"127.0.0.1\"\nport = "
                                      << module_->port()
                                      << "\npoll_period_s = 0.05\ntimeout_s = 0.2\n\n[[devices.channels]]\nname = "
-                                        "\"tc0\"\ninput = 0\n";
+                                        "\"tc0\"\ninput = 0\nalarm_high = 50\n";
   }
   std::string acquire_command(const std::string& duration) const {
     return kBosfuse + " acquire " + (dir_ / "exp.toml").string() + " --out " + (dir_ / "logged").string() +
@@ -192,8 +192,17 @@ TEST_F(AcquireLive, PrintsTheUrlOfTheRunItRecordsAndServesItsSamplesLive) {
   const auto run = testing::run_command("curl -sf " + url("/api/run"));
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_EQ(nlohmann::json::parse(run.output).at("name"), "live");
-  EXPECT_GE(values(curl_events(1.0)).size(), 5u) << "samples arrive while the logger records";
+  const auto events = curl_events(1.0);
+  EXPECT_GE(values(events).size(), 5u) << "samples arrive while the logger records";
+  const auto alarm = std::find_if(events.begin(), events.end(), [](const auto& m) {
+    return m.type == "event" && nlohmann::json::parse(m.data).at("kind") == "alarm";
+  });
+  ASSERT_NE(alarm, events.end()) << "the module serves 80 °C, above the limit";
+  EXPECT_EQ(nlohmann::json::parse(alarm->data).at("message").get<std::string>().rfind("tc0: high ", 0), 0u);
   EXPECT_EQ(acquire.wait_exit(15s), 0);
+  std::ifstream in(err);
+  const std::string stderr_text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(stderr_text.find("adam: tc0: high "), std::string::npos) << "acquire reports the alarm on stderr";
 }
 
 TEST_F(AcquireLive, APortInUseIsSaidAndTheRecordingGoesOnWithoutThePage) {

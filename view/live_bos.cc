@@ -52,7 +52,7 @@ void LiveBos::set_state(const std::string& state) {
 }
 
 void LiveBos::run() {
-  storage::RunTail tail(watch_.run_dir());
+  std::optional<storage::RunTail> tail;  // opened at the first frame: a run damaged meanwhile is a state, not a crash
   std::uint64_t seen = 0;
   for (;;) {
     {
@@ -63,7 +63,8 @@ void LiveBos::run() {
     seen = snapshot.generation;
     if (snapshot.head.frame_id <= last_frame_id_) continue;
     try {
-      evaluate_new_frames(tail);
+      if (!tail) tail.emplace(watch_.run_dir());
+      evaluate_new_frames(*tail);
     } catch (const std::exception& e) {
       set_state(e.what());  // tried again with the next frame
     }

@@ -2,6 +2,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "acquisition/experiment_config.h"
+
 namespace bosfuse::view {
 namespace {
 
@@ -10,6 +12,26 @@ namespace {
 // while the first batches commit. Rechecking it on every new event, and at
 // most this often otherwise, keeps a long run's poll cheap.
 constexpr auto kClockRecheckPeriod = std::chrono::seconds(1);
+
+// The alarm limits of the run's experiment file by (device, channel) name,
+// as the page shows them; none when the stored file is not one this build
+// reads (an old or hand-made run).
+std::map<std::pair<std::string, std::string>, nlohmann::json> alarm_limits_json(const std::string& config_toml) {
+  std::map<std::pair<std::string, std::string>, nlohmann::json> out;
+  try {
+    for (const auto& c : acquisition::alarm_limits(acquisition::parse_experiment(config_toml, "the run's experiment file"))) {
+      nlohmann::json j = nlohmann::json::object();
+      if (c.limits.low) j["low"] = *c.limits.low;
+      if (c.limits.high) j["high"] = *c.limits.high;
+      if (c.limits.rate_per_min) j["rate_per_min"] = *c.limits.rate_per_min;
+      if (c.limits.stale_s) j["stale_s"] = *c.limits.stale_s;
+      out[{c.device, c.channel}] = j;
+    }
+  } catch (const std::exception&) {
+    // Limits are shown when the file reads; the run itself is served either way.
+  }
+  return out;
+}
 
 bool same_clock(const storage::ExperimentClock& a, const storage::ExperimentClock& b) {
   return a.origin_ns == b.origin_ns && a.time_scale == b.time_scale && a.origin_name == b.origin_name &&
@@ -114,15 +136,18 @@ std::string RunWatch::describe_json() const {
                        {"profile", device.profile},
                        {"address", device.address}});
   }
+  const auto limits = alarm_limits_json(run.config_toml);
   nlohmann::json channels = nlohmann::json::array();
   for (const auto& channel : store_.channels()) {
+    const auto alarms = limits.find({names[channel.device_id], channel.name});
     channels.push_back({{"id", channel.id},
                         {"name", channel.name},
                         {"kind", channel.kind},
                         {"unit", channel.unit},
                         {"tc_type", channel.tc_type ? nlohmann::json(*channel.tc_type) : nlohmann::json()},
                         {"device_id", channel.device_id},
-                        {"device", names[channel.device_id]}});
+                        {"device", names[channel.device_id]},
+                        {"alarms", alarms == limits.end() ? nlohmann::json::object() : alarms->second}});
   }
   const storage::ExperimentClock& clock = snapshot_.clock;
   return nlohmann::json{{"name", run.name},

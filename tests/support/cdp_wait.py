@@ -4,6 +4,8 @@
 every 250 ms until it returns a truthy value or SECONDS have passed, by the
 DevTools protocol (python3-websocket). Prints the last value as JSON and
 exits 0 when it became truthy, 1 when the time ran out, 2 on an error.
+The tab is closed at the end: a browser keeps at most six connections to
+one server, and a tab left open keeps its event stream's.
 
     cdp_wait.py PORT URL SECONDS EXPR
 """
@@ -19,6 +21,13 @@ def main():
     port, url, seconds, expression = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
     request = urllib.request.Request(f"http://127.0.0.1:{port}/json/new?{url}", method="PUT")
     target = json.load(urllib.request.urlopen(request, timeout=10))
+    try:
+        return wait(target, seconds, expression)
+    finally:
+        urllib.request.urlopen(f"http://127.0.0.1:{port}/json/close/{target['id']}", timeout=10).read()
+
+
+def wait(target, seconds, expression):
     ws = websocket.create_connection(target["webSocketDebuggerUrl"], timeout=10)
     deadline = time.monotonic() + seconds
     value, message_id = None, 0
