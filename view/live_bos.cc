@@ -2,6 +2,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "view/thread_priority.h"
+
 namespace bosfuse::view {
 namespace {
 
@@ -14,7 +16,10 @@ constexpr int kFramesPerRead = 100'000;
 
 LiveBos::LiveBos(RunWatch& watch, pipeline::LiveProbeOptions options) : watch_(watch), options_(options) {
   state_.state = "waiting for frames";
-  thread_ = std::thread([this] { run(); });
+  thread_ = std::thread([this] {
+    yield_to_the_logger();
+    run();
+  });
 }
 
 LiveBos::~LiveBos() {

@@ -16,6 +16,7 @@
 #include "view/live_stream.h"
 #include "view/page.h"
 #include "view/run_watch.h"
+#include "view/thread_priority.h"
 
 namespace bosfuse::view {
 namespace {
@@ -28,6 +29,18 @@ constexpr auto kKeepAlivePeriod = std::chrono::seconds(5);
 constexpr int kSpareThreads = 4;
 // Reads of a stream that fail in a row before the page is told the run cannot be read.
 constexpr int kFailuresBeforeError = 3;
+
+// httplib's pool whose threads give way to the logger (thread_priority.h).
+class YieldingThreadPool : public httplib::ThreadPool {
+ public:
+  using httplib::ThreadPool::ThreadPool;
+  void enqueue(std::function<void()> task) override {
+    httplib::ThreadPool::enqueue([task = std::move(task)] {
+      yield_to_the_logger();
+      task();
+    });
+  }
+};
 
 std::string read_chartjs(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -70,7 +83,7 @@ struct LiveServer::Impl {
         watch(run_dir, options.poll_period),
         bos(watch) {
     const std::size_t threads = static_cast<std::size_t>(options.max_clients + kSpareThreads);
-    server.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+    server.new_task_queue = [threads] { return new YieldingThreadPool(threads); };
     // httplib's default adds SO_REUSEPORT, with which a second viewer on the
     // same port would bind too and take half the requests; SO_REUSEADDR alone
     // still allows a restart while old connections linger in TIME_WAIT.
@@ -248,6 +261,7 @@ std::string LiveServer::url() const {
 }
 
 void LiveServer::serve() {
+  yield_to_the_logger();  // the accept loop runs on the caller's thread
   impl_->serving = true;
   if (impl_->stopping) return;
   impl_->server.listen_after_bind();

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "acquisition/experiment_config.h"
+#include "view/thread_priority.h"
 
 namespace bosfuse::view {
 namespace {
@@ -48,7 +49,10 @@ RunWatch::RunWatch(const std::filesystem::path& run_dir, std::chrono::millisecon
   snapshot_.clock = storage::experiment_clock(store_);
   clock_checked_ = std::chrono::steady_clock::now();
   snapshot_.generation = 1;
-  poller_ = std::thread([this] { poll_until_stopped(); });
+  poller_ = std::thread([this] {
+    yield_to_the_logger();
+    poll_until_stopped();
+  });
 }
 
 RunWatch::~RunWatch() {
