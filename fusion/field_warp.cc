@@ -5,6 +5,8 @@
 #include <numbers>
 #include <opencv2/core/utility.hpp>
 
+#include "fusion/simd_clones.h"
+
 namespace bosfuse::fusion {
 namespace {
 
@@ -139,8 +141,8 @@ class Sampler {
 
 // Rows `rows` of the warped region; most of a deformation pass's cost, so
 // built for AVX2 besides the baseline.
-__attribute__((target_clones("avx2", "default"))) void warp_rows(const Sampler& sampler, const GridField& field,
-                                                                 cv::Rect region, cv::Range rows, cv::Mat& out) {
+BOSFUSE_AVX2_CLONES void warp_rows(const Sampler& sampler, const GridField& field, cv::Rect region, cv::Range rows,
+                                   cv::Mat& out) {
   const auto& g = field.grid;
   std::vector<AxisWeight> column_weights(static_cast<std::size_t>(region.width));
   for (int x = 0; x < region.width; ++x) column_weights[x] = axis_weight(region.x + x, g.x0_px, g.step_px, g.cols);

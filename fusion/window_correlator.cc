@@ -3,6 +3,8 @@
 #include <cmath>
 #include <opencv2/core.hpp>
 
+#include "fusion/simd_clones.h"
+
 namespace bosfuse::fusion {
 namespace {
 
@@ -87,9 +89,8 @@ void WindowCorrelator::prepare_patch_sums(const cv::Mat& search_patch) {
 // values in [0,1]); the lanes are then summed in double. Written so the inner
 // loop vectorises, and built for AVX2 besides the baseline (the loader
 // picks what the CPU has): this loop is most of a correlation's cost.
-__attribute__((target_clones("avx2", "default"))) void accumulate_products(const float* reference, const float* patch,
-                                                                           std::size_t patch_stride, int n, int side,
-                                                                           double* products) {
+BOSFUSE_AVX2_CLONES void accumulate_products(const float* reference, const float* patch, std::size_t patch_stride,
+                                             int n, int side, double* products) {
   float column[128];
   for (int dy = 0; dy < side; ++dy) {
     for (int dx = 0; dx < side; ++dx) {
