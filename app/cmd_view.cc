@@ -29,7 +29,9 @@ void view_run(const ViewArgs& args) {
 void add_view(CLI::App& root) {
   auto args = std::make_shared<ViewArgs>();
   CLI::App* cmd = root.add_subcommand(
-      "view", "Serve a live web page of a run (curves, devices, events, frames) while it is recorded or after");
+      "view",
+      "Serve a live web page of a run (curves, live BOS temperatures, frames, devices, alarms, events) while it is "
+      "recorded or after");
   cmd->add_option("run", args->run, "Run folder")->required();
   cmd->add_option("--listen", args->listen, "HOST:PORT to serve on; loopback unless you say otherwise")
       ->capture_default_str();
