@@ -9,6 +9,10 @@
 
 #include "fusion/simd_kernels.h"
 
+// After foreach_target.h too, so that each target sees them.
+#include <algorithm>
+#include <cmath>
+
 HWY_BEFORE_NAMESPACE();
 namespace bosfuse::fusion {
 namespace HWY_NAMESPACE {
@@ -90,6 +94,79 @@ void AccumulateProducts(const float* reference, const float* patch, std::size_t 
   }
 }
 
+// The reference's sum at one point, taps clamped to the image: the SIMD
+// kernel's path for points whose taps cross the image edge.
+HWY_INLINE float SampleClamped(const float* HWY_RESTRICT image, std::size_t stride, int cols, int rows, int taps,
+                               int x0, int y0, const float* HWY_RESTRICT wx, const float* HWY_RESTRICT wy) {
+  float total = 0;
+  for (int j = 0; j < taps; ++j) {
+    const float* row = image + static_cast<std::size_t>(std::clamp(y0 + j, 0, rows - 1)) * stride;
+    float row_total = 0;
+    for (int i = 0; i < taps; ++i) row_total += wx[i] * row[std::clamp(x0 + i, 0, cols - 1)];
+    total += wy[j] * row_total;
+  }
+  return total;
+}
+
+// Across the taps of one point: each vector holds `lanes` neighbouring tap
+// columns, their weights interpolated between two table entries, summed down
+// the tap rows, then weighted and added across lanes. Points whose taps
+// (rounded up to whole vectors) leave the image take the clamped scalar path.
+template <class D>
+HWY_INLINE void SampleSeparable(D d, const float* HWY_RESTRICT image, std::size_t stride, int cols, int rows,
+                                const TabulatedKernel& kernel, const double* HWY_RESTRICT xs,
+                                const double* HWY_RESTRICT ys, int count, float* HWY_RESTRICT out) {
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const int taps = kernel.taps, steps = kernel.steps, first = 1 - taps / 2;
+  const int span = (taps + lanes - 1) / lanes * lanes;
+  HWY_ALIGN float wy[16];
+  float wx_scalar[8];
+  // In the last vector of a point's taps, lanes past the taps hold the next
+  // table entry's weights and pixels the reference never reads: zeroing
+  // the pixels' column sums removes both (not even an infinity there
+  // reaches the sum).
+  const auto last_chunk = hn::FirstN(d, static_cast<std::size_t>(taps - (span - lanes)));
+  const auto weights_at = [&](double t, int i) {
+    const double position = t * steps;
+    const int e = HWY_MIN(static_cast<int>(position), steps - 1);
+    const auto f = hn::Set(d, static_cast<float>(position - e));
+    const float* a = kernel.weights + static_cast<std::size_t>(e) * taps + i;
+    const auto va = hn::LoadU(d, a);
+    return hn::MulAdd(f, hn::Sub(hn::LoadU(d, a + taps), va), va);
+  };
+  for (int k = 0; k < count; ++k) {
+    const double fx = std::floor(xs[k]), fy = std::floor(ys[k]);
+    const int x = static_cast<int>(fx) + first, y = static_cast<int>(fy) + first;
+    if (x < 0 || y < 0 || x + span > cols || y + taps > rows) {
+      tabulated_weights(kernel, xs[k] - fx, wx_scalar);
+      tabulated_weights(kernel, ys[k] - fy, wy);
+      out[k] = SampleClamped(image, stride, cols, rows, taps, x, y, wx_scalar, wy);
+      continue;
+    }
+    for (int i = 0; i < taps; i += lanes) hn::Store(weights_at(ys[k] - fy, i), d, wy + i);
+    const float* top = image + static_cast<std::size_t>(y) * stride + x;
+    auto acc = hn::Zero(d);
+    for (int i = 0; i < taps; i += lanes) {
+      auto column = hn::Mul(hn::Set(d, wy[0]), hn::LoadU(d, top + i));
+      for (int j = 1; j < taps; ++j) {
+        column = hn::MulAdd(hn::Set(d, wy[j]), hn::LoadU(d, top + static_cast<std::size_t>(j) * stride + i), column);
+      }
+      if (i + lanes > taps) column = hn::IfThenElseZero(last_chunk, column);
+      acc = hn::MulAdd(weights_at(xs[k] - fx, i), column, acc);
+    }
+    out[k] = hn::GetLane(hn::SumOfLanes(d, acc));
+  }
+}
+
+void SampleSeparablePoints(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
+                           const double* x, const double* y, int count, float* out) {
+  if (kernel.taps <= 4) {
+    SampleSeparable(hn::CappedTag<float, 4>(), image, stride, cols, rows, kernel, x, y, count, out);
+  } else {
+    SampleSeparable(hn::CappedTag<float, 8>(), image, stride, cols, rows, kernel, x, y, count, out);
+  }
+}
+
 // The target this code was compiled for, as dispatch sees it.
 const char* TargetName() { return hwy::TargetName(HWY_TARGET); }
 
@@ -101,6 +178,7 @@ HWY_AFTER_NAMESPACE();
 
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <mutex>
 #include <vector>
@@ -109,6 +187,7 @@ namespace bosfuse::fusion {
 
 HWY_EXPORT(AccumulateProducts);
 HWY_EXPORT(TargetName);
+HWY_EXPORT(SampleSeparablePoints);
 
 namespace {
 
@@ -154,6 +233,46 @@ void scalar_accumulate_products(const float* reference, const float* patch, std:
       for (int i = 0; i < n; ++i) total += column[i];
       products[static_cast<std::size_t>(dy) * side + dx] = total;
     }
+  }
+}
+
+void tabulated_weights(const TabulatedKernel& kernel, double t, float* weights) {
+  const double position = t * kernel.steps;
+  const int e = std::min(static_cast<int>(position), kernel.steps - 1);
+  const float f = static_cast<float>(position - e);
+  const float* a = kernel.weights + static_cast<std::size_t>(e) * kernel.taps;
+  const float* b = a + kernel.taps;
+  for (int k = 0; k < kernel.taps; ++k) weights[k] = a[k] + f * (b[k] - a[k]);
+}
+
+void sample_separable(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
+                      const double* x, const double* y, int count, float* out) {
+  apply_environment_once();
+  HWY_DYNAMIC_DISPATCH(SampleSeparablePoints)(image, stride, cols, rows, kernel, x, y, count, out);
+}
+
+void scalar_sample_separable(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
+                             const double* x, const double* y, int count, float* out) {
+  const int taps = kernel.taps, first = 1 - taps / 2;
+  for (int k = 0; k < count; ++k) {
+    const double fx = std::floor(x[k]), fy = std::floor(y[k]);
+    float wx[8], wy[8];
+    tabulated_weights(kernel, x[k] - fx, wx);
+    tabulated_weights(kernel, y[k] - fy, wy);
+    const int ix = static_cast<int>(fx) + first, iy = static_cast<int>(fy) + first;
+    const bool inside = ix >= 0 && iy >= 0 && ix + taps <= cols && iy + taps <= rows;
+    float total = 0;
+    for (int j = 0; j < taps; ++j) {
+      const float* row = image + static_cast<std::size_t>(std::clamp(iy + j, 0, rows - 1)) * stride;
+      float row_total = 0;
+      if (inside) {
+        for (int i = 0; i < taps; ++i) row_total += wx[i] * row[ix + i];
+      } else {
+        for (int i = 0; i < taps; ++i) row_total += wx[i] * row[std::clamp(ix + i, 0, cols - 1)];
+      }
+      total += wy[j] * row_total;
+    }
+    out[k] = total;
   }
 }
 

@@ -41,6 +41,39 @@ void accumulate_products(const float* reference, const float* patch, std::size_t
 void scalar_accumulate_products(const float* reference, const float* patch, std::size_t patch_stride, int n, int side,
                                 double* products);
 
+// A separable interpolation kernel tabulated over the sub-pixel position
+// t ∈ [0, 1]: entry e (0 ≤ e ≤ steps) holds its `taps` weights at
+// t = e / steps, the first for the tap at floor(x) + 1 − taps/2 (taps even,
+// 2..8); between entries the weights are interpolated linearly.
+// `weights` holds (steps + 1)·taps floats and then at least 8 more (any
+// value), which vector loads may read.
+struct TabulatedKernel {
+  const float* weights = nullptr;
+  int taps = 0;
+  int steps = 0;
+};
+
+// The kernel's weights at t ∈ [0, 1]: w[k] = a[k] + f·(b[k] − a[k]) for the
+// entries a, b around t·steps. `weights` has room for kernel.taps floats.
+void tabulated_weights(const TabulatedKernel& kernel, double t, float* weights);
+
+// out[k] = Σ_j wy_j · Σ_i wx_i · image(floor(y[k]) + 1 − taps/2 + j, floor(x[k]) + 1 − taps/2 + i)
+// for k < count, wx and wy the kernel's weights at the sub-pixel parts of
+// x[k] and y[k]: the window deformation's resampling at `count` points of
+// the image (x right, y down, in pixels). Taps outside the image are clamped
+// to its edge (replicated border), so a point may lie anywhere. `image` is
+// rows×cols floats with rows `stride` floats apart. The SIMD kernel sums
+// each tap column over the rows first, then the columns; the reference sums
+// each row first, then the rows; they differ only by float rounding.
+void sample_separable(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
+                      const double* x, const double* y, int count, float* out);
+
+// The reference for sample_separable: plain loops, the weights from
+// tabulated_weights, each row of taps summed in float, then the rows
+// weighted and added in row order.
+void scalar_sample_separable(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
+                             const double* x, const double* y, int count, float* out);
+
 // The most capable target the kernels may use (see BOSFUSE_SIMD above).
 enum class SimdLimit { kAuto, kAvx2, kSse4, kPortable };
 
