@@ -27,6 +27,10 @@ find_package(CLI11 REQUIRED CONFIG)
 find_package(tomlplusplus REQUIRED)
 find_package(nlohmann_json REQUIRED)
 find_package(spdlog REQUIRED)
+# SIMD kernels (fusion/simd_kernels.h): Google Highway, one source compiled
+# for each x86 target and dispatched at run time. Debian ships the shared
+# library with a pkg-config file (its flags say the library is shared).
+pkg_check_modules(HWY REQUIRED IMPORTED_TARGET libhwy)
 # The live page (view/): cpp-httplib, which Debian ships as a compiled
 # library with a pkg-config file, and Chart.js, served from Debian's copy so
 # the page needs no network. The viewer also checks for the file at start.

@@ -5,7 +5,7 @@
 #include <numbers>
 #include <opencv2/core/utility.hpp>
 
-#include "fusion/simd_clones.h"
+#include "fusion/simd_kernels.h"
 
 namespace bosfuse::fusion {
 namespace {
@@ -70,15 +70,16 @@ int taps_of(Interpolator interpolator) {
 }
 
 // Kernel weights tabulated over the sub-pixel position t ∈ [0, 1] and
-// interpolated linearly between entries: the positional error of the table
-// (< 1e-6 px) is far below anything measurable, and it avoids three
-// trigonometric calls per pixel and axis.
+// interpolated linearly between entries (see TabulatedKernel): the
+// positional error of the table (< 1e-6 px) is far below anything
+// measurable, and it avoids three trigonometric calls per pixel and axis.
 class WeightTable {
  public:
   static constexpr int kSteps = 1024;
 
   explicit WeightTable(Interpolator interpolator) : taps_(taps_of(interpolator)) {
-    table_.resize(static_cast<std::size_t>(kSteps + 1) * taps_);
+    // Zeros after the last entry, which vector loads may read.
+    table_.resize(static_cast<std::size_t>(kSteps + 1) * taps_ + 8);
     for (int i = 0; i <= kSteps; ++i) {
       double w[8] = {};
       if (interpolator == Interpolator::kCubic) {
@@ -90,71 +91,40 @@ class WeightTable {
     }
   }
 
-  int taps() const { return taps_; }
-
-  void weights(double t, float* w) const {
-    const double position = t * kSteps;
-    const int i = std::min(static_cast<int>(position), kSteps - 1);
-    const float f = static_cast<float>(position - i);
-    const float* a = &table_[static_cast<std::size_t>(i) * taps_];
-    const float* b = a + taps_;
-    for (int k = 0; k < taps_; ++k) w[k] = a[k] + f * (b[k] - a[k]);
-  }
+  TabulatedKernel kernel() const { return {table_.data(), taps_, kSteps}; }
 
  private:
   int taps_;
   std::vector<float> table_;
 };
 
-class Sampler {
- public:
-  Sampler(const cv::Mat& image, const WeightTable& table)
-      : image_(image), table_(table), taps_(table.taps()), first_(1 - table.taps() / 2) {}
+const WeightTable& table_of(Interpolator interpolator) {
+  static const WeightTable cubic(Interpolator::kCubic), lanczos3(Interpolator::kLanczos3),
+      lanczos4(Interpolator::kLanczos4);
+  return interpolator == Interpolator::kCubic ? cubic : interpolator == Interpolator::kLanczos3 ? lanczos3 : lanczos4;
+}
 
-  float sample(double x, double y) const {
-    const double fx = std::floor(x), fy = std::floor(y);
-    float wx[8], wy[8];
-    table_.weights(x - fx, wx);
-    table_.weights(y - fy, wy);
-    const int ix = static_cast<int>(fx) + first_, iy = static_cast<int>(fy) + first_;
-    const bool inside = ix >= 0 && iy >= 0 && ix + taps_ <= image_.cols && iy + taps_ <= image_.rows;
-    float total = 0;
-    for (int j = 0; j < taps_; ++j) {
-      const float* row = image_.ptr<float>(std::clamp(iy + j, 0, image_.rows - 1));
-      float row_total = 0;
-      if (inside) {
-        for (int i = 0; i < taps_; ++i) row_total += wx[i] * row[ix + i];
-      } else {
-        for (int i = 0; i < taps_; ++i) row_total += wx[i] * row[std::clamp(ix + i, 0, image_.cols - 1)];
-      }
-      total += wy[j] * row_total;
-    }
-    return total;
-  }
-
- private:
-  const cv::Mat& image_;
-  const WeightTable& table_;
-  int taps_;
-  int first_;
-};
-
-// Rows `rows` of the warped region; most of a deformation pass's cost, so
-// built for AVX2 besides the baseline.
-BOSFUSE_AVX2_CLONES void warp_rows(const Sampler& sampler, const GridField& field, cv::Rect region, cv::Range rows,
-                                   cv::Mat& out) {
+// Rows `rows` of the warped region; most of a deformation pass's cost: the
+// field at each pixel here, the resampling in sample_separable (or, with
+// `simd` false, its scalar reference).
+void warp_rows(const cv::Mat& image, const TabulatedKernel& kernel, bool simd, const GridField& field, cv::Rect region,
+               cv::Range rows, cv::Mat& out) {
   const auto& g = field.grid;
-  std::vector<AxisWeight> column_weights(static_cast<std::size_t>(region.width));
+  const auto width = static_cast<std::size_t>(region.width);
+  std::vector<AxisWeight> column_weights(width);
   for (int x = 0; x < region.width; ++x) column_weights[x] = axis_weight(region.x + x, g.x0_px, g.step_px, g.cols);
+  std::vector<double> xs(width), ys(width);
+  const auto stride = static_cast<std::size_t>(image.step1());
   for (int y = rows.start; y < rows.end; ++y) {
     const double image_y = region.y + y;
     const AxisWeight wy = axis_weight(image_y, g.y0_px, g.step_px, g.rows);
-    float* dst = out.ptr<float>(y);
     for (int x = 0; x < region.width; ++x) {
-      const double u = bilinear(field.u_px, column_weights[x], wy);
-      const double v = bilinear(field.v_px, column_weights[x], wy);
-      dst[x] = sampler.sample(region.x + x + u, image_y + v);
+      xs[x] = region.x + x + bilinear(field.u_px, column_weights[x], wy);
+      ys[x] = image_y + bilinear(field.v_px, column_weights[x], wy);
     }
+    const auto sample = simd ? sample_separable : scalar_sample_separable;
+    sample(image.ptr<float>(), stride, image.cols, image.rows, kernel, xs.data(), ys.data(), region.width,
+           out.ptr<float>(y));
   }
 }
 
@@ -177,24 +147,33 @@ cv::Point2d interpolate_field(const GridField& field, double x_px, double y_px) 
   return {bilinear(field.u_px, wx, wy), bilinear(field.v_px, wx, wy)};
 }
 
-cv::Mat warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator) {
+namespace {
+
+cv::Mat warp(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator, bool simd) {
   CV_Assert(image.type() == CV_32FC1);
   if (field.grid.rows == 0 || field.grid.cols == 0) return copy_with_replicated_border(image, region);
   cv::Mat out(region.size(), CV_32F);
-  static const WeightTable cubic(Interpolator::kCubic), lanczos3(Interpolator::kLanczos3),
-      lanczos4(Interpolator::kLanczos4);
-  const WeightTable& table = interpolator == Interpolator::kCubic      ? cubic
-                             : interpolator == Interpolator::kLanczos3 ? lanczos3
-                                                                       : lanczos4;
-  const Sampler sampler(image, table);
+  const TabulatedKernel kernel = table_of(interpolator).kernel();
   // Small regions (probes) cost less than waking the other thread.
   if (region.area() < 16384) {
-    warp_rows(sampler, field, region, cv::Range(0, region.height), out);
+    warp_rows(image, kernel, simd, field, region, cv::Range(0, region.height), out);
   } else {
     cv::parallel_for_(cv::Range(0, region.height),
-                      [&](const cv::Range& rows) { warp_rows(sampler, field, region, rows, out); });
+                      [&](const cv::Range& rows) { warp_rows(image, kernel, simd, field, region, rows, out); });
   }
   return out;
+}
+
+}  // namespace
+
+cv::Mat warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator) {
+  return warp(image, field, region, interpolator, true);
+}
+
+TabulatedKernel interpolation_kernel(Interpolator interpolator) { return table_of(interpolator).kernel(); }
+
+cv::Mat scalar_warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator) {
+  return warp(image, field, region, interpolator, false);
 }
 
 }  // namespace bosfuse::fusion

@@ -13,6 +13,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "fusion/simd_kernels.h"
+
 namespace bosfuse::fusion {
 
 enum class Interpolator {
@@ -43,7 +45,16 @@ cv::Point2d interpolate_field(const GridField& field, double x_px, double y_px);
 // The measurement resampled over `region` (in image coordinates; may extend
 // past the image): result(y, x) = image(region.y + y + V, region.x + x + U).
 // With an empty field (no nodes) it is a plain copy with replicated border.
-// `image` is CV_32FC1. Uses all threads.
+// `image` is CV_32FC1. Uses all threads. The taps are summed by the SIMD
+// kernel sample_separable (fusion/simd_kernels.h).
 cv::Mat warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator);
+
+// The reference for warp_region: the same positions and weights, the taps
+// summed by scalar_sample_separable. The two differ only by float rounding.
+cv::Mat scalar_warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator);
+
+// The interpolator's weights as warp_region uses them (tabulated; static
+// storage, valid for the life of the program).
+TabulatedKernel interpolation_kernel(Interpolator interpolator);
 
 }  // namespace bosfuse::fusion

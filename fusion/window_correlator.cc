@@ -3,7 +3,7 @@
 #include <cmath>
 #include <opencv2/core.hpp>
 
-#include "fusion/simd_clones.h"
+#include "fusion/simd_kernels.h"
 
 namespace bosfuse::fusion {
 namespace {
@@ -80,29 +80,6 @@ void WindowCorrelator::prepare_patch_sums(const cv::Mat& search_patch) {
       row_sum_sq += double(row[x]) * row[x];
       sum_[(y + 1) * stride + x + 1] = sum_[y * stride + x + 1] + row_sum;
       sum_sq_[(y + 1) * stride + x + 1] = sum_sq_[y * stride + x + 1] + row_sum_sq;
-    }
-  }
-}
-
-// Σ a·b for every shift of an n×n window over the patch. Column
-// accumulators: each lane sums n products in float (exact enough for n ≤ 128
-// values in [0,1]); the lanes are then summed in double. Written so the inner
-// loop vectorises, and built for AVX2 besides the baseline (the loader
-// picks what the CPU has): this loop is most of a correlation's cost.
-BOSFUSE_AVX2_CLONES void accumulate_products(const float* reference, const float* patch, std::size_t patch_stride,
-                                             int n, int side, double* products) {
-  float column[128];
-  for (int dy = 0; dy < side; ++dy) {
-    for (int dx = 0; dx < side; ++dx) {
-      for (int i = 0; i < n; ++i) column[i] = 0.f;
-      for (int y = 0; y < n; ++y) {
-        const float* __restrict a = reference + static_cast<std::size_t>(y) * n;
-        const float* __restrict b = patch + (y + dy) * patch_stride + dx;
-        for (int i = 0; i < n; ++i) column[i] += a[i] * b[i];
-      }
-      double total = 0;
-      for (int i = 0; i < n; ++i) total += column[i];
-      products[static_cast<std::size_t>(dy) * side + dx] = total;
     }
   }
 }

@@ -1,0 +1,309 @@
+// Highway compiles this file once per target: foreach_target.h includes it
+// again for each, with HWY_NAMESPACE naming the target; the code after
+// HWY_ONCE is compiled only once and dispatches between them.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "fusion/simd_kernels.cc"
+#include "hwy/foreach_target.h"  // IWYU pragma: keep
+// Must follow foreach_target.h.
+#include "hwy/highway.h"
+
+#include "fusion/simd_kernels.h"
+
+// After foreach_target.h too, so that each target sees them.
+#include <algorithm>
+#include <cmath>
+
+HWY_BEFORE_NAMESPACE();
+namespace bosfuse::fusion {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+// Adds the lanes to `total` in double, lowest lane first: the order in
+// which the scalar reference adds its columns.
+template <class D>
+HWY_INLINE double AddLanes(D d, hn::Vec<D> v, double total) {
+  HWY_ALIGN float lanes[hn::MaxLanes(D())];
+  hn::Store(v, d, lanes);
+  for (std::size_t i = 0; i < hn::Lanes(d); ++i) total += lanes[i];
+  return total;
+}
+
+// Four neighbouring shifts share each load of the reference, so a multiply-
+// add costs 1.25 loads rather than 2 (loads, not arithmetic, bound this
+// loop), and four independent sums hide the multiply-add's latency.
+// Columns [i, n) in vectors of d, then the rest in halves of d down to one
+// lane, so no load reaches past column n of the window.
+template <class D>
+HWY_INLINE void FourShifts(D d, const float* HWY_RESTRICT a, const float* HWY_RESTRICT b, std::size_t stride, int n,
+                           int i, double* totals) {
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  for (; i + lanes <= n; i += lanes) {
+    auto s0 = hn::Zero(d), s1 = hn::Zero(d), s2 = hn::Zero(d), s3 = hn::Zero(d);
+    for (int y = 0; y < n; ++y) {
+      const auto va = hn::LoadU(d, a + static_cast<std::size_t>(y) * n + i);
+      const float* row = b + y * stride + i;
+      s0 = hn::MulAdd(va, hn::LoadU(d, row), s0);
+      s1 = hn::MulAdd(va, hn::LoadU(d, row + 1), s1);
+      s2 = hn::MulAdd(va, hn::LoadU(d, row + 2), s2);
+      s3 = hn::MulAdd(va, hn::LoadU(d, row + 3), s3);
+    }
+    totals[0] = AddLanes(d, s0, totals[0]);
+    totals[1] = AddLanes(d, s1, totals[1]);
+    totals[2] = AddLanes(d, s2, totals[2]);
+    totals[3] = AddLanes(d, s3, totals[3]);
+  }
+  if constexpr (hn::MaxLanes(D()) > 1) {
+    if (i < n) FourShifts(hn::Half<D>(), a, b, stride, n, i, totals);
+  }
+}
+
+// One shift: the last side % 4 of a row of shifts.
+template <class D>
+HWY_INLINE void OneShift(D d, const float* HWY_RESTRICT a, const float* HWY_RESTRICT b, std::size_t stride, int n,
+                         int i, double& total) {
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  for (; i + lanes <= n; i += lanes) {
+    auto s = hn::Zero(d);
+    for (int y = 0; y < n; ++y) {
+      s = hn::MulAdd(hn::LoadU(d, a + static_cast<std::size_t>(y) * n + i), hn::LoadU(d, b + y * stride + i), s);
+    }
+    total = AddLanes(d, s, total);
+  }
+  if constexpr (hn::MaxLanes(D()) > 1) {
+    if (i < n) OneShift(hn::Half<D>(), a, b, stride, n, i, total);
+  }
+}
+
+void AccumulateProducts(const float* reference, const float* patch, std::size_t patch_stride, int n, int side,
+                        double* products) {
+  const hn::ScalableTag<float> d;
+  for (int dy = 0; dy < side; ++dy) {
+    const float* rows = patch + dy * patch_stride;
+    double* out = products + static_cast<std::size_t>(dy) * side;
+    int dx = 0;
+    for (; dx + 4 <= side; dx += 4) {
+      double totals[4] = {0, 0, 0, 0};
+      FourShifts(d, reference, rows + dx, patch_stride, n, 0, totals);
+      for (int k = 0; k < 4; ++k) out[dx + k] = totals[k];
+    }
+    for (; dx < side; ++dx) {
+      double total = 0;
+      OneShift(d, reference, rows + dx, patch_stride, n, 0, total);
+      out[dx] = total;
+    }
+  }
+}
+
+// The reference's sum at one point, taps clamped to the image: the SIMD
+// kernel's path for points whose taps cross the image edge.
+HWY_INLINE float SampleClamped(const float* HWY_RESTRICT image, std::size_t stride, int cols, int rows, int taps,
+                               int x0, int y0, const float* HWY_RESTRICT wx, const float* HWY_RESTRICT wy) {
+  float total = 0;
+  for (int j = 0; j < taps; ++j) {
+    const float* row = image + static_cast<std::size_t>(std::clamp(y0 + j, 0, rows - 1)) * stride;
+    float row_total = 0;
+    for (int i = 0; i < taps; ++i) row_total += wx[i] * row[std::clamp(x0 + i, 0, cols - 1)];
+    total += wy[j] * row_total;
+  }
+  return total;
+}
+
+// Across the taps of one point: each vector holds `lanes` neighbouring tap
+// columns, their weights interpolated between two table entries, summed down
+// the tap rows, then weighted and added across lanes. Points whose taps
+// (rounded up to whole vectors) leave the image take the clamped scalar path.
+template <class D>
+HWY_INLINE void SampleSeparable(D d, const float* HWY_RESTRICT image, std::size_t stride, int cols, int rows,
+                                const TabulatedKernel& kernel, const double* HWY_RESTRICT xs,
+                                const double* HWY_RESTRICT ys, int count, float* HWY_RESTRICT out) {
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const int taps = kernel.taps, steps = kernel.steps, first = 1 - taps / 2;
+  const int span = (taps + lanes - 1) / lanes * lanes;
+  HWY_ALIGN float wy[16];
+  float wx_scalar[8];
+  // In the last vector of a point's taps, lanes past the taps hold the next
+  // table entry's weights and pixels the reference never reads: zeroing
+  // the pixels' column sums removes both (not even an infinity there
+  // reaches the sum).
+  const auto last_chunk = hn::FirstN(d, static_cast<std::size_t>(taps - (span - lanes)));
+  const auto weights_at = [&](double t, int i) {
+    const double position = t * steps;
+    const int e = HWY_MIN(static_cast<int>(position), steps - 1);
+    const auto f = hn::Set(d, static_cast<float>(position - e));
+    const float* a = kernel.weights + static_cast<std::size_t>(e) * taps + i;
+    const auto va = hn::LoadU(d, a);
+    return hn::MulAdd(f, hn::Sub(hn::LoadU(d, a + taps), va), va);
+  };
+  for (int k = 0; k < count; ++k) {
+    const double fx = std::floor(xs[k]), fy = std::floor(ys[k]);
+    const int x = static_cast<int>(fx) + first, y = static_cast<int>(fy) + first;
+    if (x < 0 || y < 0 || x + span > cols || y + taps > rows) {
+      tabulated_weights(kernel, xs[k] - fx, wx_scalar);
+      tabulated_weights(kernel, ys[k] - fy, wy);
+      out[k] = SampleClamped(image, stride, cols, rows, taps, x, y, wx_scalar, wy);
+      continue;
+    }
+    for (int i = 0; i < taps; i += lanes) hn::Store(weights_at(ys[k] - fy, i), d, wy + i);
+    const float* top = image + static_cast<std::size_t>(y) * stride + x;
+    auto acc = hn::Zero(d);
+    for (int i = 0; i < taps; i += lanes) {
+      auto column = hn::Mul(hn::Set(d, wy[0]), hn::LoadU(d, top + i));
+      for (int j = 1; j < taps; ++j) {
+        column = hn::MulAdd(hn::Set(d, wy[j]), hn::LoadU(d, top + static_cast<std::size_t>(j) * stride + i), column);
+      }
+      if (i + lanes > taps) column = hn::IfThenElseZero(last_chunk, column);
+      acc = hn::MulAdd(weights_at(xs[k] - fx, i), column, acc);
+    }
+    out[k] = hn::GetLane(hn::SumOfLanes(d, acc));
+  }
+}
+
+void SampleSeparablePoints(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
+                           const double* x, const double* y, int count, float* out) {
+  if (kernel.taps <= 4) {
+    SampleSeparable(hn::CappedTag<float, 4>(), image, stride, cols, rows, kernel, x, y, count, out);
+  } else {
+    SampleSeparable(hn::CappedTag<float, 8>(), image, stride, cols, rows, kernel, x, y, count, out);
+  }
+}
+
+// The target this code was compiled for, as dispatch sees it.
+const char* TargetName() { return hwy::TargetName(HWY_TARGET); }
+
+}  // namespace HWY_NAMESPACE
+}  // namespace bosfuse::fusion
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <mutex>
+#include <vector>
+
+namespace bosfuse::fusion {
+
+HWY_EXPORT(AccumulateProducts);
+HWY_EXPORT(TargetName);
+HWY_EXPORT(SampleSeparablePoints);
+
+namespace {
+
+std::once_flag environment_applied;
+
+void apply_environment_once() { std::call_once(environment_applied, apply_simd_environment); }
+
+// The targets a limit rules out. Targets the CPU lacks are ruled out anyway.
+std::int64_t disabled_targets(SimdLimit limit) {
+  switch (limit) {
+    case SimdLimit::kAuto:
+      return 0;
+    case SimdLimit::kAvx2:
+      return HWY_AVX3 | HWY_AVX3_DL;
+    case SimdLimit::kSse4:
+      return HWY_AVX2 | HWY_AVX3 | HWY_AVX3_DL;
+    case SimdLimit::kPortable:
+      return ~(HWY_SCALAR | HWY_EMU128);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void accumulate_products(const float* reference, const float* patch, std::size_t patch_stride, int n, int side,
+                         double* products) {
+  apply_environment_once();
+  HWY_DYNAMIC_DISPATCH(AccumulateProducts)(reference, patch, patch_stride, n, side, products);
+}
+
+void scalar_accumulate_products(const float* reference, const float* patch, std::size_t patch_stride, int n, int side,
+                                double* products) {
+  std::vector<float> column(static_cast<std::size_t>(n));
+  for (int dy = 0; dy < side; ++dy) {
+    for (int dx = 0; dx < side; ++dx) {
+      for (int i = 0; i < n; ++i) column[i] = 0.f;
+      for (int y = 0; y < n; ++y) {
+        const float* a = reference + static_cast<std::size_t>(y) * n;
+        const float* b = patch + (y + dy) * patch_stride + dx;
+        for (int i = 0; i < n; ++i) column[i] += a[i] * b[i];
+      }
+      double total = 0;
+      for (int i = 0; i < n; ++i) total += column[i];
+      products[static_cast<std::size_t>(dy) * side + dx] = total;
+    }
+  }
+}
+
+void tabulated_weights(const TabulatedKernel& kernel, double t, float* weights) {
+  const double position = t * kernel.steps;
+  const int e = std::min(static_cast<int>(position), kernel.steps - 1);
+  const float f = static_cast<float>(position - e);
+  const float* a = kernel.weights + static_cast<std::size_t>(e) * kernel.taps;
+  const float* b = a + kernel.taps;
+  for (int k = 0; k < kernel.taps; ++k) weights[k] = a[k] + f * (b[k] - a[k]);
+}
+
+void sample_separable(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
+                      const double* x, const double* y, int count, float* out) {
+  apply_environment_once();
+  HWY_DYNAMIC_DISPATCH(SampleSeparablePoints)(image, stride, cols, rows, kernel, x, y, count, out);
+}
+
+void scalar_sample_separable(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
+                             const double* x, const double* y, int count, float* out) {
+  const int taps = kernel.taps, first = 1 - taps / 2;
+  for (int k = 0; k < count; ++k) {
+    const double fx = std::floor(x[k]), fy = std::floor(y[k]);
+    float wx[8], wy[8];
+    tabulated_weights(kernel, x[k] - fx, wx);
+    tabulated_weights(kernel, y[k] - fy, wy);
+    const int ix = static_cast<int>(fx) + first, iy = static_cast<int>(fy) + first;
+    const bool inside = ix >= 0 && iy >= 0 && ix + taps <= cols && iy + taps <= rows;
+    float total = 0;
+    for (int j = 0; j < taps; ++j) {
+      const float* row = image + static_cast<std::size_t>(std::clamp(iy + j, 0, rows - 1)) * stride;
+      float row_total = 0;
+      if (inside) {
+        for (int i = 0; i < taps; ++i) row_total += wx[i] * row[ix + i];
+      } else {
+        for (int i = 0; i < taps; ++i) row_total += wx[i] * row[std::clamp(ix + i, 0, cols - 1)];
+      }
+      total += wy[j] * row_total;
+    }
+    out[k] = total;
+  }
+}
+
+std::optional<SimdLimit> parse_simd_limit(std::string_view text) {
+  if (text.empty() || text == "auto") return SimdLimit::kAuto;
+  if (text == "avx2") return SimdLimit::kAvx2;
+  if (text == "sse4") return SimdLimit::kSse4;
+  if (text == "portable") return SimdLimit::kPortable;
+  return std::nullopt;
+}
+
+void limit_simd_targets(SimdLimit limit) {
+  // Afterwards, so that a later first kernel call does not undo this limit.
+  apply_environment_once();
+  // DisableTargets also makes the next dispatch choose again.
+  hwy::DisableTargets(disabled_targets(limit));
+}
+
+void apply_simd_environment() {
+  const char* text = std::getenv("BOSFUSE_SIMD");
+  const auto limit = parse_simd_limit(text ? text : "");
+  // A typo must not stop a run that would give the same results anyway.
+  if (!limit) spdlog::warn("BOSFUSE_SIMD='{}' is not auto, avx2, sse4 or portable; using auto", text);
+  hwy::DisableTargets(disabled_targets(limit.value_or(SimdLimit::kAuto)));
+}
+
+std::string simd_target_name() {
+  apply_environment_once();
+  return HWY_DYNAMIC_DISPATCH(TargetName)();
+}
+
+}  // namespace bosfuse::fusion
+
+#endif  // HWY_ONCE

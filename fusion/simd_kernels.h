@@ -1,0 +1,95 @@
+#pragma once
+// SIMD kernels: the inner loops of displacement evaluation, written once with
+// Google Highway and compiled for every x86 target it knows (SSSE3, SSE4,
+// AVX2, AVX-512) plus a portable C++ one; the first call picks the best
+// target this CPU runs (runtime dispatch), so one binary uses AVX-512 on a
+// workstation and SSE4 on an old logger PC. Use these rather than writing a
+// vectorised loop inline; each kernel has a scalar reference beside it that
+// states its contract and that the tests hold it to.
+//
+// Choosing the target: the environment variable BOSFUSE_SIMD, read once at
+// the first kernel call, caps what the dispatch may pick:
+//   unset, "" or "auto"  the best target the CPU has;
+//   "avx2", "sse4"       at most that target (lower if the CPU lacks it);
+//   "portable"           Highway's portable C++ target, no intrinsics
+//                        ("SCALAR" with GCC < 12.3, else "EMU128").
+// An unknown value is reported on stderr and treated as "auto". It is for
+// comparing targets on one machine and for ruling out a SIMD path when
+// results look wrong; results of all targets agree to float rounding.
+// The cap is process-wide (Highway keeps one chosen target per process).
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace bosfuse::fusion {
+
+// products[dy·side + dx] = Σ_{y,x < n} reference[y·n + x] · patch[(y + dy)·patch_stride + x + dx]
+// for every shift dx, dy in [0, side): the numerator of a direct
+// correlation. `reference` is n×n, contiguous; the patch is at least
+// (n + side − 1)² with rows `patch_stride` floats apart. Each column of the
+// window is accumulated in float over the n rows (exact enough for n ≤ 128
+// values of order 1), the n column sums then added in double, in column
+// order. Any n ≥ 1 and side ≥ 1.
+void accumulate_products(const float* reference, const float* patch, std::size_t patch_stride, int n, int side,
+                         double* products);
+
+// The reference for accumulate_products: plain loops, the same sums in the
+// same order. The SIMD kernel differs from it only by float rounding (targets
+// with FMA round a product and its sum once, not twice).
+void scalar_accumulate_products(const float* reference, const float* patch, std::size_t patch_stride, int n, int side,
+                                double* products);
+
+// A separable interpolation kernel tabulated over the sub-pixel position
+// t ∈ [0, 1]: entry e (0 ≤ e ≤ steps) holds its `taps` weights at
+// t = e / steps, the first for the tap at floor(x) + 1 − taps/2 (taps even,
+// 2..8); between entries the weights are interpolated linearly.
+// `weights` holds (steps + 1)·taps floats and then at least 8 more (any
+// value), which vector loads may read.
+struct TabulatedKernel {
+  const float* weights = nullptr;
+  int taps = 0;
+  int steps = 0;
+};
+
+// The kernel's weights at t ∈ [0, 1]: w[k] = a[k] + f·(b[k] − a[k]) for the
+// entries a, b around t·steps. `weights` has room for kernel.taps floats.
+void tabulated_weights(const TabulatedKernel& kernel, double t, float* weights);
+
+// out[k] = Σ_j wy_j · Σ_i wx_i · image(floor(y[k]) + 1 − taps/2 + j, floor(x[k]) + 1 − taps/2 + i)
+// for k < count, wx and wy the kernel's weights at the sub-pixel parts of
+// x[k] and y[k]: the window deformation's resampling at `count` points of
+// the image (x right, y down, in pixels). Taps outside the image are clamped
+// to its edge (replicated border), so a point may lie anywhere. `image` is
+// rows×cols floats with rows `stride` floats apart. The SIMD kernel sums
+// each tap column over the rows first, then the columns; the reference sums
+// each row first, then the rows; they differ only by float rounding.
+void sample_separable(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
+                      const double* x, const double* y, int count, float* out);
+
+// The reference for sample_separable: plain loops, the weights from
+// tabulated_weights, each row of taps summed in float, then the rows
+// weighted and added in row order.
+void scalar_sample_separable(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
+                             const double* x, const double* y, int count, float* out);
+
+// The most capable target the kernels may use (see BOSFUSE_SIMD above).
+enum class SimdLimit { kAuto, kAvx2, kSse4, kPortable };
+
+// Parses a BOSFUSE_SIMD value; nullopt when it is not one of the above.
+std::optional<SimdLimit> parse_simd_limit(std::string_view text);
+
+// Caps the kernels' targets from now on, overriding BOSFUSE_SIMD. For tests
+// and benchmarks; not thread-safe against kernels running at the same time.
+void limit_simd_targets(SimdLimit limit);
+
+// Reads BOSFUSE_SIMD again and applies it (the first kernel call does this
+// by itself).
+void apply_simd_environment();
+
+// Highway's name of the target the kernels run on now: "AVX3" (AVX-512),
+// "AVX2", "SSE4", "SSSE3", "EMU128" or "SCALAR" (the last two portable).
+std::string simd_target_name();
+
+}  // namespace bosfuse::fusion

@@ -1,0 +1,259 @@
+#include "fusion/simd_kernels.h"
+
+#include <gtest/gtest.h>
+#include <hwy/highway.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <random>
+#include <vector>
+
+#include "fusion/field_warp.h"
+
+namespace bosfuse::fusion {
+namespace {
+
+// A centred reference window and a patch inside a wider buffer, so rows of
+// the patch are not contiguous and its right edge is not the buffer's.
+struct Inputs {
+  int n, side;
+  std::size_t stride;
+  std::vector<float> reference, buffer;
+  const float* patch() const { return buffer.data() + stride + 3; }
+};
+
+Inputs random_inputs(int n, int side, unsigned seed) {
+  Inputs in{n, side, static_cast<std::size_t>(n + side - 1 + 7), {}, {}};
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> grey(0.f, 1.f);
+  in.reference.resize(static_cast<std::size_t>(n) * n);
+  for (auto& a : in.reference) a = grey(rng) - 0.5f;
+  in.buffer.resize(in.stride * (n + side + 1));
+  for (auto& b : in.buffer) b = grey(rng);
+  return in;
+}
+
+// Σ |a·b| for one shift: the scale float rounding is relative to (the
+// products themselves may nearly cancel, the reference being centred).
+double magnitude(const Inputs& in, int dx, int dy) {
+  double sum = 0;
+  for (int y = 0; y < in.n; ++y) {
+    for (int x = 0; x < in.n; ++x) {
+      sum += std::abs(double(in.reference[y * in.n + x]) * in.patch()[(y + dy) * in.stride + x + dx]);
+    }
+  }
+  return sum;
+}
+
+void expect_kernel_matches_reference(int n, int side, unsigned seed) {
+  SCOPED_TRACE(testing::Message() << "n=" << n << " side=" << side << " target=" << simd_target_name());
+  const Inputs in = random_inputs(n, side, seed);
+  const std::size_t count = static_cast<std::size_t>(side) * side;
+  std::vector<double> simd(count, -1.0), reference(count, -2.0);
+  accumulate_products(in.reference.data(), in.patch(), in.stride, n, side, simd.data());
+  scalar_accumulate_products(in.reference.data(), in.patch(), in.stride, n, side, reference.data());
+  for (int dy = 0; dy < side; ++dy) {
+    for (int dx = 0; dx < side; ++dx) {
+      const std::size_t i = static_cast<std::size_t>(dy) * side + dx;
+      ASSERT_NEAR(simd[i], reference[i], 1e-6 * magnitude(in, dx, dy)) << "dx=" << dx << " dy=" << dy;
+    }
+  }
+}
+
+void expect_all_sizes_match() {
+  unsigned seed = 1;
+  for (const int n : {1, 3, 8, 13, 16, 24, 32, 64}) {
+    for (const int side : {1, 3, 4, 5, 7, 9, 17}) expect_kernel_matches_reference(n, side, seed++);
+  }
+  expect_kernel_matches_reference(128, 5, seed++);
+}
+
+// The window deformation's sampling: a random image inside a wider buffer,
+// and the points of a region reaching past every edge of the image, moved
+// by a random smooth displacement field (up to ±4 px).
+struct SamplingInputs {
+  int cols, rows;
+  TabulatedKernel kernel;
+  std::size_t stride;
+  std::vector<float> buffer;
+  std::vector<double> x, y;
+  const float* image() const { return buffer.data() + 2 * stride + 5; }
+  int count() const { return static_cast<int>(x.size()); }
+};
+
+SamplingInputs random_sampling(int cols, int rows, Interpolator interpolator, unsigned seed) {
+  SamplingInputs in{cols, rows, interpolation_kernel(interpolator), static_cast<std::size_t>(cols + 11), {}, {}, {}};
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  in.buffer.resize(in.stride * (rows + 4));
+  for (auto& b : in.buffer) b = static_cast<float>(unit(rng));
+  // A sum of two random plane waves per component: smooth, and over the
+  // region both sub-pixel positions and whole-pixel offsets vary.
+  double a[2][2], k[2][2][2], phase[2][2];
+  for (int c = 0; c < 2; ++c) {
+    for (int w = 0; w < 2; ++w) {
+      a[c][w] = 2.0 * unit(rng);
+      k[c][w][0] = 0.3 * (unit(rng) - 0.5);
+      k[c][w][1] = 0.3 * (unit(rng) - 0.5);
+      phase[c][w] = 6.3 * unit(rng);
+    }
+  }
+  const auto displacement = [&](int c, double x, double y) {
+    double d = 0;
+    for (int w = 0; w < 2; ++w) d += a[c][w] * std::sin(k[c][w][0] * x + k[c][w][1] * y + phase[c][w]);
+    return d;
+  };
+  for (int y = -9; y < rows + 9; ++y) {
+    for (int x = -9; x < cols + 9; ++x) {
+      in.x.push_back(x + displacement(0, x, y));
+      in.y.push_back(y + displacement(1, x, y));
+    }
+  }
+  // Whole-pixel positions too (sub-pixel part 0, the table's first entry).
+  in.x.push_back(3.0);
+  in.y.push_back(2.0);
+  return in;
+}
+
+// Σ |wx·wy·pixel| over the taps of point k, clamped as the kernels clamp.
+double sampling_magnitude(const SamplingInputs& in, int k) {
+  const int taps = in.kernel.taps;
+  const double fx = std::floor(in.x[k]), fy = std::floor(in.y[k]);
+  float wx[8], wy[8];
+  tabulated_weights(in.kernel, in.x[k] - fx, wx);
+  tabulated_weights(in.kernel, in.y[k] - fy, wy);
+  const int x0 = static_cast<int>(fx) + 1 - taps / 2, y0 = static_cast<int>(fy) + 1 - taps / 2;
+  double sum = 0;
+  for (int j = 0; j < taps; ++j) {
+    const float* row = in.image() + static_cast<std::size_t>(std::clamp(y0 + j, 0, in.rows - 1)) * in.stride;
+    for (int i = 0; i < taps; ++i) sum += std::abs(double(wx[i]) * wy[j] * row[std::clamp(x0 + i, 0, in.cols - 1)]);
+  }
+  return sum;
+}
+
+void expect_sampling_matches_reference(int cols, int rows, Interpolator interpolator, unsigned seed) {
+  SCOPED_TRACE(testing::Message() << cols << "x" << rows << " interpolator=" << static_cast<int>(interpolator)
+                                  << " target=" << simd_target_name());
+  const SamplingInputs in = random_sampling(cols, rows, interpolator, seed);
+  std::vector<float> simd(in.x.size(), -1.f), reference(in.x.size(), -2.f);
+  sample_separable(in.image(), in.stride, cols, rows, in.kernel, in.x.data(), in.y.data(), in.count(), simd.data());
+  scalar_sample_separable(in.image(), in.stride, cols, rows, in.kernel, in.x.data(), in.y.data(), in.count(),
+                          reference.data());
+  for (int k = 0; k < in.count(); ++k) {
+    ASSERT_NEAR(simd[k], reference[k], 1e-6 * sampling_magnitude(in, k))
+        << "point " << k << " at " << in.x[k] << ", " << in.y[k];
+  }
+}
+
+void expect_all_samplings_match() {
+  unsigned seed = 100;
+  for (const auto interpolator : {Interpolator::kCubic, Interpolator::kLanczos3, Interpolator::kLanczos4}) {
+    for (const auto& [cols, rows] : {std::pair{67, 41}, std::pair{8, 8}, std::pair{3, 5}, std::pair{1, 1}}) {
+      expect_sampling_matches_reference(cols, rows, interpolator, seed++);
+    }
+  }
+}
+
+// The whole warp against its reference, on a random image and a random
+// grid field, over a region past the image's corner. Image values are in
+// [0, 1) and Σ|w| ≤ 1.5 per axis for these kernels, so Σ|w·pixel| ≤ 2.25.
+void expect_warp_matches_reference() {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> unit(0.f, 1.f);
+  cv::Mat image(90, 130, CV_32F);
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) image.at<float>(y, x) = unit(rng);
+  }
+  GridField field{{4, 6, 16, 7, 9}, cv::Mat(7, 9, CV_64F), cv::Mat(7, 9, CV_64F)};
+  for (int r = 0; r < 7; ++r) {
+    for (int c = 0; c < 9; ++c) {
+      field.u_px.at<double>(r, c) = 3.0 * std::sin(0.4 * c + 0.3 * r) + 0.1 * unit(rng);
+      field.v_px.at<double>(r, c) = 2.5 * std::cos(0.35 * r - 0.2 * c) + 0.1 * unit(rng);
+    }
+  }
+  for (const auto interpolator : {Interpolator::kCubic, Interpolator::kLanczos3, Interpolator::kLanczos4}) {
+    for (const cv::Rect region : {cv::Rect(-7, -5, 60, 40), cv::Rect(80, 60, 60, 40), cv::Rect(0, 0, 130, 90)}) {
+      SCOPED_TRACE(testing::Message() << "interpolator=" << static_cast<int>(interpolator) << " region=" << region
+                                      << " target=" << simd_target_name());
+      const cv::Mat simd = warp_region(image, field, region, interpolator);
+      const cv::Mat reference = scalar_warp_region(image, field, region, interpolator);
+      ASSERT_EQ(simd.size(), reference.size());
+      for (int y = 0; y < simd.rows; ++y) {
+        for (int x = 0; x < simd.cols; ++x) {
+          ASSERT_NEAR(simd.at<float>(y, x), reference.at<float>(y, x), 2.25e-6) << "x=" << x << " y=" << y;
+        }
+      }
+    }
+  }
+}
+
+// Every test leaves the dispatch as it found it: no cap, no mock.
+class SimdKernels : public testing::Test {
+ protected:
+  void TearDown() override {
+    hwy::SetSupportedTargetsForTest(0);
+    limit_simd_targets(SimdLimit::kAuto);
+  }
+};
+
+TEST_F(SimdKernels, MatchTheScalarReference) { expect_all_sizes_match(); }
+
+TEST_F(SimdKernels, SamplingMatchesTheScalarReference) {
+  expect_all_samplings_match();
+  expect_warp_matches_reference();
+}
+
+TEST_F(SimdKernels, SamplingMatchesTheScalarReferenceOnEveryTargetOfThisCpu) {
+  for (const std::int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    EXPECT_EQ(simd_target_name(), hwy::TargetName(target));
+    expect_all_samplings_match();
+    expect_warp_matches_reference();
+  }
+}
+
+TEST_F(SimdKernels, MatchTheScalarReferenceOnEveryTargetOfThisCpu) {
+  const std::vector<std::int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  ASSERT_FALSE(targets.empty());
+  for (const std::int64_t target : targets) {
+    hwy::SetSupportedTargetsForTest(target);
+    EXPECT_EQ(simd_target_name(), hwy::TargetName(target));
+    expect_all_sizes_match();
+  }
+}
+
+TEST_F(SimdKernels, TheEnvironmentForcesThePortableTarget) {
+  ASSERT_EQ(setenv("BOSFUSE_SIMD", "portable", 1), 0);
+  apply_simd_environment();
+  const std::string name = simd_target_name();
+  EXPECT_TRUE(name == "SCALAR" || name == "EMU128") << name;
+  expect_all_sizes_match();
+  expect_all_samplings_match();
+  expect_warp_matches_reference();
+  ASSERT_EQ(unsetenv("BOSFUSE_SIMD"), 0);
+  apply_simd_environment();
+  EXPECT_EQ(simd_target_name(), hwy::TargetName(hwy::SupportedAndGeneratedTargets().front()));
+}
+
+TEST_F(SimdKernels, ALimitCapsTheTarget) {
+  limit_simd_targets(SimdLimit::kSse4);
+  const std::string name = simd_target_name();
+  EXPECT_NE(name, "AVX2");
+  EXPECT_NE(name, "AVX3");
+  expect_all_sizes_match();
+  expect_all_samplings_match();
+}
+
+TEST(SimdLimit, ParsesTheEnvironmentValues) {
+  EXPECT_EQ(parse_simd_limit(""), SimdLimit::kAuto);
+  EXPECT_EQ(parse_simd_limit("auto"), SimdLimit::kAuto);
+  EXPECT_EQ(parse_simd_limit("avx2"), SimdLimit::kAvx2);
+  EXPECT_EQ(parse_simd_limit("sse4"), SimdLimit::kSse4);
+  EXPECT_EQ(parse_simd_limit("portable"), SimdLimit::kPortable);
+  EXPECT_EQ(parse_simd_limit("AVX2"), std::nullopt);
+  EXPECT_EQ(parse_simd_limit("neon"), std::nullopt);
+}
+
+}  // namespace
+}  // namespace bosfuse::fusion
