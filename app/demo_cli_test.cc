@@ -3,7 +3,7 @@
 // writes the report; the cooling rates it recovers from thermocouples and
 // from BOS must match the scene's true one in experiment time. Then the run
 // is read back the way a user would: `process` with no options, `report`,
-// `export` + `fit`, and a `replay --speed 10` processed and reported the
+// `export` + `fit`, and a `replay --speed 2` processed and reported the
 // same way, and every one of them must state the same k.
 
 #include <gtest/gtest.h>
@@ -158,11 +158,14 @@ TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
   EXPECT_NEAR(exported_fit.k_per_s.value, stored_tc.value, 0.01 * stored_tc.std_error)
       << "export + fit and the stored fit disagree on one series";
 
-  // 4. A replay at 10x (so 100x in all) processed with no options: the same experiment.
+  // 4. A replay at 2x (so 20x in all) processed with no options: the same
+  //    experiment. Not faster: a replay stamps its frames with the host clock
+  //    as a camera does, and at 100x (frames 0.1 s apart) the stamping delays
+  //    of a sanitizer build moved the BOS probes' k by 2%.
   const fs::path replay = dir / "replay";
-  const auto replayed = bosfuse("replay " + quoted(run) + " -o " + quoted(replay) + " --speed 10");
+  const auto replayed = bosfuse("replay " + quoted(run) + " -o " + quoted(replay) + " --speed 2");
   ASSERT_EQ(replayed.exit_code, 0) << replayed.output;
-  EXPECT_DOUBLE_EQ(storage::RunStore::open(replay).run().time_scale, 100.0);
+  EXPECT_DOUBLE_EQ(storage::RunStore::open(replay).run().time_scale, 20.0);
   const auto processed = bosfuse("process " + quoted(replay));
   ASSERT_EQ(processed.exit_code, 0) << processed.output;
   EXPECT_NE(processed.output.find("inherited from the recorded run"), std::string::npos) << processed.output;
