@@ -10,12 +10,10 @@
 #include "fusion/displacement_evaluator.h"
 #include "fusion/image_input.h"
 #include "fusion/temperature_field.h"
-#include "pipeline/image_io.h"
 #include "pipeline/probe_calibration.h"
 #include "pipeline/processing_settings.h"
 #include "pipeline/run_selection.h"
 #include "storage/processing_store.h"
-#include "storage/run_paths.h"
 #include "storage/run_store.h"
 
 namespace bosfuse::pipeline {
@@ -108,9 +106,7 @@ LiveProbes::LiveProbes(const fs::path& run_dir, LiveProbeOptions options) {
   ctx->settings = resolve_settings(run_dir, {});
   ctx->reference = load_frame(run_dir, *reference);
   ctx->reference_moments = fusion::grey_moments(ctx->reference, "reference frame");
-  if (!ctx->settings.mask.empty()) {
-    ctx->mask = read_image(storage::resolve_in_run(run_dir, ctx->settings.mask).string(), "mask");
-  }
+  ctx->mask = load_mask(run_dir, ctx->settings.mask);
   for (const auto& c : channels_) ctx->points.emplace_back(*c.image_x_px, *c.image_y_px);
   ctx->calibration = stored_calibration(storage::ProcessingStore(run_dir));
   auto& geometry = ctx->settings.geometry;
@@ -118,12 +114,7 @@ LiveProbes::LiveProbes(const fs::path& run_dir, LiveProbeOptions options) {
   if (!ctx->calibration.empty()) {
     temperature_source_ = "calibration";
   } else {
-    if (!geometry.ambient_given) {
-      const auto clock = storage::experiment_clock(store);
-      geometry.geometry.ambient_temperature_c =
-          ambient_from_thermocouples(store, channels_, clock, clock.seconds(reference->t_ns) + camera_offset_s_,
-                                     geometry.geometry.ambient_temperature_c);
-    }
+    resolve_ambient(geometry, store, channels_, storage::experiment_clock(store), *reference);
     ctx->geometry.emplace(geometry.geometry);
     temperature_source_ = fmt::format("physical model (geometry from {}, ambient {:.1f} °C)", geometry.source,
                                       geometry.geometry.ambient_temperature_c);

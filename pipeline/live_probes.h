@@ -1,7 +1,9 @@
 #pragma once
 // LiveProbes is what the live page (`bosfuse view`, `acquire --live`)
 // evaluates of each new frame while a run records: the displacement at every
-// thermocouple's image position as `process --mode probes` finds it, the BOS
+// thermocouple's image position in probe mode with the run's settings (as
+// `process` resolves them; refinement may stop once converged, where
+// `process` runs every pass, a difference under 0.001 px), the BOS
 // temperature there, the frame's image quality index against the reference
 // and a small grey view of the frame — from one decoding of the frame and
 // without the full field.

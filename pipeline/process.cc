@@ -16,13 +16,11 @@
 #include "fusion/bos_geometry.h"
 #include "fusion/image_quality.h"
 #include "fusion/temperature_field.h"
-#include "pipeline/image_io.h"
 #include "pipeline/probe_calibration.h"
 #include "pipeline/quality_json.h"
 #include "pipeline/run_selection.h"
 #include "storage/processing_store.h"
 #include "storage/run_lock.h"
-#include "storage/run_paths.h"
 #include "storage/run_store.h"
 
 namespace bosfuse::pipeline {
@@ -323,18 +321,11 @@ FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& sto
     ctx.points.emplace_back(*c.image_x_px, *c.image_y_px);
     ctx.probe_ids.push_back(results.stage_probe(processing.id, {0, c.id, c.name, *c.image_x_px, *c.image_y_px}));
   }
-  auto& geometry = ctx.settings.geometry;
-  if (!geometry.ambient_given) {
-    geometry.geometry.ambient_temperature_c = ambient_from_thermocouples(
-        store, ctx.channels, clock, clock.seconds(frames.reference.t_ns) + geometry.camera_offset_s,
-        geometry.geometry.ambient_temperature_c);
-  }
-  ctx.geometry.emplace(geometry.geometry);
+  resolve_ambient(ctx.settings.geometry, store, ctx.channels, clock, frames.reference);
+  ctx.geometry.emplace(ctx.settings.geometry.geometry);
   ctx.calibration = stored_calibration(results);
   ctx.reference = load_frame(run_dir, frames.reference);
-  if (!ctx.settings.mask.empty()) {
-    ctx.mask = read_image(storage::resolve_in_run(run_dir, ctx.settings.mask).string(), "mask");
-  }
+  ctx.mask = load_mask(run_dir, ctx.settings.mask);
   if (!ctx.settings.probes_only) fs::create_directories(run_dir / ctx.fields_dir);
   return ctx;
 }

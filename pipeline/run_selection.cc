@@ -54,9 +54,11 @@ TimeSeries channel_series(const storage::RunStore& store, std::int64_t channel_i
   return s;
 }
 
-double ambient_from_thermocouples(const storage::RunStore& store, const std::vector<storage::ChannelInfo>& channels,
-                                  const storage::ExperimentClock& clock, double t_s, double fallback_c) {
-  const std::vector<double> at{t_s};
+void resolve_ambient(GeometryConfig& geometry, const storage::RunStore& store,
+                     const std::vector<storage::ChannelInfo>& channels, const storage::ExperimentClock& clock,
+                     const storage::FrameRecord& reference) {
+  if (geometry.ambient_given) return;
+  const std::vector<double> at{clock.seconds(reference.t_ns) + geometry.camera_offset_s};
   double sum = 0;
   int count = 0;
   for (const auto& c : channels) {
@@ -64,7 +66,7 @@ double ambient_from_thermocouples(const storage::RunStore& store, const std::vec
     const auto aligned = fusion::align_to_frames(s.t_s, s.value, at);
     if (aligned.ok(0)) sum += aligned.value[0], ++count;
   }
-  return count ? sum / count : fallback_c;
+  if (count) geometry.geometry.ambient_temperature_c = sum / count;
 }
 
 TimeSeries within(const TimeSeries& s, double from_s, double to_s) {
@@ -76,6 +78,11 @@ TimeSeries within(const TimeSeries& s, double from_s, double to_s) {
     }
   }
   return out;
+}
+
+cv::Mat load_mask(const std::filesystem::path& run_dir, const std::string& mask) {
+  if (mask.empty()) return {};
+  return read_image(storage::resolve_in_run(run_dir, mask).string(), "mask");
 }
 
 cv::Mat load_frame(const std::filesystem::path& run_dir, const storage::FrameRecord& frame) {

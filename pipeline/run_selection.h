@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "pipeline/geometry_config.h"
 #include "storage/experiment_clock.h"
 #include "storage/records.h"
 #include "storage/run_store.h"
@@ -37,15 +38,21 @@ struct TimeSeries {
 TimeSeries channel_series(const storage::RunStore& store, std::int64_t channel_id,
                           const storage::ExperimentClock& clock);
 
-// The air's temperature at `t_s` from the channels' readings (their mean,
-// each interpolated at t_s), for the physical model when the geometry does
-// not give an ambient: at the reference frame, taken without the flow, the
-// thermocouples read ambient air. `fallback_c` when none has a value there.
-double ambient_from_thermocouples(const storage::RunStore& store, const std::vector<storage::ChannelInfo>& channels,
-                                  const storage::ExperimentClock& clock, double t_s, double fallback_c);
+// The physical model's ambient when the geometry does not give one: the
+// channels' mean reading (each interpolated) at the reference frame, taken
+// without the flow, on the thermocouples' clock (frame time plus the
+// geometry's camera offset). Left as it is when the geometry gives it, or
+// when no channel has a value there.
+void resolve_ambient(GeometryConfig& geometry, const storage::RunStore& store,
+                     const std::vector<storage::ChannelInfo>& channels, const storage::ExperimentClock& clock,
+                     const storage::FrameRecord& reference);
 
 // The part of `s` with from_s ≤ t ≤ to_s.
 TimeSeries within(const TimeSeries& s, double from_s, double to_s);
+
+// The settings' mask (a file in the run folder, relative to it); an empty
+// image when they name none.
+cv::Mat load_mask(const std::filesystem::path& run_dir, const std::string& mask);
 
 // A frame's image; a frame the run cannot deliver (missing, unreadable, or
 // a stored path leading outside the run) throws, naming the frame.
