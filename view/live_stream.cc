@@ -5,6 +5,8 @@
 #include <charconv>
 #include <cmath>
 
+#include "pipeline/quality_json.h"
+
 namespace bosfuse::view {
 namespace {
 
@@ -80,13 +82,12 @@ nlohmann::json bos_json(const LiveBosResult& r, const storage::ExperimentClock& 
     if (p.temperature_c && std::isfinite(*p.temperature_c)) probe["t_c"] = *p.temperature_c;
     probes.push_back(std::move(probe));
   }
-  const auto& q = r.frame.quality;
   return {{"frame_id", r.frame.frame.id},
           {"t_s", clock.seconds(r.frame.frame.t_ns) + camera_offset_s},
           {"width_px", r.frame.frame.width_px},
           {"height_px", r.frame.frame.height_px},
           {"probes", probes},
-          {"quality", {{"q_l", finite_or_null(q.q_l)}, {"q_c", finite_or_null(q.q_c)}, {"q_mod", finite_or_null(q.q_mod)}}},
+          {"quality", pipeline::to_json(r.frame.quality)},  // never NaN (fusion/image_quality.h)
           {"decode_ms", r.frame.decode_seconds * 1e3},
           {"evaluate_ms", r.frame.evaluate_seconds * 1e3},
           {"evaluated", r.evaluated},

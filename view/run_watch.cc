@@ -42,7 +42,11 @@ bool same_clock(const storage::ExperimentClock& a, const storage::ExperimentCloc
 }  // namespace
 
 RunWatch::RunWatch(const std::filesystem::path& run_dir, std::chrono::milliseconds poll_period)
-    : run_dir_(run_dir), poll_period_(poll_period), store_(storage::RunStore::open(run_dir)), tail_(run_dir) {
+    : run_dir_(run_dir),
+      poll_period_(poll_period),
+      store_(storage::RunStore::open(run_dir)),
+      alarm_limits_(alarm_limits_json(store_.run().config_toml)),
+      tail_(run_dir) {
   snapshot_.head = tail_.head();
   snapshot_.status = tail_.run_status();
   refresh_description();
@@ -140,10 +144,9 @@ std::string RunWatch::describe_json() const {
                        {"profile", device.profile},
                        {"address", device.address}});
   }
-  const auto limits = alarm_limits_json(run.config_toml);
   nlohmann::json channels = nlohmann::json::array();
   for (const auto& channel : store_.channels()) {
-    const auto alarms = limits.find({names[channel.device_id], channel.name});
+    const auto alarms = alarm_limits_.find({names[channel.device_id], channel.name});
     channels.push_back({{"id", channel.id},
                         {"name", channel.name},
                         {"kind", channel.kind},
@@ -151,7 +154,7 @@ std::string RunWatch::describe_json() const {
                         {"tc_type", channel.tc_type ? nlohmann::json(*channel.tc_type) : nlohmann::json()},
                         {"device_id", channel.device_id},
                         {"device", names[channel.device_id]},
-                        {"alarms", alarms == limits.end() ? nlohmann::json::object() : alarms->second}});
+                        {"alarms", alarms == alarm_limits_.end() ? nlohmann::json::object() : alarms->second}});
   }
   const storage::ExperimentClock& clock = snapshot_.clock;
   return nlohmann::json{{"name", run.name},

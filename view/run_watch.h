@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 
@@ -59,6 +60,10 @@ class RunWatch {
   std::filesystem::path run_dir_;
   std::chrono::milliseconds poll_period_;
   storage::RunStore store_;  // used under mutex_ only
+  // The experiment file's alarm limits by (device, channel) name: a run's
+  // file never changes (an append with another one is refused), so it is
+  // read once.
+  std::map<std::pair<std::string, std::string>, nlohmann::json> alarm_limits_;
   RunTail tail_;             // the poller thread's own
   mutable std::mutex mutex_;
   mutable std::condition_variable changed_;
