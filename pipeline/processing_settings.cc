@@ -2,9 +2,14 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
+#include <fstream>
 #include <map>
+#include <sstream>
 
 #include "acquisition/clock.h"
+#include "acquisition/toml_reader.h"
 #include "storage/processing_store.h"
 #include "storage/run_paths.h"
 #include "storage/run_store.h"
@@ -91,12 +96,17 @@ std::string mask_in_run(const fs::path& run_dir, const std::string& given) {
   return copy.string();
 }
 
-void apply(const SettingsOverrides& o, const fs::path& run_dir, const std::string& run_config,
-           ProcessingSettings& s) {
+// Everything but the files (mask, geometry), whose places differ with and without a run.
+void apply_evaluator(const SettingsOverrides& o, ProcessingSettings& s) {
   if (o.probes_only) s.probes_only = *o.probes_only;
   if (o.method) {
     if (*o.method != "xcorr" && *o.method != "flow") throw std::runtime_error("method must be xcorr or flow");
     s.evaluator.method = *o.method == "flow" ? fusion::Method::kOpticalFlow : fusion::Method::kCrossCorrelation;
+  }
+  if (o.flow_algorithm) {
+    const auto it = kFlowAlgorithms.find(*o.flow_algorithm);
+    if (it == kFlowAlgorithms.end()) throw std::runtime_error("flow algorithm must be dis, farneback or tvl1");
+    s.evaluator.flow.algorithm = it->second;
   }
   if (o.window_px || o.step_px || o.roi_px) {
     s.evaluator.set_grid(o.window_px.value_or(s.evaluator.xcorr.window_px),
@@ -105,6 +115,10 @@ void apply(const SettingsOverrides& o, const fs::path& run_dir, const std::strin
   if (o.passes) s.evaluator.xcorr.passes = *o.passes;
   if (o.probe_context_nodes) s.evaluator.xcorr.probe_context_nodes = *o.probe_context_nodes;
   if (o.max_shift_px) s.evaluator.xcorr.max_shift_px = *o.max_shift_px;
+}
+
+void apply(const SettingsOverrides& o, const fs::path& run_dir, const std::string& run_config, ProcessingSettings& s) {
+  apply_evaluator(o, s);
   if (o.mask) s.mask = o.mask->empty() ? std::string() : mask_in_run(run_dir, *o.mask);
   if (o.geometry_file) s.geometry = resolve_geometry_config(*o.geometry_file, run_config);
 }
@@ -112,8 +126,8 @@ void apply(const SettingsOverrides& o, const fs::path& run_dir, const std::strin
 }  // namespace
 
 bool SettingsOverrides::empty() const {
-  return !probes_only && !method && !window_px && !step_px && !passes && !probe_context_nodes && !max_shift_px &&
-         !roi_px && !mask && !geometry_file;
+  return !probes_only && !method && !flow_algorithm && !window_px && !step_px && !passes && !probe_context_nodes &&
+         !max_shift_px && !roi_px && !mask && !geometry_file;
 }
 
 std::string ProcessingSettings::Validate() const {
@@ -181,6 +195,80 @@ ProcessingSettings resolve_settings(const fs::path& run_dir, const SettingsOverr
   return s;
 }
 
+std::optional<SettingsOverrides> parse_processing_table(const std::string& text, const std::string& source_name) {
+  const toml::table root = acquisition::parse_toml(text, source_name);
+  const auto table = acquisition::TomlReader(root, "", source_name).table("processing");
+  if (!table) return std::nullopt;
+  const auto& r = *table;
+  SettingsOverrides o;
+  auto one_of = [&](std::string_view key, std::initializer_list<std::string_view> allowed) {
+    std::optional<std::string> value = r.optional_string(key);
+    if (value && std::find(allowed.begin(), allowed.end(), *value) == allowed.end()) {
+      std::string names;
+      for (const auto name : allowed) names += (names.empty() ? "\"" : ", \"") + std::string(name) + "\"";
+      r.fail(key, "expected one of " + names + ", not \"" + *value + "\"");
+    }
+    return value;
+  };
+  auto whole = [&](std::string_view key) -> std::optional<int> {
+    const auto value = r.optional_integer(key);
+    if (value && (*value < -1'000'000 || *value > 1'000'000)) r.fail(key, "out of range");
+    return value ? std::optional<int>(static_cast<int>(*value)) : std::nullopt;
+  };
+  if (const auto mode = one_of("mode", {"full", "probes"})) o.probes_only = *mode == "probes";
+  o.method = one_of("method", {"xcorr", "flow"});
+  o.flow_algorithm = one_of("flow_algorithm", {"dis", "farneback", "tvl1"});
+  o.window_px = whole("window_px");
+  o.step_px = whole("step_px");
+  o.passes = whole("passes");
+  o.probe_context_nodes = whole("probe_context_nodes");
+  o.max_shift_px = r.optional_number("max_shift_px");
+  if (r.has("roi_px")) {
+    const std::vector<double> roi = r.numbers("roi_px");
+    const bool whole_px =
+        std::all_of(roi.begin(), roi.end(), [](double v) { return v == std::floor(v) && v >= 0 && v < 1e6; });
+    if (roi.size() != 4 || !whole_px || roi[2] < 1 || roi[3] < 1) {
+      r.fail("roi_px", "expected [x, y, width, height] in whole pixels, width and height at least 1");
+    }
+    o.roi_px = cv::Rect(static_cast<int>(roi[0]), static_cast<int>(roi[1]), static_cast<int>(roi[2]),
+                        static_cast<int>(roi[3]));
+  }
+  o.mask = r.optional_string("mask");
+  r.reject_unknown_keys();
+  // The evaluator's own limits (a window of 8 to 128 px, 1 to 20 passes ...)
+  // are checked here too, so the message points into the file.
+  ProcessingSettings check = defaults();
+  apply_evaluator(o, check);
+  if (const auto problem = check.evaluator.Validate(); !problem.empty()) r.fail("", problem);
+  return o;
+}
+
+ProcessingSettings resolve_runless_settings(const std::string& settings_file, const SettingsOverrides& flags) {
+  if (flags.geometry_file) throw std::runtime_error("a geometry belongs to a run's processing, not to this evaluation");
+  ProcessingSettings s = defaults();
+  s.geometry.source.clear();
+  s.source = "defaults";
+  if (!settings_file.empty()) {
+    std::ifstream in(settings_file);
+    if (!in) throw std::runtime_error("cannot read settings file '" + settings_file + "'");
+    std::ostringstream text;
+    text << in.rdbuf();
+    auto from_file = parse_processing_table(text.str(), settings_file);
+    if (!from_file) throw std::runtime_error(settings_file + ": no [processing] table");
+    if (from_file->mask && !from_file->mask->empty() && fs::path(*from_file->mask).is_relative()) {
+      from_file->mask = (fs::path(settings_file).parent_path() / *from_file->mask).string();
+    }
+    apply_evaluator(*from_file, s);
+    if (from_file->mask) s.mask = *from_file->mask;
+    s.source = "[processing] of " + settings_file;
+  }
+  if (!flags.empty()) s.source += ", with the command line's options";
+  apply_evaluator(flags, s);
+  if (flags.mask) s.mask = *flags.mask;
+  if (const auto problem = s.evaluator.Validate(); !problem.empty()) throw std::runtime_error(problem);
+  return s;
+}
+
 std::string describe(const ProcessingSettings& s) {
   const auto& x = s.evaluator.xcorr;
   std::string text = fmt::format("{}, {}, window {} px, step {} px, {} passes, largest shift {:g} px",
@@ -190,6 +278,7 @@ std::string describe(const ProcessingSettings& s) {
   if (s.probes_only) text += fmt::format(", probe context {}", x.probe_context_nodes);
   if (!x.roi.empty()) text += fmt::format(", ROI {},{} {}×{} px", x.roi.x, x.roi.y, x.roi.width, x.roi.height);
   text += s.mask.empty() ? ", no mask" : ", mask " + s.mask;
+  if (s.geometry.source.empty()) return text;
   return text + ", geometry from " + s.geometry.source;
 }
 

@@ -11,6 +11,11 @@
 //   flags  >  the run's stored settings  >  the run's experiment file
 //   ([geometry], [alignment])  >  built-in defaults,
 // and it says where each part came from.
+//
+// Without a run (`bosfuse evaluate --sequence`), resolve_runless_settings()
+// orders: flags  >  a settings file's [processing] table  >  defaults. The
+// table's keys are those the run stores (to_json below), so a run's settings
+// and a folder's read the same; docs/CONFIG.md lists them.
 
 #include <filesystem>
 #include <optional>
@@ -37,7 +42,8 @@ struct ProcessingSettings {
 // (or default) value.
 struct SettingsOverrides {
   std::optional<bool> probes_only;
-  std::optional<std::string> method;  // xcorr or flow
+  std::optional<std::string> method;          // xcorr or flow
+  std::optional<std::string> flow_algorithm;  // dis, farneback or tvl1
   std::optional<int> window_px, step_px, passes, probe_context_nodes;
   std::optional<double> max_shift_px;
   std::optional<cv::Rect> roi_px;
@@ -58,8 +64,25 @@ ProcessingSettings settings_from_json(const nlohmann::json& j);
 // the run keeps every file its settings name.
 ProcessingSettings resolve_settings(const std::filesystem::path& run_dir, const SettingsOverrides& overrides);
 
+// The [processing] table of a TOML document (`source_name` names it in
+// messages): mode ("full" or "probes"), method, flow_algorithm, window_px,
+// step_px, passes, max_shift_px, probe_context_nodes, roi_px = [x, y, width,
+// height] and mask, as overrides of the defaults; nullopt when the document
+// has no such table. A wrong type, value or unknown key is an
+// acquisition::ConfigError naming the file, the line and the key. A relative
+// mask is returned as written: the caller knows what it is relative to.
+std::optional<SettingsOverrides> parse_processing_table(const std::string& text, const std::string& source_name);
+
+// The settings of an evaluation without a run: defaults, then the
+// [processing] table of `settings_file` when one is given (a relative mask
+// there is relative to the file's folder), then `flags` (a mask as given).
+// The geometry stays the defaults' and unnamed (displacements only); a flag
+// naming a geometry file is refused. Throws when the result is not usable.
+ProcessingSettings resolve_runless_settings(const std::string& settings_file, const SettingsOverrides& flags);
+
 // The settings in words, e.g. "full fields, cross-correlation, window 16 px,
-// step 8 px, 3 passes, mask holder-mask.png, geometry from run config".
+// step 8 px, 3 passes, mask holder-mask.png, geometry from run config"
+// (without the geometry when it has no source: run-less settings).
 std::string describe(const ProcessingSettings& settings);
 
 // The image scale at the flow plane, px per mm: from the run's stored

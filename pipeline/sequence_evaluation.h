@@ -1,0 +1,53 @@
+#pragma once
+// Evaluating the frames of an image sequence (image_sequence.h) against one
+// reference, one frame at a time. SequenceEvaluator reads and checks the
+// reference and the mask once, and knows the grid every field will have
+// before any frame is evaluated, so a writer can lay out its
+// [frames, ny, nx] arrays first. A frame's own problem (unreadable, another
+// size than the reference, ...) is its result's status, not an exception:
+// the other frames go on. evaluate() is const and keeps nothing between
+// frames, so workers (threads, or MPI ranks each with its own evaluator)
+// can take any frame index in any order.
+
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "fusion/displacement_evaluator.h"
+#include "pipeline/image_sequence.h"
+
+namespace bosfuse::pipeline {
+
+struct SequenceFrameResult {
+  std::string name;                 // the frame's path as listed
+  FrameTime time;                   // known whenever the file exists, even if it cannot be evaluated
+  std::string status = "ok";        // "ok", or why the frame has no field (the file is not repeated)
+  fusion::DisplacementField field;  // on the evaluator's grid() when ok
+  fusion::EvaluationSummary summary;
+
+  bool ok() const { return status == "ok"; }
+};
+
+class SequenceEvaluator {
+ public:
+  // Throws std::runtime_error naming the file when the reference or the mask
+  // cannot be read, and std::invalid_argument when the options do not fit
+  // the reference (a window larger than the image, a ROI outside it, a mask
+  // of another size): nothing about the sequence is known to be usable then.
+  SequenceEvaluator(const std::string& reference_path, fusion::EvaluatorOptions options,
+                    const std::string& mask_path = {});
+
+  SequenceFrameResult evaluate(const std::string& frame_path) const;
+
+  // Window centres of every field: cols × rows nodes from (x0, y0) every step.
+  const fusion::GridGeometry& grid() const { return grid_; }
+  cv::Size image_size() const { return reference_.size(); }
+  const fusion::EvaluatorOptions& options() const { return options_; }
+
+ private:
+  cv::Mat reference_;
+  cv::Mat mask_;
+  fusion::EvaluatorOptions options_;
+  fusion::GridGeometry grid_;
+};
+
+}  // namespace bosfuse::pipeline
