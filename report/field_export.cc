@@ -1,11 +1,9 @@
 #include "report/field_export.h"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <span>
 #include <string_view>
@@ -13,9 +11,10 @@
 #include "acquisition/clock.h"
 #include "fusion/field_csv.h"
 #include "report/hdf5_writer.h"
-#include "report/html.h"
-#include "storage/processing_store.h"
+#include "report/partial_file.h"
+#include "report/xdmf_sidecar.h"
 #include "storage/experiment_clock.h"
+#include "storage/processing_store.h"
 #include "storage/run_paths.h"
 
 #ifndef BOSFUSE_VERSION
@@ -90,37 +89,6 @@ struct ExportedFrame {
   int rows = 0, cols = 0;
 };
 
-// A file written under a temporary name beside its destination, removed
-// unless commit() renames it into place.
-class PartialFile {
- public:
-  explicit PartialFile(const fs::path& destination)
-      : destination_(destination),
-        temporary_(destination.parent_path() /
-                   fmt::format(".{}.partial-{}", destination.filename().string(), static_cast<long>(getpid()))) {}
-  ~PartialFile() {
-    std::error_code ignored;
-    if (!committed_) fs::remove(temporary_, ignored);
-  }
-  PartialFile(const PartialFile&) = delete;
-  PartialFile& operator=(const PartialFile&) = delete;
-
-  const fs::path& path() const { return temporary_; }
-  void commit() {
-    std::error_code error;
-    fs::rename(temporary_, destination_, error);
-    if (error) {
-      throw std::runtime_error(fmt::format("cannot write '{}': {}", destination_.string(), error.message()));
-    }
-    committed_ = true;
-  }
-
- private:
-  fs::path destination_;
-  fs::path temporary_;
-  bool committed_ = false;
-};
-
 std::vector<double> as_doubles(const cv::Mat& values) {
   const cv::Mat continuous = values.isContinuous() ? values : values.clone();
   return std::vector<double>(continuous.ptr<double>(), continuous.ptr<double>() + continuous.total());
@@ -170,45 +138,32 @@ std::size_t grid_of(const fusion::StoredFieldGrid& field, std::vector<Grid>& gri
   return grids.size() - 1;
 }
 
-std::string data_item(std::string_view h5_name, const std::string& dataset, std::string_view dims, bool flag) {
-  return fmt::format(R"(<DataItem Dimensions="{}" NumberType="{}" Precision="{}" Format="HDF">{}:{}</DataItem>)", dims,
-                     flag ? "UChar" : "Float", flag ? 1 : 8, html_escape(h5_name), html_escape(dataset));
-}
-
-void write_xdmf(const fs::path& path, std::string_view h5_name, const std::vector<Grid>& grids,
-                const std::map<std::string_view, std::vector<ExportedFrame>>& frames, bool in_mm) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw std::runtime_error(fmt::format("cannot write '{}'", path.string()));
-  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-      << "<Xdmf Version=\"3.0\">\n"
-      << "  <Domain>\n";
+// The sidecar's view of the exported frames: each frame's arrays are datasets of its own group.
+std::vector<XdmfCollection> xdmf_collections(const std::vector<Grid>& grids,
+                                             const std::map<std::string_view, std::vector<ExportedFrame>>& frames,
+                                             bool in_mm) {
+  std::vector<XdmfCollection> collections;
   const std::string x = in_mm ? "x_mm" : "x_px", y = in_mm ? "y_mm" : "y_px";
   for (const auto& kind : kKinds) {
     const auto it = frames.find(kind.name);
     if (it == frames.end()) continue;
-    out << fmt::format("    <Grid Name=\"{}\" GridType=\"Collection\" CollectionType=\"Temporal\">\n", kind.name);
+    XdmfCollection& collection = collections.emplace_back();
+    collection.name = kind.name;
     for (const auto& f : it->second) {
-      const Grid& grid = grids[f.grid];
-      const std::string dims = fmt::format("{} {}", f.rows, f.cols);
-      // {} prints the shortest text that reads back as the same double: Time equals the t_s attribute.
-      out << fmt::format("      <Grid Name=\"frame_{:06d}\" GridType=\"Uniform\">\n", f.frame_id)
-          << fmt::format("        <Time Value=\"{}\"/>\n", f.t_s)
-          << fmt::format("        <Topology TopologyType=\"2DRectMesh\" Dimensions=\"{}\"/>\n", dims)
-          << "        <Geometry GeometryType=\"VXVY\">\n"
-          << "          " << data_item(h5_name, grid.group + "/" + x, std::to_string(f.cols), false) << "\n"
-          << "          " << data_item(h5_name, grid.group + "/" + y, std::to_string(f.rows), false) << "\n"
-          << "        </Geometry>\n";
+      XdmfFrame& frame = collection.frames.emplace_back();
+      frame.name = fmt::format("frame_{:06d}", f.frame_id);
+      frame.t_s = f.t_s;
+      frame.rows = static_cast<std::size_t>(f.rows);
+      frame.cols = static_cast<std::size_t>(f.cols);
+      frame.x_dataset = grids[f.grid].group + "/" + x;
+      frame.y_dataset = grids[f.grid].group + "/" + y;
       for (const auto& q : kind.quantities) {
-        out << fmt::format("        <Attribute Name=\"{}\" AttributeType=\"Scalar\" Center=\"Node\">\n", q.dataset)
-            << "          " << data_item(h5_name, f.group + "/" + std::string(q.dataset), dims, q.flag) << "\n"
-            << "        </Attribute>\n";
+        frame.arrays.push_back(
+            {std::string(q.dataset), f.group + "/" + std::string(q.dataset), q.flag, std::nullopt, 0});
       }
-      out << "      </Grid>\n";
     }
-    out << "    </Grid>\n";
   }
-  out << "  </Domain>\n</Xdmf>\n";
-  if (!out.flush()) throw std::runtime_error(fmt::format("cannot write '{}'", path.string()));
+  return collections;
 }
 
 }  // namespace
@@ -337,7 +292,8 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
     }
     out.close();
   }
-  write_xdmf(xmf_file.path(), hdf5_path.filename().string(), grids, exported, options.px_per_mm.has_value());
+  write_xdmf(xmf_file.path(), hdf5_path.filename().string(),
+             xdmf_collections(grids, exported, options.px_per_mm.has_value()));
   h5_file.commit();
   xmf_file.commit();
   result.displacement_frames = exported["displacement"].size();

@@ -105,6 +105,86 @@ void Writer::write_1d(const std::string& path, std::span<const std::int64_t> dat
   write(path, H5T_STD_I64LE, H5T_NATIVE_INT64, data.data(), dims, false);
 }
 
+void Writer::write_1d(const std::string& path, std::span<const std::string> data) {
+  Datatype type(H5Tcopy(H5T_C_S1));
+  if (!type.valid() || H5Tset_size(type.get(), H5T_VARIABLE) < 0 || H5Tset_cset(type.get(), H5T_CSET_UTF8) < 0) {
+    fail("cannot make a string type for", path);
+  }
+  std::vector<const char*> pointers;
+  pointers.reserve(data.size());
+  for (const auto& text : data) pointers.push_back(text.c_str());
+  const hsize_t dims[] = {data.size()};
+  write(path, type.get(), type.get(), pointers.data(), dims, false);
+}
+
+void Writer::create_frames(const std::string& path, hid_t file_type, hid_t memory_type, const void* fill,
+                           std::span<const hsize_t, 3> dims) {
+  if (dims[0] == 0 || dims[1] == 0 || dims[2] == 0) {
+    throw std::invalid_argument(
+        fmt::format("'{}': a {} × {} × {} array has no values", path, dims[0], dims[1], dims[2]));
+  }
+  Dataspace space(H5Screate_simple(3, dims.data(), nullptr));
+  if (!space.valid()) fail("cannot describe the shape of", path);
+  PropertyList create(H5Pcreate(H5P_DATASET_CREATE));
+  if (!create.valid()) fail("cannot set up", path);
+  const hsize_t chunk[] = {1, std::min<hsize_t>(dims[1], 128), std::min<hsize_t>(dims[2], 128)};
+  if (H5Pset_chunk(create.get(), 3, chunk) < 0 || H5Pset_shuffle(create.get()) < 0 ||
+      H5Pset_deflate(create.get(), 4) < 0 || H5Pset_fill_value(create.get(), memory_type, fill) < 0 ||
+      H5Pset_fill_time(create.get(), H5D_FILL_TIME_ALLOC) < 0) {
+    fail("cannot set chunks, compression and fill value of", path);
+  }
+  Dataset dataset(
+      H5Dcreate2(file_.get(), path.c_str(), file_type, space.get(), H5P_DEFAULT, create.get(), H5P_DEFAULT));
+  if (!dataset.valid()) fail("cannot create dataset", path);
+  if (!dataset.close()) fail("cannot close dataset", path);
+}
+
+void Writer::create_frames(const std::string& path, std::size_t frames, std::size_t rows, std::size_t cols,
+                           double fill) {
+  const hsize_t dims[] = {frames, rows, cols};
+  create_frames(path, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &fill, std::span<const hsize_t, 3>(dims));
+}
+
+void Writer::create_frames(const std::string& path, std::size_t frames, std::size_t rows, std::size_t cols,
+                           std::uint8_t fill) {
+  const hsize_t dims[] = {frames, rows, cols};
+  create_frames(path, H5T_STD_U8LE, H5T_NATIVE_UINT8, &fill, std::span<const hsize_t, 3>(dims));
+}
+
+void Writer::write_frame(const std::string& path, hid_t memory_type, std::size_t frame, const void* data,
+                         std::size_t size) {
+  Dataset dataset(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT));
+  if (!dataset.valid()) fail("cannot open dataset", path);
+  Dataspace space(H5Dget_space(dataset.get()));
+  hsize_t dims[3] = {0, 0, 0};
+  if (!space.valid() || H5Sget_simple_extent_ndims(space.get()) != 3 ||
+      H5Sget_simple_extent_dims(space.get(), dims, nullptr) < 0) {
+    fail("cannot read the shape of", path);
+  }
+  if (frame >= dims[0] || size != dims[1] * dims[2]) {
+    throw std::invalid_argument(fmt::format("'{}': frame {} of {} values for a {} × {} × {} array", path, frame, size,
+                                            dims[0], dims[1], dims[2]));
+  }
+  const hsize_t start[] = {frame, 0, 0};
+  const hsize_t count[] = {1, dims[1], dims[2]};
+  Dataspace memory(H5Screate_simple(3, count, nullptr));
+  if (!memory.valid() || H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr) < 0) {
+    fail("cannot select a frame of", path);
+  }
+  if (H5Dwrite(dataset.get(), memory_type, memory.get(), space.get(), H5P_DEFAULT, data) < 0) {
+    fail(fmt::format("cannot write frame {} of dataset", frame), path);
+  }
+  if (!dataset.close()) fail("cannot close dataset", path);
+}
+
+void Writer::write_frame(const std::string& path, std::size_t frame, std::span<const double> data) {
+  write_frame(path, H5T_NATIVE_DOUBLE, frame, data.data(), data.size());
+}
+
+void Writer::write_frame(const std::string& path, std::size_t frame, std::span<const std::uint8_t> data) {
+  write_frame(path, H5T_NATIVE_UINT8, frame, data.data(), data.size());
+}
+
 void Writer::attribute(const std::string& object, const std::string& name, hid_t file_type, hid_t memory_type,
                        const void* value) {
   const std::string what = object + (object.ends_with('/') ? "" : "/") + "@" + name;

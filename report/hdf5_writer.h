@@ -102,6 +102,18 @@ class Writer {
   void write_2d(const std::string& path, std::span<const std::uint8_t> data, std::size_t rows, std::size_t cols);
   void write_1d(const std::string& path, std::span<const double> data);
   void write_1d(const std::string& path, std::span<const std::int64_t> data);
+  // Variable-length UTF-8 strings, which h5py reads as bytes (.asstr() for str).
+  void write_1d(const std::string& path, std::span<const std::string> data);
+  // A frames × rows × cols array filled one frame at a time (write_frame), so
+  // a sequence never holds more than one frame's field: chunks of one frame
+  // by at most 128 × 128, compressed as write_2d's. A frame never written
+  // reads as `fill`.
+  void create_frames(const std::string& path, std::size_t frames, std::size_t rows, std::size_t cols, double fill);
+  void create_frames(const std::string& path, std::size_t frames, std::size_t rows, std::size_t cols,
+                     std::uint8_t fill);
+  // Frame `frame` of an array create_frames() made: rows × cols values, row-major.
+  void write_frame(const std::string& path, std::size_t frame, std::span<const double> data);
+  void write_frame(const std::string& path, std::size_t frame, std::span<const std::uint8_t> data);
   // `object` is a group or dataset path ("/" for the file). Strings are
   // variable-length UTF-8, which h5py reads as str and MATLAB as char.
   void set_attribute(const std::string& object, const std::string& name, std::string_view value);
@@ -120,6 +132,9 @@ class Writer {
   [[noreturn]] void fail(std::string_view action, std::string_view object) const;
   void write(const std::string& path, hid_t file_type, hid_t memory_type, const void* data,
              std::span<const hsize_t> dims, bool compress);
+  void create_frames(const std::string& path, hid_t file_type, hid_t memory_type, const void* fill,
+                     std::span<const hsize_t, 3> dims);
+  void write_frame(const std::string& path, hid_t memory_type, std::size_t frame, const void* data, std::size_t size);
   void attribute(const std::string& object, const std::string& name, hid_t file_type, hid_t memory_type,
                  const void* value);
 

@@ -70,7 +70,9 @@ print(json.dumps(out))
 
 // Prints {"collections": {name: [{name, time, topology, geometry: [{ref, dims,
 // shape}], attributes: {name: {ref, dims, type, precision, shape}}}]}} where
-// `shape` is what h5py finds at the reference (null: no such dataset).
+// `shape` is what h5py finds at the reference (null: no such dataset). For
+// a hyperslab of a dataset, `shape` is the slab's count when it lies inside
+// the dataset (null otherwise), with start, stride, count and source_shape.
 inline constexpr char kXdmfCheck[] = R"PY(
 import json, os, sys
 import xml.etree.ElementTree as ET
@@ -88,6 +90,19 @@ def shape_of(ref):
     obj = files[full].get(dataset)
     return list(obj.shape) if isinstance(obj, h5py.Dataset) else None
 def item(e):
+    if e.get("ItemType") == "HyperSlab":
+        # start, stride and count per dimension, then the dataset they select from
+        selection, source = e.findall("DataItem")
+        numbers = [int(x) for x in selection.text.split()]
+        rank = len(numbers) // 3
+        start, stride, count = numbers[:rank], numbers[rank:2 * rank], numbers[2 * rank:]
+        inner = item(source)
+        full = inner["shape"]
+        inside = full is not None and len(full) == rank and all(
+            s >= 0 and c >= 1 and s + (c - 1) * st < f for s, st, c, f in zip(start, stride, count, full))
+        inner.update(dims=e.get("Dimensions"), start=start, stride=stride, count=count, source_shape=full,
+                     shape=count if inside else None)
+        return inner
     return {"ref": e.text.strip(), "dims": e.get("Dimensions"), "type": e.get("NumberType"),
             "precision": e.get("Precision"), "format": e.get("Format"), "shape": shape_of(e.text)}
 out = {"version": root.get("Version"), "collections": {}}
