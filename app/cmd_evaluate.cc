@@ -1,7 +1,9 @@
 // bosfuse evaluate: a reference and a measurement image → a displacement
 // field as CSV (x,y,u,v,valid,peak_ratio) on standard output or in the
 // file -o names, optionally a map PNG (--map); the summary goes to standard
-// error.
+// error. With --sequence, a whole folder or glob of frames against one
+// reference → one HDF5 file (report/sequence_export.h), with progress on
+// standard error and exit status 6 when some frames could not be evaluated.
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -11,10 +13,16 @@
 
 #include "app/command.h"
 #include "app/output_stream.h"
+#include "app/progress_display.h"
+#include "app/run_control.h"
 #include "fusion/displacement_evaluator.h"
 #include "pipeline/image_io.h"
+#include "pipeline/image_sequence.h"
+#include "pipeline/processing_settings.h"
+#include "pipeline/sequence_evaluation.h"
 #include "report/figures.h"
 #include "report/run_input.h"
+#include "report/sequence_export.h"
 
 namespace bosfuse::app {
 namespace {
@@ -24,6 +32,7 @@ using pipeline::read_image;
 struct EvaluateArgs {
   std::string reference, measurement, out = "-", map, mask, roi, method = "xcorr", flow = "dis", subpixel = "auto",
                                       interpolator = "lanczos3";
+  std::string sequence_reference, sequence, settings;
   std::vector<std::string> probes;
   int window_px = 16, first_window_px = 0, step_px = 8, passes = 3;
   double max_shift_px = 4, contour_px = 0.1;
@@ -61,18 +70,9 @@ cv::Point2d parse_point(const std::string& text, cv::Size image_size) {
   return point;
 }
 
-fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
-  fusion::EvaluatorOptions options;
-  options.method = args.method == "flow" ? fusion::Method::kOpticalFlow : fusion::Method::kCrossCorrelation;
-  cv::Rect roi;
-  if (!args.roi.empty()) {
-    const auto r = parse_ints(args.roi, 4, "--roi");
-    roi = {r[0], r[1], r[2], r[3]};
-  }
-  options.set_grid(args.window_px, args.step_px, roi);
+// The choices only the command line makes (the stored settings have no key for them).
+void apply_xcorr_choices(const EvaluateArgs& args, fusion::EvaluatorOptions& options) {
   options.xcorr.first_window_px = args.first_window_px;
-  options.xcorr.passes = args.passes;
-  options.xcorr.max_shift_px = args.max_shift_px;
   // "auto": the 2-D fit where peaks lock (first pass), 3-point after deformation.
   if (args.subpixel == "gauss3") {
     options.xcorr.subpixel = options.xcorr.refinement_subpixel = fusion::SubpixelEstimator::kGaussian3Point;
@@ -83,6 +83,20 @@ fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
                                                                   {"lanczos3", fusion::Interpolator::kLanczos3},
                                                                   {"lanczos4", fusion::Interpolator::kLanczos4}};
   options.xcorr.interpolator = interpolators.at(args.interpolator);
+}
+
+fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
+  fusion::EvaluatorOptions options;
+  options.method = args.method == "flow" ? fusion::Method::kOpticalFlow : fusion::Method::kCrossCorrelation;
+  cv::Rect roi;
+  if (!args.roi.empty()) {
+    const auto r = parse_ints(args.roi, 4, "--roi");
+    roi = {r[0], r[1], r[2], r[3]};
+  }
+  options.set_grid(args.window_px, args.step_px, roi);
+  options.xcorr.passes = args.passes;
+  options.xcorr.max_shift_px = args.max_shift_px;
+  apply_xcorr_choices(args, options);
   const std::map<std::string, fusion::FlowAlgorithm> flows{{"dis", fusion::FlowAlgorithm::kDis},
                                                            {"farneback", fusion::FlowAlgorithm::kFarneback},
                                                            {"tvl1", fusion::FlowAlgorithm::kTvl1}};
@@ -119,13 +133,131 @@ void evaluate(const EvaluateArgs& args) {
   spdlog::info("{}", result.summary.BriefReport());
 }
 
+// The options the user gave (an option left at its default does not
+// override the settings file).
+pipeline::SettingsOverrides given_overrides(const EvaluateArgs& args, const CLI::App& cmd) {
+  pipeline::SettingsOverrides o;
+  auto given = [&](const char* name) { return cmd.count(name) > 0; };
+  if (given("--method")) o.method = args.method;
+  if (given("--flow")) o.flow_algorithm = args.flow;
+  if (given("--window")) o.window_px = args.window_px;
+  if (given("--step")) o.step_px = args.step_px;
+  if (given("--passes")) o.passes = args.passes;
+  if (given("--max-shift")) o.max_shift_px = args.max_shift_px;
+  if (given("--roi")) {
+    const auto r = parse_ints(args.roi, 4, "--roi");
+    o.roi_px = cv::Rect(r[0], r[1], r[2], r[3]);
+  }
+  if (given("--mask")) o.mask = args.mask;
+  return o;
+}
+
+// What the file's `settings` attribute holds: the stored settings' keys
+// (pipeline/processing_settings.h) for an evaluation without a run.
+std::string settings_json(const pipeline::ProcessingSettings& settings, const EvaluateArgs& args) {
+  auto j = pipeline::to_json(settings);
+  j.erase("mode");
+  j.erase("probe_context_nodes");
+  j.erase("geometry");
+  j["first_window_px"] = settings.evaluator.xcorr.first_window_px;
+  j["subpixel"] = args.subpixel;
+  j["interpolator"] = args.interpolator;
+  j["source"] = settings.source;
+  return j.dump();
+}
+
+void evaluate_sequence(const EvaluateArgs& args, const CLI::App& cmd) {
+  if (!args.reference.empty() || !args.measurement.empty()) {
+    throw std::runtime_error("--sequence takes the reference as --reference REF, not as a positional image");
+  }
+  if (args.sequence_reference.empty()) throw std::runtime_error("--sequence needs --reference REF");
+  if (args.out == "-") {
+    throw std::runtime_error("--sequence needs --out FILE.h5: the fields go to an HDF5 file, not standard output");
+  }
+  for (const char* pair_only : {"--probe", "--map", "--contour"}) {
+    if (cmd.count(pair_only) > 0)
+      throw std::runtime_error(std::string(pair_only) + " is for an image pair, not --sequence");
+  }
+  pipeline::ProcessingSettings settings = pipeline::resolve_runless_settings(args.settings, given_overrides(args, cmd));
+  if (settings.probes_only) {
+    throw std::runtime_error(args.settings +
+                             ": mode = \"probes\" needs a run's thermocouples; a sequence is evaluated in full fields");
+  }
+  apply_xcorr_choices(args, settings.evaluator);
+  if (const auto problem = settings.evaluator.Validate(); !problem.empty()) throw std::runtime_error(problem);
+  spdlog::info("settings: {} ({})", pipeline::describe(settings), settings.source);
+
+  // The reference, the mask and the settings are checked before anything is written.
+  const pipeline::SequenceEvaluator evaluator(args.sequence_reference, settings.evaluator, settings.mask);
+  const auto sequence = pipeline::list_image_sequence(args.sequence, {args.sequence_reference, settings.mask});
+  for (const auto& file : sequence.left_out) spdlog::info("{}: the reference or the mask, not a frame", file);
+  report::SequenceFieldWriter writer(
+      args.out, {args.sequence_reference, settings_json(settings, args), sequence.frames, evaluator.grid()});
+
+  const std::atomic<bool>& stop = stop_requested_by_signal();
+  ProgressDisplay display;
+  std::size_t failed = 0;
+  for (std::size_t i = 0; i < sequence.frames.size(); ++i) {
+    if (stop) throw CommandFailure(kExitStopped, "stopped on request; nothing was written to " + args.out);
+    const auto result = evaluator.evaluate(sequence.frames[i]);
+    if (!result.ok()) {
+      ++failed;
+      const std::string line = fmt::format("frame {}: {}", result.name, result.status);
+      // Under --quiet the display is silent, but a failed frame is a warning all the same.
+      if (spdlog::should_log(spdlog::level::info)) {
+        display.note("warning: " + line);
+      } else {
+        spdlog::warn("{}", line);
+      }
+    } else {
+      spdlog::debug("{}: {}", result.name, result.summary.BriefReport());
+    }
+    writer.write(i, result);
+    display.step(i + 1, sequence.frames.size(), result.name);
+  }
+  display.finish();
+  const auto written = writer.commit();
+  spdlog::info("wrote {} and {}: {} of {} frames evaluated, on a {}x{} grid", written.hdf5_path.string(),
+               written.xdmf_path.string(), written.frames_ok, written.frames, evaluator.grid().cols,
+               evaluator.grid().rows);
+  if (failed > 0) {
+    throw CommandFailure(
+        kExitSomeFramesFailed,
+        fmt::format("{} of {} frames could not be evaluated (named above; their status is in {}:/status)", failed,
+                    sequence.frames.size(), args.out));
+  }
+}
+
+void evaluate_command(const EvaluateArgs& args, const CLI::App& cmd) {
+  if (!args.sequence.empty()) return evaluate_sequence(args, cmd);
+  if (!args.sequence_reference.empty() || !args.settings.empty()) {
+    throw std::runtime_error("--reference and --settings go with --sequence; an image pair is REF MEAS");
+  }
+  if (args.reference.empty() || args.measurement.empty()) {
+    throw std::runtime_error(
+        "evaluate needs REF MEAS (an image pair), or --reference REF --sequence GLOB --out FILE.h5");
+  }
+  evaluate(args);
+}
+
 void add_evaluate(CLI::App& root) {
   auto args = std::make_shared<EvaluateArgs>();
-  CLI::App* cmd =
-      root.add_subcommand("evaluate", "Displacement field of an image pair (CSV: x,y,u,v,valid,peak_ratio)");
-  cmd->add_option("reference", args->reference, "Reference image (no flow)")->required();
-  cmd->add_option("measurement", args->measurement, "Measurement image (through the flow)")->required();
-  cmd->add_option("--out,-o", args->out, "CSV file to write; '-' (the default): standard output");
+  CLI::App* cmd = root.add_subcommand(
+      "evaluate",
+      "Displacement field of an image pair (CSV: x,y,u,v,valid,peak_ratio), or of every frame of a sequence "
+      "against one reference (--sequence: HDF5)");
+  cmd->add_option("reference", args->reference, "Reference image (no flow)");
+  cmd->add_option("measurement", args->measurement, "Measurement image (through the flow)");
+  cmd->add_option("--out,-o", args->out,
+                  "CSV file to write; '-' (the default): standard output. With --sequence: the HDF5 file (required), "
+                  "its .xmf sidecar beside it");
+  cmd->add_option("--reference", args->sequence_reference, "With --sequence: the reference image");
+  cmd->add_option("--sequence", args->sequence,
+                  "Evaluate every frame a glob pattern (quoted: 'frames/*.tif') or a folder names, in natural order "
+                  "(frame_2 before frame_10), against --reference; exit status 6 when some frames failed");
+  cmd->add_option("--settings", args->settings,
+                  "With --sequence: a TOML file whose [processing] table sets the evaluation (the keys a run stores: "
+                  "method, window_px, step_px, passes, max_shift_px, roi_px, mask ...); options given override it");
   cmd->add_option("--window", args->window_px, "Final interrogation window, px (8..128)")->capture_default_str();
   cmd->add_option("--first-window", args->first_window_px, "First-pass window, px (halved each pass down to --window)");
   cmd->add_option("--step", args->step_px, "Grid spacing, px")->capture_default_str();
@@ -151,7 +283,7 @@ void add_evaluate(CLI::App& root) {
   cmd->add_option("--probe", args->probes, "Evaluate only the window centred at x,y (repeatable)");
   cmd->add_option("--map", args->map, "Also draw the displacement magnitude map to this PNG");
   cmd->add_option("--contour", args->contour_px, "Contour spacing of the map, px (0: none)")->capture_default_str();
-  cmd->callback([args] { evaluate(*args); });
+  cmd->callback([args, cmd] { evaluate_command(*args, *cmd); });
 }
 
 BOSFUSE_COMMAND(add_evaluate);

@@ -18,9 +18,10 @@ std::atomic<bool>& stop_requested_by_signal();
 // Exit statuses beyond 0 (success) and 1 (the command failed).
 enum ExitStatus : int {
   kExitFailure = 1,
-  kExitIncompleteRun = 3,  // the run was recorded, but records read could not be committed
-  kExitDeviceSilent = 4,   // the run was recorded, but a device delivered nothing or a camera lost frames
-  kExitStopped = 5,        // stopped on request before it finished (process: `--resume` continues)
+  kExitIncompleteRun = 3,     // the run was recorded, but records read could not be committed
+  kExitDeviceSilent = 4,      // the run was recorded, but a device delivered nothing or a camera lost frames
+  kExitStopped = 5,           // stopped on request before it finished (process: `--resume` continues)
+  kExitSomeFramesFailed = 6,  // evaluate --sequence: the file is written, but some frames could not be evaluated
 };
 
 // A failure with its own exit status; main() prints the message and exits with it.
