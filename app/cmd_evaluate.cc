@@ -175,8 +175,9 @@ void evaluate_sequence(const EvaluateArgs& args, const CLI::App& cmd) {
     throw std::runtime_error("--sequence needs --out FILE.h5: the fields go to an HDF5 file, not standard output");
   }
   for (const char* pair_only : {"--probe", "--map", "--contour"}) {
-    if (cmd.count(pair_only) > 0)
+    if (cmd.count(pair_only) > 0) {
       throw std::runtime_error(std::string(pair_only) + " is for an image pair, not --sequence");
+    }
   }
   pipeline::ProcessingSettings settings = pipeline::resolve_runless_settings(args.settings, given_overrides(args, cmd));
   if (settings.probes_only) {
