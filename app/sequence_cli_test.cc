@@ -19,6 +19,7 @@
 #include "sim/synthetic_pair.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/test_images.h"
 
 namespace bosfuse {
 namespace {
@@ -197,6 +198,35 @@ TEST_F(SequenceCli, AnUnreadableAndAMisfitFrameAreReportedAndTheRestEvaluated) {
   }
   const json xdmf = report::testreaders::xdmf_check(path("out.xmf"), dir_.path());
   EXPECT_EQ(xdmf.at("collections").at("displacement").size(), 2u) << "only frames with a field";
+
+  // --quiet silences the progress, not the frames that failed.
+  const auto quiet = bosfuse("-q evaluate --reference " + sh_quoted(path("ref.png")) + " --sequence " +
+                             sh_quoted(path("frames")) + " -o " + sh_quoted(path("quiet.h5")));
+  EXPECT_EQ(quiet.exit_code, 6);
+  EXPECT_NE(quiet.err.find("frame " + path("frames/b_2.png") + ": unreadable image"), std::string::npos) << quiet.err;
+  EXPECT_EQ(quiet.err.find("4/4"), std::string::npos) << quiet.err;
+}
+
+// Camera frames carry their capture time: it is taken over the file's time.
+TEST_F(SequenceCli, ExifCaptureTimesAreTakenOverFileTimes) {
+  write_frames({});
+  fs::create_directories(path("jpeg"));
+  const char* stamps[] = {"2026:11:23 10:15:30", "2026:11:23 10:15:31"};
+  for (int k = 0; k < 2; ++k) {
+    const std::string file = path("jpeg/e_" + std::to_string(k + 1) + ".jpg");
+    cv::imwrite(file, render(0.5 * (k + 1), 0), {cv::IMWRITE_JPEG_QUALITY, 98});
+    testing::write_exif(
+        file, {std::string("-DateTimeOriginal=") + stamps[k], k ? "-SubSecTimeOriginal=250" : "-SubSecTimeOriginal=0"});
+    set_mtime(file, 100.0 * (2 - k));  // file times in the opposite order
+  }
+  const auto run = bosfuse("evaluate --reference " + sh_quoted(path("ref.png")) + " --sequence " +
+                           sh_quoted(path("jpeg") + "/*.jpg") + " -o " + sh_quoted(path("e.h5")));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const json f = h5("e.h5");
+  EXPECT_EQ(f.at("/time_source").at("data"), json::array({"exif", "exif"}));
+  EXPECT_EQ(f.at("/t_s").at("data"), json::array({0.0, 1.25}));
+  EXPECT_EQ(f.at("/").at("attrs").at("time_origin_utc"), "2026-11-23T10:15:30.000000Z");
+  EXPECT_NEAR(mean_shift(f, 1).x, 1.0, 0.05) << "a JPEG frame is evaluated too";
 }
 
 TEST_F(SequenceCli, ABadReferenceIsAnErrorBeforeAnythingIsWritten) {
