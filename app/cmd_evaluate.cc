@@ -22,8 +22,8 @@ namespace {
 using pipeline::read_image;
 
 struct EvaluateArgs {
-  std::string reference, measurement, out = "-", map, mask, roi, method = "xcorr", flow = "dis", subpixel = "auto",
-                                      interpolator = "lanczos3";
+  std::string reference, measurement, out = "-", map, mask, roi, method = "xcorr", flow = "dis", dis_preset = "medium",
+                                      subpixel = "auto", interpolator = "lanczos3";
   std::vector<std::string> probes;
   int window_px = 16, first_window_px = 0, step_px = 8, passes = 3;
   double max_shift_px = 4, contour_px = 0.1;
@@ -87,6 +87,10 @@ fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
                                                            {"farneback", fusion::FlowAlgorithm::kFarneback},
                                                            {"tvl1", fusion::FlowAlgorithm::kTvl1}};
   options.flow.algorithm = flows.at(args.flow);
+  const std::map<std::string, fusion::DisPreset> presets{{"ultrafast", fusion::DisPreset::kUltrafast},
+                                                         {"fast", fusion::DisPreset::kFast},
+                                                         {"medium", fusion::DisPreset::kMedium}};
+  options.flow.dis_preset = presets.at(args.dis_preset);
   if (const auto problem = options.Validate(); !problem.empty()) throw std::runtime_error(problem);
   return options;
 }
@@ -138,6 +142,10 @@ void add_evaluate(CLI::App& root) {
       ->capture_default_str();
   cmd->add_option("--flow", args->flow, "Optical flow algorithm: dis, farneback, tvl1")
       ->check(CLI::IsMember({"dis", "farneback", "tvl1"}))
+      ->capture_default_str();
+  cmd->add_option("--dis-preset", args->dis_preset,
+                  "DIS preset: medium (most accurate, ~215 bytes a pixel), fast, or ultrafast (~45 bytes a pixel)")
+      ->check(CLI::IsMember({"ultrafast", "fast", "medium"}))
       ->capture_default_str();
   cmd->add_option("--subpixel", args->subpixel,
                   "Peak estimator: auto (2-D Gaussian fit, then 3-point after deformation), gauss2d or gauss3")

@@ -24,9 +24,19 @@ enum class FlowAlgorithm { kDis, kFarneback, kTvl1 };
 std::string to_string(FlowAlgorithm algorithm);
 bool flow_algorithm_available(FlowAlgorithm algorithm);
 
+// OpenCV's DIS presets (DISOpticalFlow::PRESET_*), each run down to full
+// resolution here (BOS shifts are sub-pixel). Medium, the default, adds a
+// variational refinement at every scale: it is the most accurate, and also
+// needs about 215 bytes a pixel (3.4 GB for a 16 MP pair); ultrafast skips
+// the refinement and needs about 45 (OpenCV 4.6, memory_budget.h).
+enum class DisPreset { kUltrafast, kFast, kMedium };
+
+std::string to_string(DisPreset preset);
+
 struct FlowOptions {
   FlowAlgorithm algorithm = FlowAlgorithm::kDis;
-  int window_px = 16;  // averaging window, same grid as cross-correlation
+  DisPreset dis_preset = DisPreset::kMedium;  // DIS only
+  int window_px = 16;                         // averaging window, same grid as cross-correlation
   int step_px = 8;
   cv::Rect roi;                      // empty: the whole image
   double min_texture_std = 0.002;    // of full scale
@@ -39,6 +49,7 @@ EvaluationResult evaluate_flow(const cv::Mat& reference, const cv::Mat& measurem
                                const cv::Mat& mask = {});
 
 // The dense flow (CV_32FC2, u then v) of a pair, for maps and tests.
-cv::Mat dense_flow(const cv::Mat& reference, const cv::Mat& measurement, FlowAlgorithm algorithm);
+cv::Mat dense_flow(const cv::Mat& reference, const cv::Mat& measurement, FlowAlgorithm algorithm,
+                   DisPreset dis_preset = DisPreset::kMedium);
 
 }  // namespace bosfuse::fusion
