@@ -220,6 +220,21 @@ TEST_F(EvaluateCli, FlowMethodWritesTheSameGrid) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 15 * 11);
 }
 
+TEST_F(EvaluateCli, DisPresetIsChosenAndAnUnknownOneIsNamed) {
+  const std::string pair = path("ref.png") + " " + path("meas.png") + " --method flow -o ";
+  const auto medium = bosfuse("evaluate " + pair + path("medium.csv"));
+  ASSERT_EQ(medium.exit_code, 0) << medium.output;
+  const auto ultrafast = bosfuse("evaluate " + pair + path("ultrafast.csv") + " --dis-preset ultrafast");
+  ASSERT_EQ(ultrafast.exit_code, 0) << ultrafast.output;
+  const auto again = bosfuse("evaluate " + pair + path("medium_again.csv") + " --dis-preset medium");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(read(path("medium_again.csv")), read(path("medium.csv"))) << "medium is the default";
+  EXPECT_NE(read(path("ultrafast.csv")), read(path("medium.csv"))) << "another preset, another field";
+  const auto unknown = bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " --dis-preset slow");
+  EXPECT_NE(unknown.exit_code, 0);
+  EXPECT_NE(unknown.output.find("--dis-preset"), std::string::npos) << unknown.output;
+}
+
 TEST_F(EvaluateCli, BackgroundAndQuality) {
   const auto made = bosfuse("background --out " + path("bg.png") +
                             " --width 200 --height 120 --dot-mm 0.3 --dpi 600 --coverage 0.3 --seed 4");

@@ -5,6 +5,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -176,9 +177,16 @@ std::optional<std::string> cgroup_path(const std::filesystem::path& cgroup_file,
 std::optional<Bytes> cgroup_headroom(const CgroupMount& mount, bool v2, const std::string& path,
                                      const std::filesystem::path& root) {
   std::string relative = path;
-  if (mount.root != "/" && relative.starts_with(mount.root)) relative = relative.substr(mount.root.size());
+  const bool below_root =
+      relative.starts_with(mount.root) && (relative.size() == mount.root.size() || relative[mount.root.size()] == '/');
+  if (mount.root != "/" && below_root) relative = relative.substr(mount.root.size());
   const std::filesystem::path top = root / std::filesystem::path(mount.mount_point).relative_path();
-  std::filesystem::path dir = top / std::filesystem::path(relative).relative_path();
+  std::filesystem::path dir = top;
+  for (const auto& part : std::filesystem::path(relative).relative_path()) {
+    // A cgroup outside this namespace's view ("/../..") has no files here to read.
+    if (part == "..") return std::nullopt;
+    if (!part.empty()) dir /= part;
+  }
   const char* limit_file = v2 ? "memory.max" : "memory.limit_in_bytes";
   const char* usage_file = v2 ? "memory.current" : "memory.usage_in_bytes";
   std::optional<Bytes> least;
@@ -193,7 +201,7 @@ std::optional<Bytes> cgroup_headroom(const CgroupMount& mount, bool v2, const st
       const Bytes headroom = *limit > used ? *limit - used : 0;
       least = least ? std::min(*least, headroom) : headroom;
     }
-    if (dir == top || !dir.has_relative_path() || dir.parent_path() == dir) break;
+    if (dir == top || dir.parent_path() == dir) break;
     dir = dir.parent_path();
   }
   return least;
