@@ -144,7 +144,7 @@ void add_evaluate(CLI::App& root) {
       ->check(CLI::IsMember({"dis", "farneback", "tvl1"}))
       ->capture_default_str();
   cmd->add_option("--dis-preset", args->dis_preset,
-                  "DIS preset: medium (most accurate, ~215 bytes a pixel), fast, or ultrafast (~45 bytes a pixel)")
+                  "DIS preset: medium (variational refinement, ~230 bytes a pixel in all), fast, or ultrafast (~60)")
       ->check(CLI::IsMember({"ultrafast", "fast", "medium"}))
       ->capture_default_str();
   cmd->add_option("--subpixel", args->subpixel,

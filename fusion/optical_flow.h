@@ -26,9 +26,12 @@ bool flow_algorithm_available(FlowAlgorithm algorithm);
 
 // OpenCV's DIS presets (DISOpticalFlow::PRESET_*), each run down to full
 // resolution here (BOS shifts are sub-pixel). Medium, the default, adds a
-// variational refinement at every scale: it is the most accurate, and also
-// needs about 215 bytes a pixel (3.4 GB for a 16 MP pair); ultrafast skips
-// the refinement and needs about 45 (OpenCV 4.6, memory_budget.h).
+// variational refinement at every scale, whose buffers bring OpenCV's own
+// memory to about 215 bytes a pixel (3.5 GB for a 16 MP pair); ultrafast
+// skips it and needs about 45 (OpenCV 4.6, memory_budget.h) and about a
+// third of the time. Neither is better everywhere: medium is the closer on a uniform
+// shift (optical_flow_test), ultrafast on the 16 MP bump of bos_bench's
+// FullFrame16MPMethods (0.011 against 0.014 px RMS).
 enum class DisPreset { kUltrafast, kFast, kMedium };
 
 std::string to_string(DisPreset preset);
