@@ -30,8 +30,8 @@ namespace {
 using pipeline::read_image;
 
 struct EvaluateArgs {
-  std::string reference, measurement, out = "-", map, mask, roi, method = "xcorr", flow = "dis", subpixel = "auto",
-                                      interpolator = "lanczos3";
+  std::string reference, measurement, out = "-", map, mask, roi, method = "xcorr", flow = "dis", dis_preset = "medium",
+                                      subpixel = "auto", interpolator = "lanczos3";
   std::string sequence_reference, sequence, settings;
   std::vector<std::string> probes;
   int window_px = 16, first_window_px = 0, step_px = 8, passes = 3;
@@ -83,6 +83,10 @@ void apply_xcorr_choices(const EvaluateArgs& args, fusion::EvaluatorOptions& opt
                                                                   {"lanczos3", fusion::Interpolator::kLanczos3},
                                                                   {"lanczos4", fusion::Interpolator::kLanczos4}};
   options.xcorr.interpolator = interpolators.at(args.interpolator);
+  const std::map<std::string, fusion::DisPreset> presets{{"ultrafast", fusion::DisPreset::kUltrafast},
+                                                         {"fast", fusion::DisPreset::kFast},
+                                                         {"medium", fusion::DisPreset::kMedium}};
+  options.flow.dis_preset = presets.at(args.dis_preset);
 }
 
 fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
@@ -162,6 +166,7 @@ std::string settings_json(const pipeline::ProcessingSettings& settings, const Ev
   j["first_window_px"] = settings.evaluator.xcorr.first_window_px;
   j["subpixel"] = args.subpixel;
   j["interpolator"] = args.interpolator;
+  j["dis_preset"] = args.dis_preset;
   j["source"] = settings.source;
   return j.dump();
 }
@@ -271,6 +276,10 @@ void add_evaluate(CLI::App& root) {
       ->capture_default_str();
   cmd->add_option("--flow", args->flow, "Optical flow algorithm: dis, farneback, tvl1")
       ->check(CLI::IsMember({"dis", "farneback", "tvl1"}))
+      ->capture_default_str();
+  cmd->add_option("--dis-preset", args->dis_preset,
+                  "DIS preset: medium (variational refinement, ~230 bytes a pixel in all), fast, or ultrafast (~60)")
+      ->check(CLI::IsMember({"ultrafast", "fast", "medium"}))
       ->capture_default_str();
   cmd->add_option("--subpixel", args->subpixel,
                   "Peak estimator: auto (2-D Gaussian fit, then 3-point after deformation), gauss2d or gauss3")

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -145,6 +146,61 @@ TEST_F(EvaluateCli, AnImageDeclaringTooManyPixelsIsRefusedUnread) {
   EXPECT_NE(limited.output.find("declares 128x96 px"), std::string::npos) << limited.output;
 }
 
+// A 4000×3000 pair passes the pixel limit but needs about 233 MB to
+// evaluate. Under a 450 MB address-space limit (ulimit -v) bosfuse has about
+// 95 MB left once it is loaded and has decoded both images: the field is
+// refused before anything of image size is allocated, with what it needs and
+// what is available, instead of ending in std::bad_alloc (what it did without
+// the check, or OpenCV's "Insufficient memory", or a failed pthread_create).
+// Probes need only their crops and still run; with a 4 GB limit the same
+// pair is evaluated.
+TEST_F(EvaluateCli, APairTooLargeForTheMemoryLimitIsRefusedBeforeItAllocates) {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  GTEST_SKIP() << "sanitizers reserve terabytes of address space: no ulimit -v fits them";
+#endif
+  cv::Mat noise(3000, 4000, CV_32F), shifted;
+  cv::randu(noise, 0.0, 1.0);
+  cv::GaussianBlur(noise, noise, {0, 0}, 1.0);
+  cv::warpAffine(noise, shifted, cv::Matx23d(1, 0, 0.4, 0, 1, -0.3), noise.size(), cv::INTER_LINEAR,
+                 cv::BORDER_REFLECT);
+  const std::vector<int> fast_png{cv::IMWRITE_PNG_COMPRESSION, 1};
+  for (const auto& [name, image] : {std::pair{"big_ref.png", noise}, std::pair{"big_meas.png", shifted}}) {
+    cv::Mat grey;
+    image.convertTo(grey, CV_8U, 255.0);
+    ASSERT_TRUE(cv::imwrite(path(name), grey, fast_png));
+  }
+  const std::string pair = path("big_ref.png") + " " + path("big_meas.png");
+  auto limited = [&](int megabytes, const std::string& args) {
+    return testing::run_command("sh -c 'ulimit -v " + std::to_string(megabytes * 1024) + " && exec " + kBosfuse +
+                                    " evaluate " + pair + " " + args + "'",
+                                120);
+  };
+  const auto refused = limited(450, "-o " + path("big.csv"));
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.output.find("a 4000×3000 pair needs "), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("to evaluate with these settings (window 16 px, step 8 px, 3 passes); "),
+            std::string::npos)
+      << refused.output;
+  EXPECT_NE(refused.output.find("are available to this process (the least of MemAvailable "), std::string::npos)
+      << refused.output;
+  EXPECT_NE(refused.output.find("ulimit -v "), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("use probe mode (--probe), or a machine with more memory"), std::string::npos)
+      << refused.output;
+  for (const char* failure : {"bad_alloc", "Insufficient memory", "pthread_create"}) {
+    EXPECT_EQ(refused.output.find(failure), std::string::npos) << refused.output;
+  }
+  EXPECT_FALSE(std::filesystem::exists(path("big.csv"))) << "refused before any output";
+
+  const auto probes = limited(450, "--probe 1000,1000 --probe 3000,2000");
+  ASSERT_EQ(probes.exit_code, 0) << probes.output;
+  EXPECT_NE(probes.output.find("2 vectors, 2 valid"), std::string::npos) << probes.output;
+
+  const auto evaluated = limited(4000, "-o " + path("big.csv"));
+  ASSERT_EQ(evaluated.exit_code, 0) << evaluated.output;
+  const std::string csv = read(path("big.csv"));
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + ((4000 - 16) / 8 + 1) * ((3000 - 16) / 8 + 1));
+}
+
 TEST_F(EvaluateCli, ColourImagesAreConvertedWithAWarning) {
   for (const char* name : {"ref", "meas"}) {
     cv::Mat colour;
@@ -162,6 +218,21 @@ TEST_F(EvaluateCli, FlowMethodWritesTheSameGrid) {
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const std::string csv = read(path("flow.csv"));
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 15 * 11);
+}
+
+TEST_F(EvaluateCli, DisPresetIsChosenAndAnUnknownOneIsNamed) {
+  const std::string pair = path("ref.png") + " " + path("meas.png") + " --method flow -o ";
+  const auto medium = bosfuse("evaluate " + pair + path("medium.csv"));
+  ASSERT_EQ(medium.exit_code, 0) << medium.output;
+  const auto ultrafast = bosfuse("evaluate " + pair + path("ultrafast.csv") + " --dis-preset ultrafast");
+  ASSERT_EQ(ultrafast.exit_code, 0) << ultrafast.output;
+  const auto again = bosfuse("evaluate " + pair + path("medium_again.csv") + " --dis-preset medium");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(read(path("medium_again.csv")), read(path("medium.csv"))) << "medium is the default";
+  EXPECT_NE(read(path("ultrafast.csv")), read(path("medium.csv"))) << "another preset, another field";
+  const auto unknown = bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " --dis-preset slow");
+  EXPECT_NE(unknown.exit_code, 0);
+  EXPECT_NE(unknown.output.find("--dis-preset"), std::string::npos) << unknown.output;
 }
 
 TEST_F(EvaluateCli, BackgroundAndQuality) {

@@ -4,11 +4,15 @@
 // timing, rendering excluded).
 //   build/bench/bos_bench --benchmark_counters_tabular=true
 //   build/bench/bos_bench --benchmark_filter=FullFrame --benchmark_repetitions=3
+//   build/bench/bos_bench --benchmark_filter=FullFrame16MPMethods --benchmark_repetitions=3
 // Figures and what they mean: docs/BENCHMARKS.md, "BOS evaluation".
 
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <opencv2/core/utility.hpp>
+#include <stdexcept>
+#include <vector>
 
 #include "fusion/displacement_evaluator.h"
 #include "sim/evaluation_study.h"
@@ -133,6 +137,69 @@ void BM_FullFrame16MP(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_FullFrame16MP)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(2);
+
+// The true window-mean displacement at the nodes of the IW 16, step 8 grid
+// of the 16 MP pair, computed once (250 305 nodes × 256 samples).
+const std::vector<cv::Point2d>& full_frame_truth(const fusion::DisplacementField& field) {
+  static const std::vector<cv::Point2d> truth = [&] {
+    std::vector<cv::Point2d> t(field.vectors.size());
+    cv::parallel_for_(cv::Range(0, int(t.size())), [&](const cv::Range& range) {
+      for (int i = range.start; i < range.end; ++i) {
+        t[i] = full_frame().truth.window_mean(field.vectors[i].x_px, field.vectors[i].y_px, 16);
+      }
+    });
+    return t;
+  }();
+  if (truth.size() != field.vectors.size()) throw std::logic_error("the 16 MP truth is for another grid");
+  return truth;
+}
+
+// RMS of |measured − true window mean| over the valid vectors, in double.
+double full_frame_rms_px(const fusion::DisplacementField& field) {
+  const auto& truth = full_frame_truth(field);
+  double sum = 0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
+    const auto& v = field.vectors[i];
+    if (!v.valid()) continue;
+    sum += std::pow(v.u_px - truth[i].x, 2) + std::pow(v.v_px - truth[i].y, 2);
+    ++n;
+  }
+  return n ? std::sqrt(sum / double(n)) : std::nan("");
+}
+
+// The 16 MP pair by method, in one run so time and error compare side by
+// side (all on the IW 16, step 8 grid; max shift 2 px):
+//   0  cross-correlation, 3 passes at IW 16 (BM_FullFrame16MP);
+//   1  cross-correlation 32→16: a first pass at IW 32, then IW 16 (2 passes);
+//   2  cross-correlation 32→16→16 (3 passes);
+//   3  DIS optical flow, medium preset (the default), averaged per window;
+//   4  DIS ultrafast.
+// rms_px: against the true window-mean displacement, over valid vectors.
+// DIS medium needs 3.7 GB and takes about 5× cross-correlation's time.
+void BM_FullFrame16MPMethods(benchmark::State& state) {
+  const auto& pair = full_frame();
+  const int method = int(state.range(0));
+  auto e = evaluator(method >= 3 ? 1 : 0, 16, method == 1 ? 2 : 3);
+  e.set_grid(16, 8);
+  e.xcorr.max_shift_px = 2;
+  e.xcorr.convergence_px = 0;
+  if (method == 1 || method == 2) e.xcorr.first_window_px = 32;
+  e.flow.dis_preset = method == 4 ? fusion::DisPreset::kUltrafast : fusion::DisPreset::kMedium;
+  fusion::EvaluationResult result;
+  for (auto _ : state) result = fusion::evaluate_displacement(pair.reference, pair.measurement, e);
+  const char* labels[] = {"xcorr 16,16,16", "xcorr 32,16", "xcorr 32,16,16", "flow-dis medium", "flow-dis ultrafast"};
+  state.SetLabel(labels[method]);
+  state.counters["rms_px"] = full_frame_rms_px(result.field);
+  state.counters["valid_pct"] = 100.0 * result.summary.valid / result.field.size();
+}
+BENCHMARK(BM_FullFrame16MPMethods)
+    ->ArgName("method")
+    ->DenseRange(0, 4)
+    ->MeasureProcessCPUTime()  // all threads' CPU: steadier than wall time on a loaded machine
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 
 // Probe mode: 10 thermocouple positions on the 16 MP pair, per pair.
 void BM_Probe10(benchmark::State& state) {

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "fusion/image_input.h"
+#include "fusion/memory_budget.h"
 
 namespace bosfuse::fusion {
 namespace {
@@ -443,6 +444,7 @@ EvaluationResult evaluate_xcorr(const cv::Mat& reference, const cv::Mat& measure
                                 const cv::Mat& mask) {
   const auto start = std::chrono::steady_clock::now();
   check_inputs(reference, measurement, mask, options);
+  check_xcorr_memory(reference, mask, options);  // here, not in check_inputs: probes need only their crops
   const PreparedPair pair = prepare(reference, measurement, mask, options, cv::Rect({0, 0}, reference.size()), true);
   const GridGeometry grid = evaluation_grid(pair.roi, options.window_px, options.step_px);
   EvaluationResult result;

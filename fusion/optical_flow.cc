@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "fusion/image_input.h"
+#include "fusion/memory_budget.h"
 #if BOSFUSE_HAVE_OPTFLOW
 #include <opencv2/optflow.hpp>
 #endif
@@ -42,6 +43,18 @@ std::string to_string(FlowAlgorithm algorithm) {
   return "unknown";
 }
 
+std::string to_string(DisPreset preset) {
+  switch (preset) {
+    case DisPreset::kUltrafast:
+      return "ultrafast";
+    case DisPreset::kFast:
+      return "fast";
+    case DisPreset::kMedium:
+      return "medium";
+  }
+  return "unknown";
+}
+
 bool flow_algorithm_available(FlowAlgorithm algorithm) {
 #if BOSFUSE_HAVE_OPTFLOW
   (void)algorithm;
@@ -61,13 +74,17 @@ std::string FlowOptions::Validate() const {
   return {};
 }
 
-cv::Mat dense_flow(const cv::Mat& reference, const cv::Mat& measurement, FlowAlgorithm algorithm) {
+cv::Mat dense_flow(const cv::Mat& reference, const cv::Mat& measurement, FlowAlgorithm algorithm,
+                   DisPreset dis_preset) {
   const cv::Mat ref8 = to_8bit(to_grey_unit_float(reference, "reference"));
   const cv::Mat meas8 = to_8bit(to_grey_unit_float(measurement, "measurement"));
   cv::Mat flow(ref8.size(), CV_32FC2, cv::Scalar(0, 0));
   switch (algorithm) {
     case FlowAlgorithm::kDis: {
-      auto dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
+      const int preset = dis_preset == DisPreset::kUltrafast ? cv::DISOpticalFlow::PRESET_ULTRAFAST
+                         : dis_preset == DisPreset::kFast    ? cv::DISOpticalFlow::PRESET_FAST
+                                                             : cv::DISOpticalFlow::PRESET_MEDIUM;
+      auto dis = cv::DISOpticalFlow::create(preset);
       dis->setFinestScale(0);  // full resolution: BOS shifts are sub-pixel
       dis->calc(ref8, meas8, flow);
       break;
@@ -94,8 +111,9 @@ EvaluationResult evaluate_flow(const cv::Mat& reference, const cv::Mat& measurem
   check_image_pair(reference, measurement, mask);
   const cv::Rect roi = effective_roi(options.roi, reference.size());
   check_window_fits(options.window_px, roi.size());
+  check_flow_memory(reference, mask, options);
   const cv::Mat ref_unit = to_grey_unit_float(reference, "reference");
-  const cv::Mat flow = dense_flow(reference, measurement, options.algorithm);
+  const cv::Mat flow = dense_flow(reference, measurement, options.algorithm, options.dis_preset);
   cv::Mat channels[2], sum_u, sum_v, sum_ref, sum_ref_sq, sum_mask;
   cv::split(flow, channels);
   cv::integral(channels[0], sum_u, CV_64F);

@@ -24,9 +24,22 @@ enum class FlowAlgorithm { kDis, kFarneback, kTvl1 };
 std::string to_string(FlowAlgorithm algorithm);
 bool flow_algorithm_available(FlowAlgorithm algorithm);
 
+// OpenCV's DIS presets (DISOpticalFlow::PRESET_*), each run down to full
+// resolution here (BOS shifts are sub-pixel). Medium, the default, adds a
+// variational refinement at every scale, whose buffers bring OpenCV's own
+// memory to about 215 bytes a pixel (3.5 GB for a 16 MP pair); ultrafast
+// skips it and needs about 45 (OpenCV 4.6, memory_budget.h) and about a
+// third of the time. Neither is better everywhere: medium is the closer on a uniform
+// shift (optical_flow_test), ultrafast on the 16 MP bump of bos_bench's
+// FullFrame16MPMethods (0.011 against 0.014 px RMS).
+enum class DisPreset { kUltrafast, kFast, kMedium };
+
+std::string to_string(DisPreset preset);
+
 struct FlowOptions {
   FlowAlgorithm algorithm = FlowAlgorithm::kDis;
-  int window_px = 16;  // averaging window, same grid as cross-correlation
+  DisPreset dis_preset = DisPreset::kMedium;  // DIS only
+  int window_px = 16;                         // averaging window, same grid as cross-correlation
   int step_px = 8;
   cv::Rect roi;                      // empty: the whole image
   double min_texture_std = 0.002;    // of full scale
@@ -39,6 +52,7 @@ EvaluationResult evaluate_flow(const cv::Mat& reference, const cv::Mat& measurem
                                const cv::Mat& mask = {});
 
 // The dense flow (CV_32FC2, u then v) of a pair, for maps and tests.
-cv::Mat dense_flow(const cv::Mat& reference, const cv::Mat& measurement, FlowAlgorithm algorithm);
+cv::Mat dense_flow(const cv::Mat& reference, const cv::Mat& measurement, FlowAlgorithm algorithm,
+                   DisPreset dis_preset = DisPreset::kMedium);
 
 }  // namespace bosfuse::fusion

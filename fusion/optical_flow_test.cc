@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 
 #include "fusion/displacement_evaluator.h"
 #include "sim/synthetic_pair.h"
@@ -40,6 +41,27 @@ TEST(OpticalFlow, EveryAlgorithmFollowsAUniformShift) {
     EXPECT_GT(result.field.count_valid(), result.field.size() * 9 / 10);
     EXPECT_LT(rms_error(result.field, pair.truth), 0.15) << to_string(algorithm);
   }
+}
+
+// Each preset is its own DIS: the fields differ, every one follows the shift,
+// and medium (the default, with the variational refinement) is the closest.
+TEST(OpticalFlow, EveryDisPresetFollowsAUniformShiftAndMediumIsTheClosest) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.6, -0.4));
+  std::map<DisPreset, double> rms;
+  cv::Mat previous;
+  for (const auto preset : {DisPreset::kUltrafast, DisPreset::kFast, DisPreset::kMedium}) {
+    FlowOptions options;
+    options.dis_preset = preset;
+    const auto result = evaluate_flow(pair.reference, pair.measurement, options);
+    EXPECT_GT(result.field.count_valid(), result.field.size() * 9 / 10) << to_string(preset);
+    rms[preset] = rms_error(result.field, pair.truth);
+    EXPECT_LT(rms[preset], 0.25) << to_string(preset);
+    const cv::Mat flow = dense_flow(pair.reference, pair.measurement, FlowAlgorithm::kDis, preset);
+    if (!previous.empty()) EXPECT_GT(cv::norm(flow, previous, cv::NORM_INF), 1e-4) << to_string(preset);
+    previous = flow;
+  }
+  EXPECT_LT(rms[DisPreset::kMedium], rms[DisPreset::kUltrafast]);
+  EXPECT_EQ(FlowOptions{}.dis_preset, DisPreset::kMedium);
 }
 
 TEST(OpticalFlow, ReportsOnTheCrossCorrelationGrid) {

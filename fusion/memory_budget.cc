@@ -1,0 +1,380 @@
+#include "fusion/memory_budget.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <utility>
+
+#include "fusion/evaluation.h"
+
+namespace bosfuse::fusion {
+namespace {
+
+using Bytes = std::uint64_t;
+
+// What does not grow with the image: each thread's correlation planes and
+// warp row buffers, OpenCV's and TBB's first-use structures (under 3 MB
+// measured), and a TBB worker's stack, which an address-space limit counts
+// in full (4 MB) the first time a process evaluates.
+constexpr Bytes kFixedBytes = Bytes{8} << 20;
+
+// A refinement pass's grid at its peak (replace_outliers after run_pass):
+// the field, the copy `before` it that measures the change, the outlier
+// test's snapshot, the predictor's u and v, the outlier flags and, at worst
+// for every node, an outlier's index. predictor_from's peak (the field, two
+// predictors, a work copy, fill flags and updates: 153 B) is below it.
+constexpr Bytes kXcorrBytesPerNode = 3 * sizeof(DisplacementVector) + 2 * sizeof(double) + 1 + sizeof(std::size_t);
+
+// OpenCV's own buffers per pixel, full resolution (finest scale 0 for DIS):
+// pyramids, gradients, flow components at every scale and, for DIS fast and
+// medium, the variational refinement's. Measured as VmHWM growth of a fresh
+// process on OpenCV 4.6 (45.4, 209.7, 212.8, 69.9 and 127.5 B/px at 1 and
+// 3 MP alike), rounded up.
+Bytes flow_library_bytes_per_pixel(const FlowOptions& options) {
+  switch (options.algorithm) {
+    case FlowAlgorithm::kDis:
+      return options.dis_preset == DisPreset::kUltrafast ? 48 : 216;
+    case FlowAlgorithm::kFarneback:
+      return 72;
+    case FlowAlgorithm::kTvl1:
+      return 132;
+  }
+  return 216;
+}
+
+Bytes pixels(cv::Size size) { return Bytes(std::max(size.width, 0)) * Bytes(std::max(size.height, 0)); }
+
+// to_grey_unit_float's grey copy of a colour image, alive while the float
+// copy is made (one image at a time).
+Bytes grey_copy_bytes(cv::Size size, int type) { return CV_MAT_CN(type) > 1 ? pixels(size) * CV_ELEM_SIZE1(type) : 0; }
+
+Bytes nodes(cv::Rect roi, int window_px, int step_px) {
+  const GridGeometry grid = evaluation_grid(roi, window_px, step_px);
+  return Bytes(std::max(grid.rows, 0)) * Bytes(std::max(grid.cols, 0));
+}
+
+// The largest region a pass warps: the bounding box of its windows (inside
+// the ROI) grown by the search reach.
+Bytes warped_region_pixels(cv::Rect roi, const XcorrOptions& options) {
+  int reach_px = std::max(options.search_radius_px(0), options.search_radius_px(1));
+  if (!options.deform) reach_px += static_cast<int>(std::ceil(options.max_shift_px)) + 2;  // whole-pixel offsets
+  return Bytes(roi.width + 2 * reach_px) * Bytes(roi.height + 2 * reach_px);
+}
+
+// Warped regions alive at once: the coarse first pass warps its own region
+// while the pass's full one is still held; symmetric deformation warps the
+// reference too.
+int warped_images_at_once(const XcorrOptions& options) {
+  const int first = options.window_px_per_pass().front();
+  const bool coarse = options.passes > 1 && options.coarse_first_pass && 2 * options.step_px <= first;
+  const bool symmetric = options.passes > 1 && options.deform && options.symmetric_deformation;
+  return coarse || symmetric ? 2 : 1;
+}
+
+std::string xcorr_settings(const XcorrOptions& options) {
+  const auto windows = options.window_px_per_pass();
+  const std::string window = windows.front() == windows.back()
+                                 ? fmt::format("window {} px", windows.back())
+                                 : fmt::format("window {}→{} px", windows.front(), windows.back());
+  return fmt::format("{}, step {} px, {} passes", window, options.step_px, options.passes);
+}
+
+std::string flow_settings(const FlowOptions& options) {
+  const std::string method = options.algorithm == FlowAlgorithm::kDis
+                                 ? fmt::format("DIS optical flow, {} preset", to_string(options.dis_preset))
+                                 : to_string(options.algorithm) + " optical flow";
+  return fmt::format("{}, window {} px", method, options.window_px);
+}
+
+bool check_enabled() {
+  const char* value = std::getenv("BOSFUSE_MEMORY_CHECK");
+  if (!value || !*value) return true;
+  const std::string text = value;
+  if (text == "on" || text == "1") return true;
+  if (text == "off" || text == "0") return false;
+  throw std::invalid_argument("BOSFUSE_MEMORY_CHECK must be on or off, not '" + text + "'");
+}
+
+// --- reading the system -----------------------------------------------------
+
+std::optional<Bytes> read_number(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::string text;
+  if (!(in >> text)) return std::nullopt;
+  if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos) return std::nullopt;  // "max"
+  try {
+    return std::stoull(text);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+// The value of `key` in a "key value" or "key: value kB" file (meminfo,
+// status, memory.stat), in bytes when the line says kB.
+std::optional<Bytes> read_keyed(const std::filesystem::path& file, const std::string& key) {
+  std::ifstream in(file);
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream fields(line);
+    std::string name, unit;
+    Bytes value = 0;
+    if (!(fields >> name >> value)) continue;
+    if (!name.empty() && name.back() == ':') name.pop_back();
+    if (name != key) continue;
+    fields >> unit;
+    return unit == "kB" ? value * 1024 : value;
+  }
+  return std::nullopt;
+}
+
+struct CgroupMount {
+  std::filesystem::path mount_point;
+  std::string root;  // the cgroup the mount shows at its mount point
+};
+
+// The memory cgroup mounts: cgroup2, and v1's with the memory controller.
+std::vector<std::pair<CgroupMount, bool>> memory_cgroup_mounts(const std::filesystem::path& mountinfo) {
+  std::vector<std::pair<CgroupMount, bool>> mounts;  // bool: v2
+  std::ifstream in(mountinfo);
+  for (std::string line; std::getline(in, line);) {
+    const auto dash = line.find(" - ");
+    if (dash == std::string::npos) continue;
+    std::istringstream before(line.substr(0, dash)), after(line.substr(dash + 3));
+    std::string id, parent, device, root, mount_point, fstype, source, super_options;
+    if (!(before >> id >> parent >> device >> root >> mount_point)) continue;
+    if (!(after >> fstype >> source >> super_options)) continue;
+    const bool v2 = fstype == "cgroup2";
+    const bool v1_memory = fstype == "cgroup" && ("," + super_options + ",").find(",memory,") != std::string::npos;
+    if (v2 || v1_memory) mounts.push_back({{mount_point, root}, v2});
+  }
+  return mounts;
+}
+
+// This process's cgroup path in the v2 hierarchy (line "0::path") or the
+// v1 memory hierarchy (a line whose controllers include memory).
+std::optional<std::string> cgroup_path(const std::filesystem::path& cgroup_file, bool v2) {
+  std::ifstream in(cgroup_file);
+  for (std::string line; std::getline(in, line);) {
+    const auto first = line.find(':'), second = line.find(':', first + 1);
+    if (first == std::string::npos || second == std::string::npos) continue;
+    const std::string controllers = line.substr(first + 1, second - first - 1);
+    const bool match = v2 ? line.substr(0, first) == "0" && controllers.empty()
+                          : ("," + controllers + ",").find(",memory,") != std::string::npos;
+    if (match) return line.substr(second + 1);
+  }
+  return std::nullopt;
+}
+
+// Limit minus usage at each level from the process's cgroup up to the
+// mount's root, the least of them; page cache the cgroup could drop
+// (inactive file pages) counts as free, as the kernel would reclaim it
+// before failing an allocation.
+std::optional<Bytes> cgroup_headroom(const CgroupMount& mount, bool v2, const std::string& path,
+                                     const std::filesystem::path& root) {
+  std::string relative = path;
+  const bool below_root =
+      relative.starts_with(mount.root) && (relative.size() == mount.root.size() || relative[mount.root.size()] == '/');
+  if (mount.root != "/" && below_root) relative = relative.substr(mount.root.size());
+  const std::filesystem::path top = root / std::filesystem::path(mount.mount_point).relative_path();
+  std::filesystem::path dir = top;
+  for (const auto& part : std::filesystem::path(relative).relative_path()) {
+    // A cgroup outside this namespace's view ("/../..") has no files here to read.
+    if (part == "..") return std::nullopt;
+    if (!part.empty()) dir /= part;
+  }
+  const char* limit_file = v2 ? "memory.max" : "memory.limit_in_bytes";
+  const char* usage_file = v2 ? "memory.current" : "memory.usage_in_bytes";
+  std::optional<Bytes> least;
+  for (int level = 0; level < 64; ++level) {  // a path has fewer levels than that
+    const auto limit = read_number(dir / limit_file);
+    const auto usage = read_number(dir / usage_file);
+    // v1 writes "no limit" as the largest page-aligned long.
+    if (limit && usage && *limit < (Bytes{1} << 60)) {
+      const Bytes reclaimable =
+          read_keyed(dir / "memory.stat", v2 ? "inactive_file" : "total_inactive_file").value_or(0);
+      const Bytes used = *usage > reclaimable ? *usage - reclaimable : 0;
+      const Bytes headroom = *limit > used ? *limit - used : 0;
+      least = least ? std::min(*least, headroom) : headroom;
+    }
+    if (dir == top || dir.parent_path() == dir) break;
+    dir = dir.parent_path();
+  }
+  return least;
+}
+
+std::optional<Bytes> rlimit_headroom(int resource, const std::filesystem::path& status, const std::string& key) {
+  rlimit limit{};
+  if (getrlimit(resource, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return std::nullopt;
+  const Bytes used = read_keyed(status, key).value_or(0);
+  return limit.rlim_cur > used ? Bytes(limit.rlim_cur) - used : 0;
+}
+
+std::optional<Bytes> least(std::optional<Bytes> a, std::optional<Bytes> b) {
+  if (!a) return b;
+  if (!b) return a;
+  return std::min(*a, *b);
+}
+
+std::string describe_sources(const AvailableMemory& m) {
+  std::vector<std::string> parts;
+  if (m.mem_available_bytes) parts.push_back("MemAvailable " + format_bytes(*m.mem_available_bytes));
+  if (m.cgroup_bytes) parts.push_back("cgroup limit " + format_bytes(*m.cgroup_bytes));
+  if (m.address_space_bytes) parts.push_back("ulimit -v " + format_bytes(*m.address_space_bytes));
+  if (m.data_bytes) parts.push_back("ulimit -d " + format_bytes(*m.data_bytes));
+  std::string text;
+  for (const auto& p : parts) text += (text.empty() ? "" : ", ") + p;
+  return text;
+}
+
+std::string join_remedies(const std::vector<std::string>& remedies) {
+  std::string text;
+  for (std::size_t i = 0; i < remedies.size(); ++i) {
+    text += i == 0 ? "" : i + 1 == remedies.size() ? ", or " : ", ";
+    text += remedies[i];
+  }
+  return text;
+}
+
+}  // namespace
+
+PairShape PairShape::of(const cv::Mat& reference, const cv::Mat& mask) {
+  return {reference.size(), reference.type(), mask.empty() ? -1 : mask.type()};
+}
+
+// As evaluate_xcorr allocates (cross_correlation.cc), the larger of two
+// moments, plus the fixed part:
+//   preparing: the float copies of reference and measurement (8 B/px), and
+//     either a colour image's grey copy or, with a mask, the exclusion mask,
+//     its 0/1 copy and CV_32S integral (6 B/px);
+//   a pass: the float copies, the mask and its integral (5 B/px), the warped
+//     regions (4 B/px of the ROI grown by the search reach; two at once in
+//     the coarse first pass or with symmetric deformation) and 169 B per
+//     grid node (kXcorrBytesPerNode).
+std::uint64_t xcorr_bytes_needed(const PairShape& pair, const XcorrOptions& options) {
+  const cv::Rect roi = effective_roi(options.roi, pair.size);
+  const Bytes n = pixels(pair.size);
+  const bool masked = pair.mask_type >= 0;
+  const Bytes mask_integral = masked ? Bytes(pair.size.width + 1) * Bytes(pair.size.height + 1) * sizeof(int) : 0;
+  const Bytes float_copies = 2 * n * sizeof(float);
+  const Bytes mask_bytes = masked ? n + mask_integral : 0;
+  const Bytes preparing =
+      float_copies + std::max(grey_copy_bytes(pair.size, pair.type),
+                              masked ? mask_bytes + std::max(n, grey_copy_bytes(pair.size, pair.mask_type)) : 0);
+  const Bytes pass = float_copies + mask_bytes +
+                     Bytes(warped_images_at_once(options)) * warped_region_pixels(roi, options) * sizeof(float) +
+                     nodes(roi, options.window_px, options.step_px) * kXcorrBytesPerNode;
+  return std::max(preparing, pass) + kFixedBytes;
+}
+
+// As evaluate_flow allocates (optical_flow.cc), the larger of two moments:
+//   the flow: the reference's float copy (4 B/px), both images in 8 bits
+//     (2), the flow (8) and the library's own buffers;
+//   after it: the float copy, the flow, its two channels (8) and four CV_64F
+//     integral images (32), with a mask its exclusion mask, 0/1 copy and
+//     CV_64F integral (10);
+// plus 48 B per grid node and the fixed part. Converting a colour image
+// costs a grey copy, but only at a moment when far less is held.
+std::uint64_t flow_bytes_needed(const PairShape& pair, const FlowOptions& options) {
+  const Bytes n = pixels(pair.size);
+  const Bytes during = n * (4 + 2 + 8 + flow_library_bytes_per_pixel(options));
+  const Bytes after = n * (4 + 8 + 8 + 32 + (pair.mask_type >= 0 ? 10 : 0));
+  const cv::Rect roi = effective_roi(options.roi, pair.size);
+  return std::max(during, after) + nodes(roi, options.window_px, options.step_px) * sizeof(DisplacementVector) +
+         kFixedBytes;
+}
+
+std::optional<std::uint64_t> AvailableMemory::bytes() const {
+  return least(least(mem_available_bytes, cgroup_bytes), least(address_space_bytes, data_bytes));
+}
+
+std::string AvailableMemory::limited_by() const {
+  const auto b = bytes();
+  if (!b) return "nothing known";
+  if (mem_available_bytes == b) return "MemAvailable";
+  if (cgroup_bytes == b) return "the cgroup limit";
+  if (address_space_bytes == b) return "ulimit -v";
+  return "ulimit -d";
+}
+
+AvailableMemory available_memory(const MemorySources& sources) {
+  AvailableMemory m;
+  m.mem_available_bytes = read_keyed(sources.proc / "meminfo", "MemAvailable");
+  for (const auto& [mount, v2] : memory_cgroup_mounts(sources.proc / "self" / "mountinfo")) {
+    const auto path = cgroup_path(sources.proc / "self" / "cgroup", v2);
+    if (path) m.cgroup_bytes = least(m.cgroup_bytes, cgroup_headroom(mount, v2, *path, sources.root));
+  }
+  if (sources.read_rlimits) {
+    const auto status = sources.proc / "self" / "status";
+    m.address_space_bytes = rlimit_headroom(RLIMIT_AS, status, "VmSize");
+    m.data_bytes = rlimit_headroom(RLIMIT_DATA, status, "VmData");
+  }
+  return m;
+}
+
+void check_memory(const MemoryRequest& request, const AvailableMemory& available) {
+  const auto bytes = available.bytes();
+  spdlog::debug("memory: {}x{} pair needs {} ({}); available {} ({})", request.size.width, request.size.height,
+                format_bytes(request.needed_bytes), request.settings, bytes ? format_bytes(*bytes) : "unknown",
+                describe_sources(available));
+  if (!bytes || request.needed_bytes <= *bytes) return;
+  throw InsufficientMemory(fmt::format(
+      "a {}×{} pair needs {} to evaluate with these settings ({}); {} are available to this process (the least of "
+      "{}); {}",
+      request.size.width, request.size.height, format_bytes(request.needed_bytes), request.settings,
+      format_bytes(*bytes), describe_sources(available), join_remedies(request.remedies)));
+}
+
+void check_xcorr_memory(const cv::Mat& reference, const cv::Mat& mask, const XcorrOptions& options) {
+  if (!check_enabled()) return;
+  const PairShape pair = PairShape::of(reference, mask);
+  const AvailableMemory available = available_memory();
+  MemoryRequest request{pair.size, xcorr_bytes_needed(pair, options), xcorr_settings(options), {}};
+  // A region only helps when the whole-image float copies fit on their own.
+  XcorrOptions smallest_region = options;
+  const int first = options.window_px_per_pass().front();
+  smallest_region.roi = {0, 0, first, first};
+  const auto bytes = available.bytes();
+  if (bytes && xcorr_bytes_needed(pair, smallest_region) < *bytes)
+    request.remedies.push_back("evaluate a region (--roi)");
+  request.remedies.push_back("use probe mode (--probe)");
+  request.remedies.push_back("a machine with more memory");
+  check_memory(request, available);
+}
+
+void check_flow_memory(const cv::Mat& reference, const cv::Mat& mask, const FlowOptions& options) {
+  if (!check_enabled()) return;
+  const PairShape pair = PairShape::of(reference, mask);
+  const AvailableMemory available = available_memory();
+  MemoryRequest request{pair.size, flow_bytes_needed(pair, options), flow_settings(options), {}};
+  const auto fits = [&](Bytes needed) { return available.bytes() && needed < *available.bytes(); };
+  if (options.algorithm == FlowAlgorithm::kDis && options.dis_preset != DisPreset::kUltrafast) {
+    FlowOptions ultrafast = options;
+    ultrafast.dis_preset = DisPreset::kUltrafast;
+    const Bytes needed = flow_bytes_needed(pair, ultrafast);
+    if (fits(needed))
+      request.remedies.push_back("DIS's ultrafast preset (--dis-preset ultrafast, needs " + format_bytes(needed) + ")");
+  }
+  XcorrOptions xcorr;
+  xcorr.window_px = std::clamp(options.window_px, 8, 128);
+  xcorr.step_px = options.step_px;
+  xcorr.roi = options.roi;
+  if (const Bytes needed = xcorr_bytes_needed(pair, xcorr); fits(needed)) {
+    request.remedies.push_back("cross-correlation (--method xcorr, needs " + format_bytes(needed) + ")");
+  }
+  request.remedies.push_back("a machine with more memory");
+  check_memory(request, available);
+}
+
+std::string format_bytes(std::uint64_t bytes) {
+  if (bytes >= 1'000'000'000) return fmt::format("{:.1f} GB", bytes / 1e9);
+  if (bytes >= 1'000'000) return fmt::format("{:.0f} MB", bytes / 1e6);
+  if (bytes >= 1'000) return fmt::format("{:.0f} kB", bytes / 1e3);
+  return fmt::format("{} bytes", bytes);
+}
+
+}  // namespace bosfuse::fusion
