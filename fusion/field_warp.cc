@@ -128,14 +128,18 @@ void warp_rows(const cv::Mat& image, const TabulatedKernel& kernel, bool simd, c
   }
 }
 
-cv::Mat copy_with_replicated_border(const cv::Mat& image, cv::Rect region) {
-  cv::Mat out(region.size(), CV_32F);
+// Rows of the image inside the region copied whole, only the columns past
+// its edges one by one.
+void copy_with_replicated_border(const cv::Mat& image, cv::Rect region, cv::Mat& out) {
+  const int inside_begin = std::clamp(-region.x, 0, region.width);
+  const int inside_end = std::clamp(image.cols - region.x, inside_begin, region.width);
   for (int y = 0; y < region.height; ++y) {
     const float* src = image.ptr<float>(std::clamp(region.y + y, 0, image.rows - 1));
     float* dst = out.ptr<float>(y);
-    for (int x = 0; x < region.width; ++x) dst[x] = src[std::clamp(region.x + x, 0, image.cols - 1)];
+    for (int x = 0; x < inside_begin; ++x) dst[x] = src[std::clamp(region.x + x, 0, image.cols - 1)];
+    std::copy(src + region.x + inside_begin, src + region.x + inside_end, dst + inside_begin);
+    for (int x = inside_end; x < region.width; ++x) dst[x] = src[std::clamp(region.x + x, 0, image.cols - 1)];
   }
-  return out;
 }
 
 }  // namespace
@@ -149,10 +153,15 @@ cv::Point2d interpolate_field(const GridField& field, double x_px, double y_px) 
 
 namespace {
 
-cv::Mat warp(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator, bool simd) {
+void warp(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator, bool simd,
+          cv::Mat& out) {
   CV_Assert(image.type() == CV_32FC1);
-  if (field.grid.rows == 0 || field.grid.cols == 0) return copy_with_replicated_border(image, region);
-  cv::Mat out(region.size(), CV_32F);
+  out.create(region.size(), CV_32F);
+  CV_Assert(out.data != image.data);
+  if (field.grid.rows == 0 || field.grid.cols == 0) {
+    copy_with_replicated_border(image, region, out);
+    return;
+  }
   const TabulatedKernel kernel = table_of(interpolator).kernel();
   // Small regions (probes) cost less than waking the other thread.
   if (region.area() < 16384) {
@@ -161,19 +170,27 @@ cv::Mat warp(const cv::Mat& image, const GridField& field, cv::Rect region, Inte
     cv::parallel_for_(cv::Range(0, region.height),
                       [&](const cv::Range& rows) { warp_rows(image, kernel, simd, field, region, rows, out); });
   }
-  return out;
 }
 
 }  // namespace
 
 cv::Mat warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator) {
-  return warp(image, field, region, interpolator, true);
+  cv::Mat out;
+  warp(image, field, region, interpolator, true, out);
+  return out;
+}
+
+void warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator,
+                 cv::Mat& out) {
+  warp(image, field, region, interpolator, true, out);
 }
 
 TabulatedKernel interpolation_kernel(Interpolator interpolator) { return table_of(interpolator).kernel(); }
 
 cv::Mat scalar_warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator) {
-  return warp(image, field, region, interpolator, false);
+  cv::Mat out;
+  warp(image, field, region, interpolator, false, out);
+  return out;
 }
 
 }  // namespace bosfuse::fusion

@@ -18,14 +18,21 @@ namespace bosfuse::fusion {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-// Adds the lanes to `total` in double, lowest lane first: the order in
-// which the scalar reference adds its columns.
+// The lanes' sum in double: the two halves widened to double and added
+// lane-wise, then reduced as a tree. Storing the lanes and adding them one
+// by one (the scalar reference's column order) costs more than the
+// multiply-adds themselves for a 16 px window.
 template <class D>
-HWY_INLINE double AddLanes(D d, hn::Vec<D> v, double total) {
-  HWY_ALIGN float lanes[hn::MaxLanes(D())];
-  hn::Store(v, d, lanes);
-  for (std::size_t i = 0; i < hn::Lanes(d); ++i) total += lanes[i];
-  return total;
+HWY_INLINE double AddLanes(D /*d*/, hn::Vec<D> v, double total) {
+#if HWY_TARGET != HWY_SCALAR  // which has one lane and no UpperHalf
+  if constexpr (hn::MaxLanes(D()) >= 2) {
+    const hn::Half<D> dh;
+    const hn::Rebind<double, decltype(dh)> dd;
+    const auto sum = hn::Add(hn::PromoteTo(dd, hn::LowerHalf(dh, v)), hn::PromoteTo(dd, hn::UpperHalf(dh, v)));
+    return total + hn::GetLane(hn::SumOfLanes(dd, sum));
+  }
+#endif
+  return total + hn::GetLane(v);
 }
 
 // Four neighbouring shifts share each load of the reference, so a multiply-
@@ -91,6 +98,59 @@ void AccumulateProducts(const float* reference, const float* patch, std::size_t 
       OneShift(d, reference, rows + dx, patch_stride, n, 0, total);
       out[dx] = total;
     }
+  }
+}
+
+// Σ of the n values at `row`, each less `shift`, squared when `square`, in
+// lanes of doubles from widened floats; the last n % lanes values scalar.
+template <bool kSquare>
+HWY_INLINE double RowSum(const float* HWY_RESTRICT row, int n, double shift) {
+  const hn::ScalableTag<double> dd;
+  const hn::Rebind<float, decltype(dd)> df;
+  const int lanes = static_cast<int>(hn::Lanes(dd));
+  const auto vshift = hn::Set(dd, shift);
+  auto acc = hn::Zero(dd);
+  int x = 0;
+  for (; x + lanes <= n; x += lanes) {
+    const auto v = hn::Sub(hn::PromoteTo(dd, hn::LoadU(df, row + x)), vshift);
+    acc = kSquare ? hn::MulAdd(v, v, acc) : hn::Add(acc, v);
+  }
+  double total = hn::GetLane(hn::SumOfLanes(dd, acc));
+  for (; x < n; ++x) {
+    const double v = row[x] - shift;
+    total += kSquare ? v * v : v;
+  }
+  return total;
+}
+
+void WindowMeanEnergy(const float* window, std::size_t stride, int n, double* mean, double* energy) {
+  double sum = 0;
+  for (int y = 0; y < n; ++y) sum += RowSum<false>(window + y * stride, n, 0.0);
+  const double m = sum / (double(n) * n);
+  double e = 0;
+  for (int y = 0; y < n; ++y) e += RowSum<true>(window + y * stride, n, m);
+  *mean = m;
+  *energy = e;
+}
+
+// out[i] = in[i] − mean for i < count.
+HWY_INLINE void SubtractRow(const float* HWY_RESTRICT in, int count, float mean, float* HWY_RESTRICT out) {
+  const hn::ScalableTag<float> d;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const auto vmean = hn::Set(d, mean);
+  int i = 0;
+  for (; i + lanes <= count; i += lanes) hn::StoreU(hn::Sub(hn::LoadU(d, in + i), vmean), d, out + i);
+  for (; i < count; ++i) out[i] = in[i] - mean;
+}
+
+void CentredPeriodicTile(const float* window, std::size_t stride, int n, int radius, float mean, float* out) {
+  const int p = n + 2 * radius;
+  for (int y = 0; y < p; ++y) {
+    const float* row = window + static_cast<std::size_t>((y - radius + n) % n) * stride;
+    float* o = out + static_cast<std::size_t>(y) * p;
+    SubtractRow(row + n - radius, radius, mean, o);
+    SubtractRow(row, n, mean, o + radius);
+    SubtractRow(row, radius, mean, o + radius + n);
   }
 }
 
@@ -188,6 +248,8 @@ namespace bosfuse::fusion {
 HWY_EXPORT(AccumulateProducts);
 HWY_EXPORT(TargetName);
 HWY_EXPORT(SampleSeparablePoints);
+HWY_EXPORT(WindowMeanEnergy);
+HWY_EXPORT(CentredPeriodicTile);
 
 namespace {
 
@@ -232,6 +294,41 @@ void scalar_accumulate_products(const float* reference, const float* patch, std:
       double total = 0;
       for (int i = 0; i < n; ++i) total += column[i];
       products[static_cast<std::size_t>(dy) * side + dx] = total;
+    }
+  }
+}
+
+void window_mean_energy(const float* window, std::size_t stride, int n, double* mean, double* energy) {
+  apply_environment_once();
+  HWY_DYNAMIC_DISPATCH(WindowMeanEnergy)(window, stride, n, mean, energy);
+}
+
+void scalar_window_mean_energy(const float* window, std::size_t stride, int n, double* mean, double* energy) {
+  double sum = 0;
+  for (int y = 0; y < n; ++y) {
+    const float* row = window + y * stride;
+    for (int x = 0; x < n; ++x) sum += row[x];
+  }
+  const double m = sum / (double(n) * n);
+  double e = 0;
+  for (int y = 0; y < n; ++y) {
+    const float* row = window + y * stride;
+    for (int x = 0; x < n; ++x) e += (row[x] - m) * (row[x] - m);
+  }
+  *mean = m;
+  *energy = e;
+}
+
+void centred_periodic_tile(const float* window, std::size_t stride, int n, int radius, float mean, float* out) {
+  apply_environment_once();
+  HWY_DYNAMIC_DISPATCH(CentredPeriodicTile)(window, stride, n, radius, mean, out);
+}
+
+void scalar_centred_periodic_tile(const float* window, std::size_t stride, int n, int radius, float mean, float* out) {
+  const int p = n + 2 * radius;
+  for (int y = 0; y < p; ++y) {
+    for (int x = 0; x < p; ++x) {
+      out[y * p + x] = window[static_cast<std::size_t>((y - radius + n) % n) * stride + (x - radius + n) % n] - mean;
     }
   }
 }
