@@ -101,39 +101,46 @@ void AccumulateProducts(const float* reference, const float* patch, std::size_t 
   }
 }
 
-// Σ of the n values at `row`, each less `shift`, squared when `square`, in
-// lanes of doubles from widened floats; the last n % lanes values scalar.
+// Σ over the window of (x − shift), or of its square, in lanes of doubles
+// from widened floats, reduced once at the end; the last n % lanes columns
+// of each row scalar.
 template <bool kSquare>
-HWY_INLINE double RowSum(const float* HWY_RESTRICT row, int n, double shift) {
+HWY_INLINE double WindowSum(const float* HWY_RESTRICT window, std::size_t stride, int n, double shift) {
   const hn::ScalableTag<double> dd;
   const hn::Rebind<float, decltype(dd)> df;
   const int lanes = static_cast<int>(hn::Lanes(dd));
+  const int vector_end = n / lanes * lanes;
   const auto vshift = hn::Set(dd, shift);
-  auto acc = hn::Zero(dd);
-  int x = 0;
-  for (; x + lanes <= n; x += lanes) {
-    const auto v = hn::Sub(hn::PromoteTo(dd, hn::LoadU(df, row + x)), vshift);
-    acc = kSquare ? hn::MulAdd(v, v, acc) : hn::Add(acc, v);
+  auto acc0 = hn::Zero(dd), acc1 = hn::Zero(dd);
+  double tail = 0;
+  for (int y = 0; y < n; ++y) {
+    const float* row = window + y * stride;
+    int x = 0;
+    for (; x + 2 * lanes <= vector_end; x += 2 * lanes) {
+      const auto v0 = hn::Sub(hn::PromoteTo(dd, hn::LoadU(df, row + x)), vshift);
+      const auto v1 = hn::Sub(hn::PromoteTo(dd, hn::LoadU(df, row + x + lanes)), vshift);
+      acc0 = kSquare ? hn::MulAdd(v0, v0, acc0) : hn::Add(acc0, v0);
+      acc1 = kSquare ? hn::MulAdd(v1, v1, acc1) : hn::Add(acc1, v1);
+    }
+    for (; x < vector_end; x += lanes) {
+      const auto v = hn::Sub(hn::PromoteTo(dd, hn::LoadU(df, row + x)), vshift);
+      acc0 = kSquare ? hn::MulAdd(v, v, acc0) : hn::Add(acc0, v);
+    }
+    for (; x < n; ++x) {
+      const double v = row[x] - shift;
+      tail += kSquare ? v * v : v;
+    }
   }
-  double total = hn::GetLane(hn::SumOfLanes(dd, acc));
-  for (; x < n; ++x) {
-    const double v = row[x] - shift;
-    total += kSquare ? v * v : v;
-  }
-  return total;
+  return hn::GetLane(hn::SumOfLanes(dd, hn::Add(acc0, acc1))) + tail;
 }
 
 void WindowMeanEnergy(const float* window, std::size_t stride, int n, double* mean, double* energy) {
-  double sum = 0;
-  for (int y = 0; y < n; ++y) sum += RowSum<false>(window + y * stride, n, 0.0);
-  const double m = sum / (double(n) * n);
-  double e = 0;
-  for (int y = 0; y < n; ++y) e += RowSum<true>(window + y * stride, n, m);
+  const double m = WindowSum<false>(window, stride, n, 0.0) / (double(n) * n);
   *mean = m;
-  *energy = e;
+  *energy = WindowSum<true>(window, stride, n, m);
 }
 
-// out[i] = in[i] − mean for i < count.
+// out[i] = in[i] − mean for i < count, in vectors and a scalar tail.
 HWY_INLINE void SubtractRow(const float* HWY_RESTRICT in, int count, float mean, float* HWY_RESTRICT out) {
   const hn::ScalableTag<float> d;
   const int lanes = static_cast<int>(hn::Lanes(d));
@@ -143,14 +150,19 @@ HWY_INLINE void SubtractRow(const float* HWY_RESTRICT in, int count, float mean,
   for (; i < count; ++i) out[i] = in[i] - mean;
 }
 
+// Each output row from its window row found without a modulo (a division
+// per row costs more than the row's subtractions); the r columns wrapped at
+// either end scalar.
 void CentredPeriodicTile(const float* window, std::size_t stride, int n, int radius, float mean, float* out) {
   const int p = n + 2 * radius;
-  for (int y = 0; y < p; ++y) {
-    const float* row = window + static_cast<std::size_t>((y - radius + n) % n) * stride;
+  int source_row = n - radius;
+  for (int y = 0; y < p; ++y, ++source_row) {
+    if (source_row == n) source_row = 0;
+    const float* row = window + static_cast<std::size_t>(source_row) * stride;
     float* o = out + static_cast<std::size_t>(y) * p;
-    SubtractRow(row + n - radius, radius, mean, o);
+    for (int x = 0; x < radius; ++x) o[x] = row[n - radius + x] - mean;
     SubtractRow(row, n, mean, o + radius);
-    SubtractRow(row, radius, mean, o + radius + n);
+    for (int x = 0; x < radius; ++x) o[radius + n + x] = row[x] - mean;
   }
 }
 
