@@ -140,6 +140,22 @@ void WindowMeanEnergy(const float* window, std::size_t stride, int n, double* me
   *energy = WindowSum<true>(window, stride, n, m);
 }
 
+void CentreWindow(const float* window, std::size_t stride, int n, double mean, float* out) {
+  const hn::ScalableTag<double> dd;
+  const hn::Rebind<float, decltype(dd)> df;
+  const int lanes = static_cast<int>(hn::Lanes(dd));
+  const auto vmean = hn::Set(dd, mean);
+  for (int y = 0; y < n; ++y) {
+    const float* row = window + y * stride;
+    float* o = out + static_cast<std::size_t>(y) * n;
+    int x = 0;
+    for (; x + lanes <= n; x += lanes) {
+      hn::StoreU(hn::DemoteTo(df, hn::Sub(hn::PromoteTo(dd, hn::LoadU(df, row + x)), vmean)), df, o + x);
+    }
+    for (; x < n; ++x) o[x] = static_cast<float>(row[x] - mean);
+  }
+}
+
 // out[i] = in[i] − mean for i < count, in vectors and a scalar tail.
 HWY_INLINE void SubtractRow(const float* HWY_RESTRICT in, int count, float mean, float* HWY_RESTRICT out) {
   const hn::ScalableTag<float> d;
@@ -262,6 +278,7 @@ HWY_EXPORT(TargetName);
 HWY_EXPORT(SampleSeparablePoints);
 HWY_EXPORT(WindowMeanEnergy);
 HWY_EXPORT(CentredPeriodicTile);
+HWY_EXPORT(CentreWindow);
 
 namespace {
 
@@ -329,6 +346,17 @@ void scalar_window_mean_energy(const float* window, std::size_t stride, int n, d
   }
   *mean = m;
   *energy = e;
+}
+
+void centre_window(const float* window, std::size_t stride, int n, double mean, float* out) {
+  apply_environment_once();
+  HWY_DYNAMIC_DISPATCH(CentreWindow)(window, stride, n, mean, out);
+}
+
+void scalar_centre_window(const float* window, std::size_t stride, int n, double mean, float* out) {
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) out[y * n + x] = static_cast<float>(window[y * stride + x] - mean);
+  }
 }
 
 void centred_periodic_tile(const float* window, std::size_t stride, int n, int radius, float mean, float* out) {

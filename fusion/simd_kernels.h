@@ -53,6 +53,15 @@ void window_mean_energy(const float* window, std::size_t stride, int n, double* 
 // The reference for window_mean_energy: plain loops in row order.
 void scalar_window_mean_energy(const float* window, std::size_t stride, int n, double* mean, double* energy);
 
+// out[y·n + x] = window(y, x) − mean, the difference taken in double and
+// rounded to float once: a reference window centred as precisely as float
+// holds it. Exact operations, so the SIMD kernel and the reference agree
+// exactly. Any n ≥ 1.
+void centre_window(const float* window, std::size_t stride, int n, double mean, float* out);
+
+// The reference for centre_window: plain loops.
+void scalar_centre_window(const float* window, std::size_t stride, int n, double mean, float* out);
+
 // The n×n window (rows `stride` floats apart) less `mean`, tiled
 // periodically over (n + 2·radius)² floats written row-major to `out`:
 // out[y·(n + 2r) + x] = window((y − r) mod n, (x − r) mod n) − mean. With

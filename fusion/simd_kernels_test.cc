@@ -69,8 +69,8 @@ void expect_all_sizes_match() {
   expect_kernel_matches_reference(128, 5, seed++);
 }
 
-// A window's mean and energy and its centred periodic tile, on a window
-// inside a wider buffer (rows not contiguous). Bright windows with little
+// A window's mean and energy, the window centred, and its centred periodic
+// tile, on a window inside a wider buffer (rows not contiguous). Bright windows with little
 // texture are the hard case for the energy: Σ (x − mean)² is small against
 // Σ x², so both kernels must centre before squaring.
 void expect_window_kernels_match(int n, int radius, float texture, unsigned seed) {
@@ -97,6 +97,10 @@ void expect_window_kernels_match(int n, int radius, float texture, unsigned seed
   centred_periodic_tile(window, stride, n, radius, static_cast<float>(mean), tile.data());
   scalar_centred_periodic_tile(window, stride, n, radius, static_cast<float>(mean), reference.data());
   for (std::size_t i = 0; i < tile.size(); ++i) ASSERT_EQ(tile[i], reference[i]) << "at " << i % p << ", " << i / p;
+  std::vector<float> centred(static_cast<std::size_t>(n) * n, -1.f), reference_centred(centred.size(), -2.f);
+  centre_window(window, stride, n, mean, centred.data());
+  scalar_centre_window(window, stride, n, mean, reference_centred.data());
+  for (std::size_t i = 0; i < centred.size(); ++i) ASSERT_EQ(centred[i], reference_centred[i]) << "at " << i;
   // The tile's centre is the window itself, centred.
   ASSERT_EQ(tile[static_cast<std::size_t>(radius) * p + radius], window[0] - static_cast<float>(mean));
 }

@@ -68,8 +68,7 @@ void WindowCorrelator::prepare_reference(const cv::Mat& reference_window, const 
                                          CorrelationPlane& plane) {
   const int n = reference_window.rows;
   centred_reference_.resize(static_cast<std::size_t>(n) * n);
-  centred_periodic_tile(reference_window.ptr<float>(), reference_window.step1(), n, 0, static_cast<float>(stats.mean),
-                        centred_reference_.data());
+  centre_window(reference_window.ptr<float>(), reference_window.step1(), n, stats.mean, centred_reference_.data());
   reference_energy_ = stats.energy;
   plane.reference_std = n > 1 ? std::sqrt(reference_energy_ / (double(n) * n - 1)) : 0.0;
 }
