@@ -8,8 +8,8 @@
 #include <cmath>
 #include <map>
 #include <opencv2/core/utility.hpp>
-#include <optional>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <stdexcept>
 
 #include "fusion/image_input.h"
@@ -292,7 +292,8 @@ const std::vector<WindowStats>& reference_stats_for(const PreparedPair& pair, co
     for (int i = range.start; i < range.end; ++i) {
       const auto& vec = field.vectors[static_cast<std::size_t>(i)];
       const cv::Point origin = window_origin(vec.x_px, vec.y_px, window_px, pair.roi);
-      stats[static_cast<std::size_t>(i)] = window_stats(view(pair.reference, cv::Rect(origin, cv::Size(window_px, window_px))));
+      stats[static_cast<std::size_t>(i)] =
+          window_stats(view(pair.reference, cv::Rect(origin, cv::Size(window_px, window_px))));
     }
   });
   return stats;
@@ -542,8 +543,8 @@ int XcorrOptions::exact_probe_context_nodes() const {
 struct XcorrEvaluator::State {
   cv::Mat reference, mask;  // as given; the pixels are shared
   XcorrOptions options;
-  bool prepared = false;    // the rest is set at the first frame
-  PreparedPair pair;        // the whole frame; its measurement buffer is reused
+  bool prepared = false;  // the rest is set at the first frame
+  PreparedPair pair;      // the whole frame; its measurement buffer is reused
   GridGeometry grid;
   PassWorkspace workspace;
   bool colour_warned = false;
@@ -589,8 +590,7 @@ EvaluationResult XcorrEvaluator::probe(const cv::Mat& measurement, const std::ve
   const int context =
       options.probe_context_nodes < 0 ? options.exact_probe_context_nodes() : options.probe_context_nodes;
   if (s.reference.channels() > 1 || measurement.channels() > 1) {
-    spdlog::warn("colour image converted to grey ({} and {} channels)", s.reference.channels(),
-                 measurement.channels());
+    spdlog::warn("colour image converted to grey ({} and {} channels)", s.reference.channels(), measurement.channels());
   }
   EvaluationResult result;
   result.summary.method = "xcorr-probe";

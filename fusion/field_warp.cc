@@ -106,7 +106,10 @@ const WeightTable& table_of(Interpolator interpolator) {
 
 // Rows `rows` of the warped region; most of a deformation pass's cost: the
 // field at each pixel here, the resampling in sample_separable (or, with
-// `simd` false, its scalar reference).
+// `simd` false, its scalar reference). The field is interpolated between
+// the two node rows around a pixel row once per row (`u_row`, `v_row`, one
+// value per node column), then along the row per pixel: the same bilinear
+// value as `bilinear`, with the two interpolations taken in the other order.
 void warp_rows(const cv::Mat& image, const TabulatedKernel& kernel, bool simd, const GridField& field, cv::Rect region,
                cv::Range rows, cv::Mat& out) {
   const auto& g = field.grid;
@@ -114,15 +117,24 @@ void warp_rows(const cv::Mat& image, const TabulatedKernel& kernel, bool simd, c
   std::vector<AxisWeight> column_weights(width);
   for (int x = 0; x < region.width; ++x) column_weights[x] = axis_weight(region.x + x, g.x0_px, g.step_px, g.cols);
   std::vector<double> xs(width), ys(width);
+  std::vector<double> u_row(static_cast<std::size_t>(g.cols)), v_row(static_cast<std::size_t>(g.cols));
   const auto stride = static_cast<std::size_t>(image.step1());
+  const auto sample = simd ? sample_separable : scalar_sample_separable;
   for (int y = rows.start; y < rows.end; ++y) {
     const double image_y = region.y + y;
     const AxisWeight wy = axis_weight(image_y, g.y0_px, g.step_px, g.rows);
+    const auto lerp_rows = [&](const cv::Mat& values, std::vector<double>& row) {
+      const double* r0 = values.ptr<double>(wy.i0);
+      const double* r1 = values.ptr<double>(wy.i1);
+      for (int c = 0; c < g.cols; ++c) row[c] = r0[c] + wy.t * (r1[c] - r0[c]);
+    };
+    lerp_rows(field.u_px, u_row);
+    lerp_rows(field.v_px, v_row);
     for (int x = 0; x < region.width; ++x) {
-      xs[x] = region.x + x + bilinear(field.u_px, column_weights[x], wy);
-      ys[x] = image_y + bilinear(field.v_px, column_weights[x], wy);
+      const AxisWeight& wx = column_weights[x];
+      xs[x] = region.x + x + (u_row[wx.i0] + wx.t * (u_row[wx.i1] - u_row[wx.i0]));
+      ys[x] = image_y + (v_row[wx.i0] + wx.t * (v_row[wx.i1] - v_row[wx.i0]));
     }
-    const auto sample = simd ? sample_separable : scalar_sample_separable;
     sample(image.ptr<float>(), stride, image.cols, image.rows, kernel, xs.data(), ys.data(), region.width,
            out.ptr<float>(y));
   }

@@ -70,9 +70,9 @@ void expect_all_sizes_match() {
 }
 
 // A window's mean and energy, the window centred, and its centred periodic
-// tile, on a window inside a wider buffer (rows not contiguous). Bright windows with little
-// texture are the hard case for the energy: Σ (x − mean)² is small against
-// Σ x², so both kernels must centre before squaring.
+// tile, on a window inside a wider buffer (rows not contiguous). Bright
+// windows with little texture are the hard case for the energy: Σ (x − mean)²
+// is small against Σ x², so both kernels must centre before squaring.
 void expect_window_kernels_match(int n, int radius, float texture, unsigned seed) {
   SCOPED_TRACE(testing::Message() << "n=" << n << " radius=" << radius << " texture=" << texture
                                   << " target=" << simd_target_name());
