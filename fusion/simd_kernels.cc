@@ -246,12 +246,130 @@ HWY_INLINE void SampleSeparable(D d, const float* HWY_RESTRICT image, std::size_
   }
 }
 
+#if HWY_TARGET != HWY_SCALAR
+// r[i] (row i of an 8×8 block) becomes column i: unpacks within 128-bit
+// blocks, then of 64-bit pairs, then the blocks combined.
+template <class D>
+HWY_INLINE void Transpose8x8(D d, hn::Vec<D>* r) {
+  const hn::Repartition<double, D> dd;
+  const auto lower64 = [&](hn::Vec<D> a, hn::Vec<D> b) {
+    return hn::BitCast(d, hn::InterleaveLower(dd, hn::BitCast(dd, a), hn::BitCast(dd, b)));
+  };
+  const auto upper64 = [&](hn::Vec<D> a, hn::Vec<D> b) {
+    return hn::BitCast(d, hn::InterleaveUpper(dd, hn::BitCast(dd, a), hn::BitCast(dd, b)));
+  };
+  const auto t0 = hn::InterleaveLower(d, r[0], r[1]), t1 = hn::InterleaveUpper(d, r[0], r[1]);
+  const auto t2 = hn::InterleaveLower(d, r[2], r[3]), t3 = hn::InterleaveUpper(d, r[2], r[3]);
+  const auto t4 = hn::InterleaveLower(d, r[4], r[5]), t5 = hn::InterleaveUpper(d, r[4], r[5]);
+  const auto t6 = hn::InterleaveLower(d, r[6], r[7]), t7 = hn::InterleaveUpper(d, r[6], r[7]);
+  const auto u0 = lower64(t0, t2), u1 = upper64(t0, t2), u2 = lower64(t1, t3), u3 = upper64(t1, t3);
+  const auto u4 = lower64(t4, t6), u5 = upper64(t4, t6), u6 = lower64(t5, t7), u7 = upper64(t5, t7);
+  r[0] = hn::ConcatLowerLower(d, u4, u0);
+  r[1] = hn::ConcatLowerLower(d, u5, u1);
+  r[2] = hn::ConcatLowerLower(d, u6, u2);
+  r[3] = hn::ConcatLowerLower(d, u7, u3);
+  r[4] = hn::ConcatUpperUpper(d, u4, u0);
+  r[5] = hn::ConcatUpperUpper(d, u5, u1);
+  r[6] = hn::ConcatUpperUpper(d, u6, u2);
+  r[7] = hn::ConcatUpperUpper(d, u7, u3);
+}
+
+// Eight neighbouring points of a row, one per lane. Where the field is
+// smooth (a window deformation's is) their taps start in one image row at
+// consecutive columns, so each tap of all eight is one contiguous load and
+// no point needs a sum across lanes. Each point's weights are its table
+// rows interpolated (as in SampleSeparable), then transposed to one vector
+// per tap. Summed as the scalar reference sums: each row of taps, then the
+// rows weighted in order. False (nothing written) when the points are not
+// so arranged or their taps leave the image.
+template <class D>
+HWY_INLINE bool SampleEightAlongRow(D d, const float* HWY_RESTRICT image, std::size_t stride, int cols, int rows,
+                                    const TabulatedKernel& kernel, const double* HWY_RESTRICT xs,
+                                    const double* HWY_RESTRICT ys, float* HWY_RESTRICT out) {
+  const int taps = kernel.taps, steps = kernel.steps, first = 1 - taps / 2;
+  HWY_ALIGN int32_t floor_x[8], floor_y[8], entry_x[8], entry_y[8];
+  HWY_ALIGN float frac_x[8], frac_y[8];
+  // Positions in double, as the reference takes them: the whole pixel, the
+  // table entry below the sub-pixel part and the fraction past it.
+  const hn::CappedTag<double, 4> dd;
+  const hn::Rebind<int32_t, decltype(dd)> di4;
+  const hn::Rebind<float, decltype(dd)> df4;
+  const int double_lanes = static_cast<int>(hn::Lanes(dd));
+  const auto last_entry = hn::Set(dd, double(steps - 1)), vsteps = hn::Set(dd, double(steps));
+  const auto split = [&](const double* p, int32_t* whole, int32_t* entry, float* frac, int i) {
+    const auto v = hn::LoadU(dd, p + i);
+    const auto floor = hn::Floor(v);
+    const auto position = hn::Mul(hn::Sub(v, floor), vsteps);
+    const auto e = hn::Min(hn::Floor(position), last_entry);
+    hn::StoreU(hn::DemoteTo(di4, floor), di4, whole + i);
+    hn::StoreU(hn::DemoteTo(di4, e), di4, entry + i);
+    hn::StoreU(hn::DemoteTo(df4, hn::Sub(position, e)), df4, frac + i);
+  };
+  for (int i = 0; i < 8; i += double_lanes) {
+    split(xs, floor_x, entry_x, frac_x, i);
+    split(ys, floor_y, entry_y, frac_y, i);
+  }
+  const int x0 = floor_x[0] + first, y0 = floor_y[0] + first;
+  if (x0 < 0 || y0 < 0 || x0 + 7 + taps > cols || y0 + taps > rows) return false;
+  const hn::RebindToSigned<D> di;
+  const auto same_row = hn::Eq(hn::Load(di, floor_y), hn::Set(di, floor_y[0]));
+  const auto next_column = hn::Eq(hn::Sub(hn::Load(di, floor_x), hn::Iota(di, 0)), hn::Set(di, floor_x[0]));
+  if (!hn::AllTrue(di, hn::And(same_row, next_column))) return false;
+
+  // Lanes past the taps hold the next entry's weights; those columns of the
+  // transposed block are never used.
+  hn::Vec<D> wx[8], wy[8];
+  for (int k = 0; k < 8; ++k) {
+    const float* a = kernel.weights + static_cast<std::size_t>(entry_x[k]) * taps;
+    const auto va = hn::LoadU(d, a);
+    wx[k] = hn::MulAdd(hn::Set(d, frac_x[k]), hn::Sub(hn::LoadU(d, a + taps), va), va);
+    const float* b = kernel.weights + static_cast<std::size_t>(entry_y[k]) * taps;
+    const auto vb = hn::LoadU(d, b);
+    wy[k] = hn::MulAdd(hn::Set(d, frac_y[k]), hn::Sub(hn::LoadU(d, b + taps), vb), vb);
+  }
+  Transpose8x8(d, wx);
+  Transpose8x8(d, wy);
+  const float* top = image + static_cast<std::size_t>(y0) * stride + x0;
+  auto total = hn::Zero(d);
+  for (int j = 0; j < taps; ++j) {
+    const float* row = top + static_cast<std::size_t>(j) * stride;
+    auto row_total = hn::Mul(wx[0], hn::LoadU(d, row));
+    for (int i = 1; i < taps; ++i) row_total = hn::MulAdd(wx[i], hn::LoadU(d, row + i), row_total);
+    total = j == 0 ? hn::Mul(wy[0], row_total) : hn::MulAdd(wy[j], row_total, total);
+  }
+  hn::StoreU(total, d, out);
+  return true;
+}
+
+// Points in groups of eight along the row where the targets have 8-lane
+// float vectors (AVX2, AVX-512), the rest one by one.
+template <class D8>
+HWY_INLINE int SampleInEights(D8 d8, const float* image, std::size_t stride, int cols, int rows,
+                              const TabulatedKernel& kernel, const double* x, const double* y, int count, float* out) {
+  int k = 0;
+  if constexpr (hn::MaxLanes(D8()) == 8) {
+    if (hn::Lanes(d8) == 8 && kernel.taps <= 8) {
+      for (; k + 8 <= count; k += 8) {
+        if (!SampleEightAlongRow(d8, image, stride, cols, rows, kernel, x + k, y + k, out + k)) {
+          SampleSeparable(hn::CappedTag<float, 8>(), image, stride, cols, rows, kernel, x + k, y + k, 8, out + k);
+        }
+      }
+    }
+  }
+  return k;
+}
+#endif
+
 void SampleSeparablePoints(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
                            const double* x, const double* y, int count, float* out) {
+  int k = 0;
+#if HWY_TARGET != HWY_SCALAR
+  k = SampleInEights(hn::CappedTag<float, 8>(), image, stride, cols, rows, kernel, x, y, count, out);
+#endif
   if (kernel.taps <= 4) {
-    SampleSeparable(hn::CappedTag<float, 4>(), image, stride, cols, rows, kernel, x, y, count, out);
+    SampleSeparable(hn::CappedTag<float, 4>(), image, stride, cols, rows, kernel, x + k, y + k, count - k, out + k);
   } else {
-    SampleSeparable(hn::CappedTag<float, 8>(), image, stride, cols, rows, kernel, x, y, count, out);
+    SampleSeparable(hn::CappedTag<float, 8>(), image, stride, cols, rows, kernel, x + k, y + k, count - k, out + k);
   }
 }
 

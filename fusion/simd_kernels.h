@@ -94,9 +94,12 @@ void tabulated_weights(const TabulatedKernel& kernel, double t, float* weights);
 // x[k] and y[k]: the window deformation's resampling at `count` points of
 // the image (x right, y down, in pixels). Taps outside the image are clamped
 // to its edge (replicated border), so a point may lie anywhere. `image` is
-// rows×cols floats with rows `stride` floats apart. The SIMD kernel sums
-// each tap column over the rows first, then the columns; the reference sums
-// each row first, then the rows; they differ only by float rounding.
+// rows×cols floats with rows `stride` floats apart. Where eight neighbouring
+// points' taps start at consecutive columns of one row (a smooth field's
+// do) and the CPU has 8-lane vectors, the SIMD kernel samples them one per
+// lane, summing as the reference does (each row of taps, then the rows);
+// other points one by one, each tap column over the rows first, then the
+// columns. Either way the two differ only by float rounding.
 void sample_separable(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
                       const double* x, const double* y, int count, float* out);
 

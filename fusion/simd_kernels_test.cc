@@ -128,7 +128,11 @@ struct SamplingInputs {
   int count() const { return static_cast<int>(x.size()); }
 };
 
-SamplingInputs random_sampling(int cols, int rows, Interpolator interpolator, unsigned seed) {
+// `smooth`: a gentle field instead (sub-pixel shifts varying by a few
+// thousandths of a pixel per pixel), as window deformation has, where
+// neighbouring points' taps start at consecutive columns of one row: the
+// kernel's path for points in groups.
+SamplingInputs random_sampling(int cols, int rows, Interpolator interpolator, unsigned seed, bool smooth = false) {
   SamplingInputs in{cols, rows, interpolation_kernel(interpolator), static_cast<std::size_t>(cols + 11), {}, {}, {}};
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -150,10 +154,16 @@ SamplingInputs random_sampling(int cols, int rows, Interpolator interpolator, un
     for (int w = 0; w < 2; ++w) d += a[c][w] * std::sin(k[c][w][0] * x + k[c][w][1] * y + phase[c][w]);
     return d;
   };
+  const double u0 = 2.0 * unit(rng) - 1.0, v0 = 2.0 * unit(rng) - 1.0;
   for (int y = -9; y < rows + 9; ++y) {
     for (int x = -9; x < cols + 9; ++x) {
-      in.x.push_back(x + displacement(0, x, y));
-      in.y.push_back(y + displacement(1, x, y));
+      if (smooth) {
+        in.x.push_back(x + u0 + 0.004 * x - 0.002 * y);
+        in.y.push_back(y + v0 + 0.003 * x + 0.001 * y);
+      } else {
+        in.x.push_back(x + displacement(0, x, y));
+        in.y.push_back(y + displacement(1, x, y));
+      }
     }
   }
   // Whole-pixel positions too (sub-pixel part 0, the table's first entry).
@@ -178,10 +188,11 @@ double sampling_magnitude(const SamplingInputs& in, int k) {
   return sum;
 }
 
-void expect_sampling_matches_reference(int cols, int rows, Interpolator interpolator, unsigned seed) {
+void expect_sampling_matches_reference(int cols, int rows, Interpolator interpolator, unsigned seed,
+                                       bool smooth = false) {
   SCOPED_TRACE(testing::Message() << cols << "x" << rows << " interpolator=" << static_cast<int>(interpolator)
-                                  << " target=" << simd_target_name());
-  const SamplingInputs in = random_sampling(cols, rows, interpolator, seed);
+                                  << " smooth=" << smooth << " target=" << simd_target_name());
+  const SamplingInputs in = random_sampling(cols, rows, interpolator, seed, smooth);
   std::vector<float> simd(in.x.size(), -1.f), reference(in.x.size(), -2.f);
   sample_separable(in.image(), in.stride, cols, rows, in.kernel, in.x.data(), in.y.data(), in.count(), simd.data());
   scalar_sample_separable(in.image(), in.stride, cols, rows, in.kernel, in.x.data(), in.y.data(), in.count(),
@@ -197,6 +208,7 @@ void expect_all_samplings_match() {
   for (const auto interpolator : {Interpolator::kCubic, Interpolator::kLanczos3, Interpolator::kLanczos4}) {
     for (const auto& [cols, rows] : {std::pair{67, 41}, std::pair{8, 8}, std::pair{3, 5}, std::pair{1, 1}}) {
       expect_sampling_matches_reference(cols, rows, interpolator, seed++);
+      expect_sampling_matches_reference(cols, rows, interpolator, seed++, true);
     }
   }
 }
