@@ -146,7 +146,7 @@ TEST_F(EvaluateCli, AnImageDeclaringTooManyPixelsIsRefusedUnread) {
   EXPECT_NE(limited.output.find("declares 128x96 px"), std::string::npos) << limited.output;
 }
 
-// A 4000×3000 pair passes the pixel limit but needs about 233 MB to
+// A 4000×3000 pair passes the pixel limit but needs about 190 MB to
 // evaluate. Under a 450 MB address-space limit (ulimit -v) bosfuse has about
 // 95 MB left once it is loaded and has decoded both images: the field is
 // refused before anything of image size is allocated, with what it needs and

@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <stdexcept>
 
 #include "fusion/image_input.h"
@@ -32,13 +34,13 @@ void check_inputs(const cv::Mat& reference, const cv::Mat& measurement, const cv
   check_window_fits(options.window_px_per_pass().front(), effective_roi(options.roi, reference.size()).size());
 }
 
-// The images (or the part `crop` of them) as the evaluator works on them;
-// coordinates in the result are relative to the crop.
-PreparedPair prepare(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
-                     const XcorrOptions& options, cv::Rect crop, bool warn_colour) {
+// The reference (or the part `crop` of it) as the evaluator works on it;
+// coordinates in the result are relative to the crop. The measurement is
+// left for prepare_measurement.
+PreparedPair prepare_reference(const cv::Mat& reference, const cv::Mat& mask, const XcorrOptions& options,
+                               cv::Rect crop, bool warn_colour) {
   PreparedPair pair;
   pair.reference = to_grey_unit_float(reference(crop), "reference", warn_colour);
-  pair.measurement = to_grey_unit_float(measurement(crop), "measurement", warn_colour);
   const cv::Rect full_roi = effective_roi(options.roi, reference.size());
   pair.roi = (full_roi & crop) - crop.tl();
   pair.full_roi_origin = full_roi.tl() - crop.tl();
@@ -48,6 +50,18 @@ PreparedPair prepare(const cv::Mat& reference, const cv::Mat& measurement, const
     cv::threshold(pair.excluded, ones, 0, 1, cv::THRESH_BINARY);
     cv::integral(ones, pair.mask_integral, CV_32S);
   }
+  return pair;
+}
+
+// Into the pair's measurement buffer, reused when it has the size already.
+void prepare_measurement(const cv::Mat& measurement, cv::Rect crop, bool warn_colour, PreparedPair& pair) {
+  to_grey_unit_float(measurement(crop), "measurement", warn_colour, pair.measurement);
+}
+
+PreparedPair prepare(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
+                     const XcorrOptions& options, cv::Rect crop, bool warn_colour) {
+  PreparedPair pair = prepare_reference(reference, mask, options, crop, warn_colour);
+  prepare_measurement(measurement, crop, warn_colour, pair);
   return pair;
 }
 
@@ -114,6 +128,17 @@ struct PassInput {
   cv::Mat warped;                        // measurement resampled over `region`
   cv::Mat warped_reference;              // symmetric deformation: the reference, resampled the other way
   cv::Rect region;
+  // Each reference window's mean and energy, when cached: node (row, col)
+  // of this pass is entry (row0 + stride·row)·cols + col0 + stride·col (the
+  // coarse first pass takes every other node of the full grid's).
+  const WindowStats* reference_stats = nullptr;
+  int stats_row0 = 0, stats_col0 = 0, stats_stride = 1, stats_cols = 0;
+
+  const WindowStats* stats_at(int row, int col) const {
+    if (!reference_stats) return nullptr;
+    return reference_stats + static_cast<std::size_t>(stats_row0 + stats_stride * row) * stats_cols + stats_col0 +
+           stats_stride * col;
+  }
 };
 
 void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, int row, int col,
@@ -141,7 +166,8 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
   const auto pairing = in.predictor && options.deform ? WindowPairing::kEqualWindows : WindowPairing::kSearchArea;
   const cv::Mat reference_window =
       in.warped_reference.empty() ? view(pair.reference, window) : view(in.warped_reference, window - in.region.tl());
-  correlator.correlate(reference_window, view(in.warped, search), r, options.correlation, plane, pairing);
+  correlator.correlate(reference_window, view(in.warped, search), r, options.correlation, plane, pairing,
+                       in.stats_at(row, col));
   if (plane.reference_std < options.min_texture_std) {
     vec.flag = VectorFlag::kNoTexture;
     return;
@@ -206,15 +232,26 @@ double max_change_px(const DisplacementField& before, const DisplacementField& a
   return change;
 }
 
+// A correlator and its plane per thread, kept for the life of the thread:
+// their buffers serve every window of every pass and frame.
+struct CorrelatorScratch {
+  WindowCorrelator correlator;
+  CorrelationPlane plane;
+};
+
+CorrelatorScratch& thread_scratch() {
+  thread_local CorrelatorScratch scratch;
+  return scratch;
+}
+
 void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, DisplacementField& field) {
   const int node_count = static_cast<int>(field.vectors.size());
   auto evaluate_range = [&](const cv::Range& range) {
-    WindowCorrelator correlator;
-    CorrelationPlane plane;
+    CorrelatorScratch& scratch = thread_scratch();
     for (int i = range.start; i < range.end; ++i) {
       auto& vec = field.vectors[static_cast<std::size_t>(i)];
       if (vec.flag == VectorFlag::kOutOfRoi) continue;
-      evaluate_node(pair, in, options, i / field.cols, i % field.cols, correlator, plane, vec);
+      evaluate_node(pair, in, options, i / field.cols, i % field.cols, scratch.correlator, scratch.plane, vec);
     }
   };
   // A probe's few windows cost less than waking the other thread.
@@ -225,38 +262,92 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
   cv::parallel_for_(cv::Range(0, node_count), evaluate_range, std::max(1.0, node_count / 256.0));
 }
 
+// What run_passes keeps between passes and, in an XcorrEvaluator, between
+// frames: the warped images' buffers, and each reference window's mean and
+// energy per window size for the nodes of the full grid (probes leave
+// cache_reference_stats false and have them summed per window).
+struct PassWorkspace {
+  cv::Mat warped_storage, warped_reference_storage;
+  bool cache_reference_stats = false;
+  std::map<int, std::vector<WindowStats>> reference_stats;  // by window size
+};
+
+// The top-left `size` of `storage`, which grows when too small: the regions
+// of successive passes differ by a few pixels, and a fresh buffer for each
+// would page-fault its 64 MB (16 MP) again.
+cv::Mat reuse(cv::Mat& storage, cv::Size size) {
+  if (storage.rows < size.height || storage.cols < size.width) {
+    storage.create(std::max(storage.rows, size.height), std::max(storage.cols, size.width), CV_32F);
+  }
+  return storage(cv::Rect({0, 0}, size));
+}
+
+// Windows of `window_px` at every node of `field`, whose node positions
+// never change for an evaluator: computed at its first frame.
+const std::vector<WindowStats>& reference_stats_for(const PreparedPair& pair, const DisplacementField& field,
+                                                    int window_px, PassWorkspace& workspace) {
+  std::vector<WindowStats>& stats = workspace.reference_stats[window_px];
+  if (stats.size() == field.vectors.size()) return stats;
+  stats.assign(field.vectors.size(), WindowStats{});
+  cv::parallel_for_(cv::Range(0, static_cast<int>(stats.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      const auto& vec = field.vectors[static_cast<std::size_t>(i)];
+      const cv::Point origin = window_origin(vec.x_px, vec.y_px, window_px, pair.roi);
+      stats[static_cast<std::size_t>(i)] =
+          window_stats(view(pair.reference, cv::Rect(origin, cv::Size(window_px, window_px))));
+    }
+  });
+  return stats;
+}
+
 // The first pass on every other node only, in x and y — a quarter of the
 // correlations, and the widest searches — when the coarse windows still
 // overlap; the rest of the field is interpolated for the next pass's
 // predictor. Nodes are chosen by their lattice index counted from the ROI,
-// so a probe's local grid picks the same nodes as the full field. False
+// so a probe's local grid picks the same nodes as the full field. None
 // when the grid is too small for it (then the pass runs on every node).
-bool run_coarse_first_pass(const PreparedPair& pair, const GridGeometry& fine, PassInput in,
-                           const XcorrOptions& options, DisplacementField& field) {
-  if (!options.coarse_first_pass || 2 * fine.step_px > in.window_px) return false;
+struct CoarseGrid {
+  GridGeometry grid;
+  int row0 = 0, col0 = 0;  // its first node on the full grid
+};
+
+std::optional<CoarseGrid> coarse_first_pass_grid(const PreparedPair& pair, const GridGeometry& fine, int window_px,
+                                                 const XcorrOptions& options) {
+  if (!options.coarse_first_pass || 2 * fine.step_px > window_px) return std::nullopt;
   const double half = (options.window_px - 1) / 2.0;
   auto first_even = [&](double origin_px, int roi_origin_px) {
     const long index = std::lround((origin_px - (roi_origin_px + half)) / fine.step_px);
     return static_cast<int>(((index % 2) + 2) % 2);
   };
-  const int col0 = first_even(fine.x0_px, pair.full_roi_origin.x);
-  const int row0 = first_even(fine.y0_px, pair.full_roi_origin.y);
-  GridGeometry coarse = fine;
-  coarse.x0_px += col0 * fine.step_px;
-  coarse.y0_px += row0 * fine.step_px;
-  coarse.step_px = 2 * fine.step_px;
-  coarse.cols = (fine.cols - col0 + 1) / 2;
-  coarse.rows = (fine.rows - row0 + 1) / 2;
-  if (coarse.rows < 2 || coarse.cols < 2) return false;
-  DisplacementField sparse = field_on_grid(coarse);
-  for (int r = 0; r < coarse.rows; ++r) {
-    for (int c = 0; c < coarse.cols; ++c) sparse.at(r, c).flag = field.at(row0 + 2 * r, col0 + 2 * c).flag;
+  CoarseGrid coarse{fine, 0, 0};
+  coarse.col0 = first_even(fine.x0_px, pair.full_roi_origin.x);
+  coarse.row0 = first_even(fine.y0_px, pair.full_roi_origin.y);
+  coarse.grid.x0_px += coarse.col0 * fine.step_px;
+  coarse.grid.y0_px += coarse.row0 * fine.step_px;
+  coarse.grid.step_px = 2 * fine.step_px;
+  coarse.grid.cols = (fine.cols - coarse.col0 + 1) / 2;
+  coarse.grid.rows = (fine.rows - coarse.row0 + 1) / 2;
+  if (coarse.grid.rows < 2 || coarse.grid.cols < 2) return std::nullopt;
+  return coarse;
+}
+
+void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, PassInput in,
+                           const XcorrOptions& options, PassWorkspace& workspace, DisplacementField& field) {
+  DisplacementField sparse = field_on_grid(coarse.grid);
+  for (int r = 0; r < coarse.grid.rows; ++r) {
+    for (int c = 0; c < coarse.grid.cols; ++c) {
+      sparse.at(r, c).flag = field.at(coarse.row0 + 2 * r, coarse.col0 + 2 * c).flag;
+    }
   }
   in.region = pass_region(pair, sparse, in.window_px, in.radius_px);
-  in.warped = warp_region(pair.measurement, GridField{}, in.region, options.interpolator);
+  in.warped = reuse(workspace.warped_storage, in.region.size());
+  warp_region(pair.measurement, GridField{}, in.region, options.interpolator, in.warped);
+  in.stats_row0 = coarse.row0;
+  in.stats_col0 = coarse.col0;
+  in.stats_stride = 2;
   run_pass(pair, in, options, sparse);
   if (options.replace_outliers) replace_outliers(sparse, options.outliers);
-  const GridField predictor = predictor_from(sparse, coarse);
+  const GridField predictor = predictor_from(sparse, coarse.grid);
   for (auto& vec : field.vectors) {
     if (vec.flag == VectorFlag::kOutOfRoi) continue;
     const cv::Point2d p = interpolate_field(predictor, vec.x_px, vec.y_px);
@@ -265,12 +356,11 @@ bool run_coarse_first_pass(const PreparedPair& pair, const GridGeometry& fine, P
     vec.peak_ratio = 0;
     vec.flag = VectorFlag::kOk;  // provisional: the next pass measures every node
   }
-  return true;
 }
 
 // Runs every pass over `field` (centres set; kOutOfRoi nodes are left alone).
 EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid, const XcorrOptions& options,
-                             DisplacementField& field) {
+                             PassWorkspace& workspace, DisplacementField& field) {
   EvaluationSummary summary;
   summary.method = "xcorr";
   const std::vector<int> windows = options.window_px_per_pass();
@@ -287,25 +377,35 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     const int reach_px = in.radius_px + (in.shift_whole_pixels ? max_abs_shift_px(predictor) : 0);
     in.region = pass_region(pair, field, in.window_px, reach_px);
     const bool warp = pass > 0 && options.deform;
+    const bool warp_reference = warp && options.symmetric_deformation;
+    if (workspace.cache_reference_stats && !warp_reference) {
+      in.reference_stats = reference_stats_for(pair, field, in.window_px, workspace).data();
+      in.stats_cols = field.cols;
+    }
+    if (pass == 0 && windows.size() > 1) {
+      if (const auto coarse = coarse_first_pass_grid(pair, grid, in.window_px, options)) {
+        run_coarse_first_pass(pair, *coarse, in, options, workspace, field);
+        summary.passes_run = 1;
+        summary.window_px_per_pass.push_back(in.window_px);
+        continue;
+      }
+    }
     // Passes before the last only feed the next pass's predictor: the
     // cheaper cubic kernel serves them as well; when they have converged, one
     // pass with the accurate kernel finishes.
     const bool last = pass + 1 == static_cast<int>(windows.size()) || finish_now;
     const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
-    if (warp && options.symmetric_deformation) {
+    in.warped = reuse(workspace.warped_storage, in.region.size());
+    if (warp_reference) {
       // Each image moves half-way: both are interpolated at half the offset,
       // and the interpolation errors of the two largely cancel.
-      in.warped = warp_region(pair.measurement, scaled(predictor, 0.5), in.region, interpolator);
-      in.warped_reference = warp_region(pair.reference, scaled(predictor, -0.5), in.region, interpolator);
+      in.warped_reference = reuse(workspace.warped_reference_storage, in.region.size());
+      warp_region(pair.measurement, scaled(predictor, 0.5), in.region, interpolator, in.warped);
+      warp_region(pair.reference, scaled(predictor, -0.5), in.region, interpolator, in.warped_reference);
     } else {
-      in.warped = warp_region(pair.measurement, warp ? predictor : GridField{}, in.region, interpolator);
+      warp_region(pair.measurement, warp ? predictor : GridField{}, in.region, interpolator, in.warped);
     }
-    const DisplacementField before = field;
-    if (pass == 0 && windows.size() > 1 && run_coarse_first_pass(pair, grid, in, options, field)) {
-      summary.passes_run = 1;
-      summary.window_px_per_pass.push_back(in.window_px);
-      continue;
-    }
+    const DisplacementField before = pass > 0 ? field : DisplacementField{};
     run_pass(pair, in, options, field);
     if (options.replace_outliers) replace_outliers(field, options.outliers);
     summary.passes_run = pass + 1;
@@ -377,13 +477,14 @@ DisplacementVector evaluate_probe(const cv::Mat& reference, const cv::Mat& measu
       grid.x0_px + context * grid.step_px, grid.y0_px + context * grid.step_px, 0, 0, 0, VectorFlag::kOutOfRoi};
   if (crop.area() == 0) return vec;
   const PreparedPair pair = prepare(reference, measurement, mask, options, crop, false);
+  PassWorkspace workspace;
   GridGeometry local_grid = grid;
   local_grid.x0_px -= crop.x;
   local_grid.y0_px -= crop.y;
   DisplacementField local = field_on_grid(local_grid);
   flag_nodes_outside(pair, options.window_px, local);
   if (local.at(context, context).flag == VectorFlag::kOutOfRoi) return vec;
-  summary = run_passes(pair, local_grid, options, local);
+  summary = run_passes(pair, local_grid, options, workspace, local);
   vec = local.at(context, context);
   vec.x_px += crop.x;
   vec.y_px += crop.y;
@@ -440,28 +541,59 @@ int XcorrOptions::exact_probe_context_nodes() const {
   return first_pass + (passes - 1) * per_pass;
 }
 
-EvaluationResult evaluate_xcorr(const cv::Mat& reference, const cv::Mat& measurement, const XcorrOptions& options,
-                                const cv::Mat& mask) {
+struct XcorrEvaluator::State {
+  cv::Mat reference, mask;  // as given; the pixels are shared
+  XcorrOptions options;
+  bool prepared = false;  // the rest is set at the first frame
+  PreparedPair pair;      // the whole frame; its measurement buffer is reused
+  GridGeometry grid;
+  PassWorkspace workspace;
+  bool colour_warned = false;
+};
+
+XcorrEvaluator::XcorrEvaluator(const cv::Mat& reference, const XcorrOptions& options, const cv::Mat& mask)
+    : state_(std::make_unique<State>()) {
+  check_inputs(reference, reference, mask, options);
+  state_->reference = reference;
+  state_->mask = mask;
+  state_->options = options;
+}
+
+XcorrEvaluator::~XcorrEvaluator() = default;
+XcorrEvaluator::XcorrEvaluator(XcorrEvaluator&&) noexcept = default;
+XcorrEvaluator& XcorrEvaluator::operator=(XcorrEvaluator&&) noexcept = default;
+
+EvaluationResult XcorrEvaluator::evaluate(const cv::Mat& measurement) {
   const auto start = std::chrono::steady_clock::now();
-  check_inputs(reference, measurement, mask, options);
-  check_xcorr_memory(reference, mask, options);  // here, not in check_inputs: probes need only their crops
-  const PreparedPair pair = prepare(reference, measurement, mask, options, cv::Rect({0, 0}, reference.size()), true);
-  const GridGeometry grid = evaluation_grid(pair.roi, options.window_px, options.step_px);
+  State& s = *state_;
+  check_inputs(s.reference, measurement, s.mask, s.options);
+  const cv::Rect whole({0, 0}, s.reference.size());
+  if (!s.prepared) {
+    // Once, before the first frame allocates: later frames reuse its buffers.
+    check_xcorr_memory(s.reference, s.mask, s.options);
+    s.pair = prepare_reference(s.reference, s.mask, s.options, whole, true);
+    s.grid = evaluation_grid(s.pair.roi, s.options.window_px, s.options.step_px);
+    s.workspace.cache_reference_stats = true;
+    s.prepared = true;
+  }
+  prepare_measurement(measurement, whole, !s.colour_warned, s.pair);
+  s.colour_warned = s.colour_warned || measurement.channels() > 1;
   EvaluationResult result;
-  result.field = field_on_grid(grid);
-  result.summary = run_passes(pair, grid, options, result.field);
+  result.field = field_on_grid(s.grid);
+  result.summary = run_passes(s.pair, s.grid, s.options, s.workspace, result.field);
   result.summary.seconds = seconds_since(start);
   return result;
 }
 
-EvaluationResult probe_xcorr(const cv::Mat& reference, const cv::Mat& measurement,
-                             const std::vector<cv::Point2d>& points, const XcorrOptions& options, const cv::Mat& mask) {
+EvaluationResult XcorrEvaluator::probe(const cv::Mat& measurement, const std::vector<cv::Point2d>& points) {
   const auto start = std::chrono::steady_clock::now();
-  check_inputs(reference, measurement, mask, options);
+  const State& s = *state_;
+  check_inputs(s.reference, measurement, s.mask, s.options);
+  const XcorrOptions& options = s.options;
   const int context =
       options.probe_context_nodes < 0 ? options.exact_probe_context_nodes() : options.probe_context_nodes;
-  if (reference.channels() > 1 || measurement.channels() > 1) {
-    spdlog::warn("colour image converted to grey ({} and {} channels)", reference.channels(), measurement.channels());
+  if (s.reference.channels() > 1 || measurement.channels() > 1) {
+    spdlog::warn("colour image converted to grey ({} and {} channels)", s.reference.channels(), measurement.channels());
   }
   EvaluationResult result;
   result.summary.method = "xcorr-probe";
@@ -472,14 +604,31 @@ EvaluationResult probe_xcorr(const cv::Mat& reference, const cv::Mat& measuremen
   // Probes are independent: one per task, on both cores.
   cv::parallel_for_(cv::Range(0, static_cast<int>(points.size())), [&](const cv::Range& range) {
     for (int i = range.start; i < range.end; ++i) {
-      result.field.vectors[i] = evaluate_probe(reference, measurement, mask, points[i], options, context, summaries[i]);
+      result.field.vectors[i] =
+          evaluate_probe(s.reference, measurement, s.mask, points[i], options, context, summaries[i]);
     }
   });
-  for (const auto& s : summaries) {
-    result.summary.passes_run = std::max(result.summary.passes_run, s.passes_run);
-    if (!s.window_px_per_pass.empty()) result.summary.window_px_per_pass = s.window_px_per_pass;
+  for (const auto& summary : summaries) {
+    result.summary.passes_run = std::max(result.summary.passes_run, summary.passes_run);
+    if (!summary.window_px_per_pass.empty()) result.summary.window_px_per_pass = summary.window_px_per_pass;
   }
   count_flags(result.field, result.summary);
+  result.summary.seconds = seconds_since(start);
+  return result;
+}
+
+EvaluationResult evaluate_xcorr(const cv::Mat& reference, const cv::Mat& measurement, const XcorrOptions& options,
+                                const cv::Mat& mask) {
+  const auto start = std::chrono::steady_clock::now();
+  EvaluationResult result = XcorrEvaluator(reference, options, mask).evaluate(measurement);
+  result.summary.seconds = seconds_since(start);
+  return result;
+}
+
+EvaluationResult probe_xcorr(const cv::Mat& reference, const cv::Mat& measurement,
+                             const std::vector<cv::Point2d>& points, const XcorrOptions& options, const cv::Mat& mask) {
+  const auto start = std::chrono::steady_clock::now();
+  EvaluationResult result = XcorrEvaluator(reference, options, mask).probe(measurement, points);
   result.summary.seconds = seconds_since(start);
   return result;
 }

@@ -17,6 +17,7 @@
 // Images may be 8- or 16-bit, grey or colour (converted with a warning);
 // input problems raise std::invalid_argument with a message naming them.
 
+#include <memory>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -70,6 +71,39 @@ struct XcorrOptions {
   std::vector<int> window_px_per_pass() const;
   int search_radius_px(int pass) const;  // including the margin the sub-pixel fit needs
   int exact_probe_context_nodes() const;
+};
+
+// Evaluates many measurements (the frames of a run) against one reference
+// with the same options and mask. What does not depend on the measurement
+// is prepared once, at the first frame: the reference as float, the mask and
+// its integral, and every window's mean and energy. What does is kept for
+// the next frame: the measurement's float image and the warped images (the
+// same buffers, so a 16 MP frame does not page-fault 200 MB of fresh
+// memory), and the correlators' scratch (per thread). Results equal those
+// of evaluate_xcorr / probe_xcorr on the same images, which are one-shot
+// wrappers around it.
+//
+// The evaluator shares the reference's and the mask's pixels (cv::Mat
+// semantics): do not write into them while it lives. Not thread-safe: one
+// evaluator per thread that evaluates frames (each evaluation uses all
+// cores anyway). Problems with the options, reference or mask are raised by
+// the constructor, problems with a measurement by evaluate / probe.
+class XcorrEvaluator {
+ public:
+  XcorrEvaluator(const cv::Mat& reference, const XcorrOptions& options, const cv::Mat& mask = {});
+  ~XcorrEvaluator();
+  XcorrEvaluator(XcorrEvaluator&&) noexcept;
+  XcorrEvaluator& operator=(XcorrEvaluator&&) noexcept;
+
+  EvaluationResult evaluate(const cv::Mat& measurement);
+
+  // As probe_xcorr below. Probes convert and warp only the few hundred
+  // pixels around each point, so little is kept between frames.
+  EvaluationResult probe(const cv::Mat& measurement, const std::vector<cv::Point2d>& points);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
 };
 
 EvaluationResult evaluate_xcorr(const cv::Mat& reference, const cv::Mat& measurement, const XcorrOptions& options,

@@ -429,5 +429,67 @@ TEST(CrossCorrelationInput, ColourImagesAreConvertedWithAWarning) {
   }
 }
 
+// An evaluator keeps the reference's window statistics and the frame's
+// buffers (float image, warped images, correlator scratch) between frames;
+// none of that may carry one frame's content into the next. Each node's
+// vector is computed from the same numbers in the same order whichever
+// buffer holds them and whichever thread runs it, so the fields are equal
+// exactly, not just to rounding.
+void expect_same_fields(const EvaluationResult& a, const EvaluationResult& b) {
+  ASSERT_EQ(a.field.size(), b.field.size());
+  for (std::size_t i = 0; i < a.field.size(); ++i) {
+    ASSERT_EQ(a.field.vectors[i].x_px, b.field.vectors[i].x_px) << i;
+    ASSERT_EQ(a.field.vectors[i].flag, b.field.vectors[i].flag) << i;
+    ASSERT_EQ(a.field.vectors[i].u_px, b.field.vectors[i].u_px) << i;
+    ASSERT_EQ(a.field.vectors[i].v_px, b.field.vectors[i].v_px) << i;
+    ASSERT_EQ(a.field.vectors[i].peak_ratio, b.field.vectors[i].peak_ratio) << i;
+  }
+  EXPECT_EQ(a.summary.passes_run, b.summary.passes_run);
+  EXPECT_EQ(a.summary.outliers_replaced, b.summary.outliers_replaced);
+}
+
+TEST(XcorrEvaluator, FramesAfterTheFirstEqualFreshEvaluations) {
+  const auto first = render(sim::DisplacementModel::sinusoid(1.2, 96), 256, 0.01, 5);
+  const std::vector<cv::Mat> frames = {
+      first.measurement, render(sim::DisplacementModel::bump_gradient(128, 128, 60, 1.5), 256, 0.01, 5).measurement,
+      render(sim::DisplacementModel::uniform(-0.7, 0.4), 256, 0.02, 5).measurement};
+  cv::Mat mask(first.reference.size(), CV_8U, cv::Scalar(0));
+  cv::circle(mask, {60, 190}, 25, cv::Scalar(255), cv::FILLED);
+  XcorrOptions coarse_to_fine;  // two window sizes, a coarse first pass and FFT in it
+  coarse_to_fine.first_window_px = 32;
+  coarse_to_fine.max_shift_px = 6;
+  XcorrOptions symmetric;  // the reference warped too: its statistics cannot be kept
+  symmetric.symmetric_deformation = true;
+  for (const XcorrOptions& options : {XcorrOptions{}, coarse_to_fine, symmetric}) {
+    XcorrEvaluator evaluator(first.reference, options, mask);
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      SCOPED_TRACE(testing::Message() << "frame " << i << ", first window " << options.first_window_px);
+      const auto reused = evaluator.evaluate(frames[i]);
+      const auto fresh = XcorrEvaluator(first.reference, options, mask).evaluate(frames[i]);
+      expect_same_fields(reused, fresh);
+      expect_same_fields(reused, evaluate_xcorr(first.reference, frames[i], options, mask));
+      EXPECT_GT(reused.summary.valid, reused.field.size() / 2);
+      EXPECT_GT(reused.summary.masked, 0u);
+      const std::vector<cv::Point2d> points = {{100.5, 60.5}, {180, 200}};
+      expect_same_fields(evaluator.probe(frames[i], points),
+                         probe_xcorr(first.reference, frames[i], points, options, mask));
+    }
+  }
+}
+
+TEST(XcorrEvaluator, ProblemsAreNamedWhereTheyArise) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.5, 0), 64);
+  EXPECT_NE(message_of([&] { XcorrEvaluator(cv::Mat(), XcorrOptions{}); }).find("reference image is empty"),
+            std::string::npos);
+  XcorrEvaluator evaluator(pair.reference, XcorrOptions{});
+  const cv::Mat smaller = pair.measurement(cv::Rect(0, 0, 48, 64)).clone();
+  EXPECT_NE(message_of([&] { evaluator.evaluate(smaller); }).find("sizes differ"), std::string::npos);
+  EXPECT_NE(message_of([&] { evaluator.probe(cv::Mat(), {{31.5, 31.5}}); }).find("measurement image is empty"),
+            std::string::npos);
+  // A bad frame leaves the evaluator usable.
+  EXPECT_EQ(evaluator.evaluate(pair.measurement).summary.valid,
+            evaluate_xcorr(pair.reference, pair.measurement, {}).summary.valid);
+}
+
 }  // namespace
 }  // namespace bosfuse::fusion

@@ -15,21 +15,26 @@ void EvaluatorOptions::set_grid(int window_px, int step_px, cv::Rect roi) {
   xcorr.roi = flow.roi = roi;
 }
 
-EvaluationResult evaluate_displacement(const cv::Mat& reference, const cv::Mat& measurement,
-                                       const EvaluatorOptions& options, const cv::Mat& mask) {
-  if (options.method == Method::kCrossCorrelation) return evaluate_xcorr(reference, measurement, options.xcorr, mask);
-  return evaluate_flow(reference, measurement, options.flow, mask);
+DisplacementEvaluator::DisplacementEvaluator(const cv::Mat& reference, const EvaluatorOptions& options,
+                                             const cv::Mat& mask)
+    : reference_(reference), mask_(mask), options_(options) {
+  if (options.method == Method::kCrossCorrelation) {
+    xcorr_.emplace(reference, options.xcorr, mask);
+  } else if (const std::string problem = options.Validate(); !problem.empty()) {
+    throw std::invalid_argument(problem);
+  }
 }
 
-EvaluationResult probe_displacement(const cv::Mat& reference, const cv::Mat& measurement,
-                                    const std::vector<cv::Point2d>& points, const EvaluatorOptions& options,
-                                    const cv::Mat& mask) {
-  if (options.method == Method::kCrossCorrelation) {
-    return probe_xcorr(reference, measurement, points, options.xcorr, mask);
-  }
+EvaluationResult DisplacementEvaluator::evaluate(const cv::Mat& measurement) {
+  if (xcorr_) return xcorr_->evaluate(measurement);
+  return evaluate_flow(reference_, measurement, options_.flow, mask_);
+}
+
+EvaluationResult DisplacementEvaluator::probe(const cv::Mat& measurement, const std::vector<cv::Point2d>& points) {
+  if (xcorr_) return xcorr_->probe(measurement, points);
   // Flow is dense anyway: evaluate a grid with step 1 restricted to the
   // points' windows would cost the same; take the nearest grid vector.
-  EvaluationResult full = evaluate_flow(reference, measurement, options.flow, mask);
+  EvaluationResult full = evaluate_flow(reference_, measurement, options_.flow, mask_);
   EvaluationResult result;
   result.summary = full.summary;
   result.field.rows = 1;
@@ -45,11 +50,23 @@ EvaluationResult probe_displacement(const cv::Mat& reference, const cv::Mat& mea
       }
     }
     DisplacementVector vec{p.x, p.y, 0, 0, 0, VectorFlag::kOutOfRoi};
-    if (best && best_distance <= options.flow.step_px) vec = *best;
+    if (best && best_distance <= options_.flow.step_px) vec = *best;
     result.field.vectors.push_back(vec);
   }
   count_flags(result.field, result.summary);
   return result;
+}
+
+EvaluationResult evaluate_displacement(const cv::Mat& reference, const cv::Mat& measurement,
+                                       const EvaluatorOptions& options, const cv::Mat& mask) {
+  if (options.method == Method::kCrossCorrelation) return evaluate_xcorr(reference, measurement, options.xcorr, mask);
+  return evaluate_flow(reference, measurement, options.flow, mask);
+}
+
+EvaluationResult probe_displacement(const cv::Mat& reference, const cv::Mat& measurement,
+                                    const std::vector<cv::Point2d>& points, const EvaluatorOptions& options,
+                                    const cv::Mat& mask) {
+  return DisplacementEvaluator(reference, options, mask).probe(measurement, points);
 }
 
 }  // namespace bosfuse::fusion

@@ -6,6 +6,7 @@
 //   kOpticalFlow      — optical_flow.h: dense flow averaged per window.
 
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,29 @@ struct EvaluatorOptions {
   std::string Validate() const;  // empty when valid
   // Window, step and ROI set for both methods at once.
   void set_grid(int window_px, int step_px, cv::Rect roi = {});
+};
+
+// One reference against many measurements (the frames of a run) with
+// either method; the command that processes a run holds one. With
+// cross-correlation it is an XcorrEvaluator, whose preparation of the
+// reference and whose buffers carry over from frame to frame; optical flow
+// keeps nothing between frames (yet). Results equal evaluate_displacement /
+// probe_displacement, which are one-shot wrappers around it. Shares the
+// reference's and mask's pixels: do not write into them while it lives.
+// Bad options, reference or mask raise std::invalid_argument here; a bad
+// measurement, in evaluate / probe.
+class DisplacementEvaluator {
+ public:
+  DisplacementEvaluator(const cv::Mat& reference, const EvaluatorOptions& options, const cv::Mat& mask = {});
+
+  EvaluationResult evaluate(const cv::Mat& measurement);
+  // See probe_displacement below.
+  EvaluationResult probe(const cv::Mat& measurement, const std::vector<cv::Point2d>& points);
+
+ private:
+  cv::Mat reference_, mask_;
+  EvaluatorOptions options_;
+  std::optional<XcorrEvaluator> xcorr_;  // with Method::kCrossCorrelation
 };
 
 EvaluationResult evaluate_displacement(const cv::Mat& reference, const cv::Mat& measurement,

@@ -106,7 +106,10 @@ const WeightTable& table_of(Interpolator interpolator) {
 
 // Rows `rows` of the warped region; most of a deformation pass's cost: the
 // field at each pixel here, the resampling in sample_separable (or, with
-// `simd` false, its scalar reference).
+// `simd` false, its scalar reference). The field is interpolated between
+// the two node rows around a pixel row once per row (`u_row`, `v_row`, one
+// value per node column), then along the row per pixel: the same bilinear
+// value as `bilinear`, with the two interpolations taken in the other order.
 void warp_rows(const cv::Mat& image, const TabulatedKernel& kernel, bool simd, const GridField& field, cv::Rect region,
                cv::Range rows, cv::Mat& out) {
   const auto& g = field.grid;
@@ -114,28 +117,41 @@ void warp_rows(const cv::Mat& image, const TabulatedKernel& kernel, bool simd, c
   std::vector<AxisWeight> column_weights(width);
   for (int x = 0; x < region.width; ++x) column_weights[x] = axis_weight(region.x + x, g.x0_px, g.step_px, g.cols);
   std::vector<double> xs(width), ys(width);
+  std::vector<double> u_row(static_cast<std::size_t>(g.cols)), v_row(static_cast<std::size_t>(g.cols));
   const auto stride = static_cast<std::size_t>(image.step1());
+  const auto sample = simd ? sample_separable : scalar_sample_separable;
   for (int y = rows.start; y < rows.end; ++y) {
     const double image_y = region.y + y;
     const AxisWeight wy = axis_weight(image_y, g.y0_px, g.step_px, g.rows);
+    const auto lerp_rows = [&](const cv::Mat& values, std::vector<double>& row) {
+      const double* r0 = values.ptr<double>(wy.i0);
+      const double* r1 = values.ptr<double>(wy.i1);
+      for (int c = 0; c < g.cols; ++c) row[c] = r0[c] + wy.t * (r1[c] - r0[c]);
+    };
+    lerp_rows(field.u_px, u_row);
+    lerp_rows(field.v_px, v_row);
     for (int x = 0; x < region.width; ++x) {
-      xs[x] = region.x + x + bilinear(field.u_px, column_weights[x], wy);
-      ys[x] = image_y + bilinear(field.v_px, column_weights[x], wy);
+      const AxisWeight& wx = column_weights[x];
+      xs[x] = region.x + x + (u_row[wx.i0] + wx.t * (u_row[wx.i1] - u_row[wx.i0]));
+      ys[x] = image_y + (v_row[wx.i0] + wx.t * (v_row[wx.i1] - v_row[wx.i0]));
     }
-    const auto sample = simd ? sample_separable : scalar_sample_separable;
     sample(image.ptr<float>(), stride, image.cols, image.rows, kernel, xs.data(), ys.data(), region.width,
            out.ptr<float>(y));
   }
 }
 
-cv::Mat copy_with_replicated_border(const cv::Mat& image, cv::Rect region) {
-  cv::Mat out(region.size(), CV_32F);
+// Rows of the image inside the region copied whole, only the columns past
+// its edges one by one.
+void copy_with_replicated_border(const cv::Mat& image, cv::Rect region, cv::Mat& out) {
+  const int inside_begin = std::clamp(-region.x, 0, region.width);
+  const int inside_end = std::clamp(image.cols - region.x, inside_begin, region.width);
   for (int y = 0; y < region.height; ++y) {
     const float* src = image.ptr<float>(std::clamp(region.y + y, 0, image.rows - 1));
     float* dst = out.ptr<float>(y);
-    for (int x = 0; x < region.width; ++x) dst[x] = src[std::clamp(region.x + x, 0, image.cols - 1)];
+    for (int x = 0; x < inside_begin; ++x) dst[x] = src[std::clamp(region.x + x, 0, image.cols - 1)];
+    std::copy(src + region.x + inside_begin, src + region.x + inside_end, dst + inside_begin);
+    for (int x = inside_end; x < region.width; ++x) dst[x] = src[std::clamp(region.x + x, 0, image.cols - 1)];
   }
-  return out;
 }
 
 }  // namespace
@@ -149,10 +165,15 @@ cv::Point2d interpolate_field(const GridField& field, double x_px, double y_px) 
 
 namespace {
 
-cv::Mat warp(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator, bool simd) {
+void warp(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator, bool simd,
+          cv::Mat& out) {
   CV_Assert(image.type() == CV_32FC1);
-  if (field.grid.rows == 0 || field.grid.cols == 0) return copy_with_replicated_border(image, region);
-  cv::Mat out(region.size(), CV_32F);
+  out.create(region.size(), CV_32F);
+  CV_Assert(out.data != image.data);
+  if (field.grid.rows == 0 || field.grid.cols == 0) {
+    copy_with_replicated_border(image, region, out);
+    return;
+  }
   const TabulatedKernel kernel = table_of(interpolator).kernel();
   // Small regions (probes) cost less than waking the other thread.
   if (region.area() < 16384) {
@@ -161,19 +182,27 @@ cv::Mat warp(const cv::Mat& image, const GridField& field, cv::Rect region, Inte
     cv::parallel_for_(cv::Range(0, region.height),
                       [&](const cv::Range& rows) { warp_rows(image, kernel, simd, field, region, rows, out); });
   }
-  return out;
 }
 
 }  // namespace
 
 cv::Mat warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator) {
-  return warp(image, field, region, interpolator, true);
+  cv::Mat out;
+  warp(image, field, region, interpolator, true, out);
+  return out;
+}
+
+void warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator,
+                 cv::Mat& out) {
+  warp(image, field, region, interpolator, true, out);
 }
 
 TabulatedKernel interpolation_kernel(Interpolator interpolator) { return table_of(interpolator).kernel(); }
 
 cv::Mat scalar_warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator) {
-  return warp(image, field, region, interpolator, false);
+  cv::Mat out;
+  warp(image, field, region, interpolator, false, out);
+  return out;
 }
 
 }  // namespace bosfuse::fusion

@@ -49,6 +49,13 @@ cv::Point2d interpolate_field(const GridField& field, double x_px, double y_px);
 // kernel sample_separable (fusion/simd_kernels.h).
 cv::Mat warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator);
 
+// The same into `out`, whose buffer is reused when it has the region's size
+// already (passes and frames of one evaluation warp into one buffer). `out`
+// may be a view into a larger buffer of that size; it must not share pixels
+// with `image`.
+void warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator,
+                 cv::Mat& out);
+
 // The reference for warp_region: the same positions and weights, the taps
 // summed by scalar_sample_separable. The two differ only by float rounding.
 cv::Mat scalar_warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator);

@@ -42,6 +42,23 @@ TEST(FieldWarp, IntegerShiftsAndAnEmptyFieldCopyPixels) {
   EXPECT_EQ(copy.at<float>(5, 5), image.at<float>(3, 3));
 }
 
+// Into a buffer that held something else, a view into a larger one, and
+// past every edge of the image (the plain copy's replicated border): the
+// same pixels as a fresh warp.
+TEST(FieldWarp, WarpingIntoAReusedBufferEqualsAFreshWarp) {
+  const cv::Mat image = smooth_image(48);
+  cv::Mat storage(60, 70, CV_32F, cv::Scalar(-7.0f));
+  for (const GridField& field : {uniform_field(0.37, -1.21), GridField{}}) {
+    for (const cv::Rect region : {cv::Rect(-3, -2, 54, 52), cv::Rect(5, 6, 20, 10)}) {
+      cv::Mat out = storage(cv::Rect({0, 0}, region.size()));
+      warp_region(image, field, region, Interpolator::kLanczos3, out);
+      ASSERT_EQ(out.data, storage.data) << "the buffer is reused, not replaced";
+      const cv::Mat fresh = warp_region(image, field, region, Interpolator::kLanczos3);
+      ASSERT_EQ(cv::norm(out, fresh, cv::NORM_INF), 0.0) << region;
+    }
+  }
+}
+
 TEST(FieldWarp, InterpolatesTheFieldBilinearlyBetweenNodes) {
   GridField field{{3.5, 3.5, 8, 2, 2}, (cv::Mat_<double>(2, 2) << 0, 1, 2, 3), cv::Mat::zeros(2, 2, CV_64F)};
   EXPECT_NEAR(interpolate_field(field, 7.5, 3.5).x, 0.5, 1e-12);

@@ -29,6 +29,12 @@ double full_scale(int depth) {
 }
 
 cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn_colour) {
+  cv::Mat unit;
+  to_grey_unit_float(image, name, warn_colour, unit);
+  return unit;
+}
+
+void to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn_colour, cv::Mat& out) {
   if (image.empty()) throw std::invalid_argument(name + ": the image is empty (unreadable file or no pixels)");
   cv::Mat grey = image;
   if (image.channels() == 3 || image.channels() == 4) {
@@ -37,11 +43,13 @@ cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name, bool w
   } else if (image.channels() != 1) {
     throw std::invalid_argument(fmt::format("{}: {} channels, expected grey or colour", name, image.channels()));
   }
-  cv::Mat unit;
-  grey.convertTo(unit, CV_32F, 1.0 / full_scale(grey.depth()));
-  // Non-finite pixels in a float input would poison every sum they enter.
-  cv::patchNaNs(unit, 0.0);
-  return unit;
+  CV_Assert(out.empty() || out.data != grey.data);
+  grey.convertTo(out, CV_32F, 1.0 / full_scale(grey.depth()));
+  // Non-finite pixels in a float input would poison every sum they enter;
+  // integer input cannot hold them, and the test is a whole pass over the
+  // image.
+  const int depth = grey.depth();
+  if (depth == CV_32F || depth == CV_64F || depth == CV_16F) cv::patchNaNs(out, 0.0);
 }
 
 void check_image_pair(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask) {

@@ -16,7 +16,16 @@ namespace bosfuse::fusion {
 // Returns CV_32FC1 in [0, 1]; 8-bit divides by 255, 16-bit by 65535, float
 // input is taken as already scaled.
 // `warn_colour` false: convert colour silently (the caller warned once).
+// The conversion is OpenCV's (cv::Mat::convertTo, cv::cvtColor), which is
+// vectorised already (OpenCV's universal intrinsics); non-finite pixels,
+// which only float input can hold, become 0.
 cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn_colour = true);
+
+// The same into `out`, whose buffer is reused when it has the image's size
+// already (a frame after frame evaluator converts every frame into one
+// buffer rather than page-faulting a fresh 64 MB one). `out` must not share
+// pixels with `image`.
+void to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn_colour, cv::Mat& out);
 
 // The value of full scale of an image depth: 255 for 8-bit, 65535 for
 // 16-bit, 1 for float (taken as scaled already).

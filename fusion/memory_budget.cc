@@ -29,7 +29,10 @@ constexpr Bytes kFixedBytes = Bytes{8} << 20;
 // test's snapshot, the predictor's u and v, the outlier flags and, at worst
 // for every node, an outlier's index. predictor_from's peak (the field, two
 // predictors, a work copy, fill flags and updates: 153 B) is below it.
-constexpr Bytes kXcorrBytesPerNode = 3 * sizeof(DisplacementVector) + 2 * sizeof(double) + 1 + sizeof(std::size_t);
+// Three field copies, the predictor, outlier flags and indices, and the
+// reference window's mean and energy kept per node for each window size.
+constexpr Bytes kXcorrBytesPerNode =
+    3 * sizeof(DisplacementVector) + 2 * sizeof(double) + 1 + sizeof(std::size_t) + 2 * 2 * sizeof(double);
 
 // OpenCV's own buffers per pixel, full resolution (finest scale 0 for DIS):
 // pyramids, gradients, flow components at every scale and, for DIS fast and
@@ -67,14 +70,10 @@ Bytes warped_region_pixels(cv::Rect roi, const XcorrOptions& options) {
   return Bytes(roi.width + 2 * reach_px) * Bytes(roi.height + 2 * reach_px);
 }
 
-// Warped regions alive at once: the coarse first pass warps its own region
-// while the pass's full one is still held; symmetric deformation warps the
-// reference too.
+// Warped regions alive at once: the passes share one buffer (the coarse
+// first pass too); symmetric deformation warps the reference into a second.
 int warped_images_at_once(const XcorrOptions& options) {
-  const int first = options.window_px_per_pass().front();
-  const bool coarse = options.passes > 1 && options.coarse_first_pass && 2 * options.step_px <= first;
-  const bool symmetric = options.passes > 1 && options.deform && options.symmetric_deformation;
-  return coarse || symmetric ? 2 : 1;
+  return options.passes > 1 && options.deform && options.symmetric_deformation ? 2 : 1;
 }
 
 std::string xcorr_settings(const XcorrOptions& options) {
@@ -252,9 +251,9 @@ PairShape PairShape::of(const cv::Mat& reference, const cv::Mat& mask) {
 //     either a colour image's grey copy or, with a mask, the exclusion mask,
 //     its 0/1 copy and CV_32S integral (6 B/px);
 //   a pass: the float copies, the mask and its integral (5 B/px), the warped
-//     regions (4 B/px of the ROI grown by the search reach; two at once in
-//     the coarse first pass or with symmetric deformation) and 169 B per
-//     grid node (kXcorrBytesPerNode).
+//     regions (4 B/px of the ROI grown by the search reach, in one buffer
+//     all passes reuse; two with symmetric deformation) and 201 B per grid
+//     node (kXcorrBytesPerNode).
 std::uint64_t xcorr_bytes_needed(const PairShape& pair, const XcorrOptions& options) {
   const cv::Rect roi = effective_roi(options.roi, pair.size);
   const Bytes n = pixels(pair.size);

