@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "fusion/adaptive_refinement.h"
 #include "fusion/image_input.h"
 
 namespace bosfuse::fusion {
@@ -113,6 +114,7 @@ struct PassInput {
   cv::Mat warped;                        // measurement resampled over `region`
   cv::Mat warped_reference;              // symmetric deformation: the reference, resampled the other way
   cv::Rect region;
+  const cv::Mat* refine = nullptr;  // adaptive refinement: only nodes marked 1 here are evaluated
 };
 
 void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, int row, int col,
@@ -162,11 +164,14 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
   vec.flag = VectorFlag::kOk;
 }
 
-// Bounding box of every window of the pass, grown by the search radius.
-cv::Rect pass_region(const PreparedPair& pair, const DisplacementField& field, int n, int r) {
+// Bounding box of every window of the pass (only those `refine` marks, when
+// given), grown by the search radius.
+cv::Rect pass_region(const PreparedPair& pair, const DisplacementField& field, int n, int r,
+                     const cv::Mat* refine = nullptr) {
   int x_min = pair.roi.x + pair.roi.width, y_min = pair.roi.y + pair.roi.height, x_max = pair.roi.x, y_max = pair.roi.y;
-  for (const auto& vec : field.vectors) {
-    if (vec.flag == VectorFlag::kOutOfRoi) continue;
+  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
+    const auto& vec = field.vectors[i];
+    if (vec.flag == VectorFlag::kOutOfRoi || (refine && !refine->data[i])) continue;
     const cv::Point o = window_origin(vec.x_px, vec.y_px, n, pair.roi);
     x_min = std::min(x_min, o.x);
     y_min = std::min(y_min, o.y);
@@ -212,7 +217,7 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
     CorrelationPlane plane;
     for (int i = range.start; i < range.end; ++i) {
       auto& vec = field.vectors[static_cast<std::size_t>(i)];
-      if (vec.flag == VectorFlag::kOutOfRoi) continue;
+      if (vec.flag == VectorFlag::kOutOfRoi || (in.refine && !in.refine->data[i])) continue;
       evaluate_node(pair, in, options, i / field.cols, i % field.cols, correlator, plane, vec);
     }
   };
@@ -230,8 +235,13 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
 // predictor. Nodes are chosen by their lattice index counted from the ROI,
 // so a probe's local grid picks the same nodes as the full field. False
 // when the grid is too small for it (then the pass runs on every node).
+struct MeasuredPass {
+  DisplacementField field;
+  GridGeometry grid;
+};
+
 bool run_coarse_first_pass(const PreparedPair& pair, const GridGeometry& fine, PassInput in,
-                           const XcorrOptions& options, DisplacementField& field) {
+                           const XcorrOptions& options, DisplacementField& field, MeasuredPass& measured) {
   if (!options.coarse_first_pass || 2 * fine.step_px > in.window_px) return false;
   const double half = (options.window_px - 1) / 2.0;
   auto first_even = [&](double origin_px, int roi_origin_px) {
@@ -256,6 +266,7 @@ bool run_coarse_first_pass(const PreparedPair& pair, const GridGeometry& fine, P
   run_pass(pair, in, options, sparse);
   if (options.replace_outliers) replace_outliers(sparse, options.outliers);
   const GridField predictor = predictor_from(sparse, coarse);
+  measured = {sparse, coarse};
   for (auto& vec : field.vectors) {
     if (vec.flag == VectorFlag::kOutOfRoi) continue;
     const cv::Point2d p = interpolate_field(predictor, vec.x_px, vec.y_px);
@@ -267,6 +278,90 @@ bool run_coarse_first_pass(const PreparedPair& pair, const GridGeometry& fine, P
   return true;
 }
 
+// ---- Adaptive refinement (fusion/adaptive_refinement.h) ----
+
+// The selection of the refinement passes and what the others keep.
+struct AdaptivePasses {
+  RefinementSelection selection;
+  DisplacementField first_pass;  // the field after the first pass, unselected nodes marked first_pass_only
+  bool active() const { return !selection.refine.empty(); }
+};
+
+AdaptivePasses select_for_refinement(const MeasuredPass& measured, const DisplacementField& field,
+                                     const GridGeometry& grid, const XcorrOptions& options) {
+  AdaptivePasses adaptive;
+  const int context = refinement_context_nodes(options.window_px_per_pass()[1], options.search_radius_px(1),
+                                               static_cast<int>(std::ceil(grid.step_px)));
+  adaptive.selection =
+      select_refinement(measured.field, measured.grid, field, grid, options.adaptive_threshold, context);
+  adaptive.first_pass = field;
+  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
+    auto& vec = adaptive.first_pass.vectors[i];
+    vec.first_pass_only = !adaptive.selection.refine.data[i] && vec.flag != VectorFlag::kOutOfRoi;
+  }
+  return adaptive;
+}
+
+// Unselected nodes as the first pass left them (the outlier test of a
+// refinement pass sees them as neighbours, but does not change them).
+void keep_first_pass(const AdaptivePasses& adaptive, DisplacementField& field) {
+  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
+    if (!adaptive.selection.refine.data[i]) field.vectors[i] = adaptive.first_pass.vectors[i];
+  }
+}
+
+// The parts of in.region the selected windows read (window and search,
+// `reach_px` around it; masked windows read nothing), as runs of 64 px tiles
+// along each row of tiles: a warp over the whole bounding box would cost as
+// much as the windows saved.
+std::vector<cv::Rect> tiles_read(const PreparedPair& pair, const DisplacementField& field, const PassInput& in,
+                                 int reach_px, const XcorrOptions& options) {
+  constexpr int kTilePx = 64;
+  const cv::Rect& region = in.region;
+  cv::Mat used = cv::Mat::zeros((region.height + kTilePx - 1) / kTilePx, (region.width + kTilePx - 1) / kTilePx, CV_8U);
+  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
+    const auto& vec = field.vectors[i];
+    if (vec.flag == VectorFlag::kOutOfRoi || !in.refine->data[i]) continue;
+    const cv::Rect window(window_origin(vec.x_px, vec.y_px, in.window_px, pair.roi), cv::Size(in.window_px, in.window_px));
+    if (window_masked(pair, window, options.max_masked_fraction, vec.x_px, vec.y_px)) continue;
+    const cv::Rect read = (window + cv::Point(-reach_px, -reach_px) + cv::Size(2 * reach_px, 2 * reach_px)) & region;
+    if (read.empty()) continue;
+    const int tx0 = (read.x - region.x) / kTilePx, tx1 = (read.x + read.width - 1 - region.x) / kTilePx;
+    const int ty0 = (read.y - region.y) / kTilePx, ty1 = (read.y + read.height - 1 - region.y) / kTilePx;
+    used(cv::Range(ty0, ty1 + 1), cv::Range(tx0, tx1 + 1)).setTo(1);
+  }
+  std::vector<cv::Rect> tiles;
+  for (int ty = 0; ty < used.rows; ++ty) {
+    for (int tx = 0; tx < used.cols;) {
+      if (!used.at<std::uint8_t>(ty, tx)) {
+        ++tx;
+        continue;
+      }
+      const int start = tx;
+      while (tx < used.cols && used.at<std::uint8_t>(ty, tx)) ++tx;
+      tiles.push_back(cv::Rect(region.x + start * kTilePx, region.y + ty * kTilePx, (tx - start) * kTilePx, kTilePx) &
+                      region);
+    }
+  }
+  return tiles;
+}
+
+// warp_region over `region`, computed only on `tiles` (zero elsewhere): each
+// pixel's value depends only on its position, so a tile equals that part of
+// the whole warp.
+cv::Mat warp_tiles(const cv::Mat& image, const GridField& field, cv::Rect region, const std::vector<cv::Rect>& tiles,
+                   Interpolator interpolator) {
+  cv::Mat out = cv::Mat::zeros(region.size(), CV_32F);
+  cv::parallel_for_(cv::Range(0, static_cast<int>(tiles.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      warp_region(image, field, tiles[i], interpolator).copyTo(out(tiles[i] - region.tl()));
+    }
+  });
+  return out;
+}
+
+// ---- end of adaptive refinement ----
+
 // Runs every pass over `field` (centres set; kOutOfRoi nodes are left alone).
 EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid, const XcorrOptions& options,
                              DisplacementField& field) {
@@ -274,6 +369,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
   summary.method = "xcorr";
   const std::vector<int> windows = options.window_px_per_pass();
   GridField predictor;
+  AdaptivePasses adaptive;
   bool finish_now = false;
   for (int pass = 0; pass < static_cast<int>(windows.size()); ++pass) {
     PassInput in;
@@ -284,29 +380,40 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     in.predictor = pass > 0 ? &predictor : nullptr;
     in.shift_whole_pixels = pass > 0 && !options.deform;
     const int reach_px = in.radius_px + (in.shift_whole_pixels ? max_abs_shift_px(predictor) : 0);
-    in.region = pass_region(pair, field, in.window_px, reach_px);
+    in.refine = adaptive.active() ? &adaptive.selection.refine : nullptr;
+    in.region = pass_region(pair, field, in.window_px, reach_px, in.refine);
+    const std::vector<cv::Rect> tiles = in.refine ? tiles_read(pair, field, in, reach_px, options) : std::vector<cv::Rect>{};
     const bool warp = pass > 0 && options.deform;
     // Passes before the last only feed the next pass's predictor: the
     // cheaper cubic kernel serves them as well; when they have converged, one
     // pass with the accurate kernel finishes.
     const bool last = pass + 1 == static_cast<int>(windows.size()) || finish_now;
     const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
+    auto warp_pass = [&](const cv::Mat& image, const GridField& by, cv::Rect region, Interpolator kernel) {
+      return in.refine ? warp_tiles(image, by, region, tiles, kernel) : warp_region(image, by, region, kernel);
+    };
     if (warp && options.symmetric_deformation) {
       // Each image moves half-way: both are interpolated at half the offset,
       // and the interpolation errors of the two largely cancel.
-      in.warped = warp_region(pair.measurement, scaled(predictor, 0.5), in.region, interpolator);
-      in.warped_reference = warp_region(pair.reference, scaled(predictor, -0.5), in.region, interpolator);
+      in.warped = warp_pass(pair.measurement, scaled(predictor, 0.5), in.region, interpolator);
+      in.warped_reference = warp_pass(pair.reference, scaled(predictor, -0.5), in.region, interpolator);
     } else {
-      in.warped = warp_region(pair.measurement, warp ? predictor : GridField{}, in.region, interpolator);
+      in.warped = warp_pass(pair.measurement, warp ? predictor : GridField{}, in.region, interpolator);
     }
     const DisplacementField before = field;
-    if (pass == 0 && windows.size() > 1 && run_coarse_first_pass(pair, grid, in, options, field)) {
+    MeasuredPass measured;
+    if (pass == 0 && windows.size() > 1 && run_coarse_first_pass(pair, grid, in, options, field, measured)) {
       summary.passes_run = 1;
       summary.window_px_per_pass.push_back(in.window_px);
+      if (options.adaptive_refinement) adaptive = select_for_refinement(measured, field, grid, options);
       continue;
     }
     run_pass(pair, in, options, field);
     if (options.replace_outliers) replace_outliers(field, options.outliers);
+    if (adaptive.active()) keep_first_pass(adaptive, field);
+    if (pass == 0 && windows.size() > 1 && options.adaptive_refinement) {
+      adaptive = select_for_refinement({field, grid}, field, grid, options);
+    }
     summary.passes_run = pass + 1;
     summary.window_px_per_pass.push_back(in.window_px);
     if (pass > 0) summary.last_change_px = max_change_px(before, field);
@@ -319,6 +426,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     }
   }
   count_flags(field, summary);
+  summary.refined_fraction = adaptive.active() ? adaptive.selection.fraction() : summary.passes_run > 1 ? 1.0 : 0.0;
   return summary;
 }
 
@@ -407,6 +515,9 @@ std::string XcorrOptions::Validate() const {
   if (!(max_masked_fraction >= 0 && max_masked_fraction <= 1)) return "max masked fraction must be 0 to 1";
   if (!(convergence_px >= 0)) return "convergence tolerance must not be negative";
   if (probe_context_nodes < -1) return "probe context must be -1 (exact) or at least 0 nodes";
+  if (!(adaptive_threshold > 0) || !std::isfinite(adaptive_threshold)) {
+    return "adaptive refinement threshold must be a positive number (times the noise floor)";
+  }
   return outliers.Validate();
 }
 
@@ -458,6 +569,8 @@ EvaluationResult probe_xcorr(const cv::Mat& reference, const cv::Mat& measuremen
   check_inputs(reference, measurement, mask, options);
   const int context =
       options.probe_context_nodes < 0 ? options.exact_probe_context_nodes() : options.probe_context_nodes;
+  XcorrOptions probe_options = options;
+  probe_options.adaptive_refinement = false;  // a probe's grid is local already, too small for a noise floor
   if (reference.channels() > 1 || measurement.channels() > 1) {
     spdlog::warn("colour image converted to grey ({} and {} channels)", reference.channels(), measurement.channels());
   }
@@ -470,7 +583,7 @@ EvaluationResult probe_xcorr(const cv::Mat& reference, const cv::Mat& measuremen
   // Probes are independent: one per task, on both cores.
   cv::parallel_for_(cv::Range(0, static_cast<int>(points.size())), [&](const cv::Range& range) {
     for (int i = range.start; i < range.end; ++i) {
-      result.field.vectors[i] = evaluate_probe(reference, measurement, mask, points[i], options, context, summaries[i]);
+      result.field.vectors[i] = evaluate_probe(reference, measurement, mask, points[i], probe_options, context, summaries[i]);
     }
   });
   for (const auto& s : summaries) {
