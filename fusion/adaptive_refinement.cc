@@ -140,6 +140,41 @@ RefinementSelection select_refinement(const DisplacementField& first_pass, const
   return selection;
 }
 
+void smooth_unrefined(DisplacementField& field, const cv::Mat& refine, double sigma_nodes) {
+  if (!(sigma_nodes >= 0) || !std::isfinite(sigma_nodes)) {
+    throw std::invalid_argument("adaptive refinement smoothing must be 0 or more nodes");
+  }
+  if (refine.rows != field.rows || refine.cols != field.cols || refine.type() != CV_8U) {
+    throw std::invalid_argument("adaptive refinement: the selection does not match the field");
+  }
+  if (sigma_nodes == 0 || field.vectors.empty()) return;
+  cv::Mat weight(field.rows, field.cols, CV_64F), u(field.rows, field.cols, CV_64F), v(field.rows, field.cols, CV_64F);
+  for (int row = 0; row < field.rows; ++row) {
+    for (int col = 0; col < field.cols; ++col) {
+      const auto& vec = field.at(row, col);
+      const double w = !refine.at<std::uint8_t>(row, col) && measured(vec) ? 1.0 : 0.0;
+      weight.at<double>(row, col) = w;
+      u.at<double>(row, col) = w * vec.u_px;
+      v.at<double>(row, col) = w * vec.v_px;
+    }
+  }
+  const int half = static_cast<int>(std::ceil(3 * sigma_nodes));
+  const cv::Mat kernel = cv::getGaussianKernel(2 * half + 1, sigma_nodes, CV_64F);
+  // Zero outside the grid: with the weights filtered alike, edges are normalised like the rest.
+  for (cv::Mat* m : {&weight, &u, &v}) {
+    cv::sepFilter2D(*m, *m, CV_64F, kernel, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
+  }
+  for (int row = 0; row < field.rows; ++row) {
+    for (int col = 0; col < field.cols; ++col) {
+      auto& vec = field.at(row, col);
+      if (refine.at<std::uint8_t>(row, col) || !measured(vec)) continue;
+      const double w = weight.at<double>(row, col);  // ≥ the node's own weight, > 0
+      vec.u_px = u.at<double>(row, col) / w;
+      vec.v_px = v.at<double>(row, col) / w;
+    }
+  }
+}
+
 int refinement_context_nodes(int window_px, int search_radius_px, int step_px) {
   if (step_px < 1) throw std::invalid_argument("adaptive refinement: the grid step must be at least 1 px");
   const int reach_px = window_px / 2 + search_radius_px + 4;

@@ -184,6 +184,39 @@ TEST(AdaptiveRefinement, ACoarseFirstPassSelectsTheFineNodesItInterpolates) {
   EXPECT_FALSE(selection.refine.at<std::uint8_t>(18, 20));
 }
 
+TEST(AdaptiveRefinement, SmoothingAveragesTheUnrefinedNoiseAway) {
+  const auto grid = grid_of(60, 60);
+  auto field = field_on(grid, zero, 0.03);
+  const cv::Mat refine = cv::Mat::zeros(grid.rows, grid.cols, CV_8U);
+  smooth_unrefined(field, refine, 2);
+  double sum_sq = 0;
+  for (const auto& v : field.vectors) sum_sq += v.u_px * v.u_px + v.v_px * v.v_px;
+  // A Gaussian of σ = 2 nodes averages about 4πσ² = 50 nodes: the noise drops ~7×.
+  EXPECT_LT(std::sqrt(sum_sq / (2.0 * field.size())), 0.03 / 4);
+}
+
+TEST(AdaptiveRefinement, SmoothingLeavesRefinedNodesAndTakesNothingFromThem) {
+  const auto grid = grid_of(40, 40);
+  // Left half displaced by 1 px and refined; right half at 0, unrefined.
+  auto field = field_on(grid, [](double x, double) { return cv::Point2d(x < 160 ? 1.0 : 0.0, 0); }, 0.0);
+  cv::Mat refine = cv::Mat::zeros(grid.rows, grid.cols, CV_8U);
+  refine.colRange(0, 20).setTo(1);
+  field.at(5, 30).flag = VectorFlag::kNoTexture;  // unmeasured: neither changed nor averaged in
+  field.at(5, 30).u_px = 7;
+  const auto before = field;
+  smooth_unrefined(field, refine, 2);
+  for (int r = 0; r < grid.rows; ++r) {
+    for (int c = 0; c < grid.cols; ++c) {
+      EXPECT_EQ(field.at(r, c).u_px, before.at(r, c).u_px) << r << "," << c;  // 1 left, 0 right, 7 at (5, 30)
+    }
+  }
+  auto unchanged = before;
+  smooth_unrefined(unchanged, cv::Mat::zeros(grid.rows, grid.cols, CV_8U), 0);
+  EXPECT_EQ(unchanged.at(3, 3).u_px, before.at(3, 3).u_px);
+  EXPECT_THROW(smooth_unrefined(unchanged, refine, -1), std::invalid_argument);
+  EXPECT_THROW(smooth_unrefined(unchanged, cv::Mat::zeros(3, 3, CV_8U), 2), std::invalid_argument);
+}
+
 TEST(AdaptiveRefinement, BadArgumentsAreNamed) {
   const auto grid = grid_of(4, 4);
   const auto field = field_on(grid, zero, 0.01);

@@ -299,6 +299,7 @@ AdaptivePasses select_for_refinement(const MeasuredPass& measured, const Displac
     auto& vec = adaptive.first_pass.vectors[i];
     vec.first_pass_only = !adaptive.selection.refine.data[i] && vec.flag != VectorFlag::kOutOfRoi;
   }
+  smooth_unrefined(adaptive.first_pass, adaptive.selection.refine, options.adaptive_smoothing_nodes);
   return adaptive;
 }
 
@@ -405,7 +406,10 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     if (pass == 0 && windows.size() > 1 && run_coarse_first_pass(pair, grid, in, options, field, measured)) {
       summary.passes_run = 1;
       summary.window_px_per_pass.push_back(in.window_px);
-      if (options.adaptive_refinement) adaptive = select_for_refinement(measured, field, grid, options);
+      if (options.adaptive_refinement) {
+        adaptive = select_for_refinement(measured, field, grid, options);
+        keep_first_pass(adaptive, field);  // the refined nodes' predictor sees the smoothed values
+      }
       continue;
     }
     run_pass(pair, in, options, field);
@@ -413,6 +417,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     if (adaptive.active()) keep_first_pass(adaptive, field);
     if (pass == 0 && windows.size() > 1 && options.adaptive_refinement) {
       adaptive = select_for_refinement({field, grid}, field, grid, options);
+      keep_first_pass(adaptive, field);
     }
     summary.passes_run = pass + 1;
     summary.window_px_per_pass.push_back(in.window_px);
@@ -517,6 +522,9 @@ std::string XcorrOptions::Validate() const {
   if (probe_context_nodes < -1) return "probe context must be -1 (exact) or at least 0 nodes";
   if (!(adaptive_threshold > 0) || !std::isfinite(adaptive_threshold)) {
     return "adaptive refinement threshold must be a positive number (times the noise floor)";
+  }
+  if (!(adaptive_smoothing_nodes >= 0 && adaptive_smoothing_nodes <= 16)) {
+    return "adaptive refinement smoothing must be 0 to 16 nodes";
   }
   return outliers.Validate();
 }

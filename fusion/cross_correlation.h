@@ -70,9 +70,12 @@ struct XcorrOptions {
   // only the nodes where the first pass found a displacement or gradient
   // above adaptive_threshold × its own noise floor, with the nodes around
   // them those depend on; the rest keep the first pass's (interpolated)
-  // value, marked first_pass_only. Probes ignore it (they are local already).
+  // value, averaged over the unrefined nodes within about
+  // adaptive_smoothing_nodes (σ; 0: as it is), and marked first_pass_only.
+  // Probes ignore it (they are local already).
   bool adaptive_refinement = false;
   double adaptive_threshold = 4;
+  double adaptive_smoothing_nodes = 2;
 
   std::string Validate() const;  // empty when valid
   std::vector<int> window_px_per_pass() const;
