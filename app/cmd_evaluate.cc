@@ -23,10 +23,10 @@ using pipeline::read_image;
 
 struct EvaluateArgs {
   std::string reference, measurement, out = "-", map, mask, roi, method = "xcorr", flow = "dis", subpixel = "auto",
-                                      interpolator = "lanczos3";
+                                      interpolator = "lanczos3", adaptive_refinement = "off";
   std::vector<std::string> probes;
   int window_px = 16, first_window_px = 0, step_px = 8, passes = 3;
-  double max_shift_px = 4, contour_px = 0.1;
+  double max_shift_px = 4, contour_px = 0.1, adaptive_threshold = 4;
 };
 
 std::vector<int> parse_ints(const std::string& text, std::size_t count, const std::string& what) {
@@ -73,6 +73,8 @@ fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
   options.xcorr.first_window_px = args.first_window_px;
   options.xcorr.passes = args.passes;
   options.xcorr.max_shift_px = args.max_shift_px;
+  options.xcorr.adaptive_refinement = args.adaptive_refinement == "on";
+  options.xcorr.adaptive_threshold = args.adaptive_threshold;
   // "auto": the 2-D fit where peaks lock (first pass), 3-point after deformation.
   if (args.subpixel == "gauss3") {
     options.xcorr.subpixel = options.xcorr.refinement_subpixel = fusion::SubpixelEstimator::kGaussian3Point;
@@ -145,6 +147,14 @@ void add_evaluate(CLI::App& root) {
       ->capture_default_str();
   cmd->add_option("--interpolator", args->interpolator, "Deformation interpolator: lanczos3, lanczos4 or cubic")
       ->check(CLI::IsMember({"lanczos3", "lanczos4", "cubic"}))
+      ->capture_default_str();
+  cmd->add_option("--adaptive-refinement", args->adaptive_refinement,
+                  "on: refinement passes only where the first pass found a displacement above the noise floor")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
+  cmd->add_option("--adaptive-threshold", args->adaptive_threshold,
+                  "Adaptive refinement: refine where the shift or its gradient exceeds this many times the first "
+                  "pass's noise floor")
       ->capture_default_str();
   cmd->add_option("--mask", args->mask, "Mask image: non-zero pixels are not evaluated");
   cmd->add_option("--roi", args->roi, "Region of interest x,y,w,h in pixels");

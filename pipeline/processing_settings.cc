@@ -105,6 +105,8 @@ void apply(const SettingsOverrides& o, const fs::path& run_dir, const std::strin
   if (o.passes) s.evaluator.xcorr.passes = *o.passes;
   if (o.probe_context_nodes) s.evaluator.xcorr.probe_context_nodes = *o.probe_context_nodes;
   if (o.max_shift_px) s.evaluator.xcorr.max_shift_px = *o.max_shift_px;
+  if (o.adaptive_refinement) s.evaluator.xcorr.adaptive_refinement = *o.adaptive_refinement;
+  if (o.adaptive_threshold) s.evaluator.xcorr.adaptive_threshold = *o.adaptive_threshold;
   if (o.mask) s.mask = o.mask->empty() ? std::string() : mask_in_run(run_dir, *o.mask);
   if (o.geometry_file) s.geometry = resolve_geometry_config(*o.geometry_file, run_config);
 }
@@ -113,7 +115,7 @@ void apply(const SettingsOverrides& o, const fs::path& run_dir, const std::strin
 
 bool SettingsOverrides::empty() const {
   return !probes_only && !method && !window_px && !step_px && !passes && !probe_context_nodes && !max_shift_px &&
-         !roi_px && !mask && !geometry_file;
+         !adaptive_refinement && !adaptive_threshold && !roi_px && !mask && !geometry_file;
 }
 
 std::string ProcessingSettings::Validate() const {
@@ -130,7 +132,9 @@ json to_json(const ProcessingSettings& s) {
             {"step_px", x.step_px},
             {"passes", x.passes},
             {"max_shift_px", x.max_shift_px},
-            {"probe_context_nodes", x.probe_context_nodes}};
+            {"probe_context_nodes", x.probe_context_nodes},
+            {"adaptive_refinement", x.adaptive_refinement},
+            {"adaptive_threshold", x.adaptive_threshold}};
   if (!x.roi.empty()) j["roi_px"] = {x.roi.x, x.roi.y, x.roi.width, x.roi.height};
   if (!s.mask.empty()) j["mask"] = s.mask;
   j["geometry"] = geometry_json(s.geometry);
@@ -153,6 +157,9 @@ ProcessingSettings settings_from_json(const nlohmann::json& j) {
     s.evaluator.xcorr.passes = j.at("passes").get<int>();
     s.evaluator.xcorr.max_shift_px = j.at("max_shift_px").get<double>();
     s.evaluator.xcorr.probe_context_nodes = j.at("probe_context_nodes").get<int>();
+    // Settings stored before adaptive refinement existed: it was off.
+    s.evaluator.xcorr.adaptive_refinement = j.value("adaptive_refinement", false);
+    s.evaluator.xcorr.adaptive_threshold = j.value("adaptive_threshold", s.evaluator.xcorr.adaptive_threshold);
     s.mask = j.value("mask", std::string());
     s.geometry = geometry_from_json(j.at("geometry"));
     return s;
@@ -188,6 +195,9 @@ std::string describe(const ProcessingSettings& s) {
                                  s.evaluator.method == fusion::Method::kOpticalFlow ? "optical flow" : "cross-correlation",
                                  x.window_px, x.step_px, x.passes, x.max_shift_px);
   if (s.probes_only) text += fmt::format(", probe context {}", x.probe_context_nodes);
+  if (x.adaptive_refinement && !s.probes_only) {
+    text += fmt::format(", adaptive refinement ({:g} × noise floor)", x.adaptive_threshold);
+  }
   if (!x.roi.empty()) text += fmt::format(", ROI {},{} {}×{} px", x.roi.x, x.roi.y, x.roi.width, x.roi.height);
   text += s.mask.empty() ? ", no mask" : ", mask " + s.mask;
   return text + ", geometry from " + s.geometry.source;
