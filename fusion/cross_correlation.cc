@@ -300,6 +300,9 @@ AdaptivePasses select_for_refinement(const MeasuredPass& measured, const Displac
     vec.first_pass_only = !adaptive.selection.refine.data[i] && vec.flag != VectorFlag::kOutOfRoi;
   }
   smooth_unrefined(adaptive.first_pass, adaptive.selection.refine, options.adaptive_smoothing_nodes);
+  spdlog::debug("adaptive refinement: noise floor {:.4f} px, threshold {:.4f} px, {:.1f} % of the windows refined",
+                adaptive.selection.noise_floor_px, adaptive.selection.threshold_px,
+                100 * adaptive.selection.fraction());
   return adaptive;
 }
 
