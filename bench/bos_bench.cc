@@ -7,6 +7,7 @@
 // Figures and what they mean: docs/BENCHMARKS.md, "BOS evaluation".
 
 #include <benchmark/benchmark.h>
+#include <sys/resource.h>
 
 #include <chrono>
 #include <cmath>
@@ -174,7 +175,8 @@ const sim::SyntheticPair& adaptive_scene(int scene) {
     static const sim::SyntheticPair uniform = render(2464, 1632, sim::DisplacementModel::uniform(0.3, -0.2));
     return uniform;
   }
-  static const sim::SyntheticPair plume = render(4928, 3264, sim::DisplacementModel::bump_gradient(2464, 1632, 320, 1.5));
+  static const sim::SyntheticPair plume =
+      render(4928, 3264, sim::DisplacementModel::bump_gradient(2464, 1632, 320, 1.5));
   return plume;
 }
 
@@ -186,7 +188,8 @@ const std::vector<cv::Point2d>& window_means(int scene, const fusion::Displaceme
     const auto& truth = adaptive_scene(scene).truth;
     means.resize(field.size());
     cv::parallel_for_(cv::Range(0, int(field.size())), [&](const cv::Range& range) {
-      for (int i = range.start; i < range.end; ++i) means[i] = truth.window_mean(field.vectors[i].x_px, field.vectors[i].y_px, 16);
+      for (int i = range.start; i < range.end; ++i)
+        means[i] = truth.window_mean(field.vectors[i].x_px, field.vectors[i].y_px, 16);
     });
   }
   return means;
@@ -201,10 +204,19 @@ void BM_AdaptiveRefinement(benchmark::State& state) {
   e.xcorr.convergence_px = 0;
   e.xcorr.adaptive_refinement = state.range(1) != 0;
   if (state.range(1) == 2) e.xcorr.adaptive_threshold = 1e9;  // refines (almost) nothing: the fixed cost
+  // CPU seconds of all threads: on a loaded machine a steadier measure of the work than the wall time.
+  auto process_cpu_s = [] {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+           1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+  };
   for (auto _ : state) {
     const auto start = std::chrono::steady_clock::now();
+    const double cpu_start_s = process_cpu_s();
     const auto result = fusion::evaluate_displacement(pair.reference, pair.measurement, e);
     state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    state.counters["cpu_all_threads_s"] = process_cpu_s() - cpu_start_s;
     const auto& means = window_means(scene, result.field);
     double sum_sq[2] = {0, 0};
     std::size_t count[2] = {0, 0};

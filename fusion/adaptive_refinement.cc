@@ -110,14 +110,13 @@ RefinementSelection select_refinement(const DisplacementField& first_pass, const
       return std::pair{i0, g > i0 ? std::min(i0 + 1, nodes - 1) : i0};  // not the node of weight 0
     };
     for (int row = 0; row < target.rows; ++row) {
-      const auto [r0, r1] = stencil(target_grid.y0_px + row * target_grid.step_px, first_grid.y0_px,
-                                    first_grid.step_px, first_grid.rows);
+      const auto [r0, r1] =
+          stencil(target_grid.y0_px + row * target_grid.step_px, first_grid.y0_px, first_grid.step_px, first_grid.rows);
       for (int col = 0; col < target.cols; ++col) {
         const auto [c0, c1] = stencil(target_grid.x0_px + col * target_grid.step_px, first_grid.x0_px,
                                       first_grid.step_px, first_grid.cols);
-        refine.at<std::uint8_t>(row, col) =
-            displaced.at<std::uint8_t>(r0, c0) | displaced.at<std::uint8_t>(r0, c1) |
-            displaced.at<std::uint8_t>(r1, c0) | displaced.at<std::uint8_t>(r1, c1);
+        refine.at<std::uint8_t>(row, col) = displaced.at<std::uint8_t>(r0, c0) | displaced.at<std::uint8_t>(r0, c1) |
+                                            displaced.at<std::uint8_t>(r1, c0) | displaced.at<std::uint8_t>(r1, c1);
       }
     }
     if (context_nodes > 0 && !refine.empty()) {

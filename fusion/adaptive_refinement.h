@@ -61,11 +61,11 @@ double field_noise_floor_px(const DisplacementField& field);
 cv::Mat displaced_nodes(const DisplacementField& field, double threshold_px);
 
 struct RefinementSelection {
-  cv::Mat refine;               // CV_8U on the refinement grid: 1 = evaluate in passes ≥ 2
-  double noise_floor_px = -1;   // of the first pass; -1: not estimable (everything selected)
-  double threshold_px = 0;      // threshold_factor × noise floor
-  std::size_t selected = 0;     // nodes selected (out-of-ROI nodes never are)
-  std::size_t candidates = 0;   // nodes not out of the ROI
+  cv::Mat refine;              // CV_8U on the refinement grid: 1 = evaluate in passes ≥ 2
+  double noise_floor_px = -1;  // of the first pass; -1: not estimable (everything selected)
+  double threshold_px = 0;     // threshold_factor × noise floor
+  std::size_t selected = 0;    // nodes selected (out-of-ROI nodes never are)
+  std::size_t candidates = 0;  // nodes not out of the ROI
   double fraction() const { return candidates ? double(selected) / double(candidates) : 0.0; }
 };
 

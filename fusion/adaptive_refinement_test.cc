@@ -117,7 +117,8 @@ TEST(AdaptiveRefinement, ABumpSelectsItsRegion) {
 TEST(AdaptiveRefinement, AStepSelectsItsEdgeAndItsDisplacedSide) {
   const auto grid = grid_of(30, 60);
   const double step_x = 240;
-  const auto field = field_on(grid, [&](double x, double) { return cv::Point2d(x >= step_x ? 1.0 : 0.0, 0); }, 0.02);
+  const auto field = field_on(
+      grid, [&](double x, double) { return cv::Point2d(x >= step_x ? 1.0 : 0.0, 0); }, 0.02);
   const auto selection = select_refinement(field, grid, field, grid, 4, 0);
   for (int r = 0; r < grid.rows; ++r) {
     for (int c = 0; c < grid.cols; ++c) {
@@ -140,7 +141,8 @@ TEST(AdaptiveRefinement, AStepSelectsItsEdgeAndItsDisplacedSide) {
 TEST(AdaptiveRefinement, AGradientThroughZeroIsSelected) {
   // u = 0.05 px per node across x = 240: near there |u| is below the threshold, the gradient is not.
   const auto grid = grid_of(30, 60);
-  const auto field = field_on(grid, [](double x, double) { return cv::Point2d(0.05 * (x - 240) / 8, 0); }, 0.005);
+  const auto field = field_on(
+      grid, [](double x, double) { return cv::Point2d(0.05 * (x - 240) / 8, 0); }, 0.005);
   const auto selection = select_refinement(field, grid, field, grid, 4, 0);
   ASSERT_LT(selection.threshold_px, 0.05);
   EXPECT_EQ(selection.selected, selection.candidates);
@@ -198,7 +200,8 @@ TEST(AdaptiveRefinement, SmoothingAveragesTheUnrefinedNoiseAway) {
 TEST(AdaptiveRefinement, SmoothingLeavesRefinedNodesAndTakesNothingFromThem) {
   const auto grid = grid_of(40, 40);
   // Left half displaced by 1 px and refined; right half at 0, unrefined.
-  auto field = field_on(grid, [](double x, double) { return cv::Point2d(x < 160 ? 1.0 : 0.0, 0); }, 0.0);
+  auto field = field_on(
+      grid, [](double x, double) { return cv::Point2d(x < 160 ? 1.0 : 0.0, 0); }, 0.0);
   cv::Mat refine = cv::Mat::zeros(grid.rows, grid.cols, CV_8U);
   refine.colRange(0, 20).setTo(1);
   field.at(5, 30).flag = VectorFlag::kNoTexture;  // unmeasured: neither changed nor averaged in

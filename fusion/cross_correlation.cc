@@ -229,17 +229,19 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
   cv::parallel_for_(cv::Range(0, node_count), evaluate_range, std::max(1.0, node_count / 256.0));
 }
 
+// A pass's measured vectors on their own grid.
+struct MeasuredPass {
+  DisplacementField field;
+  GridGeometry grid;
+};
+
 // The first pass on every other node only, in x and y — a quarter of the
 // correlations, and the widest searches — when the coarse windows still
 // overlap; the rest of the field is interpolated for the next pass's
 // predictor. Nodes are chosen by their lattice index counted from the ROI,
 // so a probe's local grid picks the same nodes as the full field. False
 // when the grid is too small for it (then the pass runs on every node).
-struct MeasuredPass {
-  DisplacementField field;
-  GridGeometry grid;
-};
-
+// `measured` gets the coarse field as measured (adaptive refinement's input).
 bool run_coarse_first_pass(const PreparedPair& pair, const GridGeometry& fine, PassInput in,
                            const XcorrOptions& options, DisplacementField& field, MeasuredPass& measured) {
   if (!options.coarse_first_pass || 2 * fine.step_px > in.window_px) return false;
@@ -284,7 +286,8 @@ bool run_coarse_first_pass(const PreparedPair& pair, const GridGeometry& fine, P
 struct AdaptivePasses {
   RefinementSelection selection;
   DisplacementField first_pass;  // the field after the first pass, unselected nodes marked first_pass_only
-  bool active() const { return !selection.refine.empty(); }
+  // Selecting every node is full refinement, without the tiles' bookkeeping.
+  bool active() const { return !selection.refine.empty() && selection.selected < selection.candidates; }
 };
 
 AdaptivePasses select_for_refinement(const MeasuredPass& measured, const DisplacementField& field,
@@ -306,8 +309,8 @@ AdaptivePasses select_for_refinement(const MeasuredPass& measured, const Displac
   return adaptive;
 }
 
-// Unselected nodes as the first pass left them (the outlier test of a
-// refinement pass sees them as neighbours, but does not change them).
+// Unselected nodes as the first pass left them, smoothed (the outlier test
+// of a refinement pass sees them as neighbours, but does not change them).
 void keep_first_pass(const AdaptivePasses& adaptive, DisplacementField& field) {
   for (std::size_t i = 0; i < field.vectors.size(); ++i) {
     if (!adaptive.selection.refine.data[i]) field.vectors[i] = adaptive.first_pass.vectors[i];
@@ -326,7 +329,8 @@ std::vector<cv::Rect> tiles_read(const PreparedPair& pair, const DisplacementFie
   for (std::size_t i = 0; i < field.vectors.size(); ++i) {
     const auto& vec = field.vectors[i];
     if (vec.flag == VectorFlag::kOutOfRoi || !in.refine->data[i]) continue;
-    const cv::Rect window(window_origin(vec.x_px, vec.y_px, in.window_px, pair.roi), cv::Size(in.window_px, in.window_px));
+    const cv::Rect window(window_origin(vec.x_px, vec.y_px, in.window_px, pair.roi),
+                          cv::Size(in.window_px, in.window_px));
     if (window_masked(pair, window, options.max_masked_fraction, vec.x_px, vec.y_px)) continue;
     const cv::Rect read = (window + cv::Point(-reach_px, -reach_px) + cv::Size(2 * reach_px, 2 * reach_px)) & region;
     if (read.empty()) continue;
@@ -386,7 +390,8 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     const int reach_px = in.radius_px + (in.shift_whole_pixels ? max_abs_shift_px(predictor) : 0);
     in.refine = adaptive.active() ? &adaptive.selection.refine : nullptr;
     in.region = pass_region(pair, field, in.window_px, reach_px, in.refine);
-    const std::vector<cv::Rect> tiles = in.refine ? tiles_read(pair, field, in, reach_px, options) : std::vector<cv::Rect>{};
+    const std::vector<cv::Rect> tiles =
+        in.refine ? tiles_read(pair, field, in, reach_px, options) : std::vector<cv::Rect>{};
     const bool warp = pass > 0 && options.deform;
     // Passes before the last only feed the next pass's predictor: the
     // cheaper cubic kernel serves them as well; when they have converged, one
@@ -594,7 +599,8 @@ EvaluationResult probe_xcorr(const cv::Mat& reference, const cv::Mat& measuremen
   // Probes are independent: one per task, on both cores.
   cv::parallel_for_(cv::Range(0, static_cast<int>(points.size())), [&](const cv::Range& range) {
     for (int i = range.start; i < range.end; ++i) {
-      result.field.vectors[i] = evaluate_probe(reference, measurement, mask, points[i], probe_options, context, summaries[i]);
+      result.field.vectors[i] =
+          evaluate_probe(reference, measurement, mask, points[i], probe_options, context, summaries[i]);
     }
   });
   for (const auto& s : summaries) {

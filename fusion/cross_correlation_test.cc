@@ -363,7 +363,9 @@ TEST_F(AdaptiveRefinementScene, RefinesTheDisplacedRegionAsFullRefinementDoes) {
   std::vector<bool> refined_here(full.field.size());
   for (std::size_t i = 0; i < full.field.size(); ++i) refined_here[i] = !adaptive.field.vectors[i].first_pass_only;
   auto in_refined = [&](const DisplacementField& field) {
-    return [&](const DisplacementVector& v) { return refined_here[static_cast<std::size_t>(&v - field.vectors.data())]; };
+    return [&](const DisplacementVector& v) {
+      return refined_here[static_cast<std::size_t>(&v - field.vectors.data())];
+    };
   };
   EXPECT_LT(errors(adaptive.field, pair_->truth, 16, in_refined(adaptive.field)).rms,
             1.02 * errors(full.field, pair_->truth, 16, in_refined(full.field)).rms);

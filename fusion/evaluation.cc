@@ -16,8 +16,7 @@ std::string EvaluationSummary::BriefReport() const {
       "{} pass(es) (windows {} px){}{}; {:.3f} s",
       method, vectors, valid, outliers_replaced, no_texture, masked, out_of_roi, no_peak, passes_run, windows,
       converged ? ", converged" : "",
-      passes_run > 1 && refined_fraction < 1 ? fmt::format(", {:.1f} % refined", 100 * refined_fraction) : "",
-      seconds);
+      passes_run > 1 && refined_fraction < 1 ? fmt::format(", {:.1f} % refined", 100 * refined_fraction) : "", seconds);
 }
 
 cv::Rect effective_roi(cv::Rect roi, cv::Size image_size) {
