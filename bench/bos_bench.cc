@@ -161,7 +161,8 @@ BENCHMARK(BM_Probe10)->ArgName("context_nodes")->Arg(1)->Arg(-1)->UseRealTime()-
 // a quarter of the frame (2464×1632). Errors against the true window mean
 // over valid vectors; "displaced" nodes are those whose true shift exceeds
 // 0.05 px, the others "still". adaptive: 0 off, 1 on, 2 on with a threshold
-// nothing reaches (the cost of the first pass and the bookkeeping alone).
+// nothing reaches (the cost of the first pass and the bookkeeping alone), 3
+// on without smoothing the unrefined nodes.
 const sim::SyntheticPair& adaptive_scene(int scene) {
   auto render = [](int width_px, int height_px, const sim::DisplacementModel& field) {
     sim::PairOptions options;
@@ -203,7 +204,8 @@ void BM_AdaptiveRefinement(benchmark::State& state) {
   e.xcorr.max_shift_px = 2;
   e.xcorr.convergence_px = 0;
   e.xcorr.adaptive_refinement = state.range(1) != 0;
-  if (state.range(1) == 2) e.xcorr.adaptive_threshold = 1e9;  // refines (almost) nothing: the fixed cost
+  if (state.range(1) == 2) e.xcorr.adaptive_threshold = 1e9;      // refines (almost) nothing: the fixed cost
+  if (state.range(1) == 3) e.xcorr.adaptive_smoothing_nodes = 0;  // the unrefined first pass as it is
   // CPU seconds of all threads: on a loaded machine a steadier measure of the work than the wall time.
   auto process_cpu_s = [] {
     rusage usage{};
@@ -238,7 +240,7 @@ void BM_AdaptiveRefinement(benchmark::State& state) {
 }
 BENCHMARK(BM_AdaptiveRefinement)
     ->ArgNames({"scene", "adaptive"})
-    ->ArgsProduct({{0, 1, 2}, {0, 1, 2}})
+    ->ArgsProduct({{0, 1, 2}, {0, 1, 2, 3}})
     ->UseManualTime()
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
