@@ -31,11 +31,11 @@ using pipeline::read_image;
 
 struct EvaluateArgs {
   std::string reference, measurement, out = "-", map, mask, roi, method = "xcorr", flow = "dis", dis_preset = "medium",
-                                      subpixel = "auto", interpolator = "lanczos3";
+                                      subpixel = "auto", interpolator = "lanczos3", adaptive_refinement = "off";
   std::string sequence_reference, sequence, settings;
   std::vector<std::string> probes;
   int window_px = 16, first_window_px = 0, step_px = 8, passes = 3;
-  double max_shift_px = 4, contour_px = 0.1;
+  double max_shift_px = 4, contour_px = 0.1, adaptive_threshold = 4;
 };
 
 std::vector<int> parse_ints(const std::string& text, std::size_t count, const std::string& what) {
@@ -100,6 +100,8 @@ fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
   options.set_grid(args.window_px, args.step_px, roi);
   options.xcorr.passes = args.passes;
   options.xcorr.max_shift_px = args.max_shift_px;
+  options.xcorr.adaptive_refinement = args.adaptive_refinement == "on";
+  options.xcorr.adaptive_threshold = args.adaptive_threshold;
   apply_xcorr_choices(args, options);
   const std::map<std::string, fusion::FlowAlgorithm> flows{{"dis", fusion::FlowAlgorithm::kDis},
                                                            {"farneback", fusion::FlowAlgorithm::kFarneback},
@@ -148,6 +150,8 @@ pipeline::SettingsOverrides given_overrides(const EvaluateArgs& args, const CLI:
   if (given("--step")) o.step_px = args.step_px;
   if (given("--passes")) o.passes = args.passes;
   if (given("--max-shift")) o.max_shift_px = args.max_shift_px;
+  if (given("--adaptive-refinement")) o.adaptive_refinement = args.adaptive_refinement == "on";
+  if (given("--adaptive-threshold")) o.adaptive_threshold = args.adaptive_threshold;
   if (given("--roi")) {
     const auto r = parse_ints(args.roi, 4, "--roi");
     o.roi_px = cv::Rect(r[0], r[1], r[2], r[3]);
@@ -287,6 +291,14 @@ void add_evaluate(CLI::App& root) {
       ->capture_default_str();
   cmd->add_option("--interpolator", args->interpolator, "Deformation interpolator: lanczos3, lanczos4 or cubic")
       ->check(CLI::IsMember({"lanczos3", "lanczos4", "cubic"}))
+      ->capture_default_str();
+  cmd->add_option("--adaptive-refinement", args->adaptive_refinement,
+                  "on: refinement passes only where the first pass found a displacement above the noise floor")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
+  cmd->add_option("--adaptive-threshold", args->adaptive_threshold,
+                  "Adaptive refinement: refine where the shift or its gradient exceeds this many times the first "
+                  "pass's noise floor")
       ->capture_default_str();
   cmd->add_option("--mask", args->mask, "Mask image: non-zero pixels are not evaluated");
   cmd->add_option("--roi", args->roi, "Region of interest x,y,w,h in pixels");

@@ -20,7 +20,8 @@ struct ProcessArgs {
   bool resume = false;
   std::optional<std::string> mode, method, mask, geometry, roi;
   std::optional<int> window_px, step_px, passes, probe_context;
-  std::optional<double> max_shift_px;
+  std::optional<double> max_shift_px, adaptive_threshold;
+  std::optional<std::string> adaptive_refinement;
 };
 
 cv::Rect parse_roi(const std::string& text) {
@@ -41,6 +42,8 @@ pipeline::SettingsOverrides overrides(const ProcessArgs& args) {
   o.passes = args.passes;
   o.probe_context_nodes = args.probe_context;
   o.max_shift_px = args.max_shift_px;
+  if (args.adaptive_refinement) o.adaptive_refinement = *args.adaptive_refinement == "on";
+  o.adaptive_threshold = args.adaptive_threshold;
   if (args.roi) o.roi_px = parse_roi(*args.roi);
   o.mask = args.mask;
   o.geometry_file = args.geometry;
@@ -86,6 +89,13 @@ void add_process(CLI::App& root) {
                   "probe equals the full field there, but is ~40x slower) (default: stored, else 1)")
       ->check(CLI::Range(-1, 16));
   cmd->add_option("--max-shift", args->max_shift_px, "Largest displacement expected, px (default: stored, else 4)");
+  cmd->add_option("--adaptive-refinement", args->adaptive_refinement,
+                  "on: refinement passes only where the first pass found a displacement above the noise floor "
+                  "(docs/CONFIG.md) (default: stored, else off)")
+      ->check(CLI::IsMember({"on", "off"}));
+  cmd->add_option("--adaptive-threshold", args->adaptive_threshold,
+                  "Adaptive refinement: refine where the shift or its gradient exceeds this many times the first "
+                  "pass's noise floor (default: stored, else 4)");
   cmd->add_option("--roi", args->roi, "Region of interest x,y,width,height in pixels (default: stored, else all)");
   cmd->add_option("--geometry", args->geometry,
                   "TOML file with [geometry] (and [alignment]); default: stored, else the run's experiment file, "

@@ -72,6 +72,19 @@ TEST_F(EvaluateCli, AGoodPairGivesACsvWithTheHeader) {
   EXPECT_NE(run.output.find("valid"), std::string::npos) << "a summary goes to stderr";
 }
 
+TEST_F(EvaluateCli, AdaptiveRefinementOfAShiftEverywhereRefinesEverything) {
+  const std::string pair = "evaluate " + path("ref.png") + " " + path("meas.png");
+  const auto plain = bosfuse(pair + " -o " + path("plain.csv"));
+  const auto adaptive = bosfuse(pair + " --adaptive-refinement on -o " + path("adaptive.csv"));
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  ASSERT_EQ(adaptive.exit_code, 0) << adaptive.output;
+  EXPECT_EQ(read(path("adaptive.csv")), read(path("plain.csv")));
+  EXPECT_EQ(adaptive.output.find("refined"), std::string::npos) << "all of it: nothing to say";
+  const auto bad = bosfuse(pair + " --adaptive-refinement on --adaptive-threshold 0");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("adaptive refinement threshold"), std::string::npos) << bad.output;
+}
+
 TEST_F(EvaluateCli, ProbesGiveOneRowEach) {
   const auto run = bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " --probe 40,40 --probe 80.5,50");
   ASSERT_EQ(run.exit_code, 0) << run.output;

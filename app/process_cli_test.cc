@@ -128,6 +128,19 @@ TEST_F(ProcessCli, ProbesOnlyStoresShiftsFitsAndAgreement) {
   EXPECT_TRUE(results.fields().empty());
 }
 
+TEST_F(ProcessCli, AdaptiveRefinementIsStoredWithTheSettings) {
+  const auto run = bosfuse("process --adaptive-refinement on --adaptive-threshold 5 " + grid_);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto processing = storage::ProcessingStore(run_dir()).current_processing();
+  ASSERT_TRUE(processing.has_value());
+  const auto settings = nlohmann::json::parse(processing->settings_json);
+  EXPECT_EQ(settings.at("adaptive_refinement"), true);
+  EXPECT_EQ(settings.at("adaptive_threshold"), 5);
+  const auto wrong = bosfuse("process --adaptive-refinement yes");
+  EXPECT_NE(wrong.exit_code, 0);
+  EXPECT_NE(wrong.output.find("--adaptive-refinement"), std::string::npos) << wrong.output;
+}
+
 TEST_F(ProcessCli, FullFieldsEqualProbesAtTheProbePointsAndWriteFieldFiles) {
   auto probe_samples = [&](const std::string& args) {
     EXPECT_EQ(bosfuse("process --mode probes " + args).exit_code, 0);

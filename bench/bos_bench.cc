@@ -8,8 +8,11 @@
 // Figures and what they mean: docs/BENCHMARKS.md, "BOS evaluation".
 
 #include <benchmark/benchmark.h>
+#include <sys/resource.h>
 
+#include <chrono>
 #include <cmath>
+#include <map>
 #include <opencv2/core/utility.hpp>
 #include <stdexcept>
 #include <vector>
@@ -233,6 +236,100 @@ void BM_Probe10(benchmark::State& state) {
     benchmark::DoNotOptimize(fusion::probe_displacement(pair.reference, pair.measurement, points, e));
 }
 BENCHMARK(BM_Probe10)->ArgName("context_nodes")->Arg(1)->Arg(-1)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// Adaptive refinement (XcorrOptions::adaptive_refinement) against full
+// refinement. Scenes: 0, a plume-sized displacement on the 16 MP frame —
+// the gradient of a Gaussian bump of radius 320 px (a DisplacementModel
+// rather than ConvectionScene, whose window means would have to be
+// integrated numerically), shifted by more than 0.05 px within ~1000 px of
+// its centre, a fifth of the frame; 1, BM_FullFrame16MP's bump (radius
+// 600 px, displaced almost everywhere); 2, a uniform shift (0.3, −0.2) px on
+// a quarter of the frame (2464×1632). Errors against the true window mean
+// over valid vectors; "displaced" nodes are those whose true shift exceeds
+// 0.05 px, the others "still". adaptive: 0 off, 1 on, 2 on with a threshold
+// nothing reaches (the cost of the first pass and the bookkeeping alone), 3
+// on without smoothing the unrefined nodes.
+const sim::SyntheticPair& adaptive_scene(int scene) {
+  auto render = [](int width_px, int height_px, const sim::DisplacementModel& field) {
+    sim::PairOptions options;
+    options.pattern.width_px = width_px;
+    options.pattern.height_px = height_px;
+    options.field = field;
+    return sim::render_pair(options);
+  };
+  if (scene == 1) return full_frame();
+  if (scene == 2) {
+    static const sim::SyntheticPair uniform = render(2464, 1632, sim::DisplacementModel::uniform(0.3, -0.2));
+    return uniform;
+  }
+  static const sim::SyntheticPair plume =
+      render(4928, 3264, sim::DisplacementModel::bump_gradient(2464, 1632, 320, 1.5));
+  return plume;
+}
+
+// The true window means at the nodes of `field` (computed once per scene).
+const std::vector<cv::Point2d>& window_means(int scene, const fusion::DisplacementField& field) {
+  static std::map<int, std::vector<cv::Point2d>> cache;
+  auto& means = cache[scene];
+  if (means.size() != field.size()) {
+    const auto& truth = adaptive_scene(scene).truth;
+    means.resize(field.size());
+    cv::parallel_for_(cv::Range(0, int(field.size())), [&](const cv::Range& range) {
+      for (int i = range.start; i < range.end; ++i)
+        means[i] = truth.window_mean(field.vectors[i].x_px, field.vectors[i].y_px, 16);
+    });
+  }
+  return means;
+}
+
+void BM_AdaptiveRefinement(benchmark::State& state) {
+  const int scene = int(state.range(0));
+  const auto& pair = adaptive_scene(scene);
+  auto e = evaluator(0, 16, 3);
+  e.set_grid(16, 8);
+  e.xcorr.max_shift_px = 2;
+  e.xcorr.convergence_px = 0;
+  e.xcorr.adaptive_refinement = state.range(1) != 0;
+  if (state.range(1) == 2) e.xcorr.adaptive_threshold = 1e9;      // refines (almost) nothing: the fixed cost
+  if (state.range(1) == 3) e.xcorr.adaptive_smoothing_nodes = 0;  // the unrefined first pass as it is
+  // CPU seconds of all threads: on a loaded machine a steadier measure of the work than the wall time.
+  auto process_cpu_s = [] {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+           1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+  };
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    const double cpu_start_s = process_cpu_s();
+    const auto result = fusion::evaluate_displacement(pair.reference, pair.measurement, e);
+    state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    state.counters["cpu_all_threads_s"] = process_cpu_s() - cpu_start_s;
+    const auto& means = window_means(scene, result.field);
+    double sum_sq[2] = {0, 0};
+    std::size_t count[2] = {0, 0};
+    for (std::size_t i = 0; i < result.field.size(); ++i) {
+      const auto& v = result.field.vectors[i];
+      if (!v.valid()) continue;
+      const bool displaced = std::hypot(means[i].x, means[i].y) > 0.05;
+      sum_sq[displaced] += std::pow(v.u_px - means[i].x, 2) + std::pow(v.v_px - means[i].y, 2);
+      ++count[displaced];
+    }
+    auto rms = [](double s, std::size_t n) { return n ? std::sqrt(s / double(n)) : 0.0; };
+    state.counters["refined_pct"] = 100 * result.summary.refined_fraction;
+    state.counters["displaced_pct"] = 100.0 * count[1] / std::max<std::size_t>(1, count[0] + count[1]);
+    state.counters["rms_px"] = rms(sum_sq[0] + sum_sq[1], count[0] + count[1]);
+    state.counters["rms_displaced_px"] = rms(sum_sq[1], count[1]);
+    state.counters["rms_still_px"] = rms(sum_sq[0], count[0]);
+    state.counters["valid_pct"] = 100.0 * result.summary.valid / result.field.size();
+  }
+}
+BENCHMARK(BM_AdaptiveRefinement)
+    ->ArgNames({"scene", "adaptive"})
+    ->ArgsProduct({{0, 1, 2}, {0, 1, 2, 3}})
+    ->UseManualTime()
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace bosfuse

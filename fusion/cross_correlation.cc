@@ -12,6 +12,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "fusion/adaptive_refinement.h"
 #include "fusion/image_input.h"
 #include "fusion/memory_budget.h"
 
@@ -139,6 +140,7 @@ struct PassInput {
     return reference_stats + static_cast<std::size_t>(stats_row0 + stats_stride * row) * stats_cols + stats_col0 +
            stats_stride * col;
   }
+  const cv::Mat* refine = nullptr;  // adaptive refinement: only nodes marked 1 here are evaluated
 };
 
 void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, int row, int col,
@@ -189,11 +191,14 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
   vec.flag = VectorFlag::kOk;
 }
 
-// Bounding box of every window of the pass, grown by the search radius.
-cv::Rect pass_region(const PreparedPair& pair, const DisplacementField& field, int n, int r) {
+// Bounding box of every window of the pass (only those `refine` marks, when
+// given), grown by the search radius.
+cv::Rect pass_region(const PreparedPair& pair, const DisplacementField& field, int n, int r,
+                     const cv::Mat* refine = nullptr) {
   int x_min = pair.roi.x + pair.roi.width, y_min = pair.roi.y + pair.roi.height, x_max = pair.roi.x, y_max = pair.roi.y;
-  for (const auto& vec : field.vectors) {
-    if (vec.flag == VectorFlag::kOutOfRoi) continue;
+  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
+    const auto& vec = field.vectors[i];
+    if (vec.flag == VectorFlag::kOutOfRoi || (refine && !refine->data[i])) continue;
     const cv::Point o = window_origin(vec.x_px, vec.y_px, n, pair.roi);
     x_min = std::min(x_min, o.x);
     y_min = std::min(y_min, o.y);
@@ -250,7 +255,7 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
     CorrelatorScratch& scratch = thread_scratch();
     for (int i = range.start; i < range.end; ++i) {
       auto& vec = field.vectors[static_cast<std::size_t>(i)];
-      if (vec.flag == VectorFlag::kOutOfRoi) continue;
+      if (vec.flag == VectorFlag::kOutOfRoi || (in.refine && !in.refine->data[i])) continue;
       evaluate_node(pair, in, options, i / field.cols, i % field.cols, scratch.correlator, scratch.plane, vec);
     }
   };
@@ -300,6 +305,12 @@ const std::vector<WindowStats>& reference_stats_for(const PreparedPair& pair, co
   return stats;
 }
 
+// A pass's measured vectors on their own grid.
+struct MeasuredPass {
+  DisplacementField field;
+  GridGeometry grid;
+};
+
 // The first pass on every other node only, in x and y — a quarter of the
 // correlations, and the widest searches — when the coarse windows still
 // overlap; the rest of the field is interpolated for the next pass's
@@ -331,8 +342,10 @@ std::optional<CoarseGrid> coarse_first_pass_grid(const PreparedPair& pair, const
   return coarse;
 }
 
+// `measured` gets the coarse field as measured (adaptive refinement's input).
 void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, PassInput in,
-                           const XcorrOptions& options, PassWorkspace& workspace, DisplacementField& field) {
+                           const XcorrOptions& options, PassWorkspace& workspace, DisplacementField& field,
+                           MeasuredPass& measured) {
   DisplacementField sparse = field_on_grid(coarse.grid);
   for (int r = 0; r < coarse.grid.rows; ++r) {
     for (int c = 0; c < coarse.grid.cols; ++c) {
@@ -348,6 +361,7 @@ void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, P
   run_pass(pair, in, options, sparse);
   if (options.replace_outliers) replace_outliers(sparse, options.outliers);
   const GridField predictor = predictor_from(sparse, coarse.grid);
+  measured = {sparse, coarse.grid};
   for (auto& vec : field.vectors) {
     if (vec.flag == VectorFlag::kOutOfRoi) continue;
     const cv::Point2d p = interpolate_field(predictor, vec.x_px, vec.y_px);
@@ -358,6 +372,96 @@ void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, P
   }
 }
 
+// ---- Adaptive refinement (fusion/adaptive_refinement.h) ----
+
+// The selection of the refinement passes and what the others keep.
+struct AdaptivePasses {
+  RefinementSelection selection;
+  DisplacementField first_pass;  // the field after the first pass, unselected nodes marked first_pass_only
+  // Selecting every node is full refinement, without the tiles' bookkeeping.
+  bool active() const { return !selection.refine.empty() && selection.selected < selection.candidates; }
+};
+
+AdaptivePasses select_for_refinement(const MeasuredPass& measured, const DisplacementField& field,
+                                     const GridGeometry& grid, const XcorrOptions& options) {
+  AdaptivePasses adaptive;
+  const int context = refinement_context_nodes(options.window_px_per_pass()[1], options.search_radius_px(1),
+                                               static_cast<int>(std::ceil(grid.step_px)));
+  adaptive.selection =
+      select_refinement(measured.field, measured.grid, field, grid, options.adaptive_threshold, context);
+  adaptive.first_pass = field;
+  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
+    auto& vec = adaptive.first_pass.vectors[i];
+    vec.first_pass_only = !adaptive.selection.refine.data[i] && vec.flag != VectorFlag::kOutOfRoi;
+  }
+  smooth_unrefined(adaptive.first_pass, adaptive.selection.refine, options.adaptive_smoothing_nodes);
+  spdlog::debug("adaptive refinement: noise floor {:.4f} px, threshold {:.4f} px, {:.1f} % of the windows refined",
+                adaptive.selection.noise_floor_px, adaptive.selection.threshold_px,
+                100 * adaptive.selection.fraction());
+  return adaptive;
+}
+
+// Unselected nodes as the first pass left them, smoothed (the outlier test
+// of a refinement pass sees them as neighbours, but does not change them).
+void keep_first_pass(const AdaptivePasses& adaptive, DisplacementField& field) {
+  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
+    if (!adaptive.selection.refine.data[i]) field.vectors[i] = adaptive.first_pass.vectors[i];
+  }
+}
+
+// The parts of in.region the selected windows read (window and search,
+// `reach_px` around it; masked windows read nothing), as runs of 64 px tiles
+// along each row of tiles: a warp over the whole bounding box would cost as
+// much as the windows saved.
+std::vector<cv::Rect> tiles_read(const PreparedPair& pair, const DisplacementField& field, const PassInput& in,
+                                 int reach_px, const XcorrOptions& options) {
+  constexpr int kTilePx = 64;
+  const cv::Rect& region = in.region;
+  cv::Mat used = cv::Mat::zeros((region.height + kTilePx - 1) / kTilePx, (region.width + kTilePx - 1) / kTilePx, CV_8U);
+  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
+    const auto& vec = field.vectors[i];
+    if (vec.flag == VectorFlag::kOutOfRoi || !in.refine->data[i]) continue;
+    const cv::Rect window(window_origin(vec.x_px, vec.y_px, in.window_px, pair.roi),
+                          cv::Size(in.window_px, in.window_px));
+    if (window_masked(pair, window, options.max_masked_fraction, vec.x_px, vec.y_px)) continue;
+    const cv::Rect read = (window + cv::Point(-reach_px, -reach_px) + cv::Size(2 * reach_px, 2 * reach_px)) & region;
+    if (read.empty()) continue;
+    const int tx0 = (read.x - region.x) / kTilePx, tx1 = (read.x + read.width - 1 - region.x) / kTilePx;
+    const int ty0 = (read.y - region.y) / kTilePx, ty1 = (read.y + read.height - 1 - region.y) / kTilePx;
+    used(cv::Range(ty0, ty1 + 1), cv::Range(tx0, tx1 + 1)).setTo(1);
+  }
+  std::vector<cv::Rect> tiles;
+  for (int ty = 0; ty < used.rows; ++ty) {
+    for (int tx = 0; tx < used.cols;) {
+      if (!used.at<std::uint8_t>(ty, tx)) {
+        ++tx;
+        continue;
+      }
+      const int start = tx;
+      while (tx < used.cols && used.at<std::uint8_t>(ty, tx)) ++tx;
+      tiles.push_back(cv::Rect(region.x + start * kTilePx, region.y + ty * kTilePx, (tx - start) * kTilePx, kTilePx) &
+                      region);
+    }
+  }
+  return tiles;
+}
+
+// warp_region over `region` into `out`, computed only on `tiles`: each
+// pixel's value depends only on its position, so a tile equals that part of
+// the whole warp. `out` is a reused buffer: outside the tiles it holds an
+// earlier pass's pixels, which no selected window reads.
+void warp_tiles(const cv::Mat& image, const GridField& field, cv::Rect region, const std::vector<cv::Rect>& tiles,
+                Interpolator interpolator, cv::Mat& out) {
+  cv::parallel_for_(cv::Range(0, static_cast<int>(tiles.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      cv::Mat tile = out(tiles[i] - region.tl());
+      warp_region(image, field, tiles[i], interpolator, tile);
+    }
+  });
+}
+
+// ---- end of adaptive refinement ----
+
 // Runs every pass over `field` (centres set; kOutOfRoi nodes are left alone).
 EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid, const XcorrOptions& options,
                              PassWorkspace& workspace, DisplacementField& field) {
@@ -365,6 +469,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
   summary.method = "xcorr";
   const std::vector<int> windows = options.window_px_per_pass();
   GridField predictor;
+  AdaptivePasses adaptive;
   bool finish_now = false;
   for (int pass = 0; pass < static_cast<int>(windows.size()); ++pass) {
     PassInput in;
@@ -375,7 +480,10 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     in.predictor = pass > 0 ? &predictor : nullptr;
     in.shift_whole_pixels = pass > 0 && !options.deform;
     const int reach_px = in.radius_px + (in.shift_whole_pixels ? max_abs_shift_px(predictor) : 0);
-    in.region = pass_region(pair, field, in.window_px, reach_px);
+    in.refine = adaptive.active() ? &adaptive.selection.refine : nullptr;
+    in.region = pass_region(pair, field, in.window_px, reach_px, in.refine);
+    const std::vector<cv::Rect> tiles =
+        in.refine ? tiles_read(pair, field, in, reach_px, options) : std::vector<cv::Rect>{};
     const bool warp = pass > 0 && options.deform;
     const bool warp_reference = warp && options.symmetric_deformation;
     if (workspace.cache_reference_stats && !warp_reference) {
@@ -384,9 +492,14 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     }
     if (pass == 0 && windows.size() > 1) {
       if (const auto coarse = coarse_first_pass_grid(pair, grid, in.window_px, options)) {
-        run_coarse_first_pass(pair, *coarse, in, options, workspace, field);
+        MeasuredPass measured;
+        run_coarse_first_pass(pair, *coarse, in, options, workspace, field, measured);
         summary.passes_run = 1;
         summary.window_px_per_pass.push_back(in.window_px);
+        if (options.adaptive_refinement) {
+          adaptive = select_for_refinement(measured, field, grid, options);
+          keep_first_pass(adaptive, field);  // the refined nodes' predictor sees the smoothed values
+        }
         continue;
       }
     }
@@ -396,18 +509,30 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     const bool last = pass + 1 == static_cast<int>(windows.size()) || finish_now;
     const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
     in.warped = reuse(workspace.warped_storage, in.region.size());
+    auto warp_pass = [&](const cv::Mat& image, const GridField& by, cv::Mat& out) {
+      if (in.refine) {
+        warp_tiles(image, by, in.region, tiles, interpolator, out);
+      } else {
+        warp_region(image, by, in.region, interpolator, out);
+      }
+    };
     if (warp_reference) {
       // Each image moves half-way: both are interpolated at half the offset,
       // and the interpolation errors of the two largely cancel.
       in.warped_reference = reuse(workspace.warped_reference_storage, in.region.size());
-      warp_region(pair.measurement, scaled(predictor, 0.5), in.region, interpolator, in.warped);
-      warp_region(pair.reference, scaled(predictor, -0.5), in.region, interpolator, in.warped_reference);
+      warp_pass(pair.measurement, scaled(predictor, 0.5), in.warped);
+      warp_pass(pair.reference, scaled(predictor, -0.5), in.warped_reference);
     } else {
-      warp_region(pair.measurement, warp ? predictor : GridField{}, in.region, interpolator, in.warped);
+      warp_pass(pair.measurement, warp ? predictor : GridField{}, in.warped);
     }
     const DisplacementField before = pass > 0 ? field : DisplacementField{};
     run_pass(pair, in, options, field);
     if (options.replace_outliers) replace_outliers(field, options.outliers);
+    if (adaptive.active()) keep_first_pass(adaptive, field);
+    if (pass == 0 && windows.size() > 1 && options.adaptive_refinement) {
+      adaptive = select_for_refinement({field, grid}, field, grid, options);
+      keep_first_pass(adaptive, field);
+    }
     summary.passes_run = pass + 1;
     summary.window_px_per_pass.push_back(in.window_px);
     if (pass > 0) summary.last_change_px = max_change_px(before, field);
@@ -420,6 +545,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     }
   }
   count_flags(field, summary);
+  summary.refined_fraction = adaptive.active() ? adaptive.selection.fraction() : summary.passes_run > 1 ? 1.0 : 0.0;
   return summary;
 }
 
@@ -509,6 +635,12 @@ std::string XcorrOptions::Validate() const {
   if (!(max_masked_fraction >= 0 && max_masked_fraction <= 1)) return "max masked fraction must be 0 to 1";
   if (!(convergence_px >= 0)) return "convergence tolerance must not be negative";
   if (probe_context_nodes < -1) return "probe context must be -1 (exact) or at least 0 nodes";
+  if (!(adaptive_threshold > 0) || !std::isfinite(adaptive_threshold)) {
+    return "adaptive refinement threshold must be a positive number (times the noise floor)";
+  }
+  if (!(adaptive_smoothing_nodes >= 0 && adaptive_smoothing_nodes <= 16)) {
+    return "adaptive refinement smoothing must be 0 to 16 nodes";
+  }
   return outliers.Validate();
 }
 
@@ -592,6 +724,8 @@ EvaluationResult XcorrEvaluator::probe(const cv::Mat& measurement, const std::ve
   const XcorrOptions& options = s.options;
   const int context =
       options.probe_context_nodes < 0 ? options.exact_probe_context_nodes() : options.probe_context_nodes;
+  XcorrOptions probe_options = options;
+  probe_options.adaptive_refinement = false;  // a probe's grid is local already, too small for a noise floor
   if (s.reference.channels() > 1 || measurement.channels() > 1) {
     spdlog::warn("colour image converted to grey ({} and {} channels)", s.reference.channels(), measurement.channels());
   }
@@ -605,7 +739,7 @@ EvaluationResult XcorrEvaluator::probe(const cv::Mat& measurement, const std::ve
   cv::parallel_for_(cv::Range(0, static_cast<int>(points.size())), [&](const cv::Range& range) {
     for (int i = range.start; i < range.end; ++i) {
       result.field.vectors[i] =
-          evaluate_probe(s.reference, measurement, s.mask, points[i], options, context, summaries[i]);
+          evaluate_probe(s.reference, measurement, s.mask, points[i], probe_options, context, summaries[i]);
     }
   });
   for (const auto& summary : summaries) {

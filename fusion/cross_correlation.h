@@ -11,7 +11,8 @@
 // within ±refine_shift_px, with the window shrinking from first_window_px to
 // window_px. After each pass the normalized-median test replaces outliers.
 // Refinement stops early when a pass at the final window changes no vector by
-// more than convergence_px. Windows whose reference has no texture, that lie
+// more than convergence_px. With adaptive_refinement the later passes
+// evaluate (and warp for) only where the first pass saw a displacement. Windows whose reference has no texture, that lie
 // under the mask, or give no clear peak are skipped and flagged.
 //
 // Images may be 8- or 16-bit, grey or colour (converted with a warning);
@@ -66,6 +67,16 @@ struct XcorrOptions {
   // full field's value at that point depends on (then the probe equals the
   // full field there, away from the image edges, when convergence_px is 0).
   int probe_context_nodes = 1;
+  // Adaptive refinement (fusion/adaptive_refinement.h): passes 2…n evaluate
+  // only the nodes where the first pass found a displacement or gradient
+  // above adaptive_threshold × its own noise floor, with the nodes around
+  // them those depend on; the rest keep the first pass's (interpolated)
+  // value, averaged over the unrefined nodes within about
+  // adaptive_smoothing_nodes (σ; 0: as it is), and marked first_pass_only.
+  // Probes ignore it (they are local already).
+  bool adaptive_refinement = false;
+  double adaptive_threshold = 4;
+  double adaptive_smoothing_nodes = 2;
 
   std::string Validate() const;  // empty when valid
   std::vector<int> window_px_per_pass() const;

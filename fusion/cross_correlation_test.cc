@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "fusion/adaptive_refinement.h"
 #include "sim/synthetic_pair.h"
 
 namespace bosfuse::fusion {
@@ -307,6 +308,155 @@ TEST(CrossCorrelation, RefinementStopsWhenAPassChangesNothing) {
   EXPECT_LT(result.summary.passes_run, 10);
 }
 
+// Adaptive refinement: a bump in the middle of a 384 px frame, displaced
+// over about a fifth of it.
+class AdaptiveRefinementScene : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    pair_ = new sim::SyntheticPair(render(sim::DisplacementModel::bump_gradient(192, 192, 30, 1.5), 384));
+  }
+  static void TearDownTestSuite() {
+    delete pair_;
+    pair_ = nullptr;
+  }
+  static EvaluationResult evaluate(bool adaptive, double threshold = 4, double smoothing_nodes = 2) {
+    XcorrOptions options;
+    options.adaptive_refinement = adaptive;
+    options.adaptive_threshold = threshold;
+    options.adaptive_smoothing_nodes = smoothing_nodes;
+    return evaluate_xcorr(pair_->reference, pair_->measurement, options);
+  }
+  static sim::SyntheticPair* pair_;
+};
+sim::SyntheticPair* AdaptiveRefinementScene::pair_ = nullptr;
+
+TEST_F(AdaptiveRefinementScene, RefinesTheDisplacedRegionAsFullRefinementDoes) {
+  const auto full = evaluate(false);
+  const auto adaptive = evaluate(true);
+  EXPECT_DOUBLE_EQ(full.summary.refined_fraction, 1.0);
+  EXPECT_GT(adaptive.summary.refined_fraction, 0.1);
+  EXPECT_LT(adaptive.summary.refined_fraction, 0.5);
+  ASSERT_EQ(adaptive.field.size(), full.field.size());
+  double sum_sq = 0, largest = 0;
+  std::size_t refined = 0;
+  for (std::size_t i = 0; i < full.field.size(); ++i) {
+    const auto& a = adaptive.field.vectors[i];
+    if (a.first_pass_only) continue;
+    const double d = std::hypot(a.u_px - full.field.vectors[i].u_px, a.v_px - full.field.vectors[i].v_px);
+    sum_sq += d * d;
+    largest = std::max(largest, d);
+    ++refined;
+  }
+  ASSERT_GT(refined, 0u);
+  EXPECT_EQ(double(refined) / full.field.size(), adaptive.summary.refined_fraction);
+  EXPECT_LT(std::sqrt(sum_sq / refined), 0.002);
+  EXPECT_LT(largest, 0.02);
+  // Every clearly displaced window is among the refined ones.
+  for (const auto& vec : adaptive.field.vectors) {
+    const cv::Point2d d = pair_->truth.at(vec.x_px, vec.y_px);
+    if (std::hypot(d.x, d.y) > 0.2) {
+      EXPECT_FALSE(vec.first_pass_only) << vec.x_px << "," << vec.y_px;
+    }
+  }
+  // Where it refines, as accurate as full refinement; elsewhere (the
+  // smoothed first pass) about as accurate too.
+  std::vector<bool> refined_here(full.field.size());
+  for (std::size_t i = 0; i < full.field.size(); ++i) refined_here[i] = !adaptive.field.vectors[i].first_pass_only;
+  auto in_refined = [&](const DisplacementField& field) {
+    return [&](const DisplacementVector& v) {
+      return refined_here[static_cast<std::size_t>(&v - field.vectors.data())];
+    };
+  };
+  EXPECT_LT(errors(adaptive.field, pair_->truth, 16, in_refined(adaptive.field)).rms,
+            1.02 * errors(full.field, pair_->truth, 16, in_refined(full.field)).rms);
+  EXPECT_LT(errors(adaptive.field, pair_->truth, 16).rms, 1.05 * errors(full.field, pair_->truth, 16).rms);
+  EXPECT_NE(adaptive.summary.BriefReport().find("% refined"), std::string::npos);
+}
+
+TEST_F(AdaptiveRefinementScene, KeepsTheSmoothedFirstPassElsewhere) {
+  // A threshold nothing reaches, no smoothing: every node keeps the first pass's value.
+  const auto first_pass = evaluate(true, 1e9, 0);
+  EXPECT_LT(first_pass.summary.refined_fraction, 0.02);
+  const auto adaptive = evaluate(true);
+  cv::Mat refine(adaptive.field.rows, adaptive.field.cols, CV_8U);
+  for (std::size_t i = 0; i < adaptive.field.size(); ++i) refine.data[i] = !adaptive.field.vectors[i].first_pass_only;
+  DisplacementField expected = first_pass.field;
+  smooth_unrefined(expected, refine, 2);
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < adaptive.field.size(); ++i) {
+    const auto& a = adaptive.field.vectors[i];
+    if (!a.first_pass_only) continue;
+    ASSERT_TRUE(first_pass.field.vectors[i].first_pass_only);
+    EXPECT_NEAR(a.u_px, expected.vectors[i].u_px, 1e-12);
+    EXPECT_NEAR(a.v_px, expected.vectors[i].v_px, 1e-12);
+    EXPECT_EQ(a.flag, VectorFlag::kOk);
+    ++kept;
+  }
+  EXPECT_GT(kept, adaptive.field.size() / 2);
+  // There the first pass alone is unbiased but noisier than refinement; smoothed, it is not.
+  auto kept_only = [](const auto& v) { return v.first_pass_only; };
+  const auto raw = errors(first_pass.field, pair_->truth, 16, [&](const auto& v) {
+    return adaptive.field.vectors[static_cast<std::size_t>(&v - first_pass.field.vectors.data())].first_pass_only;
+  });
+  const auto smoothed = errors(adaptive.field, pair_->truth, 16, kept_only);
+  EXPECT_LT(std::abs(raw.mean_u) + std::abs(raw.mean_v), 0.005);
+  EXPECT_LT(smoothed.rms, 0.6 * raw.rms);
+  EXPECT_LT(std::abs(smoothed.mean_u) + std::abs(smoothed.mean_v), 0.005);
+}
+
+TEST_F(AdaptiveRefinementScene, SelectingEverythingIsBitIdenticalToFullRefinement) {
+  // The hooks (evaluating selected nodes, warping selected tiles) change no
+  // value: a threshold every displacement exceeds gives the full field.
+  const auto full = evaluate(false);
+  const auto everything = evaluate(true, 1e-12);
+  ASSERT_DOUBLE_EQ(everything.summary.refined_fraction, 1.0);
+  for (std::size_t i = 0; i < full.field.size(); ++i) {
+    const auto &a = everything.field.vectors[i], &b = full.field.vectors[i];
+    ASSERT_EQ(a.u_px, b.u_px) << i;
+    ASSERT_EQ(a.v_px, b.v_px) << i;
+    ASSERT_EQ(a.peak_ratio, b.peak_ratio) << i;
+    ASSERT_EQ(a.flag, b.flag) << i;
+    ASSERT_FALSE(b.first_pass_only);
+  }
+  EXPECT_EQ(everything.summary.passes_run, full.summary.passes_run);
+}
+
+TEST(CrossCorrelation, AdaptiveRefinementOfAStillSceneRefinesAlmostNothing) {
+  const auto pair = render(sim::DisplacementModel::uniform(0, 0), 256);
+  XcorrOptions options;
+  options.adaptive_refinement = true;
+  const auto result = evaluate_xcorr(pair.reference, pair.measurement, options);
+  EXPECT_LT(result.summary.refined_fraction, 0.1);
+  EXPECT_LT(errors(result.field, pair.truth, 16).rms, 0.01);
+  EXPECT_TRUE(all_finite(result.field));
+}
+
+TEST(CrossCorrelation, AdaptiveRefinementKeepsMaskedWindowsMasked) {
+  const auto pair = render(sim::DisplacementModel::uniform(0, 0), 256);
+  cv::Mat mask(256, 256, CV_8U, cv::Scalar(0));
+  mask(cv::Rect(100, 100, 60, 60)).setTo(255);
+  XcorrOptions options;
+  const auto full = evaluate_xcorr(pair.reference, pair.measurement, options, mask);
+  options.adaptive_refinement = true;
+  const auto adaptive = evaluate_xcorr(pair.reference, pair.measurement, options, mask);
+  EXPECT_EQ(adaptive.summary.masked, full.summary.masked);
+  for (std::size_t i = 0; i < full.field.size(); ++i) {
+    EXPECT_EQ(adaptive.field.vectors[i].flag == VectorFlag::kMasked, full.field.vectors[i].flag == VectorFlag::kMasked)
+        << i;
+  }
+}
+
+TEST(CrossCorrelation, ProbesIgnoreAdaptiveRefinement) {
+  const auto pair = render(sim::DisplacementModel::uniform(0.3, -0.2), 192);
+  XcorrOptions options;
+  const std::vector<cv::Point2d> points{{96, 96}};
+  const auto plain = probe_xcorr(pair.reference, pair.measurement, points, options);
+  options.adaptive_refinement = true;
+  const auto adaptive = probe_xcorr(pair.reference, pair.measurement, points, options);
+  EXPECT_EQ(adaptive.field.vectors[0].u_px, plain.field.vectors[0].u_px);
+  EXPECT_FALSE(adaptive.field.vectors[0].first_pass_only);
+}
+
 // Numerical edge cases: flagged vectors, never NaN or a crash.
 
 TEST(CrossCorrelationEdges, ConstantImagesGiveNoTextureVectors) {
@@ -405,6 +555,11 @@ TEST(CrossCorrelationInput, ProblemsAreNamed) {
   odd.window_px = 4;
   EXPECT_NE(message_of([&] { evaluate_xcorr(pair.reference, pair.measurement, odd); }).find("8 to 128"),
             std::string::npos);
+  XcorrOptions no_threshold;
+  no_threshold.adaptive_threshold = 0;
+  EXPECT_NE(message_of([&] { evaluate_xcorr(pair.reference, pair.measurement, no_threshold); })
+                .find("adaptive refinement threshold"),
+            std::string::npos);
   const cv::Mat wrong_mask(10, 10, CV_8U, cv::Scalar(0));
   EXPECT_NE(message_of([&] { evaluate_xcorr(pair.reference, pair.measurement, {}, wrong_mask); }).find("mask size"),
             std::string::npos);
@@ -451,7 +606,7 @@ void expect_same_fields(const EvaluationResult& a, const EvaluationResult& b) {
 TEST(XcorrEvaluator, FramesAfterTheFirstEqualFreshEvaluations) {
   const auto first = render(sim::DisplacementModel::sinusoid(1.2, 96), 256, 0.01, 5);
   const std::vector<cv::Mat> frames = {
-      first.measurement, render(sim::DisplacementModel::bump_gradient(128, 128, 60, 1.5), 256, 0.01, 5).measurement,
+      first.measurement, render(sim::DisplacementModel::bump_gradient(80, 80, 24, 1.5), 256, 0.01, 5).measurement,
       render(sim::DisplacementModel::uniform(-0.7, 0.4), 256, 0.02, 5).measurement};
   cv::Mat mask(first.reference.size(), CV_8U, cv::Scalar(0));
   cv::circle(mask, {60, 190}, 25, cv::Scalar(255), cv::FILLED);
@@ -460,7 +615,9 @@ TEST(XcorrEvaluator, FramesAfterTheFirstEqualFreshEvaluations) {
   coarse_to_fine.max_shift_px = 6;
   XcorrOptions symmetric;  // the reference warped too: its statistics cannot be kept
   symmetric.symmetric_deformation = true;
-  for (const XcorrOptions& options : {XcorrOptions{}, coarse_to_fine, symmetric}) {
+  XcorrOptions adaptive;  // the bump is refined in tiles of a buffer an earlier frame warped whole
+  adaptive.adaptive_refinement = true;
+  for (const XcorrOptions& options : {XcorrOptions{}, coarse_to_fine, symmetric, adaptive}) {
     XcorrEvaluator evaluator(first.reference, options, mask);
     for (std::size_t i = 0; i < frames.size(); ++i) {
       SCOPED_TRACE(testing::Message() << "frame " << i << ", first window " << options.first_window_px);
@@ -470,6 +627,7 @@ TEST(XcorrEvaluator, FramesAfterTheFirstEqualFreshEvaluations) {
       expect_same_fields(reused, evaluate_xcorr(first.reference, frames[i], options, mask));
       EXPECT_GT(reused.summary.valid, reused.field.size() / 2);
       EXPECT_GT(reused.summary.masked, 0u);
+      if (options.adaptive_refinement && i == 1) EXPECT_LT(reused.summary.refined_fraction, 0.9) << "refined in part";
       const std::vector<cv::Point2d> points = {{100.5, 60.5}, {180, 200}};
       expect_same_fields(evaluator.probe(frames[i], points),
                          probe_xcorr(first.reference, frames[i], points, options, mask));

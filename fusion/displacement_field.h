@@ -35,6 +35,9 @@ struct DisplacementVector {
   double v_px = 0;
   double peak_ratio = 0;  // first / second correlation peak; 0 when not measured
   VectorFlag flag = VectorFlag::kOk;
+  // Adaptive refinement left it at the first pass's value (no displacement
+  // above the noise floor around it): a measurement, but a coarser one.
+  bool first_pass_only = false;
 
   bool valid() const { return flag == VectorFlag::kOk; }
 };

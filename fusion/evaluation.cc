@@ -13,9 +13,10 @@ std::string EvaluationSummary::BriefReport() const {
   const std::string windows = fmt::format("{}", fmt::join(window_px_per_pass, ","));
   return fmt::format(
       "{}: {} vectors, {} valid, {} outliers replaced, {} no texture, {} masked, {} out of ROI, {} no peak; "
-      "{} pass(es) (windows {} px){}; {:.3f} s",
+      "{} pass(es) (windows {} px){}{}; {:.3f} s",
       method, vectors, valid, outliers_replaced, no_texture, masked, out_of_roi, no_peak, passes_run, windows,
-      converged ? ", converged" : "", seconds);
+      converged ? ", converged" : "",
+      passes_run > 1 && refined_fraction < 1 ? fmt::format(", {:.1f} % refined", 100 * refined_fraction) : "", seconds);
 }
 
 cv::Rect effective_roi(cv::Rect roi, cv::Size image_size) {

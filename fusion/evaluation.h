@@ -20,6 +20,9 @@ struct EvaluationSummary {
   std::vector<int> window_px_per_pass;
   bool converged = false;     // stopped because a pass changed nothing
   double last_change_px = 0;  // max |Δu|,|Δv| of the last refinement pass
+  // Of the windows not out of the ROI, the fraction the refinement passes
+  // evaluated: 1 without adaptive refinement, 0 without a refinement pass.
+  double refined_fraction = 0;
   std::size_t vectors = 0;
   std::size_t valid = 0;
   std::size_t outliers_replaced = 0;

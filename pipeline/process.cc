@@ -80,6 +80,7 @@ json evaluation_json(const fusion::EvaluationSummary& s) {
           {"no_texture", s.no_texture},
           {"no_peak", s.no_peak},
           {"outliers_replaced", s.outliers_replaced},
+          {"refined_fraction", s.refined_fraction},
           {"seconds", s.seconds}};
 }
 

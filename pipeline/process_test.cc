@@ -112,6 +112,41 @@ TEST_F(Process, StoresItsSettingsReusesThemWithoutOptionsAndOptionsOverrideThem)
       << "only the current processing's field files are kept";
 }
 
+TEST_F(Process, AdaptiveRefinementIsASettingAndEachFieldStoresTheFractionRefined) {
+  ASSERT_TRUE(process(run()).complete);
+  EXPECT_EQ(current_settings(run()).at("adaptive_refinement"), false) << "the default";
+  for (const auto& f : storage::ProcessingStore(run()).fields()) {
+    if (f.kind == "displacement") {
+      EXPECT_EQ(json::parse(f.json).at("refined_fraction"), 1.0);
+    }
+  }
+  SettingsOverrides adaptive;
+  adaptive.adaptive_refinement = true;
+  adaptive.adaptive_threshold = 6;
+  ASSERT_TRUE(process(run(), adaptive).complete);
+  EXPECT_EQ(current_settings(run()).at("adaptive_refinement"), true);
+  EXPECT_EQ(current_settings(run()).at("adaptive_threshold"), 6);
+  std::size_t displacement_fields = 0;
+  for (const auto& f : storage::ProcessingStore(run()).fields()) {
+    if (f.kind != "displacement") continue;
+    const double fraction = json::parse(f.json).at("refined_fraction").get<double>();
+    EXPECT_GE(fraction, 0.0);
+    EXPECT_LE(fraction, 1.0);
+    ++displacement_fields;
+  }
+  EXPECT_GT(displacement_fields, 0u);
+  ASSERT_TRUE(process(run()).complete);
+  EXPECT_EQ(current_settings(run()).at("adaptive_refinement"), true) << "kept without options";
+  // Settings stored before the option existed read as off.
+  json old = current_settings(run());
+  old.erase("adaptive_refinement");
+  old.erase("adaptive_threshold");
+  EXPECT_FALSE(settings_from_json(old).evaluator.xcorr.adaptive_refinement);
+  SettingsOverrides bad;
+  bad.adaptive_threshold = 0;
+  EXPECT_THROW(process(run(), bad), std::runtime_error);
+}
+
 TEST_F(Process, AMaskOutsideTheRunIsCopiedIntoItAndARelativeOneMustBeInIt) {
   cv::imwrite((dir_ / "holder.png").string(), testrun::holder_mask(truth_));
   SettingsOverrides outside;

@@ -115,6 +115,8 @@ void apply_evaluator(const SettingsOverrides& o, ProcessingSettings& s) {
   if (o.passes) s.evaluator.xcorr.passes = *o.passes;
   if (o.probe_context_nodes) s.evaluator.xcorr.probe_context_nodes = *o.probe_context_nodes;
   if (o.max_shift_px) s.evaluator.xcorr.max_shift_px = *o.max_shift_px;
+  if (o.adaptive_refinement) s.evaluator.xcorr.adaptive_refinement = *o.adaptive_refinement;
+  if (o.adaptive_threshold) s.evaluator.xcorr.adaptive_threshold = *o.adaptive_threshold;
 }
 
 void apply(const SettingsOverrides& o, const fs::path& run_dir, const std::string& run_config, ProcessingSettings& s) {
@@ -127,7 +129,7 @@ void apply(const SettingsOverrides& o, const fs::path& run_dir, const std::strin
 
 bool SettingsOverrides::empty() const {
   return !probes_only && !method && !flow_algorithm && !window_px && !step_px && !passes && !probe_context_nodes &&
-         !max_shift_px && !roi_px && !mask && !geometry_file;
+         !max_shift_px && !adaptive_refinement && !adaptive_threshold && !roi_px && !mask && !geometry_file;
 }
 
 std::string ProcessingSettings::Validate() const {
@@ -144,7 +146,9 @@ json to_json(const ProcessingSettings& s) {
             {"step_px", x.step_px},
             {"passes", x.passes},
             {"max_shift_px", x.max_shift_px},
-            {"probe_context_nodes", x.probe_context_nodes}};
+            {"probe_context_nodes", x.probe_context_nodes},
+            {"adaptive_refinement", x.adaptive_refinement},
+            {"adaptive_threshold", x.adaptive_threshold}};
   if (!x.roi.empty()) j["roi_px"] = {x.roi.x, x.roi.y, x.roi.width, x.roi.height};
   if (!s.mask.empty()) j["mask"] = s.mask;
   j["geometry"] = geometry_json(s.geometry);
@@ -167,6 +171,9 @@ ProcessingSettings settings_from_json(const nlohmann::json& j) {
     s.evaluator.xcorr.passes = j.at("passes").get<int>();
     s.evaluator.xcorr.max_shift_px = j.at("max_shift_px").get<double>();
     s.evaluator.xcorr.probe_context_nodes = j.at("probe_context_nodes").get<int>();
+    // Settings stored before adaptive refinement existed: it was off.
+    s.evaluator.xcorr.adaptive_refinement = j.value("adaptive_refinement", false);
+    s.evaluator.xcorr.adaptive_threshold = j.value("adaptive_threshold", s.evaluator.xcorr.adaptive_threshold);
     s.mask = j.value("mask", std::string());
     s.geometry = geometry_from_json(j.at("geometry"));
     return s;
@@ -223,6 +230,8 @@ std::optional<SettingsOverrides> parse_processing_table(const std::string& text,
   o.passes = whole("passes");
   o.probe_context_nodes = whole("probe_context_nodes");
   o.max_shift_px = r.optional_number("max_shift_px");
+  o.adaptive_refinement = r.optional_bool("adaptive_refinement");
+  o.adaptive_threshold = r.optional_number("adaptive_threshold");
   if (r.has("roi_px")) {
     const std::vector<double> roi = r.numbers("roi_px");
     const bool whole_px =
@@ -276,6 +285,9 @@ std::string describe(const ProcessingSettings& s) {
                                  s.evaluator.method == fusion::Method::kOpticalFlow ? "optical flow" : "cross-correlation",
                                  x.window_px, x.step_px, x.passes, x.max_shift_px);
   if (s.probes_only) text += fmt::format(", probe context {}", x.probe_context_nodes);
+  if (x.adaptive_refinement && !s.probes_only) {
+    text += fmt::format(", adaptive refinement ({:g} × noise floor)", x.adaptive_threshold);
+  }
   if (!x.roi.empty()) text += fmt::format(", ROI {},{} {}×{} px", x.roi.x, x.roi.y, x.roi.width, x.roi.height);
   text += s.mask.empty() ? ", no mask" : ", mask " + s.mask;
   if (s.geometry.source.empty()) return text;

@@ -46,6 +46,8 @@ struct SettingsOverrides {
   std::optional<std::string> flow_algorithm;  // dis, farneback or tvl1
   std::optional<int> window_px, step_px, passes, probe_context_nodes;
   std::optional<double> max_shift_px;
+  std::optional<bool> adaptive_refinement;
+  std::optional<double> adaptive_threshold;
   std::optional<cv::Rect> roi_px;
   std::optional<std::string> mask;           // relative to the run folder, or absolute (then copied into it)
   std::optional<std::string> geometry_file;  // a TOML file with [geometry] / [alignment]

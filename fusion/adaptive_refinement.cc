@@ -1,0 +1,183 @@
+#include "fusion/adaptive_refinement.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <vector>
+
+namespace bosfuse::fusion {
+namespace {
+
+bool measured(const DisplacementVector& v) { return v.flag == VectorFlag::kOk; }
+
+double median_of(double* begin, int n) {
+  std::nth_element(begin, begin + n / 2, begin + n);
+  const double upper = begin[n / 2];
+  if (n % 2 == 1) return upper;
+  return 0.5 * (*std::max_element(begin, begin + n / 2) + upper);
+}
+
+// The component's central difference at (row, col), halved (change per
+// node); one-sided at the grid's edge and beside unmeasured nodes, 0 where
+// neither neighbour is measured.
+double node_gradient(const DisplacementField& field, int row, int col, int dr, int dc, bool u) {
+  auto value_at = [&](int r, int c, double& value) {
+    if (r < 0 || c < 0 || r >= field.rows || c >= field.cols || !measured(field.at(r, c))) return false;
+    value = u ? field.at(r, c).u_px : field.at(r, c).v_px;
+    return true;
+  };
+  double centre = 0, before = 0, after = 0;
+  value_at(row, col, centre);
+  const bool has_before = value_at(row - dr, col - dc, before);
+  const bool has_after = value_at(row + dr, col + dc, after);
+  if (has_before && has_after) return (after - before) / 2;
+  if (has_after) return after - centre;
+  if (has_before) return centre - before;
+  return 0;
+}
+
+}  // namespace
+
+double field_noise_floor_px(const DisplacementField& field) {
+  std::vector<double> residuals;
+  residuals.reserve(2 * field.vectors.size());
+  for (int row = 0; row < field.rows; ++row) {
+    for (int col = 0; col < field.cols; ++col) {
+      const auto& vec = field.at(row, col);
+      if (!measured(vec)) continue;
+      std::array<double, 8> u{}, v{};
+      int count = 0;
+      for (int dr = -1; dr <= 1; ++dr) {
+        for (int dc = -1; dc <= 1; ++dc) {
+          const int r = row + dr, c = col + dc;
+          if ((dr == 0 && dc == 0) || r < 0 || c < 0 || r >= field.rows || c >= field.cols) continue;
+          if (!measured(field.at(r, c))) continue;
+          u[count] = field.at(r, c).u_px;
+          v[count] = field.at(r, c).v_px;
+          ++count;
+        }
+      }
+      if (count < 3) continue;
+      residuals.push_back(std::abs(vec.u_px - median_of(u.data(), count)));
+      residuals.push_back(std::abs(vec.v_px - median_of(v.data(), count)));
+    }
+  }
+  if (residuals.size() < 16) return -1;  // 8 vectors, two components each
+  const double mad = median_of(residuals.data(), static_cast<int>(residuals.size()));
+  return std::isfinite(mad) ? 1.4826 * mad : -1;
+}
+
+cv::Mat displaced_nodes(const DisplacementField& field, double threshold_px) {
+  cv::Mat displaced = cv::Mat::zeros(field.rows, field.cols, CV_8U);
+  for (int row = 0; row < field.rows; ++row) {
+    for (int col = 0; col < field.cols; ++col) {
+      const auto& vec = field.at(row, col);
+      if (vec.flag == VectorFlag::kOutOfRoi) continue;
+      bool show = !measured(vec) || std::hypot(vec.u_px, vec.v_px) > threshold_px;
+      for (const bool u : {true, false}) {
+        if (show) break;
+        show = std::abs(node_gradient(field, row, col, 0, 1, u)) > threshold_px ||
+               std::abs(node_gradient(field, row, col, 1, 0, u)) > threshold_px;
+      }
+      // A NaN (which no evaluator should give) counts as displaced: refining it is safe.
+      if (show || !std::isfinite(vec.u_px) || !std::isfinite(vec.v_px)) displaced.at<std::uint8_t>(row, col) = 1;
+    }
+  }
+  return displaced;
+}
+
+RefinementSelection select_refinement(const DisplacementField& first_pass, const GridGeometry& first_grid,
+                                      const DisplacementField& target, const GridGeometry& target_grid,
+                                      double threshold_factor, int context_nodes) {
+  if (!(threshold_factor > 0)) throw std::invalid_argument("adaptive refinement threshold factor must be positive");
+  if (context_nodes < 0) throw std::invalid_argument("adaptive refinement context must be at least 0 nodes");
+  if (first_pass.rows != first_grid.rows || first_pass.cols != first_grid.cols || target.rows != target_grid.rows ||
+      target.cols != target_grid.cols) {
+    throw std::invalid_argument("adaptive refinement: a field does not match its grid");
+  }
+  RefinementSelection selection;
+  selection.noise_floor_px = field_noise_floor_px(first_pass);
+  cv::Mat refine(target.rows, target.cols, CV_8U, cv::Scalar(1));
+  if (selection.noise_floor_px >= 0 && first_pass.rows > 0 && first_pass.cols > 0) {
+    selection.threshold_px = threshold_factor * selection.noise_floor_px;
+    const cv::Mat displaced = displaced_nodes(first_pass, selection.threshold_px);
+    // The first-pass nodes a target node is interpolated from (field_warp.h's bilinear stencil).
+    auto stencil = [](double position_px, double origin_px, double step_px, int nodes) {
+      const double g = std::clamp((position_px - origin_px) / step_px, 0.0, double(nodes - 1));
+      const int i0 = std::min(static_cast<int>(g), nodes - 1);
+      return std::pair{i0, g > i0 ? std::min(i0 + 1, nodes - 1) : i0};  // not the node of weight 0
+    };
+    for (int row = 0; row < target.rows; ++row) {
+      const auto [r0, r1] =
+          stencil(target_grid.y0_px + row * target_grid.step_px, first_grid.y0_px, first_grid.step_px, first_grid.rows);
+      for (int col = 0; col < target.cols; ++col) {
+        const auto [c0, c1] = stencil(target_grid.x0_px + col * target_grid.step_px, first_grid.x0_px,
+                                      first_grid.step_px, first_grid.cols);
+        refine.at<std::uint8_t>(row, col) = displaced.at<std::uint8_t>(r0, c0) | displaced.at<std::uint8_t>(r0, c1) |
+                                            displaced.at<std::uint8_t>(r1, c0) | displaced.at<std::uint8_t>(r1, c1);
+      }
+    }
+    if (context_nodes > 0 && !refine.empty()) {
+      const cv::Mat square = cv::Mat::ones(2 * context_nodes + 1, 2 * context_nodes + 1, CV_8U);
+      cv::dilate(refine, refine, square, cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+    }
+  }
+  for (int row = 0; row < target.rows; ++row) {
+    for (int col = 0; col < target.cols; ++col) {
+      auto& node = refine.at<std::uint8_t>(row, col);
+      if (target.at(row, col).flag == VectorFlag::kOutOfRoi) {
+        node = 0;
+        continue;
+      }
+      ++selection.candidates;
+      selection.selected += node;
+    }
+  }
+  selection.refine = refine;
+  return selection;
+}
+
+void smooth_unrefined(DisplacementField& field, const cv::Mat& refine, double sigma_nodes) {
+  if (!(sigma_nodes >= 0) || !std::isfinite(sigma_nodes)) {
+    throw std::invalid_argument("adaptive refinement smoothing must be 0 or more nodes");
+  }
+  if (refine.rows != field.rows || refine.cols != field.cols || refine.type() != CV_8U) {
+    throw std::invalid_argument("adaptive refinement: the selection does not match the field");
+  }
+  if (sigma_nodes == 0 || field.vectors.empty()) return;
+  cv::Mat weight(field.rows, field.cols, CV_64F), u(field.rows, field.cols, CV_64F), v(field.rows, field.cols, CV_64F);
+  for (int row = 0; row < field.rows; ++row) {
+    for (int col = 0; col < field.cols; ++col) {
+      const auto& vec = field.at(row, col);
+      const double w = !refine.at<std::uint8_t>(row, col) && measured(vec) ? 1.0 : 0.0;
+      weight.at<double>(row, col) = w;
+      u.at<double>(row, col) = w * vec.u_px;
+      v.at<double>(row, col) = w * vec.v_px;
+    }
+  }
+  const int half = static_cast<int>(std::ceil(3 * sigma_nodes));
+  const cv::Mat kernel = cv::getGaussianKernel(2 * half + 1, sigma_nodes, CV_64F);
+  // Zero outside the grid: with the weights filtered alike, edges are normalised like the rest.
+  for (cv::Mat* m : {&weight, &u, &v}) {
+    cv::sepFilter2D(*m, *m, CV_64F, kernel, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
+  }
+  for (int row = 0; row < field.rows; ++row) {
+    for (int col = 0; col < field.cols; ++col) {
+      auto& vec = field.at(row, col);
+      if (refine.at<std::uint8_t>(row, col) || !measured(vec)) continue;
+      const double w = weight.at<double>(row, col);  // ≥ the node's own weight, > 0
+      vec.u_px = u.at<double>(row, col) / w;
+      vec.v_px = v.at<double>(row, col) / w;
+    }
+  }
+}
+
+int refinement_context_nodes(int window_px, int search_radius_px, int step_px) {
+  if (step_px < 1) throw std::invalid_argument("adaptive refinement: the grid step must be at least 1 px");
+  const int reach_px = window_px / 2 + search_radius_px + 4;
+  return (reach_px + step_px - 1) / step_px + 2;
+}
+
+}  // namespace bosfuse::fusion
