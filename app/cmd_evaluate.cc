@@ -198,7 +198,7 @@ void evaluate_sequence(const EvaluateArgs& args, const CLI::App& cmd) {
   spdlog::info("settings: {} ({})", pipeline::describe(settings), settings.source);
 
   // The reference, the mask and the settings are checked before anything is written.
-  const pipeline::SequenceEvaluator evaluator(args.sequence_reference, settings.evaluator, settings.mask);
+  pipeline::SequenceEvaluator evaluator(args.sequence_reference, settings.evaluator, settings.mask);
   const auto sequence = pipeline::list_image_sequence(args.sequence, {args.sequence_reference, settings.mask});
   for (const auto& file : sequence.left_out) spdlog::info("{}: the reference or the mask, not a frame", file);
   report::SequenceFieldWriter writer(

@@ -40,9 +40,10 @@ SequenceEvaluator::SequenceEvaluator(const std::string& reference_path, fusion::
   const cv::Rect roi = fusion::effective_roi(options_.xcorr.roi, reference_.size());
   fusion::check_window_fits(first_window_px(options_), roi.size());
   grid_ = fusion::evaluation_grid(roi, options_.xcorr.window_px, options_.xcorr.step_px);
+  evaluator_.emplace(reference_, options_, mask_);
 }
 
-SequenceFrameResult SequenceEvaluator::evaluate(const std::string& frame_path) const {
+SequenceFrameResult SequenceEvaluator::evaluate(const std::string& frame_path) {
   SequenceFrameResult result;
   result.name = frame_path;
   try {
@@ -55,9 +56,7 @@ SequenceFrameResult SequenceEvaluator::evaluate(const std::string& frame_path) c
       throw std::runtime_error(fmt::format("image size {}x{} differs from the reference's {}x{}", image.cols,
                                            image.rows, reference_.cols, reference_.rows));
     }
-    // The one evaluation call: an evaluator object keeping the reference
-    // prepared across frames would replace it here.
-    fusion::EvaluationResult evaluated = fusion::evaluate_displacement(reference_, image, options_, mask_);
+    fusion::EvaluationResult evaluated = evaluator_->evaluate(image);
     if (evaluated.field.rows != grid_.rows || evaluated.field.cols != grid_.cols) {
       throw std::logic_error(fmt::format("the field has {}x{} nodes, not the {}x{} of the sequence's grid",
                                          evaluated.field.cols, evaluated.field.rows, grid_.cols, grid_.rows));

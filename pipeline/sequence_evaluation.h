@@ -5,11 +5,13 @@
 // before any frame is evaluated, so a writer can lay out its
 // [frames, ny, nx] arrays first. A frame's own problem (unreadable, another
 // size than the reference, ...) is its result's status, not an exception:
-// the other frames go on. evaluate() is const and keeps nothing between
-// frames, so workers (threads, or MPI ranks each with its own evaluator)
-// can take any frame index in any order.
+// the other frames go on. evaluate() keeps the reference prepared and its
+// buffers from frame to frame (fusion::DisplacementEvaluator) and takes the
+// frames in any order: workers (threads, or MPI ranks) each hold their own
+// SequenceEvaluator and may take any frame index.
 
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 
 #include "fusion/displacement_evaluator.h"
@@ -36,7 +38,7 @@ class SequenceEvaluator {
   SequenceEvaluator(const std::string& reference_path, fusion::EvaluatorOptions options,
                     const std::string& mask_path = {});
 
-  SequenceFrameResult evaluate(const std::string& frame_path) const;
+  SequenceFrameResult evaluate(const std::string& frame_path);
 
   // Window centres of every field: cols × rows nodes from (x0, y0) every step.
   const fusion::GridGeometry& grid() const { return grid_; }
@@ -48,6 +50,7 @@ class SequenceEvaluator {
   cv::Mat mask_;
   fusion::EvaluatorOptions options_;
   fusion::GridGeometry grid_;
+  std::optional<fusion::DisplacementEvaluator> evaluator_;  // made once the reference is checked
 };
 
 }  // namespace bosfuse::pipeline

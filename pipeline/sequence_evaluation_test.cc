@@ -44,7 +44,7 @@ class SequenceEvaluation : public ::testing::Test {
 };
 
 TEST_F(SequenceEvaluation, EachFrameGetsItsFieldOnTheGridKnownBeforehand) {
-  const SequenceEvaluator evaluator(path("ref.png"), options_);
+  SequenceEvaluator evaluator(path("ref.png"), options_);
   EXPECT_EQ(evaluator.grid().cols, (96 - 16) / 8 + 1);
   EXPECT_EQ(evaluator.grid().rows, (64 - 16) / 8 + 1);
   // In any order: nothing is kept between frames.
@@ -59,7 +59,7 @@ TEST_F(SequenceEvaluation, EachFrameGetsItsFieldOnTheGridKnownBeforehand) {
 }
 
 TEST_F(SequenceEvaluation, AFramesOwnProblemIsItsStatus) {
-  const SequenceEvaluator evaluator(path("ref.png"), options_);
+  SequenceEvaluator evaluator(path("ref.png"), options_);
   std::ofstream(path("junk.png")) << "not an image";
   const auto junk = evaluator.evaluate(path("junk.png"));
   EXPECT_FALSE(junk.ok());
