@@ -16,6 +16,7 @@
 #include "fusion/bos_geometry.h"
 #include "fusion/image_quality.h"
 #include "fusion/temperature_field.h"
+#include "pipeline/frame_prefetch.h"
 #include "pipeline/probe_calibration.h"
 #include "pipeline/quality_json.h"
 #include "pipeline/run_selection.h"
@@ -30,6 +31,26 @@ namespace fs = std::filesystem;
 using json = nlohmann::ordered_json;
 using storage::ChannelInfo;
 using storage::FrameRecord;
+using Clock = std::chrono::steady_clock;
+
+// Adds the wall time of its scope to `seconds`.
+class AddTime {
+ public:
+  explicit AddTime(double& seconds) : seconds_(seconds) {}
+  ~AddTime() { seconds_ += std::chrono::duration<double>(Clock::now() - start_).count(); }
+  AddTime(const AddTime&) = delete;
+  AddTime& operator=(const AddTime&) = delete;
+
+ private:
+  double& seconds_;
+  const Clock::time_point start_ = Clock::now();
+};
+
+template <class Work>
+decltype(auto) timed(double& seconds, Work&& work) {
+  const AddTime add(seconds);
+  return work();
+}
 
 json number_or_null(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
 
@@ -104,6 +125,15 @@ struct FrameContext {
   ProcessingSettings settings;
   std::optional<fusion::BosGeometry> geometry;
   std::map<std::int64_t, ChannelCalibration> calibration;
+
+  // The one place frames meet the evaluator: an evaluator object that keeps
+  // the reference prepared across frames slots in here.
+  fusion::EvaluationResult evaluate(const cv::Mat& measurement) const {
+    return fusion::evaluate_displacement(reference, measurement, settings.evaluator, mask);
+  }
+  fusion::EvaluationResult probe(const cv::Mat& measurement) const {
+    return fusion::probe_displacement(reference, measurement, points, settings.evaluator, mask);
+  }
 };
 
 // Everything measured at the probes of one frame, and the field rows.
@@ -114,18 +144,21 @@ struct FrameResult {
   json summary;
 };
 
-FrameResult evaluate_full(const FrameContext& ctx, const FrameRecord& frame, const cv::Mat& measurement) {
+FrameResult evaluate_full(const FrameContext& ctx, const FrameRecord& frame, const cv::Mat& measurement,
+                          ProcessTimes& times) {
   FrameResult out;
-  const auto evaluated = fusion::evaluate_displacement(ctx.reference, measurement, ctx.settings.evaluator, ctx.mask);
+  const auto evaluated = timed(times.evaluation_s, [&] { return ctx.evaluate(measurement); });
   out.summary = evaluation_json(evaluated.summary);
   const std::string stem = fmt::format("{}/frame_{:06d}", ctx.fields_dir, frame.id);
-  fusion::write_csv(evaluated.field, ctx.run_dir / (stem + "_displacement.csv"));
+  timed(times.csv_s, [&] { fusion::write_csv(evaluated.field, ctx.run_dir / (stem + "_displacement.csv")); });
   out.fields.push_back({0, frame.id, "displacement", stem + "_displacement.csv", out.summary.dump()});
   std::optional<fusion::TemperatureFieldResult> temperature;
   if (evaluated.field.rows >= 3 && evaluated.field.cols >= 3) {
     const auto& field_options = ctx.settings.geometry.temperature_field;
-    temperature = fusion::recover_temperature_field(evaluated.field, *ctx.geometry, field_options);
-    fusion::write_csv(temperature->field, ctx.run_dir / (stem + "_temperature.csv"));
+    temperature = timed(times.temperature_field_s, [&] {
+      return fusion::recover_temperature_field(evaluated.field, *ctx.geometry, field_options);
+    });
+    timed(times.csv_s, [&] { fusion::write_csv(temperature->field, ctx.run_dir / (stem + "_temperature.csv")); });
     const auto& s = temperature->summary;
     out.fields.push_back({0, frame.id, "temperature", stem + "_temperature.csv",
                           json{{"min_c", number_or_null(s.min_c)},
@@ -142,11 +175,10 @@ FrameResult evaluate_full(const FrameContext& ctx, const FrameRecord& frame, con
   return out;
 }
 
-FrameResult evaluate_probes(const FrameContext& ctx, const cv::Mat& measurement) {
+FrameResult evaluate_probes(const FrameContext& ctx, const cv::Mat& measurement, ProcessTimes& times) {
   FrameResult out;
   if (ctx.points.empty()) return out;
-  const auto evaluated =
-      fusion::probe_displacement(ctx.reference, measurement, ctx.points, ctx.settings.evaluator, ctx.mask);
+  const auto evaluated = timed(times.evaluation_s, [&] { return ctx.probe(measurement); });
   out.summary = evaluation_json(evaluated.summary);
   for (const auto& v : evaluated.field.vectors) {
     out.shifts.push_back({v.u_px, v.v_px, v.valid()});
@@ -156,11 +188,10 @@ FrameResult evaluate_probes(const FrameContext& ctx, const cv::Mat& measurement)
 }
 
 // Evaluates one frame and stages its results in one transaction.
-void process_frame(const FrameContext& ctx, const FrameRecord& frame, storage::ProcessingStore& results,
-                   std::int64_t processing_id) {
-  const cv::Mat measurement = load_frame(ctx.run_dir, frame);
-  const FrameResult r = ctx.settings.probes_only ? evaluate_probes(ctx, measurement)
-                                                 : evaluate_full(ctx, frame, measurement);
+void process_frame(const FrameContext& ctx, const FrameRecord& frame, const cv::Mat& measurement,
+                   storage::ProcessingStore& results, std::int64_t processing_id, ProcessTimes& times) {
+  const FrameResult r = ctx.settings.probes_only ? evaluate_probes(ctx, measurement, times)
+                                                 : evaluate_full(ctx, frame, measurement, times);
   std::vector<storage::ProbeSampleRecord> samples;
   for (std::size_t p = 0; p < ctx.channels.size(); ++p) {
     const PointShift& s = r.shifts[p];
@@ -170,7 +201,7 @@ void process_frame(const FrameContext& ctx, const FrameRecord& frame, storage::P
     samples.push_back({ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift, s.valid ? t_c : std::nullopt,
                        s.valid});
   }
-  results.stage_frame(processing_id, frame.id, r.summary.dump(), samples, r.fields);
+  timed(times.staging_s, [&] { results.stage_frame(processing_id, frame.id, r.summary.dump(), samples, r.fields); });
 }
 
 // The probe series a Newton fit sees: temperatures when every valid sample
@@ -298,11 +329,24 @@ FitsAndAgreements fit_everything(const storage::RunStore& store, const storage::
   return out;
 }
 
-json quality_json(const FrameContext& ctx, const RunFrames& frames, const storage::ExperimentClock& clock) {
+// `last_image`: the last frame's image when this processing still has it
+// (empty: read again, as after a resume that had nothing left to do).
+json quality_json(const FrameContext& ctx, const RunFrames& frames, const cv::Mat& last_image,
+                  const storage::ExperimentClock& clock) {
   const FrameRecord& last = frames.measurements.back();
   json j = {{"frame_id", last.id}, {"reference_frame_id", frames.reference.id}, {"t_s", clock.seconds(last.t_ns)}};
-  j.update(to_json(fusion::modified_quality_index(load_frame(ctx.run_dir, last), ctx.reference)));
+  const cv::Mat image = last_image.empty() ? load_frame(ctx.run_dir, last) : last_image;
+  j.update(to_json(fusion::modified_quality_index(image, ctx.reference)));
   return j;
+}
+
+// The frames a processing has still to evaluate, in time order.
+std::vector<FrameRecord> frames_to_do(const RunFrames& frames, const std::set<std::int64_t>& done) {
+  std::vector<FrameRecord> out;
+  for (const FrameRecord& frame : frames.measurements) {
+    if (!done.count(frame.id)) out.push_back(frame);
+  }
+  return out;
 }
 
 FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& store,
@@ -338,9 +382,19 @@ std::string temperature_source(const FrameContext& ctx) {
 
 }  // namespace
 
+std::string ProcessOptions::Validate() const {
+  if (prefetch_frames < 0) {
+    return fmt::format("prefetch_frames is {}; it must be 0 (decode on the calling thread) or more", prefetch_frames);
+  }
+  return "";
+}
+
 ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options) {
   FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres' own logging; the fit summaries say it better
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
+  if (const std::string problem = options.Validate(); !problem.empty()) {
+    throw std::invalid_argument("process options: " + problem);
+  }
   if (!storage::RunStore::holds_run(run_dir)) throw std::runtime_error("'" + run_dir.string() + "' holds no bosfuse run");
   const auto lock = storage::RunLock::try_acquire(run_dir, "process.lock");
   if (!lock) {
@@ -355,6 +409,10 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   // then equals the full field at its point.
   processing.settings.evaluator.xcorr.convergence_px = 0;
   const RunFrames frames = split_frames(store.frames());
+  const auto staged = results.staged_frame_ids(processing.id);
+  const std::set<std::int64_t> done(staged.begin(), staged.end());
+  // Started before the context is read, so the first frame decodes beside the reference.
+  FramePrefetch ahead(run_dir, frames_to_do(frames, done), options.prefetch_frames);
   const FrameContext ctx = frame_context(run_dir, store, results, processing, frames, clock);
 
   ProcessReport report;
@@ -362,8 +420,6 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   report.frames = frames.measurements.size();
   report.probes = ctx.channels.size();
   report.temperature_source = temperature_source(ctx);
-  const auto staged = results.staged_frame_ids(processing.id);
-  const std::set<std::int64_t> done(staged.begin(), staged.end());
   report.frames_resumed = done.size();
   auto progress = [&](std::size_t n, const std::string& line, bool frame = false) {
     if (options.progress) options.progress({n, report.frames, line, frame});
@@ -375,18 +431,24 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
     progress(done.size(), "geometry from " + ctx.settings.geometry.source + ":\n" + ctx.geometry->brief_report());
   }
   std::size_t n = done.size();
-  for (const FrameRecord& frame : frames.measurements) {
-    if (done.count(frame.id)) continue;
+  cv::Mat last_image;  // the quality index's, kept rather than decoded twice
+  while (ahead.remaining() > 0) {
     if (options.stop && options.stop->load()) {
       report.text = processing.note + fmt::format("stopped after {} of {} frames; the run's earlier results are "
                                                   "unchanged; `bosfuse process {} --resume` continues\n",
                                                   n, report.frames, run_dir.string());
       return report;
     }
-    process_frame(ctx, frame, results, processing.id);
+    PrefetchedFrame next = *ahead.next();
+    report.times.decode_s += next.decode_seconds;
+    report.times.wait_for_frames_s += next.wait_seconds;
+    const FrameRecord& frame = next.frame;
+    process_frame(ctx, frame, next.image, results, processing.id, report.times);
     progress(++n, fmt::format("frame {} (t = {:.2f} s) evaluated", frame.id, clock.seconds(frame.t_ns)), true);
+    if (frame.id == frames.measurements.back().id) last_image = std::move(next.image);
   }
 
+  const auto finishing = Clock::now();
   const FitsAndAgreements fitted = fit_everything(store, results, ctx, processing.id, clock);
   for (const auto& f : fitted.fits) report.fits_ok += f.ok ? 1 : 0;
   report.fits = fitted.fits.size();
@@ -395,11 +457,12 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
                         {"probes", report.probes},
                         {"temperature_source", report.temperature_source},
                         {"time_basis", clock.basis()},
-                        {"quality", quality_json(ctx, frames, clock)}};
+                        {"quality", quality_json(ctx, frames, last_image, clock)}};
   results.complete_processing(processing.id, fitted.fits, fitted.agreements, summary.dump(), acquisition::utc_now_ns());
   remove_fields_except(run_dir, fmt::format("p{}", processing.id));
   report.complete = true;
-  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report.times.finishing_s = std::chrono::duration<double>(Clock::now() - finishing).count();
+  report.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   report.text = processing.note +
                 fmt::format("{} frames{}, {} probes ({}), temperatures from {}; {} of {} fits ok, {} agreements, "
                             "{:.1f} s; times in {}\n",

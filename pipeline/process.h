@@ -18,7 +18,9 @@
 // The settings used (processing_settings.h) are stored with the results.
 // Results are written aside, one frame per transaction, while the work goes
 // on; they replace the run's current results in one transaction only when
-// every frame is done. A processing that is interrupted (Ctrl-C, a crash,
+// every frame is done. The next frame is decoded on a second thread while
+// one is evaluated (frame_prefetch.h); results are written on the calling
+// thread, in frame order, either way. A processing that is interrupted (Ctrl-C, a crash,
 // kill -9) leaves the current results as they were, and `resume` continues
 // it with its own settings from the first frame it had not finished.
 
@@ -44,6 +46,25 @@ struct ProcessOptions {
   bool resume = false;          // continue the run's interrupted processing (no overrides allowed)
   std::function<void(const ProcessProgress&)> progress;  // may be empty
   const std::atomic<bool>* stop = nullptr;  // when it becomes true: stop after the current frame, resumable
+  // Frames decoded ahead of the evaluation, on a second thread (frame_prefetch.h);
+  // 0 decodes each on the calling thread. Each costs a frame's memory (32 MB at
+  // 16 MP, 16 bits) and gives the same results.
+  int prefetch_frames = 1;
+
+  std::string Validate() const;  // empty when valid
+};
+
+// Where a processing's time went, in wall seconds summed over the frames it
+// evaluated. With frames decoded ahead, decode_s runs beside the evaluation
+// and wait_for_frames_s is what of it the frame loop still waited for.
+struct ProcessTimes {
+  double decode_s = 0;             // reading and decoding frames, on whichever thread did it
+  double wait_for_frames_s = 0;    // the frame loop held up by decoding
+  double evaluation_s = 0;         // displacement fields or probes
+  double temperature_field_s = 0;  // the physical model's field (full fields only)
+  double csv_s = 0;                // writing the field files
+  double staging_s = 0;            // storing each frame's results (one transaction per frame)
+  double finishing_s = 0;          // fits, agreements, quality index, the swap into the current results
 };
 
 struct ProcessReport {
@@ -57,6 +78,7 @@ struct ProcessReport {
   std::size_t agreements = 0;
   std::string temperature_source;  // calibration, physical model, none
   double seconds = 0;
+  ProcessTimes times;
   std::string text;  // what a person reads at the end
 };
 
