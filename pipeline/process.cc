@@ -126,13 +126,12 @@ struct FrameContext {
   std::optional<fusion::BosGeometry> geometry;
   std::map<std::int64_t, ChannelCalibration> calibration;
 
-  // The one place frames meet the evaluator: an evaluator object that keeps
-  // the reference prepared across frames slots in here.
+  // The one place frames meet the evaluator (an evaluator object that keeps
+  // the reference prepared across frames slots in here): the full field, or
+  // only the windows at the probes.
   fusion::EvaluationResult evaluate(const cv::Mat& measurement) const {
-    return fusion::evaluate_displacement(reference, measurement, settings.evaluator, mask);
-  }
-  fusion::EvaluationResult probe(const cv::Mat& measurement) const {
-    return fusion::probe_displacement(reference, measurement, points, settings.evaluator, mask);
+    return settings.probes_only ? fusion::probe_displacement(reference, measurement, points, settings.evaluator, mask)
+                                : fusion::evaluate_displacement(reference, measurement, settings.evaluator, mask);
   }
 };
 
@@ -144,10 +143,9 @@ struct FrameResult {
   json summary;
 };
 
-FrameResult evaluate_full(const FrameContext& ctx, const FrameRecord& frame, const cv::Mat& measurement,
-                          ProcessTimes& times) {
+FrameResult finish_full(const FrameContext& ctx, const FrameRecord& frame, const fusion::EvaluationResult& evaluated,
+                        ProcessTimes& times) {
   FrameResult out;
-  const auto evaluated = timed(times.evaluation_s, [&] { return ctx.evaluate(measurement); });
   out.summary = evaluation_json(evaluated.summary);
   const std::string stem = fmt::format("{}/frame_{:06d}", ctx.fields_dir, frame.id);
   timed(times.csv_s, [&] { fusion::write_csv(evaluated.field, ctx.run_dir / (stem + "_displacement.csv")); });
@@ -175,10 +173,8 @@ FrameResult evaluate_full(const FrameContext& ctx, const FrameRecord& frame, con
   return out;
 }
 
-FrameResult evaluate_probes(const FrameContext& ctx, const cv::Mat& measurement, ProcessTimes& times) {
+FrameResult finish_probes(const fusion::EvaluationResult& evaluated) {
   FrameResult out;
-  if (ctx.points.empty()) return out;
-  const auto evaluated = timed(times.evaluation_s, [&] { return ctx.probe(measurement); });
   out.summary = evaluation_json(evaluated.summary);
   for (const auto& v : evaluated.field.vectors) {
     out.shifts.push_back({v.u_px, v.v_px, v.valid()});
@@ -187,22 +183,74 @@ FrameResult evaluate_probes(const FrameContext& ctx, const cv::Mat& measurement,
   return out;
 }
 
-// Evaluates one frame and stages its results in one transaction.
-void process_frame(const FrameContext& ctx, const FrameRecord& frame, const cv::Mat& measurement,
-                   storage::ProcessingStore& results, std::int64_t processing_id, ProcessTimes& times) {
-  const FrameResult r = ctx.settings.probes_only ? evaluate_probes(ctx, measurement, times)
-                                                 : evaluate_full(ctx, frame, measurement, times);
+// A frame's results as one transaction stages them, and what making them
+// took (temperature field, field files).
+struct FinishedFrame {
+  FrameRecord frame;
+  FrameResult result;
   std::vector<storage::ProbeSampleRecord> samples;
+  ProcessTimes times;
+};
+
+// All of a frame's work after its evaluation: thread-safe against the next
+// frame's evaluation (it only reads `ctx` and writes the frame's own files).
+FinishedFrame finish_frame(const FrameContext& ctx, const FrameRecord& frame,
+                           const fusion::EvaluationResult& evaluated) {
+  FinishedFrame out{frame, {}, {}, {}};
+  out.result = ctx.settings.probes_only ? finish_probes(evaluated) : finish_full(ctx, frame, evaluated, out.times);
   for (std::size_t p = 0; p < ctx.channels.size(); ++p) {
-    const PointShift& s = r.shifts[p];
+    const PointShift& s = out.result.shifts[p];
     const double shift = std::hypot(s.u_px, s.v_px);
     auto t_c = calibrated_temperature_c(ctx.calibration, ctx.channels[p].id, shift);
-    if (!t_c) t_c = r.model_temperature_c[p];
-    samples.push_back({ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift, s.valid ? t_c : std::nullopt,
-                       s.valid});
+    if (!t_c) t_c = out.result.model_temperature_c[p];
+    out.samples.push_back({ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift,
+                           s.valid ? t_c : std::nullopt, s.valid});
   }
-  timed(times.staging_s, [&] { results.stage_frame(processing_id, frame.id, r.summary.dump(), samples, r.fields); });
+  return out;
 }
+
+// The frame being finished on a second thread while the next one is
+// evaluated (or, in turn, finished when it is staged), staged on the calling
+// thread in frame order, one transaction each.
+class FinishingFrame {
+ public:
+  FinishingFrame(storage::ProcessingStore& results, std::int64_t processing_id, ProcessTimes& times)
+      : results_(results), processing_id_(processing_id), times_(times) {}
+
+  // Stages the frame finishing before, then starts this one's finishing.
+  void start(const FrameContext& ctx, const FrameRecord& frame, fusion::EvaluationResult evaluated, bool aside) {
+    stage();
+    finishing_ = std::async(aside ? std::launch::async : std::launch::deferred,
+                            [&ctx, frame, evaluated = std::move(evaluated)] { return finish_frame(ctx, frame, evaluated); });
+  }
+
+  // The frame before one that failed is staged as in turn it would have
+  // been, so a resume starts at the failing one; the first error is the one
+  // to report, so this one's own is dropped.
+  void stage_before_error() noexcept {
+    try {
+      stage();
+    } catch (...) {
+    }
+  }
+
+  // Waits for the frame finishing, if any, and stages it.
+  void stage() {
+    if (!finishing_.valid()) return;
+    const FinishedFrame f = timed(times_.wait_for_finishing_s, [&] { return finishing_.get(); });
+    times_.temperature_field_s += f.times.temperature_field_s;
+    times_.csv_s += f.times.csv_s;
+    timed(times_.staging_s, [&] {
+      results_.stage_frame(processing_id_, f.frame.id, f.result.summary.dump(), f.samples, f.result.fields);
+    });
+  }
+
+ private:
+  storage::ProcessingStore& results_;
+  const std::int64_t processing_id_;
+  ProcessTimes& times_;
+  std::future<FinishedFrame> finishing_;  // a std::async future: its destructor waits for the thread
+};
 
 // The probe series a Newton fit sees: temperatures when every valid sample
 // has one, else the shift; experiment seconds on the host clock (frame time
@@ -432,23 +480,33 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   }
   std::size_t n = done.size();
   cv::Mat last_image;  // the quality index's, kept rather than decoded twice
+  FinishingFrame finished_aside(results, processing.id, report.times);
   while (ahead.remaining() > 0) {
     if (options.stop && options.stop->load()) {
+      finished_aside.stage();
       report.text = processing.note + fmt::format("stopped after {} of {} frames; the run's earlier results are "
                                                   "unchanged; `bosfuse process {} --resume` continues\n",
                                                   n, report.frames, run_dir.string());
       return report;
     }
-    PrefetchedFrame next = *ahead.next();
-    report.times.decode_s += next.decode_seconds;
-    report.times.wait_for_frames_s += next.wait_seconds;
-    const FrameRecord& frame = next.frame;
-    process_frame(ctx, frame, next.image, results, processing.id, report.times);
-    progress(++n, fmt::format("frame {} (t = {:.2f} s) evaluated", frame.id, clock.seconds(frame.t_ns)), true);
-    if (frame.id == frames.measurements.back().id) last_image = std::move(next.image);
+    try {
+      PrefetchedFrame next = *ahead.next();
+      report.times.decode_s += next.decode_seconds;
+      report.times.wait_for_frames_s += next.wait_seconds;
+      const FrameRecord& frame = next.frame;
+      auto evaluated = timed(report.times.evaluation_s, [&] { return ctx.evaluate(next.image); });
+      finished_aside.start(ctx, frame, std::move(evaluated), options.finish_aside);
+      if (!options.finish_aside) finished_aside.stage();
+      progress(++n, fmt::format("frame {} (t = {:.2f} s) evaluated", frame.id, clock.seconds(frame.t_ns)), true);
+      if (frame.id == frames.measurements.back().id) last_image = std::move(next.image);
+    } catch (...) {
+      finished_aside.stage_before_error();
+      throw;
+    }
   }
+  finished_aside.stage();
 
-  const auto finishing = Clock::now();
+  const auto fits_start = Clock::now();
   const FitsAndAgreements fitted = fit_everything(store, results, ctx, processing.id, clock);
   for (const auto& f : fitted.fits) report.fits_ok += f.ok ? 1 : 0;
   report.fits = fitted.fits.size();
@@ -461,7 +519,7 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   results.complete_processing(processing.id, fitted.fits, fitted.agreements, summary.dump(), acquisition::utc_now_ns());
   remove_fields_except(run_dir, fmt::format("p{}", processing.id));
   report.complete = true;
-  report.times.finishing_s = std::chrono::duration<double>(Clock::now() - finishing).count();
+  report.times.finishing_s = std::chrono::duration<double>(Clock::now() - fits_start).count();
   report.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   report.text = processing.note +
                 fmt::format("{} frames{}, {} probes ({}), temperatures from {}; {} of {} fits ok, {} agreements, "

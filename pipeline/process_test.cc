@@ -22,18 +22,21 @@ using json = nlohmann::json;
 
 ProcessReport process(const fs::path& run, SettingsOverrides overrides = {}, bool resume = false,
                       const std::atomic<bool>* stop = nullptr,
-                      std::function<void(const ProcessProgress&)> progress = {}, int prefetch_frames = 1) {
+                      std::function<void(const ProcessProgress&)> progress = {}, bool pipelined = true) {
   ProcessOptions options;
   options.overrides = std::move(overrides);
   options.resume = resume;
   options.stop = stop;
   options.progress = std::move(progress);
-  options.prefetch_frames = prefetch_frames;
+  options.prefetch_frames = pipelined ? 1 : 0;
+  options.finish_aside = pipelined;
   return process_run(run, options);
 }
 
-ProcessReport process_with_prefetch(const fs::path& run, int prefetch_frames, SettingsOverrides overrides = {}) {
-  return process(run, std::move(overrides), false, nullptr, {}, prefetch_frames);
+// Pipelined: the next frame decoded and the last one finished while one is
+// evaluated; else each step in turn.
+ProcessReport process_pipelined(const fs::path& run, bool pipelined, SettingsOverrides overrides = {}) {
+  return process(run, std::move(overrides), false, nullptr, {}, pipelined);
 }
 
 // More measurement frames of the bump, each its own peak, stored out of time
@@ -217,46 +220,51 @@ TEST_F(Process, ASecondProcessingOfTheRunIsRefusedWhileOneRuns) {
   EXPECT_FALSE(storage::ProcessingStore(run()).unfinished_processing()) << "the refused one left nothing behind";
 }
 
-TEST_F(Process, FramesDecodedAheadGiveTheSameResultsAsFramesDecodedInTurn) {
+TEST_F(Process, ThePipelinedProcessingStoresWhatOneInTurnStores) {
   add_frames(run(), truth_);
   for (const bool probes_only : {false, true}) {
     SCOPED_TRACE(probes_only ? "probe mode" : "full fields");
     SettingsOverrides mode;
     mode.probes_only = probes_only;
-    const auto in_turn = process_with_prefetch(run(), 0, mode);
+    const auto in_turn = process_pipelined(run(), false, mode);
     ASSERT_TRUE(in_turn.complete);
     EXPECT_EQ(in_turn.frames, 6u);
     const Results sequential(run());
     EXPECT_EQ(sequential.probes.at(0).second.size(), 6u);
     EXPECT_EQ(sequential.field_files.size(), probes_only ? 0u : 12u);
-    const auto ahead = process_with_prefetch(run(), 1, mode);
-    ASSERT_TRUE(ahead.complete);
+    const auto pipelined = process_pipelined(run(), true, mode);
+    ASSERT_TRUE(pipelined.complete);
     expect_equal(Results(run()), sequential);
-    EXPECT_GT(ahead.times.decode_s, 0) << "the decoding is accounted for";
-    EXPECT_GT(ahead.times.evaluation_s, 0);
+    EXPECT_GT(pipelined.times.decode_s, 0) << "the decoding is accounted for";
+    EXPECT_GT(pipelined.times.evaluation_s, 0);
+    if (!probes_only) {
+      EXPECT_GT(pipelined.times.csv_s, 0) << "the field files, written aside, are accounted for";
+    }
   }
 }
 
-TEST_F(Process, AnUnreadableFrameFailsAtItsOwnFrameWithTheSameMessageReadAheadOrNot) {
+TEST_F(Process, AnUnreadableFrameFailsAtItsOwnFrameWithTheSameMessagePipelinedOrNot) {
   const auto frames = storage::RunStore::open(run()).frames();
   const storage::FrameRecord& second = frames.back();  // the later of the two measurements
   ASSERT_FALSE(second.is_reference);
   std::ofstream(run() / second.path, std::ios::trunc) << "not a PNG";
   std::string messages[2];
-  for (const int prefetch : {0, 1}) {
+  for (const bool pipelined : {false, true}) {
     try {
-      process_with_prefetch(run(), prefetch);
+      process_pipelined(run(), pipelined);
       FAIL() << "an unreadable frame was processed";
     } catch (const std::runtime_error& e) {
-      messages[prefetch] = e.what();
+      messages[pipelined] = e.what();
     }
     EXPECT_EQ(staged_frames(run()), std::vector<std::int64_t>{frames[1].id})
-        << "the frame before the unreadable one was done, with the look-ahead " << prefetch;
+        << "the frame before the unreadable one was done, " << (pipelined ? "pipelined" : "in turn");
   }
   EXPECT_NE(messages[0].find("frame " + std::to_string(second.id) + " "), std::string::npos) << messages[0];
   EXPECT_NE(messages[0].find("unreadable image"), std::string::npos) << messages[0];
   EXPECT_EQ(messages[1], messages[0]);
-  EXPECT_THROW(process_with_prefetch(run(), -1), std::invalid_argument);
+  ProcessOptions negative;
+  negative.prefetch_frames = -1;
+  EXPECT_THROW(process_run(run(), negative), std::invalid_argument);
 }
 
 TEST(ProcessTime, FitsAreInExperimentSecondsFromTheDeclaredOriginAndScale) {
