@@ -14,14 +14,17 @@
 // 16-bit PNG with a plume whose deflection fades, full fields with the
 // process defaults: each step in turn (/prefetch:0/aside:0), the next frame
 // decoded ahead (/prefetch:1/aside:0), and also the last frame's temperature
-// field and field files made aside (/prefetch:1/aside:1, the default). Counters: frames per second (wall), the peak resident
-// memory of the processing (VmHWM, reset before each; where the kernel cannot
-// reset it, getrusage's maximum over the process's life — then run one
-// variant per process), and per frame the costs besides the evaluation
-// (ProcessReport::times). The frames are rendered once into a cache
-// ($BOSFUSE_BENCH_CACHE, else $TMPDIR/bosfuse-bench-cache: about 1 GB) and
-// linked into a scratch run; rendering is never timed. Run it on its own:
-//   build/bench/process_bench --benchmark_filter=16MP --benchmark_repetitions=3 --benchmark_enable_random_interleaving=true
+// field and field files made aside (/prefetch:1/aside:1, the default).
+// Counters: frames per second (wall); the peak resident memory of the
+// processing (VmHWM, reset before each run; where the kernel cannot reset
+// it, peak_is_lifetime = 1 and it is getrusage's maximum over the process's
+// life: then run one variant per process); per frame, the costs besides the
+// evaluation (ProcessReport::times). The frames are rendered once into a
+// cache ($BOSFUSE_BENCH_CACHE, else $TMPDIR/bosfuse-bench-cache: 650 MB) and
+// linked into a scratch run; rendering is never timed. Each run takes a
+// minute or more: run it on its own, on a loaded machine one variant per
+// process, alternating, e.g.
+//   build/bench/process_bench --benchmark_filter='16MP/prefetch:1/aside:1'
 // Figures: docs/BENCHMARKS.md, "Processing".
 
 #include <benchmark/benchmark.h>

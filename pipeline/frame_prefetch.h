@@ -24,8 +24,8 @@
 #include <filesystem>
 #include <functional>
 #include <future>
-#include <optional>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 #include "storage/records.h"

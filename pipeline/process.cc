@@ -203,8 +203,8 @@ FinishedFrame finish_frame(const FrameContext& ctx, const FrameRecord& frame,
     const double shift = std::hypot(s.u_px, s.v_px);
     auto t_c = calibrated_temperature_c(ctx.calibration, ctx.channels[p].id, shift);
     if (!t_c) t_c = out.result.model_temperature_c[p];
-    out.samples.push_back({ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift,
-                           s.valid ? t_c : std::nullopt, s.valid});
+    out.samples.push_back(
+        {ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift, s.valid ? t_c : std::nullopt, s.valid});
   }
   return out;
 }
@@ -220,8 +220,9 @@ class FinishingFrame {
   // Stages the frame finishing before, then starts this one's finishing.
   void start(const FrameContext& ctx, const FrameRecord& frame, fusion::EvaluationResult evaluated, bool aside) {
     stage();
-    finishing_ = std::async(aside ? std::launch::async : std::launch::deferred,
-                            [&ctx, frame, evaluated = std::move(evaluated)] { return finish_frame(ctx, frame, evaluated); });
+    finishing_ =
+        std::async(aside ? std::launch::async : std::launch::deferred,
+                   [&ctx, frame, evaluated = std::move(evaluated)] { return finish_frame(ctx, frame, evaluated); });
   }
 
   // The frame before one that failed is staged as in turn it would have

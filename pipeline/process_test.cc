@@ -50,13 +50,13 @@ void add_frames(const fs::path& run, const testrun::Truth& truth) {
   pair.pattern.seed = 5;  // the run's background
   const double times_s[] = {90, 30, 120, 45};
   for (int f = 0; f < 4; ++f) {
-    pair.field = sim::DisplacementModel::bump_gradient(truth.bump_centre.x, truth.bump_centre.y,
-                                                       truth.bump_radius_px, 0.2 + 0.2 * f);
+    pair.field = sim::DisplacementModel::bump_gradient(truth.bump_centre.x, truth.bump_centre.y, truth.bump_radius_px,
+                                                       0.2 + 0.2 * f);
     pair.noise_seed = 200 + f;
     const std::string name = "frames/extra" + std::to_string(f) + ".png";
     ASSERT_TRUE(cv::imwrite((run / name).string(), sim::render_pair(pair).measurement));
-    store.add_frame({0, std::nullopt, truth.start_ns + static_cast<std::int64_t>(times_s[f] * 1e9), std::nullopt,
-                     name, truth.image.width, truth.image.height, 8, false});
+    store.add_frame({0, std::nullopt, truth.start_ns + static_cast<std::int64_t>(times_s[f] * 1e9), std::nullopt, name,
+                     truth.image.width, truth.image.height, 8, false});
   }
 }
 
