@@ -13,8 +13,8 @@
 // BM_ProcessRun16MP: the paper's 16 MP camera, 20 frames of 4928×3264 in
 // 16-bit PNG with a plume whose deflection fades, full fields with the
 // process defaults: each step in turn (/prefetch:0/aside:0), the next frame
-// decoded ahead (/prefetch:1/aside:0), and also the last frame's temperature
-// field and field files made aside (/prefetch:1/aside:1, the default).
+// decoded ahead (/prefetch:1/aside:0, the default), and also the last
+// frame's temperature field and field files made aside (/prefetch:1/aside:1).
 // Counters: frames per second (wall); the peak resident memory of the
 // processing (VmHWM, reset before each run; where the kernel cannot reset
 // it, peak_is_lifetime = 1 and it is getrusage's maximum over the process's

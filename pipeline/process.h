@@ -18,10 +18,10 @@
 // The settings used (processing_settings.h) are stored with the results.
 // Results are written aside, one frame per transaction, while the work goes
 // on; they replace the run's current results in one transaction only when
-// every frame is done. While one frame is evaluated, the next is decoded
-// (frame_prefetch.h) and the one before gets its temperature field and field
-// files, each on a second thread; results are staged on the calling thread,
-// in frame order, either way. A processing that is interrupted (Ctrl-C, a crash,
+// every frame is done. While one frame is evaluated, the next is decoded on
+// a second thread (frame_prefetch.h), and, when asked, the one before gets
+// its temperature field and field files on another; results are staged on
+// the calling thread, in frame order, either way. A processing that is interrupted (Ctrl-C, a crash,
 // kill -9) leaves the current results as they were, and `resume` continues
 // it with its own settings from the first frame it had not finished.
 
@@ -54,7 +54,10 @@ struct ProcessOptions {
   // A frame's temperature field and field files are made on a second thread
   // while the next frame is evaluated, and the frame staged after; false: in
   // turn. Either way "stop" stages the frame evaluated last before it returns.
-  bool finish_aside = true;
+  // Off by default: on two cores the second thread slows the evaluation
+  // about as much as it saves (process_bench BM_ProcessRun16MP), and the
+  // concurrent Poisson solve adds ~200 MB at 16 MP.
+  bool finish_aside = false;
 
   std::string Validate() const;  // empty when valid
 };
