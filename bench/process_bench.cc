@@ -8,15 +8,37 @@
 //   full:   full fields (the default mode)
 //   probes: probe mode with one node of context (the default) or the exact
 //           context (--probe-context -1: equal to the full field)
-//   build/bench/process_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
+//   build/bench/process_bench --benchmark_filter=-16MP --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
+//
+// BM_ProcessRun16MP: the paper's 16 MP camera, 20 frames of 4928×3264 in
+// 16-bit PNG with a plume whose deflection fades, full fields with the
+// process defaults: each step in turn (/prefetch:0/aside:0), the next frame
+// decoded ahead (/prefetch:1/aside:0, the default), and also the last
+// frame's temperature field and field files made aside (/prefetch:1/aside:1).
+// Counters: frames per second (wall); the peak resident memory of the
+// processing (VmHWM, reset before each run; where the kernel cannot reset
+// it, peak_is_lifetime = 1 and it is getrusage's maximum over the process's
+// life: then run one variant per process); per frame, the costs besides the
+// evaluation (ProcessReport::times). The frames are rendered once into a
+// cache ($BOSFUSE_BENCH_CACHE, else $TMPDIR/bosfuse-bench-cache: 650 MB) and
+// linked into a scratch run; rendering is never timed. Each run takes a
+// minute or more: run it on its own, on a loaded machine one variant per
+// process, alternating, e.g.
+//   build/bench/process_bench --benchmark_filter='16MP/prefetch:1/aside:1'
 // Figures: docs/BENCHMARKS.md, "Processing".
 
 #include <benchmark/benchmark.h>
+#include <fmt/format.h>
+
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
-#include <unistd.h>
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
 #include <vector>
 
 #include "fusion/bos_geometry.h"
@@ -128,6 +150,155 @@ void BM_TemperatureFieldOnly(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(fusion::recover_temperature_field(evaluated.field, geometry));
 }
 BENCHMARK(BM_TemperatureFieldOnly)->Unit(benchmark::kMillisecond);
+
+// ---- The 16 MP run ----
+
+constexpr int kWidth16MP = 4928, kHeight16MP = 3264;
+constexpr double kPlumeAxisXPx = 2464, kPlumeSourceYPx = 3000;
+
+// Warm air rising from a source near the bottom: the background is pulled
+// towards the column's axis (negative peak, as bump_gradient's hot spot), the
+// column widening with height and fading in over its first 200 px.
+cv::Point2d plume_shift_px(double x_px, double y_px, double peak_px) {
+  const double height_px = kPlumeSourceYPx - y_px;
+  if (height_px <= 0) return {0, 0};
+  const double sigma_px = 120 + 0.15 * height_px;
+  const double d = (x_px - kPlumeAxisXPx) / sigma_px;
+  const double onset = 1 - std::exp(-height_px / 200);
+  return {peak_px * onset * d * std::exp(0.5 - 0.5 * d * d), 0};  // d·e^(−d²/2) peaks at d = 1
+}
+
+double plume_peak_px(int frame) { return -1.5 * std::exp(-0.1 * frame); }
+
+fs::path frame_cache_dir() {
+  const char* cache = std::getenv("BOSFUSE_BENCH_CACHE");
+  // The name changes with anything that changes the frames.
+  return (cache && *cache ? fs::path(cache) : fs::temp_directory_path() / "bosfuse-bench-cache") /
+         "process16mp-v1-4928x3264-16bit-plume";
+}
+
+std::string frame_name(int frame) { return fmt::format("f{}.png", frame); }
+
+// The reference (frame 0) and kFrames measurements as 16-bit PNG, rendered
+// into the cache when it does not hold them yet (a partial rendering is
+// never taken for one: the folder gets its name when complete).
+fs::path cached_16mp_frames() {
+  const fs::path dir = frame_cache_dir();
+  if (fs::is_regular_file(dir / "complete")) return dir;
+  const fs::path partial = dir.string() + ".partial-" + std::to_string(::getpid());
+  fs::remove_all(partial);
+  fs::create_directories(partial);
+  sim::PatternOptions options;
+  options.width_px = kWidth16MP;
+  options.height_px = kHeight16MP;
+  const sim::BackgroundPattern pattern = sim::generate_pattern(options);
+  for (int i = 0; i <= kFrames; ++i) {
+    const double peak_px = plume_peak_px(i);
+    cv::Mat dots = i == 0 ? sim::render_dots(pattern, nullptr)
+                          : sim::render_dots(pattern, [peak_px](double x, double y) { return plume_shift_px(x, y, peak_px); });
+    const cv::Mat image = sim::camera_image(std::move(dots), 0, 0.01, 16, static_cast<std::uint64_t>(i + 1), 1);
+    if (!cv::imwrite((partial / frame_name(i)).string(), image)) {
+      throw std::runtime_error("cannot write " + (partial / frame_name(i)).string());
+    }
+  }
+  std::ofstream(partial / "complete") << "done\n";
+  std::error_code taken;
+  fs::rename(partial, dir, taken);  // another process may have finished first: then its frames serve
+  if (taken) fs::remove_all(partial);
+  return dir;
+}
+
+// A fresh run over the cached frames (hard links, else copies), removed at exit.
+const fs::path& sixteen_megapixel_run() {
+  static const ScratchDir dir{[] {
+    const fs::path frames = cached_16mp_frames();
+    const fs::path run = fs::temp_directory_path() / ("bosfuse-process-bench-16mp-" + std::to_string(::getpid()));
+    fs::remove_all(run);
+    auto store = storage::RunStore::create(run, {0, "bench 16 MP", kStartNs, std::nullopt, "", {}, 1.0, std::nullopt},
+                                           storage::RunStore::CreateMode::kNew);
+    const auto device = store.add_device({0, "daq", "modbus-tcp", "generic", "sim"});
+    std::vector<std::int64_t> channels{
+        store.add_channel({0, device, "tc1", "thermocouple", "degC", "K", kPlumeAxisXPx + 150, 2200.0}),
+        store.add_channel({0, device, "tc2", "thermocouple", "degC", "K", kPlumeAxisXPx - 250, 1400.0})};
+    std::vector<storage::Sample> samples;
+    for (int i = 0; i <= 2 * kFrames; ++i) {
+      for (auto c : channels) {
+        samples.push_back({c, kStartNs + i * 1'000'000'000LL, std::nullopt, 20 + 30 * std::exp(-0.05 * i),
+                           std::nullopt, {}});
+      }
+    }
+    store.write_samples(samples);
+    fs::create_directories(run / "frames");
+    for (int i = 0; i <= kFrames; ++i) {
+      const std::string path = "frames/" + frame_name(i);
+      std::error_code not_linked;
+      fs::create_hard_link(frames / frame_name(i), run / path, not_linked);
+      if (not_linked) fs::copy_file(frames / frame_name(i), run / path);
+      store.add_frame({0, std::nullopt, kStartNs + 2LL * i * 1'000'000'000, std::nullopt, path, kWidth16MP,
+                       kHeight16MP, 16, i == 0});
+    }
+    store.finish(storage::RunStatus::kComplete, kStartNs + 2LL * kFrames * 1'000'000'000);
+    return run;
+  }()};
+  return dir.path;
+}
+
+// The peak resident memory, VmHWM, in MB; -1 when /proc does not say.
+double peak_resident_mb() {
+  std::ifstream status("/proc/self/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // kB
+  }
+  return -1;
+}
+
+// Starts the peak anew from the current resident size (Linux ≥ 4.0); false
+// when the kernel refuses, and the peak is then the process's lifetime one.
+bool reset_peak_resident() {
+  std::ofstream clear("/proc/self/clear_refs");
+  clear << "5";
+  clear.flush();
+  return static_cast<bool>(clear);
+}
+
+void BM_ProcessRun16MP(benchmark::State& state) {
+  const fs::path& run = sixteen_megapixel_run();
+  pipeline::ProcessOptions options;
+  options.overrides.probes_only = false;
+  options.prefetch_frames = static_cast<int>(state.range(0));
+  options.finish_aside = state.range(1) != 0;
+  pipeline::ProcessTimes times;
+  bool peak_reset = true;
+  for (auto _ : state) {
+    state.PauseTiming();
+    peak_reset = reset_peak_resident() && peak_reset;
+    state.ResumeTiming();
+    times = pipeline::process_run(run, options).times;
+  }
+  rusage usage{};
+  ::getrusage(RUSAGE_SELF, &usage);
+  state.counters["frames_per_s"] = benchmark::Counter(kFrames, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["peak_rss_MB"] = peak_reset ? peak_resident_mb() : usage.ru_maxrss / 1024.0;
+  state.counters["peak_is_lifetime"] = peak_reset ? 0 : 1;
+  // Per frame, the last iteration's: decode runs beside the evaluation when read ahead.
+  const double per_frame_ms = 1e3 / kFrames;
+  state.counters["decode_ms"] = times.decode_s * per_frame_ms;
+  state.counters["wait_frame_ms"] = times.wait_for_frames_s * per_frame_ms;
+  state.counters["evaluate_ms"] = times.evaluation_s * per_frame_ms;
+  state.counters["temperature_ms"] = times.temperature_field_s * per_frame_ms;
+  state.counters["csv_ms"] = times.csv_s * per_frame_ms;
+  state.counters["wait_finish_ms"] = times.wait_for_finishing_s * per_frame_ms;
+  state.counters["stage_ms"] = times.staging_s * per_frame_ms;
+  state.counters["finish_ms"] = times.finishing_s * 1e3;  // once per run
+}
+BENCHMARK(BM_ProcessRun16MP)
+    ->ArgNames({"prefetch", "aside"})
+    ->Args({0, 0})
+    ->Args({1, 0})
+    ->Args({1, 1})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
 
 }  // namespace
 }  // namespace bosfuse

@@ -16,6 +16,7 @@
 #include "fusion/bos_geometry.h"
 #include "fusion/image_quality.h"
 #include "fusion/temperature_field.h"
+#include "pipeline/frame_prefetch.h"
 #include "pipeline/probe_calibration.h"
 #include "pipeline/quality_json.h"
 #include "pipeline/run_selection.h"
@@ -30,6 +31,26 @@ namespace fs = std::filesystem;
 using json = nlohmann::ordered_json;
 using storage::ChannelInfo;
 using storage::FrameRecord;
+using Clock = std::chrono::steady_clock;
+
+// Adds the wall time of its scope to `seconds`.
+class AddTime {
+ public:
+  explicit AddTime(double& seconds) : seconds_(seconds) {}
+  ~AddTime() { seconds_ += std::chrono::duration<double>(Clock::now() - start_).count(); }
+  AddTime(const AddTime&) = delete;
+  AddTime& operator=(const AddTime&) = delete;
+
+ private:
+  double& seconds_;
+  const Clock::time_point start_ = Clock::now();
+};
+
+template <class Work>
+decltype(auto) timed(double& seconds, Work&& work) {
+  const AddTime add(seconds);
+  return work();
+}
 
 json number_or_null(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
 
@@ -105,6 +126,14 @@ struct FrameContext {
   ProcessingSettings settings;
   std::optional<fusion::BosGeometry> geometry;
   std::map<std::int64_t, ChannelCalibration> calibration;
+
+  // The one place frames meet the evaluator (an evaluator object that keeps
+  // the reference prepared across frames slots in here): the full field, or
+  // only the windows at the probes.
+  fusion::EvaluationResult evaluate(const cv::Mat& measurement) const {
+    return settings.probes_only ? fusion::probe_displacement(reference, measurement, points, settings.evaluator, mask)
+                                : fusion::evaluate_displacement(reference, measurement, settings.evaluator, mask);
+  }
 };
 
 // Everything measured at the probes of one frame, and the field rows.
@@ -115,18 +144,20 @@ struct FrameResult {
   json summary;
 };
 
-FrameResult evaluate_full(const FrameContext& ctx, const FrameRecord& frame, const cv::Mat& measurement) {
+FrameResult finish_full(const FrameContext& ctx, const FrameRecord& frame, const fusion::EvaluationResult& evaluated,
+                        ProcessTimes& times) {
   FrameResult out;
-  const auto evaluated = fusion::evaluate_displacement(ctx.reference, measurement, ctx.settings.evaluator, ctx.mask);
   out.summary = evaluation_json(evaluated.summary);
   const std::string stem = fmt::format("{}/frame_{:06d}", ctx.fields_dir, frame.id);
-  fusion::write_csv(evaluated.field, ctx.run_dir / (stem + "_displacement.csv"));
+  timed(times.csv_s, [&] { fusion::write_csv(evaluated.field, ctx.run_dir / (stem + "_displacement.csv")); });
   out.fields.push_back({0, frame.id, "displacement", stem + "_displacement.csv", out.summary.dump()});
   std::optional<fusion::TemperatureFieldResult> temperature;
   if (evaluated.field.rows >= 3 && evaluated.field.cols >= 3) {
     const auto& field_options = ctx.settings.geometry.temperature_field;
-    temperature = fusion::recover_temperature_field(evaluated.field, *ctx.geometry, field_options);
-    fusion::write_csv(temperature->field, ctx.run_dir / (stem + "_temperature.csv"));
+    temperature = timed(times.temperature_field_s, [&] {
+      return fusion::recover_temperature_field(evaluated.field, *ctx.geometry, field_options);
+    });
+    timed(times.csv_s, [&] { fusion::write_csv(temperature->field, ctx.run_dir / (stem + "_temperature.csv")); });
     const auto& s = temperature->summary;
     out.fields.push_back({0, frame.id, "temperature", stem + "_temperature.csv",
                           json{{"min_c", number_or_null(s.min_c)},
@@ -143,11 +174,8 @@ FrameResult evaluate_full(const FrameContext& ctx, const FrameRecord& frame, con
   return out;
 }
 
-FrameResult evaluate_probes(const FrameContext& ctx, const cv::Mat& measurement) {
+FrameResult finish_probes(const fusion::EvaluationResult& evaluated) {
   FrameResult out;
-  if (ctx.points.empty()) return out;
-  const auto evaluated =
-      fusion::probe_displacement(ctx.reference, measurement, ctx.points, ctx.settings.evaluator, ctx.mask);
   out.summary = evaluation_json(evaluated.summary);
   for (const auto& v : evaluated.field.vectors) {
     out.shifts.push_back({v.u_px, v.v_px, v.valid()});
@@ -156,23 +184,75 @@ FrameResult evaluate_probes(const FrameContext& ctx, const cv::Mat& measurement)
   return out;
 }
 
-// Evaluates one frame and stages its results in one transaction.
-void process_frame(const FrameContext& ctx, const FrameRecord& frame, storage::ProcessingStore& results,
-                   std::int64_t processing_id) {
-  const cv::Mat measurement = load_frame(ctx.run_dir, frame);
-  const FrameResult r = ctx.settings.probes_only ? evaluate_probes(ctx, measurement)
-                                                 : evaluate_full(ctx, frame, measurement);
+// A frame's results as one transaction stages them, and what making them
+// took (temperature field, field files).
+struct FinishedFrame {
+  FrameRecord frame;
+  FrameResult result;
   std::vector<storage::ProbeSampleRecord> samples;
+  ProcessTimes times;
+};
+
+// All of a frame's work after its evaluation: thread-safe against the next
+// frame's evaluation (it only reads `ctx` and writes the frame's own files).
+FinishedFrame finish_frame(const FrameContext& ctx, const FrameRecord& frame,
+                           const fusion::EvaluationResult& evaluated) {
+  FinishedFrame out{frame, {}, {}, {}};
+  out.result = ctx.settings.probes_only ? finish_probes(evaluated) : finish_full(ctx, frame, evaluated, out.times);
   for (std::size_t p = 0; p < ctx.channels.size(); ++p) {
-    const PointShift& s = r.shifts[p];
+    const PointShift& s = out.result.shifts[p];
     const double shift = std::hypot(s.u_px, s.v_px);
     auto t_c = calibrated_temperature_c(ctx.calibration, ctx.channels[p].id, shift);
-    if (!t_c) t_c = r.model_temperature_c[p];
-    samples.push_back({ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift, s.valid ? t_c : std::nullopt,
-                       s.valid});
+    if (!t_c) t_c = out.result.model_temperature_c[p];
+    out.samples.push_back(
+        {ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift, s.valid ? t_c : std::nullopt, s.valid});
   }
-  results.stage_frame(processing_id, frame.id, r.summary.dump(), samples, r.fields);
+  return out;
 }
+
+// The frame being finished on a second thread while the next one is
+// evaluated (or, in turn, finished when it is staged), staged on the calling
+// thread in frame order, one transaction each.
+class FinishingFrame {
+ public:
+  FinishingFrame(storage::ProcessingStore& results, std::int64_t processing_id, ProcessTimes& times)
+      : results_(results), processing_id_(processing_id), times_(times) {}
+
+  // Stages the frame finishing before, then starts this one's finishing.
+  void start(const FrameContext& ctx, const FrameRecord& frame, fusion::EvaluationResult evaluated, bool aside) {
+    stage();
+    finishing_ =
+        std::async(aside ? std::launch::async : std::launch::deferred,
+                   [&ctx, frame, evaluated = std::move(evaluated)] { return finish_frame(ctx, frame, evaluated); });
+  }
+
+  // The frame before one that failed is staged as in turn it would have
+  // been, so a resume starts at the failing one; the first error is the one
+  // to report, so this one's own is dropped.
+  void stage_before_error() noexcept {
+    try {
+      stage();
+    } catch (...) {
+    }
+  }
+
+  // Waits for the frame finishing, if any, and stages it.
+  void stage() {
+    if (!finishing_.valid()) return;
+    const FinishedFrame f = timed(times_.wait_for_finishing_s, [&] { return finishing_.get(); });
+    times_.temperature_field_s += f.times.temperature_field_s;
+    times_.csv_s += f.times.csv_s;
+    timed(times_.staging_s, [&] {
+      results_.stage_frame(processing_id_, f.frame.id, f.result.summary.dump(), f.samples, f.result.fields);
+    });
+  }
+
+ private:
+  storage::ProcessingStore& results_;
+  const std::int64_t processing_id_;
+  ProcessTimes& times_;
+  std::future<FinishedFrame> finishing_;  // a std::async future: its destructor waits for the thread
+};
 
 // The probe series a Newton fit sees: temperatures when every valid sample
 // has one, else the shift; experiment seconds on the host clock (frame time
@@ -299,11 +379,24 @@ FitsAndAgreements fit_everything(const storage::RunStore& store, const storage::
   return out;
 }
 
-json quality_json(const FrameContext& ctx, const RunFrames& frames, const storage::ExperimentClock& clock) {
+// `last_image`: the last frame's image when this processing still has it
+// (empty: read again, as after a resume that had nothing left to do).
+json quality_json(const FrameContext& ctx, const RunFrames& frames, const cv::Mat& last_image,
+                  const storage::ExperimentClock& clock) {
   const FrameRecord& last = frames.measurements.back();
   json j = {{"frame_id", last.id}, {"reference_frame_id", frames.reference.id}, {"t_s", clock.seconds(last.t_ns)}};
-  j.update(to_json(fusion::modified_quality_index(load_frame(ctx.run_dir, last), ctx.reference)));
+  const cv::Mat image = last_image.empty() ? load_frame(ctx.run_dir, last) : last_image;
+  j.update(to_json(fusion::modified_quality_index(image, ctx.reference)));
   return j;
+}
+
+// The frames a processing has still to evaluate, in time order.
+std::vector<FrameRecord> frames_to_do(const RunFrames& frames, const std::set<std::int64_t>& done) {
+  std::vector<FrameRecord> out;
+  for (const FrameRecord& frame : frames.measurements) {
+    if (!done.count(frame.id)) out.push_back(frame);
+  }
+  return out;
 }
 
 FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& store,
@@ -339,9 +432,19 @@ std::string temperature_source(const FrameContext& ctx) {
 
 }  // namespace
 
+std::string ProcessOptions::Validate() const {
+  if (prefetch_frames < 0) {
+    return fmt::format("prefetch_frames is {}; it must be 0 (decode on the calling thread) or more", prefetch_frames);
+  }
+  return "";
+}
+
 ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options) {
   FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres' own logging; the fit summaries say it better
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
+  if (const std::string problem = options.Validate(); !problem.empty()) {
+    throw std::invalid_argument("process options: " + problem);
+  }
   if (!storage::RunStore::holds_run(run_dir)) throw std::runtime_error("'" + run_dir.string() + "' holds no bosfuse run");
   const auto lock = storage::RunLock::try_acquire(run_dir, "process.lock");
   if (!lock) {
@@ -356,6 +459,10 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   // then equals the full field at its point.
   processing.settings.evaluator.xcorr.convergence_px = 0;
   const RunFrames frames = split_frames(store.frames());
+  const auto staged = results.staged_frame_ids(processing.id);
+  const std::set<std::int64_t> done(staged.begin(), staged.end());
+  // Started before the context is read, so the first frame decodes beside the reference.
+  FramePrefetch ahead(run_dir, frames_to_do(frames, done), options.prefetch_frames);
   const FrameContext ctx = frame_context(run_dir, store, results, processing, frames, clock);
 
   ProcessReport report;
@@ -363,8 +470,6 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   report.frames = frames.measurements.size();
   report.probes = ctx.channels.size();
   report.temperature_source = temperature_source(ctx);
-  const auto staged = results.staged_frame_ids(processing.id);
-  const std::set<std::int64_t> done(staged.begin(), staged.end());
   report.frames_resumed = done.size();
   auto progress = [&](std::size_t n, const std::string& line, bool frame = false) {
     if (options.progress) options.progress({n, report.frames, line, frame});
@@ -376,18 +481,34 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
     progress(done.size(), "geometry from " + ctx.settings.geometry.source + ":\n" + ctx.geometry->brief_report());
   }
   std::size_t n = done.size();
-  for (const FrameRecord& frame : frames.measurements) {
-    if (done.count(frame.id)) continue;
+  cv::Mat last_image;  // the quality index's, kept rather than decoded twice
+  FinishingFrame finished_aside(results, processing.id, report.times);
+  while (ahead.remaining() > 0) {
     if (options.stop && options.stop->load()) {
+      finished_aside.stage();
       report.text = processing.note + fmt::format("stopped after {} of {} frames; the run's earlier results are "
                                                   "unchanged; `bosfuse process {} --resume` continues\n",
                                                   n, report.frames, run_dir.string());
       return report;
     }
-    process_frame(ctx, frame, results, processing.id);
-    progress(++n, fmt::format("frame {} (t = {:.2f} s) evaluated", frame.id, clock.seconds(frame.t_ns)), true);
+    try {
+      PrefetchedFrame next = *ahead.next();
+      report.times.decode_s += next.decode_seconds;
+      report.times.wait_for_frames_s += next.wait_seconds;
+      const FrameRecord& frame = next.frame;
+      auto evaluated = timed(report.times.evaluation_s, [&] { return ctx.evaluate(next.image); });
+      finished_aside.start(ctx, frame, std::move(evaluated), options.finish_aside);
+      if (!options.finish_aside) finished_aside.stage();
+      progress(++n, fmt::format("frame {} (t = {:.2f} s) evaluated", frame.id, clock.seconds(frame.t_ns)), true);
+      if (frame.id == frames.measurements.back().id) last_image = std::move(next.image);
+    } catch (...) {
+      finished_aside.stage_before_error();
+      throw;
+    }
   }
+  finished_aside.stage();
 
+  const auto fits_start = Clock::now();
   const FitsAndAgreements fitted = fit_everything(store, results, ctx, processing.id, clock);
   for (const auto& f : fitted.fits) report.fits_ok += f.ok ? 1 : 0;
   report.fits = fitted.fits.size();
@@ -396,11 +517,12 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
                         {"probes", report.probes},
                         {"temperature_source", report.temperature_source},
                         {"time_basis", clock.basis()},
-                        {"quality", quality_json(ctx, frames, clock)}};
+                        {"quality", quality_json(ctx, frames, last_image, clock)}};
   results.complete_processing(processing.id, fitted.fits, fitted.agreements, summary.dump(), acquisition::utc_now_ns());
   remove_fields_except(run_dir, fmt::format("p{}", processing.id));
   report.complete = true;
-  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report.times.finishing_s = std::chrono::duration<double>(Clock::now() - fits_start).count();
+  report.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   report.text = processing.note +
                 fmt::format("{} frames{}, {} probes ({}), temperatures from {}; {} of {} fits ok, {} agreements, "
                             "{:.1f} s; times in {}\n",

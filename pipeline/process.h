@@ -18,7 +18,10 @@
 // The settings used (processing_settings.h) are stored with the results.
 // Results are written aside, one frame per transaction, while the work goes
 // on; they replace the run's current results in one transaction only when
-// every frame is done. A processing that is interrupted (Ctrl-C, a crash,
+// every frame is done. While one frame is evaluated, the next is decoded on
+// a second thread (frame_prefetch.h), and, when asked, the one before gets
+// its temperature field and field files on another; results are staged on
+// the calling thread, in frame order, either way. A processing that is interrupted (Ctrl-C, a crash,
 // kill -9) leaves the current results as they were, and `resume` continues
 // it with its own settings from the first frame it had not finished.
 
@@ -44,6 +47,36 @@ struct ProcessOptions {
   bool resume = false;          // continue the run's interrupted processing (no overrides allowed)
   std::function<void(const ProcessProgress&)> progress;  // may be empty
   const std::atomic<bool>* stop = nullptr;  // when it becomes true: stop after the current frame, resumable
+  // Frames decoded ahead of the evaluation, on a second thread (frame_prefetch.h);
+  // 0 decodes each on the calling thread. Each costs a frame's memory (32 MB at
+  // 16 MP, 16 bits) and gives the same results.
+  int prefetch_frames = 1;
+  // A frame's temperature field and field files are made on a second thread
+  // while the next frame is evaluated, and the frame staged after; false: in
+  // turn. Either way "stop" stages the frame evaluated last before it returns.
+  // Off by default: on two cores the second thread slows the evaluation
+  // about as much as it saves (process_bench BM_ProcessRun16MP), and the
+  // concurrent Poisson solve adds ~200 MB at 16 MP.
+  bool finish_aside = false;
+
+  std::string Validate() const;  // empty when valid
+};
+
+// Where a processing's time went, in wall seconds summed over the frames it
+// evaluated. With frames decoded ahead, decode_s runs beside the evaluation
+// and wait_for_frames_s is what of it the frame loop still waited for;
+// likewise, finished aside, the temperature field and the field files run
+// beside the next frame's evaluation and wait_for_finishing_s is what the
+// loop waited for them.
+struct ProcessTimes {
+  double decode_s = 0;              // reading and decoding frames, on whichever thread did it
+  double wait_for_frames_s = 0;     // the frame loop held up by decoding
+  double evaluation_s = 0;          // displacement fields or probes
+  double temperature_field_s = 0;   // the physical model's field (full fields only), on whichever thread
+  double csv_s = 0;                 // writing the field files, on whichever thread
+  double wait_for_finishing_s = 0;  // the frame loop held up by a frame's temperature field and files
+  double staging_s = 0;             // storing each frame's results (one transaction per frame)
+  double finishing_s = 0;           // fits, agreements, quality index, the swap into the current results
 };
 
 struct ProcessReport {
@@ -57,6 +90,7 @@ struct ProcessReport {
   std::size_t agreements = 0;
   std::string temperature_source;  // calibration, physical model, none
   double seconds = 0;
+  ProcessTimes times;
   std::string text;  // what a person reads at the end
 };
 

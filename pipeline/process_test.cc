@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "sim/synthetic_pair.h"
 #include "storage/processing_store.h"
 #include "storage/run_lock.h"
 #include "storage/run_store.h"
@@ -21,13 +22,49 @@ using json = nlohmann::json;
 
 ProcessReport process(const fs::path& run, SettingsOverrides overrides = {}, bool resume = false,
                       const std::atomic<bool>* stop = nullptr,
-                      std::function<void(const ProcessProgress&)> progress = {}) {
+                      std::function<void(const ProcessProgress&)> progress = {}, bool pipelined = true) {
   ProcessOptions options;
   options.overrides = std::move(overrides);
   options.resume = resume;
   options.stop = stop;
   options.progress = std::move(progress);
+  options.prefetch_frames = pipelined ? 1 : 0;
+  options.finish_aside = pipelined;
   return process_run(run, options);
+}
+
+// Pipelined: the next frame decoded and the last one finished while one is
+// evaluated; else each step in turn.
+ProcessReport process_pipelined(const fs::path& run, bool pipelined, SettingsOverrides overrides = {}) {
+  return process(run, std::move(overrides), false, nullptr, {}, pipelined);
+}
+
+// More measurement frames of the bump, each its own peak, stored out of time
+// order among the run's two (ids and time order differ).
+void add_frames(const fs::path& run, const testrun::Truth& truth) {
+  auto store = storage::RunStore::open(run, true);
+  sim::PairOptions pair;
+  pair.pattern.width_px = truth.image.width;
+  pair.pattern.height_px = truth.image.height;
+  pair.pattern.dot_diameter_px = 3;
+  pair.pattern.seed = 5;  // the run's background
+  const double times_s[] = {90, 30, 120, 45};
+  for (int f = 0; f < 4; ++f) {
+    pair.field = sim::DisplacementModel::bump_gradient(truth.bump_centre.x, truth.bump_centre.y, truth.bump_radius_px,
+                                                       0.2 + 0.2 * f);
+    pair.noise_seed = 200 + f;
+    const std::string name = "frames/extra" + std::to_string(f) + ".png";
+    ASSERT_TRUE(cv::imwrite((run / name).string(), sim::render_pair(pair).measurement));
+    store.add_frame({0, std::nullopt, truth.start_ns + static_cast<std::int64_t>(times_s[f] * 1e9), std::nullopt, name,
+                     truth.image.width, truth.image.height, 8, false});
+  }
+}
+
+// The frames a processing left staged, when one was left unfinished.
+std::vector<std::int64_t> staged_frames(const fs::path& run) {
+  const storage::ProcessingStore results(run);
+  const auto unfinished = results.unfinished_processing();
+  return unfinished ? results.staged_frame_ids(unfinished->id) : std::vector<std::int64_t>{};
 }
 
 json current_settings(const fs::path& run) {
@@ -61,9 +98,12 @@ void expect_equal(const Results& a, const Results& b) {
     for (std::size_t i = 0; i < a.probes[p].second.size(); ++i) {
       const auto &x = a.probes[p].second[i], &y = b.probes[p].second[i];
       EXPECT_EQ(x.frame_id, y.frame_id);
+      EXPECT_EQ(x.t_ns, y.t_ns);
       EXPECT_EQ(x.u_px, y.u_px);
       EXPECT_EQ(x.v_px, y.v_px);
+      EXPECT_EQ(x.shift_px, y.shift_px);
       EXPECT_EQ(x.temperature_c, y.temperature_c);
+      EXPECT_EQ(x.valid, y.valid);
     }
   }
   EXPECT_EQ(a.fits, b.fits);
@@ -213,6 +253,53 @@ TEST_F(Process, ASecondProcessingOfTheRunIsRefusedWhileOneRuns) {
     EXPECT_NE(std::string(e.what()).find("another bosfuse is processing"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(storage::ProcessingStore(run()).unfinished_processing()) << "the refused one left nothing behind";
+}
+
+TEST_F(Process, ThePipelinedProcessingStoresWhatOneInTurnStores) {
+  add_frames(run(), truth_);
+  for (const bool probes_only : {false, true}) {
+    SCOPED_TRACE(probes_only ? "probe mode" : "full fields");
+    SettingsOverrides mode;
+    mode.probes_only = probes_only;
+    const auto in_turn = process_pipelined(run(), false, mode);
+    ASSERT_TRUE(in_turn.complete);
+    EXPECT_EQ(in_turn.frames, 6u);
+    const Results sequential(run());
+    EXPECT_EQ(sequential.probes.at(0).second.size(), 6u);
+    EXPECT_EQ(sequential.field_files.size(), probes_only ? 0u : 12u);
+    const auto pipelined = process_pipelined(run(), true, mode);
+    ASSERT_TRUE(pipelined.complete);
+    expect_equal(Results(run()), sequential);
+    EXPECT_GT(pipelined.times.decode_s, 0) << "the decoding is accounted for";
+    EXPECT_GT(pipelined.times.evaluation_s, 0);
+    if (!probes_only) {
+      EXPECT_GT(pipelined.times.csv_s, 0) << "the field files, written aside, are accounted for";
+    }
+  }
+}
+
+TEST_F(Process, AnUnreadableFrameFailsAtItsOwnFrameWithTheSameMessagePipelinedOrNot) {
+  const auto frames = storage::RunStore::open(run()).frames();
+  const storage::FrameRecord& second = frames.back();  // the later of the two measurements
+  ASSERT_FALSE(second.is_reference);
+  std::ofstream(run() / second.path, std::ios::trunc) << "not a PNG";
+  std::string messages[2];
+  for (const bool pipelined : {false, true}) {
+    try {
+      process_pipelined(run(), pipelined);
+      FAIL() << "an unreadable frame was processed";
+    } catch (const std::runtime_error& e) {
+      messages[pipelined] = e.what();
+    }
+    EXPECT_EQ(staged_frames(run()), std::vector<std::int64_t>{frames[1].id})
+        << "the frame before the unreadable one was done, " << (pipelined ? "pipelined" : "in turn");
+  }
+  EXPECT_NE(messages[0].find("frame " + std::to_string(second.id) + " "), std::string::npos) << messages[0];
+  EXPECT_NE(messages[0].find("unreadable image"), std::string::npos) << messages[0];
+  EXPECT_EQ(messages[1], messages[0]);
+  ProcessOptions negative;
+  negative.prefetch_frames = -1;
+  EXPECT_THROW(process_run(run(), negative), std::invalid_argument);
 }
 
 TEST(ProcessTime, FitsAreInExperimentSecondsFromTheDeclaredOriginAndScale) {
