@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -126,13 +127,14 @@ struct FrameContext {
   ProcessingSettings settings;
   std::optional<fusion::BosGeometry> geometry;
   std::map<std::int64_t, ChannelCalibration> calibration;
+  // One for the run: the reference is prepared once and the buffers of one
+  // frame serve the next.
+  std::unique_ptr<fusion::DisplacementEvaluator> evaluator;
 
-  // The one place frames meet the evaluator (an evaluator object that keeps
-  // the reference prepared across frames slots in here): the full field, or
-  // only the windows at the probes.
+  // The one place frames meet the evaluator: the full field, or only the
+  // windows at the probes.
   fusion::EvaluationResult evaluate(const cv::Mat& measurement) const {
-    return settings.probes_only ? fusion::probe_displacement(reference, measurement, points, settings.evaluator, mask)
-                                : fusion::evaluate_displacement(reference, measurement, settings.evaluator, mask);
+    return settings.probes_only ? evaluator->probe(measurement, points) : evaluator->evaluate(measurement);
   }
 };
 
@@ -420,6 +422,7 @@ FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& sto
   ctx.calibration = stored_calibration(results);
   ctx.reference = load_frame(run_dir, frames.reference);
   ctx.mask = load_mask(run_dir, ctx.settings.mask);
+  ctx.evaluator = std::make_unique<fusion::DisplacementEvaluator>(ctx.reference, ctx.settings.evaluator, ctx.mask);
   if (!ctx.settings.probes_only) fs::create_directories(run_dir / ctx.fields_dir);
   return ctx;
 }
