@@ -17,19 +17,11 @@ GridGeometry grid_of(int rows, int cols, double step_px = 8, double x0_px = 7.5,
 DisplacementField field_on(const GridGeometry& grid, const std::function<cv::Point2d(double, double)>& f,
                            double noise_px, std::uint64_t seed = 1) {
   cv::RNG rng(seed);
-  DisplacementField field;
-  field.rows = grid.rows;
-  field.cols = grid.cols;
-  field.vectors.resize(static_cast<std::size_t>(grid.rows) * grid.cols);
-  for (int r = 0; r < grid.rows; ++r) {
-    for (int c = 0; c < grid.cols; ++c) {
-      auto& v = field.at(r, c);
-      v.x_px = grid.x0_px + c * grid.step_px;
-      v.y_px = grid.y0_px + r * grid.step_px;
-      const cv::Point2d d = f(v.x_px, v.y_px);
-      v.u_px = d.x + rng.gaussian(noise_px);
-      v.v_px = d.y + rng.gaussian(noise_px);
-    }
+  DisplacementField field = field_on_grid(grid);
+  for (auto& v : field.vectors) {
+    const cv::Point2d d = f(v.x_px, v.y_px);
+    v.u_px = d.x + rng.gaussian(noise_px);
+    v.v_px = d.y + rng.gaussian(noise_px);
   }
   return field;
 }
