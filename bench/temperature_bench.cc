@@ -1,11 +1,12 @@
 // The temperature field of a 16 MP frame (4928×3264, IW 16 px, step 8 px:
 // 615×407 nodes, ~250 k unknowns): the Poisson solve that process runs for
 // every frame, by solver (0: CHOLMOD supernodal, 1: Eigen simplicial LDLT).
-//   BM_TemperatureFieldOneShot/s       recover_temperature_field: analysis, factorisation and solve each call
+//   BM_TemperatureFieldOneShot/s       recover_temperature_field: analysis (AMD ordering), factorisation and
+//                                      solve each call
 //   BM_TemperatureFieldPerFrame/s/m    one TemperatureFieldSolver over a run's frames, each with new
 //                                      displacements; m = 0: the same unmeasured nodes every frame (the
 //                                      factor is reused, only solved), m = 1: they change every frame
-//                                      (refactorised on the kept analysis)
+//                                      (refactorised on the kept analysis; CHOLMOD orders by nested dissection)
 // Run: build/bench/temperature_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 // Figures go into docs/BENCHMARKS.md.
 

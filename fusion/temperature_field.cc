@@ -99,15 +99,20 @@ class Factorisation {
 template <class Decomposition>
 class EigenFactorisation final : public Factorisation {
  public:
+  explicit EigenFactorisation(bool nested_dissection) : nested_dissection_(nested_dissection) {}
+
   void analyse(const Eigen::SparseMatrix<double>& a) override {
     if constexpr (std::is_same_v<Decomposition, Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>>>) {
       // CHOLMOD's default takes AMD unless its fill looks bad, which it does
       // not on a grid; METIS' nested dissection is the better ordering for a
       // 2-D grid: each factorisation on the 16 MP grid took 0.5 s instead of
-      // 1.0 s, for ~1.3 s of analysis once per run (temperature_bench).
-      cholmod_common& common = decomposition_.cholmod();
-      common.nmethods = 1;
-      common.method[0].ordering = CHOLMOD_METIS;
+      // 1.0 s, but its analysis ~1.3 s instead of ~0.2 s — worth it only
+      // when the analysis serves many frames (temperature_bench).
+      if (nested_dissection_) {
+        cholmod_common& common = decomposition_.cholmod();
+        common.nmethods = 1;
+        common.method[0].ordering = CHOLMOD_METIS;
+      }
     }
     decomposition_.analyzePattern(a);
     if (decomposition_.info() != Eigen::Success)
@@ -126,15 +131,18 @@ class EigenFactorisation final : public Factorisation {
 
  private:
   Decomposition decomposition_;
+  bool nested_dissection_;
 };
 
-std::unique_ptr<Factorisation> make_factorisation(PoissonSolver solver) {
+// `nested_dissection`: the ordering for a factorisation repeated over many
+// frames (CHOLMOD only; Eigen's is AMD).
+std::unique_ptr<Factorisation> make_factorisation(PoissonSolver solver, bool nested_dissection) {
   using Matrix = Eigen::SparseMatrix<double>;
   switch (solver) {
     case PoissonSolver::kCholmodSupernodal:
-      return std::make_unique<EigenFactorisation<Eigen::CholmodSupernodalLLT<Matrix>>>();
+      return std::make_unique<EigenFactorisation<Eigen::CholmodSupernodalLLT<Matrix>>>(nested_dissection);
     case PoissonSolver::kEigenSimplicial:
-      return std::make_unique<EigenFactorisation<Eigen::SimplicialLDLT<Matrix>>>();
+      return std::make_unique<EigenFactorisation<Eigen::SimplicialLDLT<Matrix>>>(nested_dissection);
   }
   throw std::invalid_argument("temperature field: unknown Poisson solver");
 }
@@ -240,6 +248,7 @@ struct TemperatureFieldSolver::State {
   std::vector<std::uint8_t> factorised_for;  // the measured nodes of the factorised matrix; empty: none
   int analyses = 0;
   int factorisations = 0;
+  bool one_shot = false;  // recover_temperature_field's: the cheaper analysis
 
   void start_grid(const GridKey& key, const DisplacementField& displacement, const TemperatureFieldOptions& options) {
     grid = key;
@@ -251,7 +260,7 @@ struct TemperatureFieldSolver::State {
           unknown[static_cast<std::size_t>(r) * key.cols + c] = unknowns++;
       }
     }
-    factorisation = make_factorisation(options.solver);
+    factorisation = make_factorisation(options.solver, !one_shot);
     analysed = false;
     factorised_for.clear();
   }
@@ -328,7 +337,9 @@ TemperatureFieldResult TemperatureFieldSolver::recover(const DisplacementField& 
 
 TemperatureFieldResult recover_temperature_field(const DisplacementField& displacement, const BosGeometry& geometry,
                                                  const TemperatureFieldOptions& options) {
-  return TemperatureFieldSolver(geometry, options).recover(displacement);
+  TemperatureFieldSolver solver(geometry, options);
+  solver.state_->one_shot = true;
+  return solver.recover(displacement);
 }
 
 void write_csv(const TemperatureField& field, const std::filesystem::path& path) {

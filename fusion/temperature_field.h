@@ -127,6 +127,8 @@ class TemperatureFieldSolver {
   int factorisations() const;
 
  private:
+  friend TemperatureFieldResult recover_temperature_field(const DisplacementField&, const BosGeometry&,
+                                                          const TemperatureFieldOptions&);
   struct State;
   BosGeometry geometry_;
   TemperatureFieldOptions options_;

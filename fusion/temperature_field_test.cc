@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "fusion/bos_geometry.h"
 #include "fusion/displacement_evaluator.h"
@@ -253,9 +254,11 @@ DisplacementField with_masked_block(DisplacementField field, int row0, int col0,
 // A run's frames through one solver: the second frame keeps the first one's
 // unmeasured nodes (factor reused, only solved), the third masks others
 // (refactorised on the kept analysis). Each must equal a fresh one-shot
-// solve. The kept analysis and factor are the same computations on the same
-// pattern and values as the fresh ones, so only the order of rounding could
-// differ: 1e-12 of the largest δn (the solve's own error is ~1e-3 of it).
+// solve. The one-shot form orders the matrix by AMD, the kept solver by
+// nested dissection, so the two round differently (~1e-16 of δn); but the
+// field holds n = n0 + δn, whose last bit is ~4e-12 of the largest δn here,
+// so 1e-10 allows a few bits of n and nothing of the physics (the solve's
+// own error is ~1e-3 of δn). Measured: n bit-equal on every frame.
 TEST(TemperatureFieldSolver, FramesEqualFreshSolves) {
   const BosGeometry g(paper_like_setup());
   const std::vector<DisplacementField> frames = {
@@ -272,7 +275,10 @@ TEST(TemperatureFieldSolver, FramesEqualFreshSolves) {
     for (std::size_t f = 0; f < frames.size(); ++f) {
       const auto kept = solver.recover(frames[f]);
       const auto fresh = recover_temperature_field(frames[f], g, options);
-      EXPECT_LT(relative_difference(kept.field, fresh.field, g), 1e-12) << "frame " << f;
+      const double difference = relative_difference(kept.field, fresh.field, g);
+      EXPECT_LT(difference, 1e-10) << "frame " << f;
+      std::printf("solver %d frame %zu: largest difference %.3g of the largest dn\n", static_cast<int>(kind), f,
+                  difference);
       EXPECT_EQ(kept.field.measured, fresh.field.measured);
       EXPECT_EQ(kept.summary.unmeasured_nodes, fresh.summary.unmeasured_nodes);
       EXPECT_NEAR(kept.summary.max_c, fresh.summary.max_c, 1e-9);
@@ -305,7 +311,7 @@ TEST(TemperatureFieldSolver, ANewGridIsAnalysedAnew) {
   for (const auto* frame : {&large, &small, &large}) {
     const auto kept = solver.recover(*frame);
     EXPECT_EQ(kept.field.rows, frame->rows);
-    EXPECT_LT(relative_difference(kept.field, recover_temperature_field(*frame, g).field, g), 1e-12);
+    EXPECT_LT(relative_difference(kept.field, recover_temperature_field(*frame, g).field, g), 1e-10);
   }
   EXPECT_EQ(solver.analyses(), 3);
   DisplacementField probes;
