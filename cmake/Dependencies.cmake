@@ -23,6 +23,16 @@ find_package(JPEG REQUIRED)
 find_package(TIFF REQUIRED)
 find_package(Eigen3 REQUIRED NO_MODULE)
 find_package(Ceres REQUIRED)
+# The temperature field's Poisson solve (fusion/temperature_field.h): CHOLMOD's
+# supernodal Cholesky through Eigen's CholmodSupport. Debian's
+# libsuitesparse-dev (Ceres' own dependency) has no CMake or pkg-config file
+# for it, so the header and the library are found directly; libcholmod.so
+# brings AMD, COLAMD, SuiteSparse_config and BLAS/LAPACK as its own needs.
+find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse REQUIRED)
+find_library(CHOLMOD_LIBRARY cholmod REQUIRED)
+add_library(bosfuse_cholmod INTERFACE IMPORTED)
+set_target_properties(bosfuse_cholmod PROPERTIES INTERFACE_INCLUDE_DIRECTORIES ${CHOLMOD_INCLUDE_DIR}
+                                                 INTERFACE_LINK_LIBRARIES ${CHOLMOD_LIBRARY})
 find_package(CLI11 REQUIRED CONFIG)
 find_package(tomlplusplus REQUIRED)
 find_package(nlohmann_json REQUIRED)

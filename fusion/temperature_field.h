@@ -25,10 +25,20 @@
 // gradient enters. They are reported as not measured in the result.
 //
 // The solve is done for δn = n − n0 in double precision (n − 1 is ~3e-4, so
-// solving for n itself would lose digits) with Eigen's SimplicialLDLT.
+// solving for n itself would lose digits) by a sparse Cholesky factorisation:
+// CHOLMOD's supernodal one by default (BLAS on dense blocks of the factor),
+// Eigen's simplicial LDLᵀ as the alternative it is measured against.
+//
+// A run's frames share one grid and so one sparsity pattern; only the
+// weights (which nodes are unmeasured) and the right-hand side change. The
+// TemperatureFieldSolver keeps what survives between frames: the ordering
+// and symbolic analysis while the grid stays, and the numeric factor too
+// while the unmeasured nodes stay the same, so such a frame costs only the
+// two triangular solves. recover_temperature_field is the one-shot form.
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -38,12 +48,17 @@
 
 namespace bosfuse::fusion {
 
+// The sparse Cholesky behind the solve. Both give the same field (to
+// rounding); the supernodal one is the faster on large grids.
+enum class PoissonSolver { kCholmodSupernodal, kEigenSimplicial };
+
 struct TemperatureFieldOptions {
   bool use_replaced_outliers = true;  // kOutlierReplaced vectors (neighbour medians) count as measurements
   int max_nodes = 4'000'000;          // bound on the linear system's size
   double fill_weight = 1e-3;          // weight of the zero-gradient edges at unmeasured nodes (measured: 1)
   // Image edges the heated air leaves through (not ambient); at least one edge must stay ambient.
   bool open_top = false, open_bottom = false, open_left = false, open_right = false;
+  PoissonSolver solver = PoissonSolver::kCholmodSupernodal;
 
   std::string Validate() const;  // empty when valid
 };
@@ -89,6 +104,36 @@ struct TemperatureFieldResult {
 // invalid.
 TemperatureFieldResult recover_temperature_field(const DisplacementField& displacement, const BosGeometry& geometry,
                                                  const TemperatureFieldOptions& options = {});
+
+// The temperature fields of a sequence of displacement fields, reusing the
+// factorisation work between them (see the header's paragraph): hold one for
+// a run's frames. Any grid is accepted; a different grid (size, origin,
+// spacing) only costs a new analysis. Calls are serialised by a mutex, so
+// frames finished on another thread may share it, one at a time.
+class TemperatureFieldSolver {
+ public:
+  // Throws std::invalid_argument when the options are invalid.
+  TemperatureFieldSolver(const BosGeometry& geometry, const TemperatureFieldOptions& options = {});
+  ~TemperatureFieldSolver();
+  TemperatureFieldSolver(const TemperatureFieldSolver&) = delete;
+  TemperatureFieldSolver& operator=(const TemperatureFieldSolver&) = delete;
+
+  // Same result and errors as recover_temperature_field.
+  TemperatureFieldResult recover(const DisplacementField& displacement);
+
+  // What the calls so far have cost: symbolic analyses (orderings) and
+  // numeric factorisations; the rest of the calls only solved.
+  int analyses() const;
+  int factorisations() const;
+
+ private:
+  friend TemperatureFieldResult recover_temperature_field(const DisplacementField&, const BosGeometry&,
+                                                          const TemperatureFieldOptions&);
+  struct State;
+  BosGeometry geometry_;
+  TemperatureFieldOptions options_;
+  std::unique_ptr<State> state_;
+};
 
 // CSV with the header `x,y,temperature_c,measured`; NaN written as empty.
 void write_csv(const TemperatureField& field, const std::filesystem::path& path);

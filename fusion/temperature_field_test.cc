@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "fusion/bos_geometry.h"
 #include "fusion/displacement_evaluator.h"
@@ -223,6 +224,104 @@ TEST(TemperatureField, OpenEdgeLetsTheHeatedRegionLeaveTheImage) {
   TemperatureFieldOptions all_open = open;
   all_open.open_bottom = all_open.open_left = all_open.open_right = true;
   EXPECT_NE(all_open.Validate().find("ambient"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace bosfuse::fusion
+
+namespace bosfuse::fusion {
+namespace {
+
+// Largest difference of δn = n − n0 between two fields, relative to the
+// largest |δn| of `fresh`.
+double relative_difference(const TemperatureField& kept, const TemperatureField& fresh, const BosGeometry& g) {
+  EXPECT_EQ(kept.refractive_index.size(), fresh.refractive_index.size());
+  double largest = 0, difference = 0;
+  for (std::size_t i = 0; i < fresh.refractive_index.size() && i < kept.refractive_index.size(); ++i) {
+    largest = std::max(largest, std::abs(fresh.refractive_index[i] - g.ambient_refractive_index()));
+    difference = std::max(difference, std::abs(kept.refractive_index[i] - fresh.refractive_index[i]));
+  }
+  return difference / largest;
+}
+
+DisplacementField with_masked_block(DisplacementField field, int row0, int col0, int size) {
+  for (int r = row0; r < row0 + size; ++r) {
+    for (int c = col0; c < col0 + size; ++c) field.at(r, c).flag = VectorFlag::kMasked;
+  }
+  return field;
+}
+
+// A run's frames through one solver: the second frame keeps the first one's
+// unmeasured nodes (factor reused, only solved), the third masks others
+// (refactorised on the kept analysis). Each must equal a fresh one-shot
+// solve. The one-shot form orders the matrix by AMD, the kept solver by
+// nested dissection, so the two round differently (~1e-16 of δn); but the
+// field holds n = n0 + δn, whose last bit is ~4e-12 of the largest δn here,
+// so 1e-10 allows a few bits of n and nothing of the physics (the solve's
+// own error is ~1e-3 of δn). Measured: n bit-equal on every frame.
+TEST(TemperatureFieldSolver, FramesEqualFreshSolves) {
+  const BosGeometry g(paper_like_setup());
+  const std::vector<DisplacementField> frames = {
+      with_masked_block(analytic_displacement(HotSpot{512, 380, 80, 30}, g, 48, 64, 16), 30, 28, 6),
+      with_masked_block(analytic_displacement(HotSpot{420, 300, 60, 45}, g, 48, 64, 16), 30, 28, 6),
+      with_masked_block(analytic_displacement(HotSpot{600, 200, 90, 20}, g, 48, 64, 16), 10, 40, 8),
+  };
+  for (const PoissonSolver kind : {PoissonSolver::kCholmodSupernodal, PoissonSolver::kEigenSimplicial}) {
+    TemperatureFieldOptions options;
+    options.solver = kind;
+    options.open_top = true;  // the open edge's unknowns too
+    TemperatureFieldSolver solver(g, options);
+    double previous_peak = 0;
+    for (std::size_t f = 0; f < frames.size(); ++f) {
+      const auto kept = solver.recover(frames[f]);
+      const auto fresh = recover_temperature_field(frames[f], g, options);
+      const double difference = relative_difference(kept.field, fresh.field, g);
+      EXPECT_LT(difference, 1e-10) << "frame " << f;
+      std::printf("solver %d frame %zu: largest difference %.3g of the largest dn\n", static_cast<int>(kind), f,
+                  difference);
+      EXPECT_EQ(kept.field.measured, fresh.field.measured);
+      EXPECT_EQ(kept.summary.unmeasured_nodes, fresh.summary.unmeasured_nodes);
+      EXPECT_NEAR(kept.summary.max_c, fresh.summary.max_c, 1e-9);
+      EXPECT_NE(kept.summary.max_c, previous_peak) << "each frame is its own field, not the one before";
+      previous_peak = kept.summary.max_c;
+    }
+    EXPECT_EQ(solver.analyses(), 1);
+    EXPECT_EQ(solver.factorisations(), 2) << "the second frame's unmeasured nodes are the first's";
+  }
+}
+
+// The two factorisations solve the same system.
+TEST(TemperatureFieldSolver, CholmodAndEigenAgree) {
+  const BosGeometry g(paper_like_setup());
+  const auto frame = with_masked_block(analytic_displacement(HotSpot{512, 380, 80, 30}, g, 48, 64, 16), 30, 28, 6);
+  TemperatureFieldOptions cholmod, eigen;
+  cholmod.solver = PoissonSolver::kCholmodSupernodal;
+  eigen.solver = PoissonSolver::kEigenSimplicial;
+  const auto a = recover_temperature_field(frame, g, cholmod), b = recover_temperature_field(frame, g, eigen);
+  EXPECT_LT(relative_difference(a.field, b.field, g), 1e-9);
+}
+
+// Another grid mid-run (a resumed run with other settings, a probe band) is
+// analysed anew, and a return to the first grid too.
+TEST(TemperatureFieldSolver, ANewGridIsAnalysedAnew) {
+  const BosGeometry g(paper_like_setup());
+  const HotSpot spot{300, 200, 60, 25};
+  const auto large = analytic_displacement(spot, g, 40, 50, 12), small = analytic_displacement(spot, g, 30, 40, 16);
+  TemperatureFieldSolver solver(g);
+  for (const auto* frame : {&large, &small, &large}) {
+    const auto kept = solver.recover(*frame);
+    EXPECT_EQ(kept.field.rows, frame->rows);
+    EXPECT_LT(relative_difference(kept.field, recover_temperature_field(*frame, g).field, g), 1e-10);
+  }
+  EXPECT_EQ(solver.analyses(), 3);
+  DisplacementField probes;
+  probes.rows = 1;
+  probes.cols = 2;
+  probes.vectors.resize(2);
+  EXPECT_THROW(solver.recover(probes), std::invalid_argument);
+  TemperatureFieldOptions invalid;
+  invalid.fill_weight = 0;
+  EXPECT_THROW(TemperatureFieldSolver(g, invalid), std::invalid_argument);
 }
 
 }  // namespace

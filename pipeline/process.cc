@@ -130,6 +130,11 @@ struct FrameContext {
   // One for the run: the reference is prepared once and the buffers of one
   // frame serve the next.
   std::unique_ptr<fusion::DisplacementEvaluator> evaluator;
+  // One for the run too: the Poisson system's analysis is done once, and its
+  // factor is reused while the unmeasured nodes stay. Frames are finished one
+  // at a time (FinishingFrame waits for one before starting the next); the
+  // solver serialises its calls besides.
+  std::unique_ptr<fusion::TemperatureFieldSolver> temperature_solver;
 
   // The one place frames meet the evaluator: the full field, or only the
   // windows at the probes.
@@ -156,9 +161,7 @@ FrameResult finish_full(const FrameContext& ctx, const FrameRecord& frame, const
   std::optional<fusion::TemperatureFieldResult> temperature;
   if (evaluated.field.rows >= 3 && evaluated.field.cols >= 3) {
     const auto& field_options = ctx.settings.geometry.temperature_field;
-    temperature = timed(times.temperature_field_s, [&] {
-      return fusion::recover_temperature_field(evaluated.field, *ctx.geometry, field_options);
-    });
+    temperature = timed(times.temperature_field_s, [&] { return ctx.temperature_solver->recover(evaluated.field); });
     timed(times.csv_s, [&] { fusion::write_csv(temperature->field, ctx.run_dir / (stem + "_temperature.csv")); });
     const auto& s = temperature->summary;
     out.fields.push_back({0, frame.id, "temperature", stem + "_temperature.csv",
@@ -423,6 +426,8 @@ FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& sto
   ctx.reference = load_frame(run_dir, frames.reference);
   ctx.mask = load_mask(run_dir, ctx.settings.mask);
   ctx.evaluator = std::make_unique<fusion::DisplacementEvaluator>(ctx.reference, ctx.settings.evaluator, ctx.mask);
+  ctx.temperature_solver =
+      std::make_unique<fusion::TemperatureFieldSolver>(*ctx.geometry, ctx.settings.geometry.temperature_field);
   if (!ctx.settings.probes_only) fs::create_directories(run_dir / ctx.fields_dir);
   return ctx;
 }

@@ -1,0 +1,105 @@
+// The temperature field of a 16 MP frame (4928×3264, IW 16 px, step 8 px:
+// 615×407 nodes, ~250 k unknowns): the Poisson solve that process runs for
+// every frame, by solver (0: CHOLMOD supernodal, 1: Eigen simplicial LDLT).
+//   BM_TemperatureFieldOneShot/s       recover_temperature_field: analysis (AMD ordering), factorisation and
+//                                      solve each call
+//   BM_TemperatureFieldPerFrame/s/m    one TemperatureFieldSolver over a run's frames, each with new
+//                                      displacements; m = 0: the same unmeasured nodes every frame (the
+//                                      factor is reused, only solved), m = 1: they change every frame
+//                                      (refactorised on the kept analysis; CHOLMOD orders by nested dissection)
+// Run: build/bench/temperature_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
+// Figures go into docs/BENCHMARKS.md.
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+#include "fusion/bos_geometry.h"
+#include "fusion/displacement_field.h"
+#include "fusion/temperature_field.h"
+
+namespace {
+
+using namespace bosfuse::fusion;
+
+constexpr int kRows = 407, kCols = 615;  // 16 MP, IW 16, step 8
+constexpr double kStepPx = 8;
+
+BosGeometry geometry() {
+  BosGeometryOptions o;
+  o.z_d_m = 0.5;
+  o.depth_m = 0.1;
+  o.magnification = 0.15;
+  o.pixel_pitch_um = 5.0;
+  return BosGeometry(o);
+}
+
+// A hot plume's shifts (a Gaussian's gradient, inward), its centre moving
+// with the frame; with `masked_block` a 20×20-node block at a place that
+// depends on the frame is unmeasured.
+DisplacementField frame_field(int frame, bool masked_block) {
+  DisplacementField field;
+  field.rows = kRows;
+  field.cols = kCols;
+  field.vectors.resize(static_cast<std::size_t>(kRows) * kCols);
+  const double cx = 2400 + 40 * frame, cy = 1600 - 25 * frame, sigma = 500, amplitude_px = 1.5;
+  for (int r = 0; r < kRows; ++r) {
+    for (int c = 0; c < kCols; ++c) {
+      DisplacementVector& v = field.at(r, c);
+      v.x_px = 8 + c * kStepPx;
+      v.y_px = 8 + r * kStepPx;
+      const double dx = v.x_px - cx, dy = v.y_px - cy;
+      const double g = amplitude_px * std::exp(-(dx * dx + dy * dy) / (2 * sigma * sigma)) / sigma;
+      v.u_px = -g * dx;
+      v.v_px = -g * dy;
+    }
+  }
+  if (masked_block) {
+    const int r0 = 100 + 30 * (frame % 5), c0 = 200 + 40 * (frame % 5);
+    for (int r = r0; r < r0 + 20; ++r) {
+      for (int c = c0; c < c0 + 20; ++c) field.at(r, c).flag = VectorFlag::kMasked;
+    }
+  }
+  return field;
+}
+
+TemperatureFieldOptions options_for(std::int64_t solver) {
+  TemperatureFieldOptions o;
+  o.solver = solver == 0 ? PoissonSolver::kCholmodSupernodal : PoissonSolver::kEigenSimplicial;
+  return o;
+}
+
+void BM_TemperatureFieldOneShot(benchmark::State& state) {
+  const BosGeometry g = geometry();
+  const auto options = options_for(state.range(0));
+  const DisplacementField field = frame_field(0, true);
+  for (auto _ : state) benchmark::DoNotOptimize(recover_temperature_field(field, g, options));
+  state.SetLabel(state.range(0) == 0 ? "cholmod supernodal" : "eigen simplicial");
+}
+
+void BM_TemperatureFieldPerFrame(benchmark::State& state) {
+  const BosGeometry g = geometry();
+  const bool masks_change = state.range(1) != 0;
+  constexpr int kFrames = 6;
+  std::vector<DisplacementField> frames;
+  for (int f = 0; f < kFrames; ++f) frames.push_back(frame_field(f, true));
+  if (!masks_change) {
+    for (int f = 1; f < kFrames; ++f) {
+      for (std::size_t i = 0; i < frames[f].size(); ++i) frames[f].vectors[i].flag = frames[0].vectors[i].flag;
+    }
+  }
+  TemperatureFieldSolver solver(g, options_for(state.range(0)));
+  solver.recover(frames[kFrames - 1]);  // the run's first frame, analysed outside the timing
+  int f = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(solver.recover(frames[f++ % kFrames]));
+  state.counters["factorisations"] = solver.factorisations();
+  state.SetLabel(std::string(state.range(0) == 0 ? "cholmod supernodal" : "eigen simplicial") +
+                 (masks_change ? ", refactorised" : ", factor reused"));
+}
+
+BENCHMARK(BM_TemperatureFieldOneShot)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_TemperatureFieldPerFrame)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();
