@@ -6,6 +6,8 @@
 #include <functional>
 #include <stdexcept>
 
+#include "fusion/evaluation.h"
+
 namespace bosfuse::fusion {
 namespace {
 
