@@ -627,7 +627,9 @@ TEST(XcorrEvaluator, FramesAfterTheFirstEqualFreshEvaluations) {
       expect_same_fields(reused, evaluate_xcorr(first.reference, frames[i], options, mask));
       EXPECT_GT(reused.summary.valid, reused.field.size() / 2);
       EXPECT_GT(reused.summary.masked, 0u);
-      if (options.adaptive_refinement && i == 1) EXPECT_LT(reused.summary.refined_fraction, 0.9) << "refined in part";
+      if (options.adaptive_refinement && i == 1) {
+        EXPECT_LT(reused.summary.refined_fraction, 0.9) << "refined in part";
+      }
       const std::vector<cv::Point2d> points = {{100.5, 60.5}, {180, 200}};
       expect_same_fields(evaluator.probe(frames[i], points),
                          probe_xcorr(first.reference, frames[i], points, options, mask));

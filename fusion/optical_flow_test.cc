@@ -57,7 +57,9 @@ TEST(OpticalFlow, EveryDisPresetFollowsAUniformShiftAndMediumIsTheClosest) {
     rms[preset] = rms_error(result.field, pair.truth);
     EXPECT_LT(rms[preset], 0.25) << to_string(preset);
     const cv::Mat flow = dense_flow(pair.reference, pair.measurement, FlowAlgorithm::kDis, preset);
-    if (!previous.empty()) EXPECT_GT(cv::norm(flow, previous, cv::NORM_INF), 1e-4) << to_string(preset);
+    if (!previous.empty()) {
+      EXPECT_GT(cv::norm(flow, previous, cv::NORM_INF), 1e-4) << to_string(preset);
+    }
     previous = flow;
   }
   EXPECT_LT(rms[DisPreset::kMedium], rms[DisPreset::kUltrafast]);
