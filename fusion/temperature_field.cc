@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -345,15 +346,23 @@ TemperatureFieldResult recover_temperature_field(const DisplacementField& displa
 void write_csv(const TemperatureField& field, const std::filesystem::path& path) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error(path.string() + ": cannot open for writing");
-  out << field_csv_header(kTemperatureColumns) << "\n";
+  // One buffer, as the displacement field's CSV (displacement_field.cc).
+  fmt::memory_buffer text;
+  const auto to = std::back_inserter(text);
+  fmt::format_to(to, "{}\n", field_csv_header(kTemperatureColumns));
   for (int r = 0; r < field.rows; ++r) {
     for (int c = 0; c < field.cols; ++c) {
       const std::size_t i = field.index(r, c);
       const double t = field.temperature_c[i];
-      out << fmt::format("{:.1f},{:.1f},{},{}\n", field.x0_px + c * field.step_px, field.y0_px + r * field.step_px,
-                         std::isfinite(t) ? fmt::format("{:.4f}", t) : std::string(), int{field.measured[i]});
+      const double x_px = field.x0_px + c * field.step_px, y_px = field.y0_px + r * field.step_px;
+      if (std::isfinite(t)) {
+        fmt::format_to(to, "{:.1f},{:.1f},{:.4f},{}\n", x_px, y_px, t, int{field.measured[i]});
+      } else {
+        fmt::format_to(to, "{:.1f},{:.1f},,{}\n", x_px, y_px, int{field.measured[i]});
+      }
     }
   }
+  out.write(text.data(), static_cast<std::streamsize>(text.size()));
   if (!out.flush()) throw std::runtime_error(path.string() + ": write failed");
 }
 

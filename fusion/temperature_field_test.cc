@@ -7,6 +7,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "fusion/bos_geometry.h"
 #include "fusion/displacement_evaluator.h"
@@ -189,6 +192,23 @@ TEST(TemperatureField, InwardDisplacementFromImagesIsAHotSpot) {
   const double expected_rise = 0.5 * 30 * std::exp(0.5) * g.celsius_per_px_shift_per_px_length();
   EXPECT_GT(*centre - 20, 0) << "inward shifts must integrate to a hot spot";
   EXPECT_NEAR(*centre - 20, expected_rise, 0.15 * expected_rise);
+}
+
+TEST(TemperatureField, TheCsvHasANodePerLineAndAnEmptyCellWhereNoTemperatureExists) {
+  TemperatureField field;
+  field.rows = 1;
+  field.cols = 2;
+  field.x0_px = 7.5;
+  field.y0_px = 7.5;
+  field.step_px = 8;
+  field.temperature_c = {25.5, std::nan("")};
+  field.measured = {1, 0};
+  const auto path = std::filesystem::temp_directory_path() / "bosfuse-temperature-csv-test.csv";
+  write_csv(field, path);
+  std::ifstream in(path);
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  std::filesystem::remove(path);
+  EXPECT_EQ(text, "x,y,temperature_c,measured\n7.5,7.5,25.5000,1\n15.5,7.5,,0\n");
 }
 
 }  // namespace
