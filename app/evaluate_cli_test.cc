@@ -184,11 +184,11 @@ TEST_F(EvaluateCli, APairTooLargeForTheMemoryLimitIsRefusedBeforeItAllocates) {
   }
   const std::string pair = path("big_ref.png") + " " + path("big_meas.png");
   auto limited = [&](int megabytes, const std::string& args) {
-    return testing::run_command("sh -c 'ulimit -v " + std::to_string(megabytes * 1024) + " && exec " + kBosfuse +
-                                    " evaluate " + pair + " " + args + "'",
-                                120);
+    return testing::run_command(
+        "sh -c 'ulimit -v " + std::to_string(megabytes * 1024) + " && exec " + kBosfuse + " evaluate " + args + "'",
+        120);
   };
-  const auto refused = limited(450, "-o " + path("big.csv"));
+  const auto refused = limited(450, pair + " -o " + path("big.csv"));
   EXPECT_NE(refused.exit_code, 0);
   EXPECT_NE(refused.output.find("a 4000×3000 pair needs "), std::string::npos) << refused.output;
   EXPECT_NE(refused.output.find("to evaluate with these settings (window 16 px, step 8 px, 3 passes); "),
@@ -203,12 +203,18 @@ TEST_F(EvaluateCli, APairTooLargeForTheMemoryLimitIsRefusedBeforeItAllocates) {
     EXPECT_EQ(refused.output.find(failure), std::string::npos) << refused.output;
   }
   EXPECT_FALSE(std::filesystem::exists(path("big.csv"))) << "refused before any output";
+  // A sequence is refused before its file is laid out, not frame by frame.
+  const auto sequence =
+      limited(450, "--reference " + path("big_ref.png") + " --sequence " + path("big_meas.png") + " -o " + path("big.h5"));
+  EXPECT_EQ(sequence.exit_code, 1) << sequence.output;
+  EXPECT_NE(sequence.output.find("a 4000×3000 pair needs "), std::string::npos) << sequence.output;
+  EXPECT_FALSE(std::filesystem::exists(path("big.h5"))) << "refused before any output";
 
-  const auto probes = limited(450, "--probe 1000,1000 --probe 3000,2000");
+  const auto probes = limited(450, pair + " --probe 1000,1000 --probe 3000,2000");
   ASSERT_EQ(probes.exit_code, 0) << probes.output;
   EXPECT_NE(probes.output.find("2 vectors, 2 valid"), std::string::npos) << probes.output;
 
-  const auto evaluated = limited(4000, "-o " + path("big.csv"));
+  const auto evaluated = limited(4000, pair + " -o " + path("big.csv"));
   ASSERT_EQ(evaluated.exit_code, 0) << evaluated.output;
   const std::string csv = read(path("big.csv"));
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + ((4000 - 16) / 8 + 1) * ((3000 - 16) / 8 + 1));

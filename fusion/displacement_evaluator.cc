@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "fusion/memory_budget.h"
+
 namespace bosfuse::fusion {
 
 std::string EvaluatorOptions::Validate() const {
@@ -22,6 +24,14 @@ DisplacementEvaluator::DisplacementEvaluator(const cv::Mat& reference, const Eva
     xcorr_.emplace(reference, options.xcorr, mask);
   } else if (const std::string problem = options.Validate(); !problem.empty()) {
     throw std::invalid_argument(problem);
+  }
+}
+
+void DisplacementEvaluator::check_memory() const {
+  if (xcorr_) {
+    check_xcorr_memory(reference_, mask_, options_.xcorr);
+  } else {
+    check_flow_memory(reference_, mask_, options_.flow);
   }
 }
 

@@ -40,6 +40,12 @@ class DisplacementEvaluator {
  public:
   DisplacementEvaluator(const cv::Mat& reference, const EvaluatorOptions& options, const cv::Mat& mask = {});
 
+  // Throws InsufficientMemory (memory_budget.h) when a full-field
+  // evaluation needs more than this process can get. evaluate() checks it
+  // at its first frame; a caller that must know before it starts (a
+  // sequence, whose output file is laid out first) asks here.
+  void check_memory() const;
+
   EvaluationResult evaluate(const cv::Mat& measurement);
   // See probe_displacement below.
   EvaluationResult probe(const cv::Mat& measurement, const std::vector<cv::Point2d>& points);

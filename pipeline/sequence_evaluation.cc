@@ -41,6 +41,7 @@ SequenceEvaluator::SequenceEvaluator(const std::string& reference_path, fusion::
   fusion::check_window_fits(first_window_px(options_), roi.size());
   grid_ = fusion::evaluation_grid(roi, options_.xcorr.window_px, options_.xcorr.step_px);
   evaluator_.emplace(reference_, options_, mask_);
+  evaluator_->check_memory();
 }
 
 SequenceFrameResult SequenceEvaluator::evaluate(const std::string& frame_path) {

@@ -34,7 +34,9 @@ class SequenceEvaluator {
   // Throws std::runtime_error naming the file when the reference or the mask
   // cannot be read, and std::invalid_argument when the options do not fit
   // the reference (a window larger than the image, a ROI outside it, a mask
-  // of another size): nothing about the sequence is known to be usable then.
+  // of another size) or when evaluating a frame of the reference's size needs
+  // more memory than this process can get (fusion::InsufficientMemory):
+  // nothing about the sequence is known to be usable then.
   SequenceEvaluator(const std::string& reference_path, fusion::EvaluatorOptions options,
                     const std::string& mask_path = {});
 
