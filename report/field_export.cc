@@ -10,6 +10,7 @@
 
 #include "acquisition/clock.h"
 #include "fusion/field_csv.h"
+#include "report/field_conventions.h"
 #include "report/hdf5_writer.h"
 #include "report/partial_file.h"
 #include "report/xdmf_sidecar.h"
@@ -28,12 +29,6 @@ namespace fs = std::filesystem;
 
 // Bumped when a reader would have to change: files say which layout they follow.
 constexpr std::int64_t kLayoutVersion = 1;
-
-constexpr std::string_view kDisplacementConvention =
-    "a background feature at (x, y) in the reference image appears at (x + u, y + v) in the measurement image";
-constexpr std::string_view kCoordinates =
-    "image coordinates: origin at the top-left pixel's centre, x to the right, y down; 2-D arrays are [ny, nx] "
-    "(row index = y)";
 
 // A stored CSV column and the dataset it becomes.
 struct Quantity {
@@ -226,7 +221,7 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
                       "/displacement/frame_NNNNNN and /temperature/frame_NNNNNN (NNNNNN = frame id in the run "
                       "store), grid coordinates under /grids; see docs/REPORT.md, Field export");
     out.set_attribute("/", "displacement_convention", kDisplacementConvention);
-    out.set_attribute("/", "coordinates", kCoordinates);
+    out.set_attribute("/", "coordinates", coordinates_convention("2-D arrays are [ny, nx]"));
     out.set_attribute("/", "time", "t_s: " + clock.basis());
     if (options.px_per_mm) out.set_attribute("/", "px_per_mm", *options.px_per_mm);
     out.create_group("/grids");

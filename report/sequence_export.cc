@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "report/field_export.h"
+#include "report/field_conventions.h"
 #include "report/hdf5_writer.h"
 #include "report/partial_file.h"
 #include "report/xdmf_sidecar.h"
@@ -28,12 +29,6 @@ constexpr std::int64_t kLayoutVersion = 1;
 // The flag of every node of a frame that has no field (its status says why).
 constexpr std::uint8_t kFrameNotEvaluated = 255;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-constexpr std::string_view kDisplacementConvention =
-    "a background feature at (x, y) in the reference image appears at (x + u, y + v) in the measurement image";
-constexpr std::string_view kCoordinates =
-    "image coordinates: origin at the top-left pixel's centre, x to the right, y down; fields are [frames, ny, nx] "
-    "(row index = y)";
 
 struct Quantity {
   std::string_view dataset;
@@ -111,7 +106,7 @@ SequenceFieldWriter::SequenceFieldWriter(const fs::path& hdf5_path, SequenceExpo
   out.set_attribute("/", "settings", in.settings_json);
   out.set_attribute("/", "frames", static_cast<std::int64_t>(frames));
   out.set_attribute("/", "displacement_convention", kDisplacementConvention);
-  out.set_attribute("/", "coordinates", kCoordinates);
+  out.set_attribute("/", "coordinates", coordinates_convention("fields are [frames, ny, nx]"));
   auto describe = [&](const std::string& path, std::string_view units, std::string_view what) {
     out.set_attribute(path, "units", units);
     out.set_attribute(path, "description", what);
