@@ -126,13 +126,20 @@ const sim::SyntheticPair& full_frame() {
   return pair;
 }
 
-// IW 16, step 8, 3 passes with deformation; max shift 2 px (BOS).
-void BM_FullFrame16MP(benchmark::State& state) {
-  const auto& pair = full_frame();
-  auto e = evaluator(0, 16, 3);
+// The full-field benchmarks' evaluation: IW 16, step 8, with deformation,
+// every pass run; max shift 2 px (BOS).
+fusion::EvaluatorOptions full_frame_options(int method = 0, int passes = 3) {
+  auto e = evaluator(method, 16, passes);
   e.set_grid(16, 8);
   e.xcorr.max_shift_px = 2;
   e.xcorr.convergence_px = 0;
+  return e;
+}
+
+// 3 passes.
+void BM_FullFrame16MP(benchmark::State& state) {
+  const auto& pair = full_frame();
+  const auto e = full_frame_options();
   for (auto _ : state) {
     const auto result = fusion::evaluate_displacement(pair.reference, pair.measurement, e);
     state.counters["vectors"] = double(result.field.size());
@@ -183,10 +190,7 @@ double full_frame_rms_px(const fusion::DisplacementField& field) {
 void BM_FullFrame16MPMethods(benchmark::State& state) {
   const auto& pair = full_frame();
   const int method = int(state.range(0));
-  auto e = evaluator(method >= 3 ? 1 : 0, 16, method == 1 ? 2 : 3);
-  e.set_grid(16, 8);
-  e.xcorr.max_shift_px = 2;
-  e.xcorr.convergence_px = 0;
+  auto e = full_frame_options(method >= 3 ? 1 : 0, method == 1 ? 2 : 3);
   if (method == 1 || method == 2) e.xcorr.first_window_px = 32;
   e.flow.dis_preset = method == 4 ? fusion::DisPreset::kUltrafast : fusion::DisPreset::kMedium;
   fusion::EvaluationResult result;
@@ -210,11 +214,7 @@ BENCHMARK(BM_FullFrame16MPMethods)
 // prepares them, is outside the timing).
 void BM_FullFrame16MPEvaluator(benchmark::State& state) {
   const auto& pair = full_frame();
-  auto e = evaluator(0, 16, 3);
-  e.set_grid(16, 8);
-  e.xcorr.max_shift_px = 2;
-  e.xcorr.convergence_px = 0;
-  fusion::DisplacementEvaluator frames(pair.reference, e);
+  fusion::DisplacementEvaluator frames(pair.reference, full_frame_options());
   frames.evaluate(pair.measurement);
   for (auto _ : state) {
     const auto result = frames.evaluate(pair.measurement);
@@ -285,10 +285,7 @@ const std::vector<cv::Point2d>& window_means(int scene, const fusion::Displaceme
 void BM_AdaptiveRefinement(benchmark::State& state) {
   const int scene = int(state.range(0));
   const auto& pair = adaptive_scene(scene);
-  auto e = evaluator(0, 16, 3);
-  e.set_grid(16, 8);
-  e.xcorr.max_shift_px = 2;
-  e.xcorr.convergence_px = 0;
+  auto e = full_frame_options();
   e.xcorr.adaptive_refinement = state.range(1) != 0;
   if (state.range(1) == 2) e.xcorr.adaptive_threshold = 1e9;      // refines (almost) nothing: the fixed cost
   if (state.range(1) == 3) e.xcorr.adaptive_smoothing_nodes = 0;  // the unrefined first pass as it is
