@@ -3,12 +3,15 @@
 // temperature fields), Newton fits and agreement, stored in the run with
 // the settings used (pipeline/process.h). With no options the run's stored
 // settings are used again; options override them and are stored in turn.
-// Progress goes to stderr, the summary to stdout.
+// Progress goes to stderr, the summary to stdout. Started by mpirun or srun,
+// the frames are spread over the job's ranks and rank 0 alone writes the
+// run (app/ranks.h).
 
 #include <iostream>
 
 #include "app/command.h"
 #include "app/progress_display.h"
+#include "app/ranks.h"
 #include "app/run_control.h"
 #include "pipeline/process.h"
 
@@ -19,7 +22,7 @@ struct ProcessArgs {
   std::string run;
   bool resume = false;
   std::optional<std::string> mode, method, mask, geometry, roi;
-  std::optional<int> window_px, step_px, passes, probe_context;
+  std::optional<int> window_px, step_px, passes, probe_context, threads;
   std::optional<double> max_shift_px, adaptive_threshold;
   std::optional<std::string> adaptive_refinement;
 };
@@ -50,8 +53,9 @@ pipeline::SettingsOverrides overrides(const ProcessArgs& args) {
   return o;
 }
 
-void process(const ProcessArgs& args) {
+void process(const ProcessArgs& args, pipeline::FrameDistributor* distributor) {
   pipeline::ProcessOptions options;
+  options.distributor = distributor;
   options.overrides = overrides(args);
   options.resume = args.resume;
   options.stop = &stop_requested_by_signal();
@@ -103,7 +107,14 @@ void add_process(CLI::App& root) {
   cmd->add_option("--mask", args->mask,
                   "Mask image (e.g. the heater's holder): non-zero pixels are not evaluated; a path relative to the "
                   "run folder, or absolute (then copied into the run); '' for none (default: stored, else none)");
-  cmd->callback([args] { process(*args); });
+  cmd->add_option("--threads", args->threads,
+                  "Evaluation threads (per MPI rank under mpirun/srun); default: every core, or in an MPI job the "
+                  "rank's share of its node");
+  cmd->callback([args] {
+    run_on_ranks(
+        args->threads, [&](pipeline::FrameDistributor* distributor) { process(*args, distributor); },
+        pipeline::planned_frame_work);
+  });
 }
 
 BOSFUSE_COMMAND(add_process);

@@ -119,6 +119,7 @@ std::string boundary_text(const fusion::TemperatureFieldOptions& o) {
 struct FrameContext {
   fs::path run_dir;
   std::string fields_dir;  // relative to the run folder
+  FrameRecord reference_frame;
   std::vector<ChannelInfo> channels;
   std::vector<cv::Point2d> points;
   std::vector<std::int64_t> probe_ids;  // staged, one per channel
@@ -215,6 +216,95 @@ FinishedFrame finish_frame(const FrameContext& ctx, const FrameRecord& frame,
   return out;
 }
 
+// One frame's results into the processing's staging tables (one
+// transaction), and what making them took into the processing's times.
+void stage_finished(storage::ProcessingStore& results, std::int64_t processing_id, const FinishedFrame& f,
+                    ProcessTimes& times) {
+  times.decode_s += f.times.decode_s;
+  times.evaluation_s += f.times.evaluation_s;
+  times.temperature_field_s += f.times.temperature_field_s;
+  times.csv_s += f.times.csv_s;
+  timed(times.staging_s,
+        [&] { results.stage_frame(processing_id, f.frame.id, f.result.summary.dump(), f.samples, f.result.fields); });
+}
+
+// --- Frames evaluated by other processes (ProcessOptions::distributor) ---
+// They get a plan (the frame context's data and the frames to do) and send
+// back finished frames, both as CBOR: binary, so every double arrives bit
+// for bit (NaN included) and a distributed processing stores what one
+// process would.
+
+json frame_json(const FrameRecord& f) {
+  return {{"id", f.id},           {"t_ns", f.t_ns},           {"path", f.path},
+          {"width_px", f.width_px}, {"height_px", f.height_px}, {"bit_depth", f.bit_depth}};
+}
+
+FrameRecord frame_from_json(const json& j) {
+  FrameRecord f;
+  f.id = j.at("id").get<std::int64_t>();
+  f.t_ns = j.at("t_ns").get<std::int64_t>();
+  f.path = j.at("path").get<std::string>();
+  f.width_px = j.at("width_px").get<int>();
+  f.height_px = j.at("height_px").get<int>();
+  f.bit_depth = j.at("bit_depth").get<int>();
+  return f;
+}
+
+json sample_json(const storage::ProbeSampleRecord& s) {
+  return {s.probe_id, s.frame_id, s.t_ns, s.u_px, s.v_px, s.shift_px,
+          s.temperature_c ? json(*s.temperature_c) : json(nullptr), s.valid};
+}
+
+storage::ProbeSampleRecord sample_from_json(const json& j) {
+  const json& t = j.at(6);
+  return {j.at(0).get<std::int64_t>(), j.at(1).get<std::int64_t>(), j.at(2).get<std::int64_t>(),
+          j.at(3).get<double>(),       j.at(4).get<double>(),       j.at(5).get<double>(),
+          t.is_null() ? std::nullopt : std::optional<double>(t.get<double>()), j.at(7).get<bool>()};
+}
+
+Bytes finished_bytes(const FinishedFrame& f) {
+  json samples = json::array(), fields = json::array();
+  for (const auto& s : f.samples) samples.push_back(sample_json(s));
+  for (const auto& r : f.result.fields) fields.push_back({r.frame_id, r.kind, r.path, r.json});
+  const json j = {{"frame", frame_json(f.frame)},
+                  {"summary", f.result.summary},
+                  {"samples", samples},
+                  {"fields", fields},
+                  {"times",
+                   {f.times.decode_s, f.times.evaluation_s, f.times.temperature_field_s, f.times.csv_s}}};
+  return json::to_cbor(j);
+}
+
+FinishedFrame finished_from_bytes(const Bytes& bytes) {
+  const json j = json::from_cbor(bytes);
+  FinishedFrame f;
+  f.frame = frame_from_json(j.at("frame"));
+  f.result.summary = j.at("summary");
+  for (const auto& s : j.at("samples")) f.samples.push_back(sample_from_json(s));
+  for (const auto& r : j.at("fields")) {
+    f.result.fields.push_back(
+        {0, r.at(0).get<std::int64_t>(), r.at(1).get<std::string>(), r.at(2).get<std::string>(), r.at(3).get<std::string>()});
+  }
+  const json& t = j.at("times");
+  f.times.decode_s = t.at(0).get<double>();
+  f.times.evaluation_s = t.at(1).get<double>();
+  f.times.temperature_field_s = t.at(2).get<double>();
+  f.times.csv_s = t.at(3).get<double>();
+  return f;
+}
+
+// A frame from its file to its finished results: what every process of a
+// distributed processing does with the frames it is handed.
+FinishedFrame evaluate_and_finish(const FrameContext& ctx, const FrameRecord& frame) {
+  ProcessTimes times;
+  const cv::Mat image = timed(times.decode_s, [&] { return load_frame(ctx.run_dir, frame); });
+  const auto evaluated = timed(times.evaluation_s, [&] { return ctx.evaluate(image); });
+  FinishedFrame f = finish_frame(ctx, frame, evaluated);
+  f.times.decode_s = times.decode_s;
+  f.times.evaluation_s = times.evaluation_s;
+  return f;
+}
+
 // The frame being finished on a second thread while the next one is
 // evaluated (or, in turn, finished when it is staged), staged on the calling
 // thread in frame order, one transaction each.
@@ -245,11 +335,7 @@ class FinishingFrame {
   void stage() {
     if (!finishing_.valid()) return;
     const FinishedFrame f = timed(times_.wait_for_finishing_s, [&] { return finishing_.get(); });
-    times_.temperature_field_s += f.times.temperature_field_s;
-    times_.csv_s += f.times.csv_s;
-    timed(times_.staging_s, [&] {
-      results_.stage_frame(processing_id_, f.frame.id, f.result.summary.dump(), f.samples, f.result.fields);
-    });
+    stage_finished(results_, processing_id_, f, times_);
   }
 
  private:
@@ -404,12 +490,30 @@ std::vector<FrameRecord> frames_to_do(const RunFrames& frames, const std::set<st
   return out;
 }
 
+// The reference, the mask, the evaluator and the temperature solver of a
+// context whose data is set: made the same way by every process.
+void load_frame_context(FrameContext& ctx) {
+  // Every pass run, as in the full field; with the exact context (-1) a probe
+  // then equals the full field at its point.
+  ctx.settings.evaluator.xcorr.convergence_px = 0;
+  ctx.geometry.emplace(ctx.settings.geometry.geometry);
+  ctx.reference = load_frame(ctx.run_dir, ctx.reference_frame);
+  ctx.mask = load_mask(ctx.run_dir, ctx.settings.mask);
+  ctx.evaluator = std::make_unique<fusion::DisplacementEvaluator>(ctx.reference, ctx.settings.evaluator, ctx.mask);
+  ctx.temperature_solver =
+      std::make_unique<fusion::TemperatureFieldSolver>(*ctx.geometry, ctx.settings.geometry.temperature_field);
+  if (!ctx.settings.probes_only) fs::create_directories(ctx.run_dir / ctx.fields_dir);
+}
+
+// The context of the process that owns the run: probes staged, the ambient
+// and the calibration read from the store.
 FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& store,
                            storage::ProcessingStore& results, const Processing& processing,
                            const RunFrames& frames, const storage::ExperimentClock& clock) {
   FrameContext ctx;
   ctx.run_dir = run_dir;
   ctx.fields_dir = fmt::format("fields/p{}", processing.id);
+  ctx.reference_frame = frames.reference;
   ctx.settings = processing.settings;
   ctx.channels = positioned_channels(store.channels());
   if (ctx.settings.probes_only && ctx.channels.empty()) {
@@ -421,15 +525,55 @@ FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& sto
     ctx.probe_ids.push_back(results.stage_probe(processing.id, {0, c.id, c.name, *c.image_x_px, *c.image_y_px}));
   }
   resolve_ambient(ctx.settings.geometry, store, ctx.channels, clock, frames.reference);
-  ctx.geometry.emplace(ctx.settings.geometry.geometry);
   ctx.calibration = stored_calibration(results);
-  ctx.reference = load_frame(run_dir, frames.reference);
-  ctx.mask = load_mask(run_dir, ctx.settings.mask);
-  ctx.evaluator = std::make_unique<fusion::DisplacementEvaluator>(ctx.reference, ctx.settings.evaluator, ctx.mask);
-  ctx.temperature_solver =
-      std::make_unique<fusion::TemperatureFieldSolver>(*ctx.geometry, ctx.settings.geometry.temperature_field);
-  if (!ctx.settings.probes_only) fs::create_directories(run_dir / ctx.fields_dir);
+  load_frame_context(ctx);
   return ctx;
+}
+
+// What another process needs to evaluate and finish any of `frames` as this
+// one would: the context's data (not the store: a run folder on a shared
+// filesystem is read by every node, but its database is written by one).
+Bytes plan_bytes(const FrameContext& ctx, const std::vector<FrameRecord>& frames) {
+  json channels = json::array(), calibration = json::array(), todo = json::array();
+  for (std::size_t p = 0; p < ctx.channels.size(); ++p) {
+    channels.push_back({ctx.channels[p].id, ctx.channels[p].name, ctx.points[p].x, ctx.points[p].y, ctx.probe_ids[p]});
+  }
+  for (const auto& [channel, c] : ctx.calibration) {
+    calibration.push_back({channel, c.slope_c_per_px, c.reference_temperature_c, c.camera_offset_s});
+  }
+  for (const auto& f : frames) todo.push_back(frame_json(f));
+  return json::to_cbor(json{{"run_dir", fs::absolute(ctx.run_dir).string()},
+                            {"fields_dir", ctx.fields_dir},
+                            {"reference", frame_json(ctx.reference_frame)},
+                            {"settings", to_json(ctx.settings)},
+                            {"channels", channels},
+                            {"calibration", calibration},
+                            {"frames", todo}});
+}
+
+// The context a plan describes, loaded, and the frames to do.
+std::pair<FrameContext, std::vector<FrameRecord>> context_from_plan(const Bytes& plan) {
+  const json j = json::from_cbor(plan);
+  FrameContext ctx;
+  ctx.run_dir = j.at("run_dir").get<std::string>();
+  ctx.fields_dir = j.at("fields_dir").get<std::string>();
+  ctx.reference_frame = frame_from_json(j.at("reference"));
+  ctx.settings = settings_from_json(j.at("settings"));
+  for (const auto& c : j.at("channels")) {
+    ChannelInfo info;
+    info.id = c.at(0).get<std::int64_t>();
+    info.name = c.at(1).get<std::string>();
+    ctx.channels.push_back(info);
+    ctx.points.emplace_back(c.at(2).get<double>(), c.at(3).get<double>());
+    ctx.probe_ids.push_back(c.at(4).get<std::int64_t>());
+  }
+  for (const auto& c : j.at("calibration")) {
+    ctx.calibration[c.at(0).get<std::int64_t>()] = {c.at(1).get<double>(), c.at(2).get<double>(), c.at(3).get<double>()};
+  }
+  std::vector<FrameRecord> frames;
+  for (const auto& f : j.at("frames")) frames.push_back(frame_from_json(f));
+  load_frame_context(ctx);
+  return {std::move(ctx), std::move(frames)};
 }
 
 std::string temperature_source(const FrameContext& ctx) {
@@ -463,14 +607,13 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   const auto store = storage::RunStore::open(run_dir);
   const storage::ExperimentClock clock = storage::experiment_clock(store);
   Processing processing = start_processing(run_dir, options, results);
-  // Every pass run, as in the full field; with the exact context (-1) a probe
-  // then equals the full field at its point.
-  processing.settings.evaluator.xcorr.convergence_px = 0;
   const RunFrames frames = split_frames(store.frames());
   const auto staged = results.staged_frame_ids(processing.id);
   const std::set<std::int64_t> done(staged.begin(), staged.end());
+  const std::vector<FrameRecord> todo = frames_to_do(frames, done);
   // Started before the context is read, so the first frame decodes beside the reference.
-  FramePrefetch ahead(run_dir, frames_to_do(frames, done), options.prefetch_frames);
+  std::optional<FramePrefetch> ahead;
+  if (!options.distributor) ahead.emplace(run_dir, todo, options.prefetch_frames);
   const FrameContext ctx = frame_context(run_dir, store, results, processing, frames, clock);
 
   ProcessReport report;
@@ -489,32 +632,45 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
     progress(done.size(), "geometry from " + ctx.settings.geometry.source + ":\n" + ctx.geometry->brief_report());
   }
   std::size_t n = done.size();
+  auto frame_staged = [&](const FrameRecord& frame) {
+    progress(++n, fmt::format("frame {} (t = {:.2f} s) evaluated", frame.id, clock.seconds(frame.t_ns)), true);
+  };
   cv::Mat last_image;  // the quality index's, kept rather than decoded twice
-  FinishingFrame finished_aside(results, processing.id, report.times);
-  while (ahead.remaining() > 0) {
-    if (options.stop && options.stop->load()) {
-      finished_aside.stage();
-      report.text = processing.note + fmt::format("stopped after {} of {} frames; the run's earlier results are "
-                                                  "unchanged; `bosfuse process {} --resume` continues\n",
-                                                  n, report.frames, run_dir.string());
-      return report;
+  if (options.distributor) {
+    options.distributor->run(
+        plan_bytes(ctx, todo), todo.size(), [&](std::size_t i) { return finished_bytes(evaluate_and_finish(ctx, todo[i])); },
+        [&](std::size_t, const Bytes& bytes) {
+          const FinishedFrame f = finished_from_bytes(bytes);
+          stage_finished(results, processing.id, f, report.times);
+          frame_staged(f.frame);
+        },
+        options.stop);
+  } else {
+    FinishingFrame finished_aside(results, processing.id, report.times);
+    while (ahead->remaining() > 0 && !(options.stop && options.stop->load())) {
+      try {
+        PrefetchedFrame next = *ahead->next();
+        report.times.decode_s += next.decode_seconds;
+        report.times.wait_for_frames_s += next.wait_seconds;
+        const FrameRecord& frame = next.frame;
+        auto evaluated = timed(report.times.evaluation_s, [&] { return ctx.evaluate(next.image); });
+        finished_aside.start(ctx, frame, std::move(evaluated), options.finish_aside);
+        if (!options.finish_aside) finished_aside.stage();
+        frame_staged(frame);
+        if (frame.id == frames.measurements.back().id) last_image = std::move(next.image);
+      } catch (...) {
+        finished_aside.stage_before_error();
+        throw;
+      }
     }
-    try {
-      PrefetchedFrame next = *ahead.next();
-      report.times.decode_s += next.decode_seconds;
-      report.times.wait_for_frames_s += next.wait_seconds;
-      const FrameRecord& frame = next.frame;
-      auto evaluated = timed(report.times.evaluation_s, [&] { return ctx.evaluate(next.image); });
-      finished_aside.start(ctx, frame, std::move(evaluated), options.finish_aside);
-      if (!options.finish_aside) finished_aside.stage();
-      progress(++n, fmt::format("frame {} (t = {:.2f} s) evaluated", frame.id, clock.seconds(frame.t_ns)), true);
-      if (frame.id == frames.measurements.back().id) last_image = std::move(next.image);
-    } catch (...) {
-      finished_aside.stage_before_error();
-      throw;
-    }
+    finished_aside.stage();
   }
-  finished_aside.stage();
+  if (n < report.frames) {
+    report.text = processing.note + fmt::format("stopped after {} of {} frames; the run's earlier results are "
+                                                "unchanged; `bosfuse process {} --resume` continues\n",
+                                                n, report.frames, run_dir.string());
+    return report;
+  }
 
   const auto fits_start = Clock::now();
   const FitsAndAgreements fitted = fit_everything(store, results, ctx, processing.id, clock);
@@ -540,8 +696,15 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
                             report.probes, ctx.settings.probes_only ? "probe mode" : "full fields",
                             report.temperature_source, report.fits_ok, report.fits, report.agreements, report.seconds,
                             clock.basis()) +
-                fitted.text;
+                fitted.text + (options.distributor ? options.distributor->brief_report() : "");
   return report;
+}
+
+FrameWork planned_frame_work(const Bytes& plan) {
+  auto planned = std::make_shared<std::pair<FrameContext, std::vector<FrameRecord>>>(context_from_plan(plan));
+  return [planned](std::size_t i) {
+    return finished_bytes(evaluate_and_finish(planned->first, planned->second.at(i)));
+  };
 }
 
 }  // namespace bosfuse::pipeline

@@ -31,6 +31,7 @@
 #include <functional>
 #include <string>
 
+#include "pipeline/frame_distributor.h"
 #include "pipeline/processing_settings.h"
 
 namespace bosfuse::pipeline {
@@ -58,6 +59,11 @@ struct ProcessOptions {
   // about as much as it saves (process_bench BM_ProcessRun16MP), and the
   // concurrent Poisson solve adds ~200 MB at 16 MP.
   bool finish_aside = false;
+  // When set, the frames are evaluated by several processes (cluster/: MPI
+  // ranks), this one included, and this one alone writes the run's store;
+  // the stored results are those of a processing here. Decoding ahead and
+  // finishing aside are then each process's own business (not done).
+  FrameDistributor* distributor = nullptr;
 
   std::string Validate() const;  // empty when valid
 };
@@ -95,5 +101,11 @@ struct ProcessReport {
 };
 
 ProcessReport process_run(const std::filesystem::path& run_dir, const ProcessOptions& options);
+
+// The other processes' side of a distributed processing: the work of frame i
+// of the plan the distributor sent them (the run folder at the same path,
+// as on a shared filesystem). Throws when this process cannot set up the
+// plan's evaluation (the reference unreadable here, say).
+FrameWork planned_frame_work(const Bytes& plan);
 
 }  // namespace bosfuse::pipeline

@@ -63,6 +63,7 @@ class BackgroundProcess {
   BackgroundProcess& operator=(const BackgroundProcess&) = delete;
 
   void send_signal(int signal) { kill(pid_, signal); }
+  pid_t pid() const { return pid_; }
 
   // The exit code once the process ends within `limit`; -1 if it is still
   // running then or was killed by a signal.
