@@ -9,11 +9,13 @@
 #include <spdlog/spdlog.h>
 
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "app/command.h"
 #include "app/output_stream.h"
 #include "app/progress_display.h"
+#include "app/ranks.h"
 #include "app/run_control.h"
 #include "fusion/displacement_evaluator.h"
 #include "pipeline/image_io.h"
@@ -35,6 +37,7 @@ struct EvaluateArgs {
   std::string sequence_reference, sequence, settings;
   std::vector<std::string> probes;
   int window_px = 16, first_window_px = 0, step_px = 8, passes = 3;
+  std::optional<int> threads;
   double max_shift_px = 4, contour_px = 0.1, adaptive_threshold = 4;
 };
 
@@ -175,6 +178,83 @@ std::string settings_json(const pipeline::ProcessingSettings& settings, const Ev
   return j.dump();
 }
 
+// What the other ranks of an MPI job are sent: the frames as rank 0 listed
+// them, and the settings it resolved, which each rank resolves again from
+// the same command line and must find the same.
+pipeline::Bytes sequence_plan(const std::vector<std::string>& frames, const std::string& settings) {
+  return nlohmann::json::to_cbor(nlohmann::json{{"frames", frames}, {"settings", settings}});
+}
+
+pipeline::FrameWork sequence_frame_work(const EvaluateArgs& args, const pipeline::ProcessingSettings& settings,
+                                        const pipeline::Bytes& plan) {
+  const auto j = nlohmann::json::from_cbor(plan);
+  if (j.at("settings").get<std::string>() != settings_json(settings, args)) {
+    throw std::runtime_error("the settings resolved here differ from rank 0's: is " +
+                             (args.settings.empty() ? std::string("the mask") : args.settings) +
+                             " the same file on every node?");
+  }
+  auto evaluator =
+      std::make_shared<pipeline::SequenceEvaluator>(args.sequence_reference, settings.evaluator, settings.mask);
+  auto frames = std::make_shared<std::vector<std::string>>(j.at("frames").get<std::vector<std::string>>());
+  return [evaluator, frames](std::size_t i) { return pipeline::result_bytes(evaluator->evaluate(frames->at(i))); };
+}
+
+// Rank 0's side, or the whole job in one process: every frame evaluated,
+// here or by the distributor's ranks, and written in order.
+void write_sequence(const EvaluateArgs& args, const pipeline::ProcessingSettings& settings,
+                    pipeline::FrameDistributor* distributor) {
+  // The reference, the mask and the settings are checked before anything is written.
+  pipeline::SequenceEvaluator evaluator(args.sequence_reference, settings.evaluator, settings.mask);
+  const auto sequence = pipeline::list_image_sequence(args.sequence, {args.sequence_reference, settings.mask});
+  for (const auto& file : sequence.left_out) spdlog::info("{}: the reference or the mask, not a frame", file);
+  report::SequenceFieldWriter writer(
+      args.out, {args.sequence_reference, settings_json(settings, args), sequence.frames, evaluator.grid()});
+
+  const std::atomic<bool>& stop = stop_requested_by_signal();
+  ProgressDisplay display;
+  std::size_t failed = 0;
+  auto take = [&](std::size_t i, const pipeline::SequenceFrameResult& result) {
+    if (!result.ok()) {
+      ++failed;
+      const std::string line = fmt::format("frame {}: {}", result.name, result.status);
+      // Under --quiet the display is silent, but a failed frame is a warning all the same.
+      if (spdlog::should_log(spdlog::level::info)) {
+        display.note("warning: " + line);
+      } else {
+        spdlog::warn("{}", line);
+      }
+    } else {
+      spdlog::debug("{}: {}", result.name, result.summary.BriefReport());
+    }
+    writer.write(i, result);
+    display.step(i + 1, sequence.frames.size(), result.name);
+  };
+  const std::size_t count = sequence.frames.size();
+  std::size_t taken = 0;
+  if (distributor) {
+    taken = distributor->run(
+        sequence_plan(sequence.frames, settings_json(settings, args)), count,
+        [&](std::size_t i) { return pipeline::result_bytes(evaluator.evaluate(sequence.frames[i])); },
+        [&](std::size_t i, const pipeline::Bytes& bytes) { take(i, pipeline::result_from_bytes(bytes)); }, &stop);
+  } else {
+    for (; taken < count && !stop; ++taken) take(taken, evaluator.evaluate(sequence.frames[taken]));
+  }
+  if (taken < count) throw CommandFailure(kExitStopped, "stopped on request; nothing was written to " + args.out);
+  display.finish();
+  if (distributor) spdlog::info("{}", distributor->brief_report());
+  const auto written = writer.commit();
+  spdlog::info("wrote {} and {}: {} of {} frames evaluated, on a {}x{} grid", written.hdf5_path.string(),
+               written.xdmf_path.string(), written.frames_ok, written.frames, evaluator.grid().cols,
+               evaluator.grid().rows);
+  if (failed > 0) {
+    throw CommandFailure(
+        kExitSomeFramesFailed,
+        fmt::format("{} of {} frames could not be evaluated (named above; their status is in {}:/status)", failed,
+                    sequence.frames.size(), args.out));
+  }
+}
+
+
 void evaluate_sequence(const EvaluateArgs& args, const CLI::App& cmd) {
   if (!args.reference.empty() || !args.measurement.empty()) {
     throw std::runtime_error("--sequence takes the reference as --reference REF, not as a positional image");
@@ -197,45 +277,9 @@ void evaluate_sequence(const EvaluateArgs& args, const CLI::App& cmd) {
   if (const auto problem = settings.evaluator.Validate(); !problem.empty()) throw std::runtime_error(problem);
   spdlog::info("settings: {} ({})", pipeline::describe(settings), settings.source);
 
-  // The reference, the mask and the settings are checked before anything is written.
-  pipeline::SequenceEvaluator evaluator(args.sequence_reference, settings.evaluator, settings.mask);
-  const auto sequence = pipeline::list_image_sequence(args.sequence, {args.sequence_reference, settings.mask});
-  for (const auto& file : sequence.left_out) spdlog::info("{}: the reference or the mask, not a frame", file);
-  report::SequenceFieldWriter writer(
-      args.out, {args.sequence_reference, settings_json(settings, args), sequence.frames, evaluator.grid()});
-
-  const std::atomic<bool>& stop = stop_requested_by_signal();
-  ProgressDisplay display;
-  std::size_t failed = 0;
-  for (std::size_t i = 0; i < sequence.frames.size(); ++i) {
-    if (stop) throw CommandFailure(kExitStopped, "stopped on request; nothing was written to " + args.out);
-    const auto result = evaluator.evaluate(sequence.frames[i]);
-    if (!result.ok()) {
-      ++failed;
-      const std::string line = fmt::format("frame {}: {}", result.name, result.status);
-      // Under --quiet the display is silent, but a failed frame is a warning all the same.
-      if (spdlog::should_log(spdlog::level::info)) {
-        display.note("warning: " + line);
-      } else {
-        spdlog::warn("{}", line);
-      }
-    } else {
-      spdlog::debug("{}: {}", result.name, result.summary.BriefReport());
-    }
-    writer.write(i, result);
-    display.step(i + 1, sequence.frames.size(), result.name);
-  }
-  display.finish();
-  const auto written = writer.commit();
-  spdlog::info("wrote {} and {}: {} of {} frames evaluated, on a {}x{} grid", written.hdf5_path.string(),
-               written.xdmf_path.string(), written.frames_ok, written.frames, evaluator.grid().cols,
-               evaluator.grid().rows);
-  if (failed > 0) {
-    throw CommandFailure(
-        kExitSomeFramesFailed,
-        fmt::format("{} of {} frames could not be evaluated (named above; their status is in {}:/status)", failed,
-                    sequence.frames.size(), args.out));
-  }
+  run_on_ranks(
+      args.threads, [&](pipeline::FrameDistributor* distributor) { write_sequence(args, settings, distributor); },
+      [&](const pipeline::Bytes& plan) { return sequence_frame_work(args, settings, plan); });
 }
 
 void evaluate_command(const EvaluateArgs& args, const CLI::App& cmd) {
@@ -268,6 +312,9 @@ void add_evaluate(CLI::App& root) {
   cmd->add_option("--settings", args->settings,
                   "With --sequence: a TOML file whose [processing] table sets the evaluation (the keys a run stores: "
                   "method, window_px, step_px, passes, max_shift_px, roi_px, mask ...); options given override it");
+  cmd->add_option("--threads", args->threads,
+                  "With --sequence: evaluation threads (per MPI rank under mpirun/srun); default: every core, or in "
+                  "an MPI job the rank's share of its node");
   cmd->add_option("--window", args->window_px, "Final interrogation window, px (8..128)")->capture_default_str();
   cmd->add_option("--first-window", args->first_window_px, "First-pass window, px (halved each pass down to --window)");
   cmd->add_option("--step", args->step_px, "Grid spacing, px")->capture_default_str();

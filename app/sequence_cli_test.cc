@@ -207,6 +207,38 @@ TEST_F(SequenceCli, AnUnreadableAndAMisfitFrameAreReportedAndTheRestEvaluated) {
   EXPECT_EQ(quiet.err.find("4/4"), std::string::npos) << quiet.err;
 }
 
+#ifdef BOSFUSE_HAVE_MPI
+// Under mpirun (cluster/frame_farm.h) the frames are spread over the ranks
+// and rank 0 writes the file: the same file as one process writes, and a
+// frame's own failure still only that frame's.
+TEST_F(SequenceCli, UnderMpirunTheFileIsOneProcesssAndFailedFramesAreNamed) {
+  std::vector<Frame> frames;
+  for (int k = 1; k <= 9; ++k) frames.push_back({fmt::format("c_{}.png", k), 0.1 * k, -0.05 * k, 1.5 * k});
+  write_frames(frames);
+  std::ofstream(path("frames/c_10.png")) << "not an image";
+  cv::imwrite(path("frames/c_11.png"), render(0.2, 0.2)(cv::Rect(0, 0, 64, 48)).clone());
+  const std::string args = "evaluate --reference " + sh_quoted(path("ref.png")) + " --sequence " +
+                           sh_quoted(path("frames")) + " --window 16 --step 4 -o ";
+  const auto alone = bosfuse(args + sh_quoted(path("alone.h5")));
+  ASSERT_EQ(alone.exit_code, 6) << alone.err;
+
+  setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);  // what Open MPI asks of root (CI runs as root)
+  setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  const auto job = testing::run_with_streams("mpirun --oversubscribe -n 3 " + kBosfuse + " " + args +
+                                                 sh_quoted(path("ranks.h5")),
+                                             dir_.path(), 300);
+  EXPECT_EQ(job.exit_code, 6) << "some frames failed: " << job.err;
+  EXPECT_NE(job.err.find("frame " + path("frames/c_10.png") + ": unreadable image"), std::string::npos) << job.err;
+  EXPECT_NE(job.err.find("2 of 11 frames could not be evaluated"), std::string::npos) << job.err;
+  EXPECT_NE(job.err.find("distributed over 3 MPI ranks"), std::string::npos) << job.err;
+
+  const json one = h5("alone.h5"), many = h5("ranks.h5");
+  EXPECT_EQ(many.at("/u_px").at("shape")[0], 11);
+  EXPECT_EQ(many.at("/status").at("data")[9].get<std::string>().substr(0, 16), "unreadable image");
+  EXPECT_EQ(many, one) << "every dataset and attribute, bit for bit";
+}
+#endif
+
 // Camera frames carry their capture time: it is taken over the file's time.
 TEST_F(SequenceCli, ExifCaptureTimesAreTakenOverFileTimes) {
   write_frames({});

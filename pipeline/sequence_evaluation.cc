@@ -2,8 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <cstring>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <type_traits>
 
 #include "acquisition/image_file.h"
 #include "fusion/evaluation.h"
@@ -14,6 +17,7 @@ namespace bosfuse::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
+using nlohmann::json;
 
 std::vector<std::uint8_t> read_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -70,6 +74,83 @@ SequenceFrameResult SequenceEvaluator::evaluate(const std::string& frame_path) {
     result.field = {};
   }
   return result;
+}
+
+namespace {
+
+json summary_json(const fusion::EvaluationSummary& s) {
+  return {s.method,      s.passes_run, s.window_px_per_pass, s.converged,  s.last_change_px,
+          s.refined_fraction, s.vectors, s.valid,           s.outliers_replaced, s.no_texture,
+          s.masked,      s.out_of_roi, s.no_peak,            s.seconds};
+}
+
+fusion::EvaluationSummary summary_from_json(const json& j) {
+  fusion::EvaluationSummary s;
+  j.at(0).get_to(s.method);
+  j.at(1).get_to(s.passes_run);
+  j.at(2).get_to(s.window_px_per_pass);
+  j.at(3).get_to(s.converged);
+  j.at(4).get_to(s.last_change_px);
+  j.at(5).get_to(s.refined_fraction);
+  j.at(6).get_to(s.vectors);
+  j.at(7).get_to(s.valid);
+  j.at(8).get_to(s.outliers_replaced);
+  j.at(9).get_to(s.no_texture);
+  j.at(10).get_to(s.masked);
+  j.at(11).get_to(s.out_of_roi);
+  j.at(12).get_to(s.no_peak);
+  j.at(13).get_to(s.seconds);
+  return s;
+}
+
+// The vectors as they lie in memory: ranks of one job run one build of bosfuse.
+static_assert(std::is_trivially_copyable_v<fusion::DisplacementVector>);
+
+std::vector<std::uint8_t> vectors_binary(const std::vector<fusion::DisplacementVector>& vectors) {
+  std::vector<std::uint8_t> out(vectors.size() * sizeof(fusion::DisplacementVector));
+  if (!vectors.empty()) std::memcpy(out.data(), vectors.data(), out.size());
+  return out;
+}
+
+std::vector<fusion::DisplacementVector> vectors_from_binary(const json::binary_t& bytes) {
+  if (bytes.size() % sizeof(fusion::DisplacementVector) != 0) throw std::runtime_error("a truncated field");
+  std::vector<fusion::DisplacementVector> out(bytes.size() / sizeof(fusion::DisplacementVector));
+  if (!out.empty()) std::memcpy(out.data(), bytes.data(), bytes.size());
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> result_bytes(const SequenceFrameResult& r) {
+  return json::to_cbor(json{{"name", r.name},
+                            {"t_ns", r.time.t_ns ? json(*r.time.t_ns) : json(nullptr)},
+                            {"time_source", static_cast<int>(r.time.source)},
+                            {"status", r.status},
+                            {"rows", r.field.rows},
+                            {"cols", r.field.cols},
+                            {"vectors", json::binary(vectors_binary(r.field.vectors))},
+                            {"summary", summary_json(r.summary)}});
+}
+
+SequenceFrameResult result_from_bytes(const std::vector<std::uint8_t>& bytes) {
+  try {
+    const json j = json::from_cbor(bytes);
+    SequenceFrameResult r;
+    r.name = j.at("name").get<std::string>();
+    if (!j.at("t_ns").is_null()) r.time.t_ns = j.at("t_ns").get<std::int64_t>();
+    r.time.source = static_cast<TimeSource>(j.at("time_source").get<int>());
+    r.status = j.at("status").get<std::string>();
+    r.field.rows = j.at("rows").get<int>();
+    r.field.cols = j.at("cols").get<int>();
+    r.field.vectors = vectors_from_binary(j.at("vectors").get_binary());
+    r.summary = summary_from_json(j.at("summary"));
+    if (r.field.vectors.size() != static_cast<std::size_t>(r.field.rows) * r.field.cols) {
+      throw std::runtime_error("a field of another size than its grid");
+    }
+    return r;
+  } catch (const json::exception& e) {
+    throw std::runtime_error(std::string("a sequence frame's result that cannot be read: ") + e.what());
+  }
 }
 
 }  // namespace bosfuse::pipeline

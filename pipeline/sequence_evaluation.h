@@ -55,4 +55,10 @@ class SequenceEvaluator {
   std::optional<fusion::DisplacementEvaluator> evaluator_;  // made once the reference is checked
 };
 
+// A frame's result as bytes and back, bit for bit, so an MPI rank can send
+// it to the one that writes the file (frame_distributor.h).
+std::vector<std::uint8_t> result_bytes(const SequenceFrameResult& result);
+// Throws std::runtime_error on bytes not made by result_bytes().
+SequenceFrameResult result_from_bytes(const std::vector<std::uint8_t>& bytes);
+
 }  // namespace bosfuse::pipeline

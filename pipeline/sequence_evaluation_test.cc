@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <fstream>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 
 #include "sim/synthetic_pair.h"
@@ -74,6 +76,36 @@ TEST_F(SequenceEvaluation, AFramesOwnProblemIsItsStatus) {
   const auto missing = evaluator.evaluate(path("gone.png"));
   EXPECT_EQ(missing.status, "no such file");
   EXPECT_EQ(missing.time.source, TimeSource::kNone);
+}
+
+TEST_F(SequenceEvaluation, AResultSurvivesItsBytesBitForBit) {
+  SequenceEvaluator evaluator(path("ref.png"), options_);
+  auto result = evaluator.evaluate(path("f_1.png"));
+  ASSERT_TRUE(result.ok()) << result.status;
+  result.field.vectors[3].u_px = std::numeric_limits<double>::quiet_NaN();  // as a failed node carries
+  result.field.vectors[3].flag = fusion::VectorFlag::kNoPeak;
+  const auto back = result_from_bytes(result_bytes(result));
+  EXPECT_EQ(back.name, result.name);
+  EXPECT_EQ(back.time.t_ns, result.time.t_ns);
+  EXPECT_EQ(back.time.source, result.time.source);
+  EXPECT_EQ(back.status, "ok");
+  ASSERT_EQ(back.field.rows, result.field.rows);
+  ASSERT_EQ(back.field.size(), result.field.size());
+  for (std::size_t k = 0; k < result.field.size(); ++k) {
+    const auto &a = result.field.vectors[k], &b = back.field.vectors[k];
+    EXPECT_EQ(std::memcmp(&a.u_px, &b.u_px, sizeof(double)), 0) << k;  // NaN included
+    EXPECT_EQ(a.v_px, b.v_px) << k;
+    EXPECT_EQ(a.x_px, b.x_px) << k;
+    EXPECT_EQ(a.peak_ratio, b.peak_ratio) << k;
+    EXPECT_EQ(a.flag, b.flag) << k;
+  }
+  EXPECT_EQ(back.summary.BriefReport(), result.summary.BriefReport());
+
+  std::ofstream(path("junk.png")) << "not an image";
+  const auto failed = result_from_bytes(result_bytes(evaluator.evaluate(path("junk.png"))));
+  EXPECT_NE(failed.status.find("unreadable image"), std::string::npos) << failed.status;
+  EXPECT_EQ(failed.field.size(), 0u);
+  EXPECT_THROW(result_from_bytes({1, 2, 3}), std::runtime_error);
 }
 
 TEST_F(SequenceEvaluation, ABadReferenceOrMaskOrWindowIsAnErrorBeforeAnyFrame) {
