@@ -127,6 +127,29 @@ TEST_F(ProcessMpi, AKilledRankFailsTheJobLeavesThePreviousResultsAndResumeComple
       << "a resumed processing differs from an uninterrupted one";
 }
 
+// examples/slurm/process.sbatch as sbatch would run it on one node: Slurm's
+// variables set as a two-task, one-CPU-per-task job would have them, Open
+// MPI's mpirun standing in for srun (no Slurm here).
+TEST_F(ProcessMpi, TheSlurmRecipeRunsTheJobOnItsRanksAndThreads) {
+  const std::string script = std::string(BOSFUSE_SOURCE_DIR) + "/examples/slurm/process.sbatch";
+  const std::string env = "SLURM_JOB_ID=4242 SLURM_JOB_NUM_NODES=1 SLURM_NTASKS=2 SLURM_CPUS_PER_TASK=1 BOSFUSE=" +
+                          kBosfuse + " BOSFUSE_LAUNCHER='mpirun --oversubscribe -n 2' ";
+  const auto job = testing::run_command("env " + env + "bash " + script + " " + run_dir().string() + " " + grid_, 300);
+  ASSERT_EQ(job.exit_code, 0) << job.output;
+  EXPECT_NE(job.output.find("job 4242 on 1 nodes, 2 ranks x 1 threads"), std::string::npos) << job.output;
+  EXPECT_NE(job.output.find("distributed over 2 MPI ranks"), std::string::npos) << job.output;
+  EXPECT_NE(job.output.find("bosfuse-process: done"), std::string::npos) << job.output;
+  EXPECT_EQ(StoredResults(run_dir()).samples.at(0).size(), 40u);
+
+  const auto usage = testing::run_command("bash " + script);
+  EXPECT_EQ(usage.exit_code, 2);
+  EXPECT_NE(usage.output.find("usage: sbatch"), std::string::npos) << usage.output;
+  const auto failed = testing::run_command("env " + env + "bash " + script + " " + run_dir().string() + " --resume", 120);
+  EXPECT_NE(failed.exit_code, 0) << "nothing to resume: " << failed.output;
+  EXPECT_NE(failed.output.find("nothing to resume"), std::string::npos) << failed.output;
+  EXPECT_NE(failed.output.find("earlier results are intact"), std::string::npos) << failed.output;
+}
+
 }  // namespace
 }  // namespace bosfuse
 

@@ -26,6 +26,16 @@
 // process, alternating, e.g.
 //   build/bench/process_bench --benchmark_filter='16MP/prefetch:1/aside:1'
 // Figures: docs/BENCHMARKS.md, "Processing".
+//
+// BM_ProcessRun16MPRanks: the same run processed by the executable under
+// `mpirun --oversubscribe -n RANKS bosfuse process --threads THREADS`
+// (cluster/frame_farm.h); ranks:1 is one process started by mpirun.
+// Counters: frames per second (wall, MPI start-up included), the bytes of
+// a frame's results sent to rank 0, and rank 0's time to write a frame's
+// results into the run (its "writer's limit"), and the field files the
+// ranks wrote per frame (on a cluster: to the shared filesystem). Figures and the scaling
+// model: docs/BENCHMARKS.md, "Scaling out".
+//   build/bench/process_bench --benchmark_filter=16MPRanks
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
@@ -296,6 +306,53 @@ BENCHMARK(BM_ProcessRun16MP)
     ->Args({0, 0})
     ->Args({1, 0})
     ->Args({1, 1})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+
+// The number after `label` in `text` (the job's report), 0 when absent.
+double number_after(const std::string& text, const std::string& label) {
+  const auto at = text.find(label);
+  return at == std::string::npos ? 0 : std::atof(text.c_str() + at + label.size());
+}
+
+std::string output_of(const std::string& command) {
+  std::string out;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) throw std::runtime_error("cannot run " + command);
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof buffer, pipe)) out += buffer;
+  if (pclose(pipe) != 0) throw std::runtime_error(command + " failed:\n" + out);
+  return out;
+}
+
+void BM_ProcessRun16MPRanks(benchmark::State& state) {
+  const fs::path& run = sixteen_megapixel_run();
+  // What Open MPI asks of root; harmless otherwise.
+  setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+  setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  const std::string command =
+      fmt::format("mpirun --oversubscribe -n {} {}/bosfuse process {} --mode full --threads {} -q 2>&1", state.range(0),
+                  BOSFUSE_BINARY_DIR, run.string(), state.range(1));
+  std::string report;
+  for (auto _ : state) report = output_of(command);
+  state.counters["frames_per_s"] = benchmark::Counter(kFrames, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["kB_per_frame_to_rank0"] = number_after(report, "results sent to rank 0: ");
+  state.counters["rank0_write_ms"] = number_after(report, "rank 0 wrote the results: ");
+  // What the ranks wrote beside: the field files, on the shared filesystem in a cluster.
+  std::uintmax_t field_bytes = 0;
+  for (const auto& f : fs::recursive_directory_iterator(run / "fields")) {
+    if (f.is_regular_file()) field_bytes += f.file_size();
+  }
+  state.counters["field_files_MB_per_frame"] = static_cast<double>(field_bytes) / kFrames / 1e6;
+}
+BENCHMARK(BM_ProcessRun16MPRanks)
+    ->ArgNames({"ranks", "threads"})
+    ->Args({1, 1})
+    ->Args({1, 2})
+    ->Args({2, 1})
+    ->Args({2, 2})
+    ->Args({3, 1})
     ->Iterations(1)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();

@@ -155,7 +155,9 @@ class FrameFarm::Round {
       if (failure_ && taken_ >= failure_->first) return;
       const Bytes result = std::move(it->second);
       done_.erase(it);
+      const auto start = Clock::now();
       take_(taken_, result);
+      farm_.take_s_ += seconds_between(start, Clock::now());
       ++taken_;
     }
   }
@@ -200,6 +202,7 @@ std::size_t FrameFarm::run(const pipeline::Bytes& plan, std::size_t count, const
     Round round(*this, count, local, take, stop);
     taken = round.go();
   }
+  taken_ = taken;
   seconds_ = seconds_between(start, Clock::now());
   return taken;
 }
@@ -213,6 +216,11 @@ std::string FrameFarm::brief_report() const {
   if (remote_frames_ > 0) {
     text += fmt::format("  results sent to rank 0: {:.1f} kB a frame\n",
                         static_cast<double>(result_bytes_) / remote_frames_ / 1e3);
+  }
+  if (taken_ > 0) {
+    const double ms = 1e3 * take_s_ / static_cast<double>(taken_);
+    text += fmt::format("  rank 0 wrote the results: {:.2f} ms a frame (the writer's limit: {:.0f} frames/s)\n", ms,
+                        1e3 / ms);
   }
   return text;
 }

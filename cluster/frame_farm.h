@@ -54,6 +54,8 @@ class FrameFarm : public pipeline::FrameDistributor {
   std::vector<std::string> hosts_;
   std::size_t result_bytes_ = 0;  // received from the other ranks
   std::size_t remote_frames_ = 0;
+  std::size_t taken_ = 0;
+  double take_s_ = 0;  // in the job's `take`: rank 0 writing the results
   double seconds_ = 0;
 };
 

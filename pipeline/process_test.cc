@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <map>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -276,6 +278,83 @@ TEST_F(Process, ThePipelinedProcessingStoresWhatOneInTurnStores) {
       EXPECT_GT(pipelined.times.csv_s, 0) << "the field files, written aside, are accounted for";
     }
   }
+}
+
+// A distributor in one process, for the logic of ProcessOptions::distributor
+// (the MPI one, cluster/frame_farm.h, is tested under mpirun in app/): odd
+// frames are evaluated by "another rank" — a context made from the plan's
+// bytes alone, as a rank on another node makes it — even frames locally,
+// all of them last to first; results are taken in frame order, up to the
+// first that failed.
+class ReversedDistributor : public FrameDistributor {
+ public:
+  std::size_t run(const Bytes& plan, std::size_t count, const FrameWork& local, const TakeFrame& take,
+                  const std::atomic<bool>*) override {
+    const FrameWork remote = planned_frame_work(plan);
+    std::map<std::size_t, Bytes> done;
+    std::optional<std::pair<std::size_t, std::string>> failure;
+    for (std::size_t i = count; i-- > 0;) {
+      try {
+        done[i] = (i % 2 ? remote : local)(i);
+      } catch (const std::exception& e) {
+        failure.emplace(i, e.what());
+      }
+    }
+    std::size_t taken = 0;
+    for (; taken < count && (!failure || taken < failure->first); ++taken) take(taken, done.at(taken));
+    if (failure) throw std::runtime_error(failure->second);
+    return taken;
+  }
+  std::string brief_report() const override { return "reversed\n"; }
+};
+
+TEST_F(Process, ADistributedProcessingStoresWhatOneProcessStores) {
+  add_frames(run(), truth_);
+  for (const bool probes_only : {false, true}) {
+    SCOPED_TRACE(probes_only ? "probe mode" : "full fields");
+    ProcessOptions options;
+    options.overrides.probes_only = probes_only;
+    ASSERT_TRUE(process_run(run(), options).complete);
+    const Results alone(run());
+    ReversedDistributor distributor;
+    options.distributor = &distributor;
+    const auto distributed = process_run(run(), options);
+    ASSERT_TRUE(distributed.complete);
+    EXPECT_EQ(distributed.frames, 6u);
+    EXPECT_NE(distributed.text.find("reversed"), std::string::npos) << "the distributor's report";
+    expect_equal(Results(run()), alone);
+    EXPECT_GT(distributed.times.evaluation_s, 0) << "every rank's times reach the report";
+  }
+}
+
+TEST_F(Process, ADistributedFrameThatFailsStopsTheProcessingAtItsFrameAndResumeCompletesIt) {
+  add_frames(run(), truth_);
+  ASSERT_TRUE(process(run()).complete);
+  const Results alone(run());
+  auto frames = storage::RunStore::open(run()).frames();
+  std::erase_if(frames, [](const auto& f) { return f.is_reference; });
+  std::sort(frames.begin(), frames.end(), [](const auto& a, const auto& b) { return a.t_ns < b.t_ns; });
+  const fs::path fourth = run() / frames.at(3).path;  // the fourth of six in time order
+  fs::rename(fourth, fourth.string() + ".away");
+  ProcessOptions options;
+  options.overrides.window_px = 16;  // a new processing, with the same numbers
+  ReversedDistributor distributor;
+  options.distributor = &distributor;
+  try {
+    process_run(run(), options);
+    FAIL() << "a missing frame was processed";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("frame " + std::to_string(frames.at(3).id)), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(staged_frames(run()).size(), 3u) << "the three frames before it in time, not the two after";
+  expect_equal(Results(run()), alone);  // the current results are untouched
+  fs::rename(fourth.string() + ".away", fourth);
+  options.resume = true;
+  options.overrides = {};
+  const auto resumed = process_run(run(), options);
+  ASSERT_TRUE(resumed.complete);
+  EXPECT_EQ(resumed.frames_resumed, 3u);
+  expect_equal(Results(run()), alone);
 }
 
 TEST_F(Process, AnUnreadableFrameFailsAtItsOwnFrameWithTheSameMessagePipelinedOrNot) {
