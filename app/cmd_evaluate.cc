@@ -254,7 +254,6 @@ void write_sequence(const EvaluateArgs& args, const pipeline::ProcessingSettings
   }
 }
 
-
 void evaluate_sequence(const EvaluateArgs& args, const CLI::App& cmd) {
   if (!args.reference.empty() || !args.measurement.empty()) {
     throw std::runtime_error("--sequence takes the reference as --reference REF, not as a positional image");

@@ -22,7 +22,7 @@ struct ProcessArgs {
   std::string run;
   bool resume = false;
   std::optional<std::string> mode, method, mask, geometry, roi;
-  std::optional<int> window_px, step_px, passes, probe_context, threads;
+  std::optional<int> window_px, step_px, passes, probe_context, threads, frames_at_once;
   std::optional<double> max_shift_px, adaptive_threshold;
   std::optional<std::string> adaptive_refinement;
 };
@@ -56,6 +56,7 @@ pipeline::SettingsOverrides overrides(const ProcessArgs& args) {
 void process(const ProcessArgs& args, pipeline::FrameDistributor* distributor) {
   pipeline::ProcessOptions options;
   options.distributor = distributor;
+  if (args.frames_at_once) options.frames_at_once = *args.frames_at_once;
   options.overrides = overrides(args);
   options.resume = args.resume;
   options.stop = &stop_requested_by_signal();
@@ -107,6 +108,10 @@ void add_process(CLI::App& root) {
   cmd->add_option("--mask", args->mask,
                   "Mask image (e.g. the heater's holder): non-zero pixels are not evaluated; a path relative to the "
                   "run folder, or absolute (then copied into the run); '' for none (default: stored, else none)");
+  cmd->add_option("--frames-at-once", args->frames_at_once,
+                  "Frames evaluated side by side, each with its own evaluator (~600 MB at 16 MP); 1: one at a time "
+                  "(default: one per core, at most 4; under mpirun each rank takes one at a time)")
+      ->check(CLI::Range(1, 64));
   cmd->add_option("--threads", args->threads,
                   "Evaluation threads (per MPI rank under mpirun/srun); default: every core, or in an MPI job the "
                   "rank's share of its node");

@@ -117,7 +117,8 @@ TEST_F(ProcessCli, AMaskedHolderIsNotEvaluatedAndTheTemperatureFieldIsFilledTher
   }
   const auto missing = bosfuse("process " + grid_ + " --mask nope.png");
   EXPECT_NE(missing.exit_code, 0);
-  EXPECT_NE(missing.output.find("mask 'nope.png': no such file in the run folder"), std::string::npos) << missing.output;
+  EXPECT_NE(missing.output.find("mask 'nope.png': no such file in the run folder"), std::string::npos)
+      << missing.output;
 }
 
 TEST_F(ProcessCli, CalibrationGivesDegreesPerPixelAndProbeTemperatures) {
@@ -266,8 +267,7 @@ TEST_F(ProcessCli, AKilledProcessLeavesThePreviousResultsAndResumeCompletesThem)
   EXPECT_NE(resumed.output.find("done before the resume"), std::string::npos) << resumed.output;
   std::string options;
   for (const auto& o : kSlowOptions) options += " " + o;
-  ASSERT_EQ(testing::run_command(kBosfuse + " process " + (dir_.path() / "copy").string() + options, 120).exit_code,
-            0);
+  ASSERT_EQ(testing::run_command(kBosfuse + " process " + (dir_.path() / "copy").string() + options, 120).exit_code, 0);
   EXPECT_TRUE(StoredResults(run_dir()) == StoredResults(dir_.path() / "copy"))
       << "a resumed processing differs from an uninterrupted one";
 }

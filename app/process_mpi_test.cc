@@ -79,8 +79,7 @@ TEST_F(ProcessMpi, ThreeRanksStoreWhatOneProcessStores) {
   const auto single = testing::run_command(kBosfuse + " process " + alone.string() + options, 300);
   ASSERT_EQ(single.exit_code, 0) << single.output;
 
-  const auto job =
-      testing::run_command(mpirun(3) + kBosfuse + " process " + run_dir().string() + options, 300);
+  const auto job = testing::run_command(mpirun(3) + kBosfuse + " process " + run_dir().string() + options, 300);
   ASSERT_EQ(job.exit_code, 0) << job.output;
   const auto ranks = frames_by_rank(job.output);
   ASSERT_EQ(ranks.size(), 3u) << job.output;
@@ -116,8 +115,7 @@ TEST_F(ProcessMpi, AKilledRankFailsTheJobLeavesThePreviousResultsAndResumeComple
   ASSERT_LT(staged_frames(run_dir()), 40) << "it finished before a rank could be killed";
   EXPECT_TRUE(StoredResults(run_dir()) == previous) << "the previous results changed";
 
-  const auto resumed =
-      testing::run_command(mpirun(2) + kBosfuse + " process --resume " + run_dir().string(), 300);
+  const auto resumed = testing::run_command(mpirun(2) + kBosfuse + " process --resume " + run_dir().string(), 300);
   ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
   EXPECT_NE(resumed.output.find("done before the resume"), std::string::npos) << resumed.output;
   std::string options;
@@ -132,8 +130,9 @@ TEST_F(ProcessMpi, AKilledRankFailsTheJobLeavesThePreviousResultsAndResumeComple
 // MPI's mpirun standing in for srun (no Slurm here).
 TEST_F(ProcessMpi, TheSlurmRecipeRunsTheJobOnItsRanksAndThreads) {
   const std::string script = std::string(BOSFUSE_SOURCE_DIR) + "/examples/slurm/process.sbatch";
-  const std::string env = "SLURM_JOB_ID=4242 SLURM_JOB_NUM_NODES=1 SLURM_NTASKS=2 SLURM_CPUS_PER_TASK=1 BOSFUSE=" +
-                          kBosfuse + " BOSFUSE_LAUNCHER='mpirun --oversubscribe -n 2' ";
+  const std::string env =
+      "SLURM_JOB_ID=4242 SLURM_JOB_NUM_NODES=1 SLURM_NTASKS=2 SLURM_CPUS_PER_TASK=1 BOSFUSE=" + kBosfuse +
+      " BOSFUSE_LAUNCHER='mpirun --oversubscribe -n 2' ";
   const auto job = testing::run_command("env " + env + "bash " + script + " " + run_dir().string() + " " + grid_, 300);
   ASSERT_EQ(job.exit_code, 0) << job.output;
   EXPECT_NE(job.output.find("job 4242 on 1 nodes, 2 ranks x 1 threads"), std::string::npos) << job.output;
@@ -144,7 +143,8 @@ TEST_F(ProcessMpi, TheSlurmRecipeRunsTheJobOnItsRanksAndThreads) {
   const auto usage = testing::run_command("bash " + script);
   EXPECT_EQ(usage.exit_code, 2);
   EXPECT_NE(usage.output.find("usage: sbatch"), std::string::npos) << usage.output;
-  const auto failed = testing::run_command("env " + env + "bash " + script + " " + run_dir().string() + " --resume", 120);
+  const auto failed =
+      testing::run_command("env " + env + "bash " + script + " " + run_dir().string() + " --resume", 120);
   EXPECT_NE(failed.exit_code, 0) << "nothing to resume: " << failed.output;
   EXPECT_NE(failed.output.find("nothing to resume"), std::string::npos) << failed.output;
   EXPECT_NE(failed.output.find("earlier results are intact"), std::string::npos) << failed.output;

@@ -224,9 +224,8 @@ TEST_F(SequenceCli, UnderMpirunTheFileIsOneProcesssAndFailedFramesAreNamed) {
 
   setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);  // what Open MPI asks of root (CI runs as root)
   setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
-  const auto job = testing::run_with_streams("mpirun --oversubscribe -n 3 " + kBosfuse + " " + args +
-                                                 sh_quoted(path("ranks.h5")),
-                                             dir_.path(), 300);
+  const auto job = testing::run_with_streams(
+      "mpirun --oversubscribe -n 3 " + kBosfuse + " " + args + sh_quoted(path("ranks.h5")), dir_.path(), 300);
   EXPECT_EQ(job.exit_code, 6) << "some frames failed: " << job.err;
   EXPECT_NE(job.err.find("frame " + path("frames/c_10.png") + ": unreadable image"), std::string::npos) << job.err;
   EXPECT_NE(job.err.find("2 of 11 frames could not be evaluated"), std::string::npos) << job.err;

@@ -8,7 +8,8 @@
 //   full:   full fields (the default mode)
 //   probes: probe mode with one node of context (the default) or the exact
 //           context (--probe-context -1: equal to the full field)
-//   build/bench/process_bench --benchmark_filter=-16MP --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
+//   build/bench/process_bench --benchmark_filter=-16MP --benchmark_repetitions=3
+//   --benchmark_report_aggregates_only=true
 //
 // BM_ProcessRun16MP: the paper's 16 MP camera, 20 frames of 4928×3264 in
 // 16-bit PNG with a plume whose deflection fades, full fields with the
@@ -39,7 +40,6 @@
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
-
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -90,8 +90,8 @@ const fs::path& synthetic_run() {
     for (int i = 0; i <= 2 * kFrames; ++i) {
       for (auto c : channels) {
         const double t = i;
-        samples.push_back({c, kStartNs + i * 1'000'000'000LL, std::nullopt, 20 + 30 * std::exp(-0.05 * t),
-                           std::nullopt, {}});
+        samples.push_back(
+            {c, kStartNs + i * 1'000'000'000LL, std::nullopt, 20 + 30 * std::exp(-0.05 * t), std::nullopt, {}});
       }
     }
     store.write_samples(samples);
@@ -204,8 +204,9 @@ fs::path cached_16mp_frames() {
   const sim::BackgroundPattern pattern = sim::generate_pattern(options);
   for (int i = 0; i <= kFrames; ++i) {
     const double peak_px = plume_peak_px(i);
-    cv::Mat dots = i == 0 ? sim::render_dots(pattern, nullptr)
-                          : sim::render_dots(pattern, [peak_px](double x, double y) { return plume_shift_px(x, y, peak_px); });
+    cv::Mat dots =
+        i == 0 ? sim::render_dots(pattern, nullptr)
+               : sim::render_dots(pattern, [peak_px](double x, double y) { return plume_shift_px(x, y, peak_px); });
     const cv::Mat image = sim::camera_image(std::move(dots), 0, 0.01, 16, static_cast<std::uint64_t>(i + 1), 1);
     if (!cv::imwrite((partial / frame_name(i)).string(), image)) {
       throw std::runtime_error("cannot write " + (partial / frame_name(i)).string());
@@ -233,8 +234,8 @@ const fs::path& sixteen_megapixel_run() {
     std::vector<storage::Sample> samples;
     for (int i = 0; i <= 2 * kFrames; ++i) {
       for (auto c : channels) {
-        samples.push_back({c, kStartNs + i * 1'000'000'000LL, std::nullopt, 20 + 30 * std::exp(-0.05 * i),
-                           std::nullopt, {}});
+        samples.push_back(
+            {c, kStartNs + i * 1'000'000'000LL, std::nullopt, 20 + 30 * std::exp(-0.05 * i), std::nullopt, {}});
       }
     }
     store.write_samples(samples);
@@ -244,8 +245,8 @@ const fs::path& sixteen_megapixel_run() {
       std::error_code not_linked;
       fs::create_hard_link(frames / frame_name(i), run / path, not_linked);
       if (not_linked) fs::copy_file(frames / frame_name(i), run / path);
-      store.add_frame({0, std::nullopt, kStartNs + 2LL * i * 1'000'000'000, std::nullopt, path, kWidth16MP,
-                       kHeight16MP, 16, i == 0});
+      store.add_frame({0, std::nullopt, kStartNs + 2LL * i * 1'000'000'000, std::nullopt, path, kWidth16MP, kHeight16MP,
+                       16, i == 0});
     }
     store.finish(storage::RunStatus::kComplete, kStartNs + 2LL * kFrames * 1'000'000'000);
     return run;

@@ -36,7 +36,11 @@ class FrameFarm::Round {
  public:
   Round(FrameFarm& farm, std::size_t count, const pipeline::FrameWork& local, const pipeline::TakeFrame& take,
         const std::atomic<bool>* stop)
-      : farm_(farm), count_(count), local_(local), take_(take), stop_(stop),
+      : farm_(farm),
+        count_(count),
+        local_(local),
+        take_(take),
+        stop_(stop),
         state_(static_cast<std::size_t>(farm.session_.size()), State::kPreparing) {
     state_[0] = State::kIdle;
   }
@@ -109,7 +113,8 @@ class FrameFarm::Round {
       case kError: {
         const std::uint64_t index = index_of(m.bytes);
         const Bytes text = rest_of(m.bytes);
-        fail(index == kSetUp ? 0 : index, std::make_exception_ptr(std::runtime_error(std::string(text.begin(), text.end()))));
+        fail(index == kSetUp ? 0 : index,
+             std::make_exception_ptr(std::runtime_error(std::string(text.begin(), text.end()))));
         if (index == kSetUp) {
           state_[rank] = State::kIdle;  // never given a frame
           return;
@@ -117,7 +122,8 @@ class FrameFarm::Round {
         break;
       }
       default:
-        fail(0, std::make_exception_ptr(std::runtime_error(fmt::format("an unexpected MPI message (tag {}) from rank {}", m.tag, rank))));
+        fail(0, std::make_exception_ptr(
+                    std::runtime_error(fmt::format("an unexpected MPI message (tag {}) from rank {}", m.tag, rank))));
     }
     give(rank);
   }
@@ -210,8 +216,8 @@ std::size_t FrameFarm::run(const pipeline::Bytes& plan, std::size_t count, const
 std::string FrameFarm::brief_report() const {
   std::string text = fmt::format("distributed over {} MPI ranks in {:.1f} s:\n", session_.size(), seconds_);
   for (std::size_t rank = 0; rank < tally_.size(); ++rank) {
-    text += fmt::format("  rank {} on {}: {} frames, busy {:.1f} s\n", rank,
-                        hosts_[rank].empty() ? "?" : hosts_[rank], tally_[rank].frames, tally_[rank].busy_s);
+    text += fmt::format("  rank {} on {}: {} frames, busy {:.1f} s\n", rank, hosts_[rank].empty() ? "?" : hosts_[rank],
+                        tally_[rank].frames, tally_[rank].busy_s);
   }
   if (remote_frames_ > 0) {
     text += fmt::format("  results sent to rank 0: {:.1f} kB a frame\n",

@@ -1,7 +1,6 @@
 #include "cluster/mpi_session.h"
 
 #include <mpi.h>
-
 #include <sched.h>
 
 #include <algorithm>
@@ -74,7 +73,9 @@ Bytes with_index(std::uint64_t index, const Bytes& rest) {
   return out;
 }
 
-Bytes with_index(std::uint64_t index, const std::string& rest) { return with_index(index, Bytes(rest.begin(), rest.end())); }
+Bytes with_index(std::uint64_t index, const std::string& rest) {
+  return with_index(index, Bytes(rest.begin(), rest.end()));
+}
 
 std::uint64_t index_of(const Bytes& payload) {
   if (payload.size() < sizeof(std::uint64_t)) throw std::runtime_error("an MPI message without its frame index");

@@ -41,7 +41,7 @@ class MpiSession {
   // The evaluation threads a rank should use when not told: the cores the
   // launcher bound it to, or, unbound, its share of the node's cores.
   int default_threads() const;
-  std::string name() const;                           // "rank 2 on node7", for messages
+  std::string name() const;  // "rank 2 on node7", for messages
 
   void send(int to, int tag, const Bytes& bytes) const;
   // A message that has arrived from `from` (or any rank), without waiting.

@@ -18,6 +18,7 @@
 #include "fusion/image_quality.h"
 #include "fusion/temperature_field.h"
 #include "pipeline/frame_prefetch.h"
+#include "pipeline/frame_threads.h"
 #include "pipeline/probe_calibration.h"
 #include "pipeline/quality_json.h"
 #include "pipeline/run_selection.h"
@@ -235,8 +236,12 @@ void stage_finished(storage::ProcessingStore& results, std::int64_t processing_i
 // process would.
 
 json frame_json(const FrameRecord& f) {
-  return {{"id", f.id},           {"t_ns", f.t_ns},           {"path", f.path},
-          {"width_px", f.width_px}, {"height_px", f.height_px}, {"bit_depth", f.bit_depth}};
+  return {{"id", f.id},
+          {"t_ns", f.t_ns},
+          {"path", f.path},
+          {"width_px", f.width_px},
+          {"height_px", f.height_px},
+          {"bit_depth", f.bit_depth}};
 }
 
 FrameRecord frame_from_json(const json& j) {
@@ -251,15 +256,26 @@ FrameRecord frame_from_json(const json& j) {
 }
 
 json sample_json(const storage::ProbeSampleRecord& s) {
-  return {s.probe_id, s.frame_id, s.t_ns, s.u_px, s.v_px, s.shift_px,
-          s.temperature_c ? json(*s.temperature_c) : json(nullptr), s.valid};
+  return {s.probe_id,
+          s.frame_id,
+          s.t_ns,
+          s.u_px,
+          s.v_px,
+          s.shift_px,
+          s.temperature_c ? json(*s.temperature_c) : json(nullptr),
+          s.valid};
 }
 
 storage::ProbeSampleRecord sample_from_json(const json& j) {
   const json& t = j.at(6);
-  return {j.at(0).get<std::int64_t>(), j.at(1).get<std::int64_t>(), j.at(2).get<std::int64_t>(),
-          j.at(3).get<double>(),       j.at(4).get<double>(),       j.at(5).get<double>(),
-          t.is_null() ? std::nullopt : std::optional<double>(t.get<double>()), j.at(7).get<bool>()};
+  return {j.at(0).get<std::int64_t>(),
+          j.at(1).get<std::int64_t>(),
+          j.at(2).get<std::int64_t>(),
+          j.at(3).get<double>(),
+          j.at(4).get<double>(),
+          j.at(5).get<double>(),
+          t.is_null() ? std::nullopt : std::optional<double>(t.get<double>()),
+          j.at(7).get<bool>()};
 }
 
 Bytes finished_bytes(const FinishedFrame& f) {
@@ -270,8 +286,7 @@ Bytes finished_bytes(const FinishedFrame& f) {
                   {"summary", f.result.summary},
                   {"samples", samples},
                   {"fields", fields},
-                  {"times",
-                   {f.times.decode_s, f.times.evaluation_s, f.times.temperature_field_s, f.times.csv_s}}};
+                  {"times", {f.times.decode_s, f.times.evaluation_s, f.times.temperature_field_s, f.times.csv_s}}};
   return json::to_cbor(j);
 }
 
@@ -282,8 +297,8 @@ FinishedFrame finished_from_bytes(const Bytes& bytes) {
   f.result.summary = j.at("summary");
   for (const auto& s : j.at("samples")) f.samples.push_back(sample_from_json(s));
   for (const auto& r : j.at("fields")) {
-    f.result.fields.push_back(
-        {0, r.at(0).get<std::int64_t>(), r.at(1).get<std::string>(), r.at(2).get<std::string>(), r.at(3).get<std::string>()});
+    f.result.fields.push_back({0, r.at(0).get<std::int64_t>(), r.at(1).get<std::string>(), r.at(2).get<std::string>(),
+                               r.at(3).get<std::string>()});
   }
   const json& t = j.at("times");
   f.times.decode_s = t.at(0).get<double>();
@@ -401,14 +416,14 @@ void remove_fields_except(const fs::path& run_dir, const std::string& keep) {
   }
 }
 
-Processing start_processing(const fs::path& run_dir, const ProcessOptions& options,
-                            storage::ProcessingStore& results) {
+Processing start_processing(const fs::path& run_dir, const ProcessOptions& options, storage::ProcessingStore& results) {
   const auto unfinished = results.unfinished_processing();
   if (options.resume) {
     if (!unfinished) throw std::runtime_error("nothing to resume: the run has no interrupted processing");
     if (!options.overrides.empty()) {
-      throw std::runtime_error("--resume continues with the interrupted processing's own settings; run without "
-                               "--resume to process with other settings");
+      throw std::runtime_error(
+          "--resume continues with the interrupted processing's own settings; run without "
+          "--resume to process with other settings");
     }
     Processing p{unfinished->id, settings_from_json(nlohmann::json::parse(unfinished->settings_json)), ""};
     p.settings.source = fmt::format("the interrupted processing {}'s settings", unfinished->id);
@@ -455,9 +470,9 @@ FitsAndAgreements fit_everything(const storage::RunStore& store, const storage::
         cal != ctx.calibration.end() ? cal->second.camera_offset_s : ctx.settings.geometry.camera_offset_s;
     const ProbeSeries probe = probe_fit_series(results.staged_probe_samples(probes[p].id), clock, offset_s);
     const auto probe_fit = fit_at_origin(probe.series);
-    out.fits.push_back({0, storage::FitSubject::kProbe, probes[p].id, clock.origin_ns, probe_fit.ok(),
-                        fit_json(probe_fit, probe.quantity, probe.quantity == "shift_px" ? "px" : "degC", clock)
-                            .dump()});
+    out.fits.push_back(
+        {0, storage::FitSubject::kProbe, probes[p].id, clock.origin_ns, probe_fit.ok(),
+         fit_json(probe_fit, probe.quantity, probe.quantity == "shift_px" ? "px" : "degC", clock).dump()});
     const auto& [tc_fit, tc_series] = tc_fits.at(c.id);
     const auto agreement = agree(tc_fit, tc_series, probe_fit, probe, c.name);
     json j = fitting::to_json(agreement);
@@ -507,9 +522,9 @@ void load_frame_context(FrameContext& ctx) {
 
 // The context of the process that owns the run: probes staged, the ambient
 // and the calibration read from the store.
-FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& store,
-                           storage::ProcessingStore& results, const Processing& processing,
-                           const RunFrames& frames, const storage::ExperimentClock& clock) {
+FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& store, storage::ProcessingStore& results,
+                           const Processing& processing, const RunFrames& frames,
+                           const storage::ExperimentClock& clock) {
   FrameContext ctx;
   ctx.run_dir = run_dir;
   ctx.fields_dir = fmt::format("fields/p{}", processing.id);
@@ -568,7 +583,8 @@ std::pair<FrameContext, std::vector<FrameRecord>> context_from_plan(const Bytes&
     ctx.probe_ids.push_back(c.at(4).get<std::int64_t>());
   }
   for (const auto& c : j.at("calibration")) {
-    ctx.calibration[c.at(0).get<std::int64_t>()] = {c.at(1).get<double>(), c.at(2).get<double>(), c.at(3).get<double>()};
+    ctx.calibration[c.at(0).get<std::int64_t>()] = {c.at(1).get<double>(), c.at(2).get<double>(),
+                                                    c.at(3).get<double>()};
   }
   std::vector<FrameRecord> frames;
   for (const auto& f : j.at("frames")) frames.push_back(frame_from_json(f));
@@ -576,15 +592,69 @@ std::pair<FrameContext, std::vector<FrameRecord>> context_from_plan(const Bytes&
   return {std::move(ctx), std::move(frames)};
 }
 
+// The frames of a processing, evaluated and staged in frame order, one
+// transaction each: here, one after the other, or by a distributor's
+// processes.
+struct FrameLoop {
+  const FrameContext& ctx;
+  storage::ProcessingStore& results;
+  std::int64_t processing_id;
+  ProcessTimes& times;
+  std::function<void(const FrameRecord&)> staged;
+
+  // Decoded ahead and, when asked, finished aside (ProcessOptions); returns
+  // the frame `last_id`'s image when it was evaluated.
+  cv::Mat here(FramePrefetch& ahead, const ProcessOptions& options, std::int64_t last_id) const {
+    cv::Mat last_image;
+    FinishingFrame finished_aside(results, processing_id, times);
+    while (ahead.remaining() > 0 && !(options.stop && options.stop->load())) {
+      try {
+        PrefetchedFrame next = *ahead.next();
+        times.decode_s += next.decode_seconds;
+        times.wait_for_frames_s += next.wait_seconds;
+        auto evaluated = timed(times.evaluation_s, [&] { return ctx.evaluate(next.image); });
+        finished_aside.start(ctx, next.frame, std::move(evaluated), options.finish_aside);
+        if (!options.finish_aside) finished_aside.stage();
+        staged(next.frame);
+        if (next.frame.id == last_id) last_image = std::move(next.image);
+      } catch (...) {
+        finished_aside.stage_before_error();
+        throw;
+      }
+    }
+    finished_aside.stage();
+    return last_image;
+  }
+
+  // By every process of the distributor, this one included; no image is
+  // kept (the frames are decoded where they are evaluated).
+  cv::Mat distributed(FrameDistributor& distributor, const std::vector<FrameRecord>& todo,
+                      const std::atomic<bool>* stop) const {
+    distributor.run(
+        plan_bytes(ctx, todo), todo.size(),
+        [&](std::size_t i) { return finished_bytes(evaluate_and_finish(ctx, todo[i])); },
+        [&](std::size_t, const Bytes& bytes) {
+          const FinishedFrame f = finished_from_bytes(bytes);
+          stage_finished(results, processing_id, f, times);
+          staged(f.frame);
+        },
+        stop);
+    return {};
+  }
+};
+
 std::string temperature_source(const FrameContext& ctx) {
-  return !ctx.calibration.empty()        ? "calibration"
+  return !ctx.calibration.empty()    ? "calibration"
          : !ctx.settings.probes_only ? "physical model"
-                                         : "none (probe fits on the shift; run bosfuse calibrate)";
+                                     : "none (probe fits on the shift; run bosfuse calibrate)";
 }
 
 }  // namespace
 
 std::string ProcessOptions::Validate() const {
+  if (frames_at_once < 0) {
+    return fmt::format("frames_at_once is {}; it must be 0 (chosen for this machine), 1 or more", frames_at_once);
+  }
   if (prefetch_frames < 0) {
     return fmt::format("prefetch_frames is {}; it must be 0 (decode on the calling thread) or more", prefetch_frames);
   }
@@ -597,7 +667,8 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   if (const std::string problem = options.Validate(); !problem.empty()) {
     throw std::invalid_argument("process options: " + problem);
   }
-  if (!storage::RunStore::holds_run(run_dir)) throw std::runtime_error("'" + run_dir.string() + "' holds no bosfuse run");
+  if (!storage::RunStore::holds_run(run_dir))
+    throw std::runtime_error("'" + run_dir.string() + "' holds no bosfuse run");
   const auto lock = storage::RunLock::try_acquire(run_dir, "process.lock");
   if (!lock) {
     throw std::runtime_error("another bosfuse is processing " + run_dir.string() + " (" +
@@ -612,8 +683,16 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   const std::set<std::int64_t> done(staged.begin(), staged.end());
   const std::vector<FrameRecord> todo = frames_to_do(frames, done);
   // Started before the context is read, so the first frame decodes beside the reference.
+  std::optional<FrameThreads> side_by_side;
+  const int frames_at_once = options.frames_at_once ? options.frames_at_once : FrameThreads::default_threads();
+  if (!options.distributor && frames_at_once > 1 && todo.size() > 1) {
+    side_by_side.emplace(frames_at_once, planned_frame_work);
+  }
+  FrameDistributor* const distributor = options.distributor ? options.distributor
+                                        : side_by_side      ? &*side_by_side
+                                                            : nullptr;
   std::optional<FramePrefetch> ahead;
-  if (!options.distributor) ahead.emplace(run_dir, todo, options.prefetch_frames);
+  if (!distributor) ahead.emplace(run_dir, todo, options.prefetch_frames);
   const FrameContext ctx = frame_context(run_dir, store, results, processing, frames, clock);
 
   ProcessReport report;
@@ -625,9 +704,9 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   auto progress = [&](std::size_t n, const std::string& line, bool frame = false) {
     if (options.progress) options.progress({n, report.frames, line, frame});
   };
-  progress(done.size(), fmt::format("processing {} ({}), settings from {}; times in {}", run_dir.string(),
-                                    ctx.settings.probes_only ? "probe mode" : "full fields",
-                                    ctx.settings.source, clock.basis()));
+  progress(done.size(),
+           fmt::format("processing {} ({}), settings from {}; times in {}", run_dir.string(),
+                       ctx.settings.probes_only ? "probe mode" : "full fields", ctx.settings.source, clock.basis()));
   if (!ctx.settings.probes_only) {
     progress(done.size(), "geometry from " + ctx.settings.geometry.source + ":\n" + ctx.geometry->brief_report());
   }
@@ -635,40 +714,15 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   auto frame_staged = [&](const FrameRecord& frame) {
     progress(++n, fmt::format("frame {} (t = {:.2f} s) evaluated", frame.id, clock.seconds(frame.t_ns)), true);
   };
-  cv::Mat last_image;  // the quality index's, kept rather than decoded twice
-  if (options.distributor) {
-    options.distributor->run(
-        plan_bytes(ctx, todo), todo.size(), [&](std::size_t i) { return finished_bytes(evaluate_and_finish(ctx, todo[i])); },
-        [&](std::size_t, const Bytes& bytes) {
-          const FinishedFrame f = finished_from_bytes(bytes);
-          stage_finished(results, processing.id, f, report.times);
-          frame_staged(f.frame);
-        },
-        options.stop);
-  } else {
-    FinishingFrame finished_aside(results, processing.id, report.times);
-    while (ahead->remaining() > 0 && !(options.stop && options.stop->load())) {
-      try {
-        PrefetchedFrame next = *ahead->next();
-        report.times.decode_s += next.decode_seconds;
-        report.times.wait_for_frames_s += next.wait_seconds;
-        const FrameRecord& frame = next.frame;
-        auto evaluated = timed(report.times.evaluation_s, [&] { return ctx.evaluate(next.image); });
-        finished_aside.start(ctx, frame, std::move(evaluated), options.finish_aside);
-        if (!options.finish_aside) finished_aside.stage();
-        frame_staged(frame);
-        if (frame.id == frames.measurements.back().id) last_image = std::move(next.image);
-      } catch (...) {
-        finished_aside.stage_before_error();
-        throw;
-      }
-    }
-    finished_aside.stage();
-  }
+  const FrameLoop loop{ctx, results, processing.id, report.times, frame_staged};
+  // The quality index's, kept rather than decoded twice.
+  const cv::Mat last_image = distributor ? loop.distributed(*distributor, todo, options.stop)
+                                         : loop.here(*ahead, options, frames.measurements.back().id);
   if (n < report.frames) {
-    report.text = processing.note + fmt::format("stopped after {} of {} frames; the run's earlier results are "
-                                                "unchanged; `bosfuse process {} --resume` continues\n",
-                                                n, report.frames, run_dir.string());
+    report.text = processing.note + fmt::format(
+                                        "stopped after {} of {} frames; the run's earlier results are "
+                                        "unchanged; `bosfuse process {} --resume` continues\n",
+                                        n, report.frames, run_dir.string());
     return report;
   }
 
@@ -688,23 +742,21 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   report.times.finishing_s = std::chrono::duration<double>(Clock::now() - fits_start).count();
   report.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   report.text = processing.note +
-                fmt::format("{} frames{}, {} probes ({}), temperatures from {}; {} of {} fits ok, {} agreements, "
-                            "{:.1f} s; times in {}\n",
-                            report.frames,
-                            report.frames_resumed ? fmt::format(" ({} done before the resume)", report.frames_resumed)
-                                                  : "",
-                            report.probes, ctx.settings.probes_only ? "probe mode" : "full fields",
-                            report.temperature_source, report.fits_ok, report.fits, report.agreements, report.seconds,
-                            clock.basis()) +
-                fitted.text + (options.distributor ? options.distributor->brief_report() : "");
+                fmt::format(
+                    "{} frames{}, {} probes ({}), temperatures from {}; {} of {} fits ok, {} agreements, "
+                    "{:.1f} s; times in {}\n",
+                    report.frames,
+                    report.frames_resumed ? fmt::format(" ({} done before the resume)", report.frames_resumed) : "",
+                    report.probes, ctx.settings.probes_only ? "probe mode" : "full fields", report.temperature_source,
+                    report.fits_ok, report.fits, report.agreements, report.seconds, clock.basis()) +
+                fitted.text + (distributor ? distributor->brief_report() : "");
   return report;
 }
 
 FrameWork planned_frame_work(const Bytes& plan) {
   auto planned = std::make_shared<std::pair<FrameContext, std::vector<FrameRecord>>>(context_from_plan(plan));
-  return [planned](std::size_t i) {
-    return finished_bytes(evaluate_and_finish(planned->first, planned->second.at(i)));
-  };
+  return
+      [planned](std::size_t i) { return finished_bytes(evaluate_and_finish(planned->first, planned->second.at(i))); };
 }
 
 }  // namespace bosfuse::pipeline

@@ -59,10 +59,16 @@ struct ProcessOptions {
   // about as much as it saves (process_bench BM_ProcessRun16MP), and the
   // concurrent Poisson solve adds ~200 MB at 16 MP.
   bool finish_aside = false;
+  // Frames evaluated side by side, each by a thread with its own context
+  // (frame_threads.h): 0 chooses (one per core, at most four); 1 evaluates
+  // one frame at a time, with `prefetch_frames` and `finish_aside`. The
+  // results are the same either way.
+  int frames_at_once = 0;
   // When set, the frames are evaluated by several processes (cluster/: MPI
   // ranks), this one included, and this one alone writes the run's store;
-  // the stored results are those of a processing here. Decoding ahead and
-  // finishing aside are then each process's own business (not done).
+  // the stored results are those of a processing here. Each process then
+  // evaluates one frame at a time (frames_at_once, prefetch_frames and
+  // finish_aside are not used).
   FrameDistributor* distributor = nullptr;
 
   std::string Validate() const;  // empty when valid

@@ -4,10 +4,9 @@
 
 #include <fstream>
 #include <map>
-#include <optional>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 
 #include "sim/synthetic_pair.h"
 #include "storage/processing_store.h"
@@ -32,6 +31,7 @@ ProcessReport process(const fs::path& run, SettingsOverrides overrides = {}, boo
   options.progress = std::move(progress);
   options.prefetch_frames = pipelined ? 1 : 0;
   options.finish_aside = pipelined;
+  options.frames_at_once = 1;  // the pipelined loop; frames side by side have their own test
   return process_run(run, options);
 }
 
@@ -324,6 +324,23 @@ TEST_F(Process, ADistributedProcessingStoresWhatOneProcessStores) {
     EXPECT_NE(distributed.text.find("reversed"), std::string::npos) << "the distributor's report";
     expect_equal(Results(run()), alone);
     EXPECT_GT(distributed.times.evaluation_s, 0) << "every rank's times reach the report";
+  }
+}
+
+TEST_F(Process, FramesSideBySideStoreWhatOneAtATimeStores) {
+  add_frames(run(), truth_);
+  for (const bool probes_only : {false, true}) {
+    SCOPED_TRACE(probes_only ? "probe mode" : "full fields");
+    ProcessOptions options;
+    options.overrides.probes_only = probes_only;
+    options.frames_at_once = 1;
+    ASSERT_TRUE(process_run(run(), options).complete);
+    const Results one_at_a_time(run());
+    options.frames_at_once = 3;
+    const auto side_by_side = process_run(run(), options);
+    ASSERT_TRUE(side_by_side.complete);
+    EXPECT_NE(side_by_side.text.find("3 frames side by side"), std::string::npos) << side_by_side.text;
+    expect_equal(Results(run()), one_at_a_time);
   }
 }
 

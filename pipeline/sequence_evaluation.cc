@@ -79,9 +79,9 @@ SequenceFrameResult SequenceEvaluator::evaluate(const std::string& frame_path) {
 namespace {
 
 json summary_json(const fusion::EvaluationSummary& s) {
-  return {s.method,      s.passes_run, s.window_px_per_pass, s.converged,  s.last_change_px,
-          s.refined_fraction, s.vectors, s.valid,           s.outliers_replaced, s.no_texture,
-          s.masked,      s.out_of_roi, s.no_peak,            s.seconds};
+  return {s.method,  s.passes_run, s.window_px_per_pass, s.converged,  s.last_change_px, s.refined_fraction,
+          s.vectors, s.valid,      s.outliers_replaced,  s.no_texture, s.masked,         s.out_of_roi,
+          s.no_peak, s.seconds};
 }
 
 fusion::EvaluationSummary summary_from_json(const json& j) {
