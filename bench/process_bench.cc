@@ -14,8 +14,10 @@
 // BM_ProcessRun16MP: the paper's 16 MP camera, 20 frames of 4928×3264 in
 // 16-bit PNG with a plume whose deflection fades, full fields with the
 // process defaults: each step in turn (/prefetch:0/aside:0), the next frame
-// decoded ahead (/prefetch:1/aside:0, the default), and also the last
-// frame's temperature field and field files made aside (/prefetch:1/aside:1).
+// decoded ahead (/prefetch:1/aside:0), and also the last frame's
+// temperature field and field files made aside (/prefetch:1/aside:1), each
+// one frame at a time (/at_once:1); and two frames side by side
+// (/at_once:2, the default on two cores: pipeline/frame_threads.h).
 // Counters: frames per second (wall); the peak resident memory of the
 // processing (VmHWM, reset before each run; where the kernel cannot reset
 // it, peak_is_lifetime = 1 and it is getrusage's maximum over the process's
@@ -30,7 +32,10 @@
 //
 // BM_ProcessRun16MPRanks: the same run processed by the executable under
 // `mpirun --oversubscribe -n RANKS bosfuse process --threads THREADS`
-// (cluster/frame_farm.h); ranks:1 is one process started by mpirun.
+// (cluster/frame_farm.h); ranks:1 is one process started by mpirun, one
+// frame at a time (--frames-at-once 1, which the ranks of a job are anyway).
+// --bind-to none: Open MPI binds each of up to two ranks to one core by
+// default, which would give a rank of two threads one core.
 // Counters: frames per second (wall, MPI start-up included), the bytes of
 // a frame's results sent to rank 0, and rank 0's time to write a frame's
 // results into the run (its "writer's limit"), and the field files the
@@ -278,6 +283,7 @@ void BM_ProcessRun16MP(benchmark::State& state) {
   options.overrides.probes_only = false;
   options.prefetch_frames = static_cast<int>(state.range(0));
   options.finish_aside = state.range(1) != 0;
+  options.frames_at_once = static_cast<int>(state.range(2));
   pipeline::ProcessTimes times;
   bool peak_reset = true;
   for (auto _ : state) {
@@ -303,10 +309,11 @@ void BM_ProcessRun16MP(benchmark::State& state) {
   state.counters["finish_ms"] = times.finishing_s * 1e3;  // once per run
 }
 BENCHMARK(BM_ProcessRun16MP)
-    ->ArgNames({"prefetch", "aside"})
-    ->Args({0, 0})
-    ->Args({1, 0})
-    ->Args({1, 1})
+    ->ArgNames({"prefetch", "aside", "at_once"})
+    ->Args({0, 0, 1})
+    ->Args({1, 0, 1})
+    ->Args({1, 1, 1})
+    ->Args({1, 0, 2})
     ->Iterations(1)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();
@@ -332,9 +339,9 @@ void BM_ProcessRun16MPRanks(benchmark::State& state) {
   // What Open MPI asks of root; harmless otherwise.
   setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
   setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
-  const std::string command =
-      fmt::format("mpirun --oversubscribe -n {} {}/bosfuse process {} --mode full --threads {} -q 2>&1", state.range(0),
-                  BOSFUSE_BINARY_DIR, run.string(), state.range(1));
+  const std::string command = fmt::format(
+      "mpirun --oversubscribe --bind-to none -n {} {}/bosfuse process {} --mode full --threads {} --frames-at-once 1 -q 2>&1",
+      state.range(0), BOSFUSE_BINARY_DIR, run.string(), state.range(1));
   std::string report;
   for (auto _ : state) report = output_of(command);
   state.counters["frames_per_s"] = benchmark::Counter(kFrames, benchmark::Counter::kIsIterationInvariantRate);
