@@ -14,6 +14,7 @@
 #include "app/ranks.h"
 #include "app/run_control.h"
 #include "pipeline/process.h"
+#include "pipeline/process_frame.h"
 
 namespace bosfuse::app {
 namespace {

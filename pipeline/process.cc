@@ -20,6 +20,7 @@
 #include "pipeline/frame_prefetch.h"
 #include "pipeline/frame_threads.h"
 #include "pipeline/probe_calibration.h"
+#include "pipeline/process_frame.h"
 #include "pipeline/quality_json.h"
 #include "pipeline/run_selection.h"
 #include "storage/processing_store.h"
@@ -35,27 +36,6 @@ using storage::ChannelInfo;
 using storage::FrameRecord;
 using Clock = std::chrono::steady_clock;
 
-// Adds the wall time of its scope to `seconds`.
-class AddTime {
- public:
-  explicit AddTime(double& seconds) : seconds_(seconds) {}
-  ~AddTime() { seconds_ += std::chrono::duration<double>(Clock::now() - start_).count(); }
-  AddTime(const AddTime&) = delete;
-  AddTime& operator=(const AddTime&) = delete;
-
- private:
-  double& seconds_;
-  const Clock::time_point start_ = Clock::now();
-};
-
-template <class Work>
-decltype(auto) timed(double& seconds, Work&& work) {
-  const AddTime add(seconds);
-  return work();
-}
-
-json number_or_null(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
-
 // The shared fit layout plus what was fitted and on which time base.
 json fit_json(const fitting::NewtonFit& fit, const std::string& quantity, const std::string& unit,
               const storage::ExperimentClock& clock) {
@@ -64,157 +44,6 @@ json fit_json(const fitting::NewtonFit& fit, const std::string& quantity, const 
   j["unit"] = unit;
   j["time_basis"] = clock.basis();
   return j;
-}
-
-// The displacement grid interpolated bilinearly at a point; valid only when
-// every node it uses is.
-struct PointShift {
-  double u_px = 0, v_px = 0;
-  bool valid = false;
-};
-
-PointShift shift_at(const fusion::DisplacementField& field, cv::Point2d p) {
-  const auto& origin = field.at(0, 0);
-  const double step = field.cols > 1 ? field.at(0, 1).x_px - origin.x_px : 1.0;
-  const double fx = (p.x - origin.x_px) / step, fy = (p.y - origin.y_px) / step;
-  if (!(fx >= 0 && fy >= 0 && fx <= field.cols - 1 && fy <= field.rows - 1)) return {};
-  const int c0 = std::min(static_cast<int>(fx), std::max(field.cols - 2, 0));
-  const int r0 = std::min(static_cast<int>(fy), std::max(field.rows - 2, 0));
-  const double ax = fx - c0, ay = fy - r0;
-  PointShift out{0, 0, true};
-  for (int dr = 0; dr <= 1; ++dr) {
-    for (int dc = 0; dc <= 1; ++dc) {
-      const double w = (dr ? ay : 1 - ay) * (dc ? ax : 1 - ax);
-      if (w <= 1e-12) continue;
-      const auto& v = field.at(std::min(r0 + dr, field.rows - 1), std::min(c0 + dc, field.cols - 1));
-      out.u_px += w * v.u_px;
-      out.v_px += w * v.v_px;
-      out.valid = out.valid && v.valid();
-    }
-  }
-  return out;
-}
-
-json evaluation_json(const fusion::EvaluationSummary& s) {
-  return {{"method", s.method},
-          {"vectors", s.vectors},
-          {"valid", s.valid},
-          {"masked", s.masked},
-          {"no_texture", s.no_texture},
-          {"no_peak", s.no_peak},
-          {"outliers_replaced", s.outliers_replaced},
-          {"refined_fraction", s.refined_fraction},
-          {"seconds", s.seconds}};
-}
-
-std::string boundary_text(const fusion::TemperatureFieldOptions& o) {
-  std::string open;
-  for (const auto& [flag, name] :
-       {std::pair{o.open_top, "top"}, {o.open_bottom, "bottom"}, {o.open_left, "left"}, {o.open_right, "right"}}) {
-    if (flag) open += std::string(open.empty() ? "" : ", ") + name;
-  }
-  return open.empty() ? "ambient air on the field's border" : "ambient air on the border except the open " + open;
-}
-
-// What every frame's evaluation needs besides the frame itself.
-struct FrameContext {
-  fs::path run_dir;
-  std::string fields_dir;  // relative to the run folder
-  FrameRecord reference_frame;
-  std::vector<ChannelInfo> channels;
-  std::vector<cv::Point2d> points;
-  std::vector<std::int64_t> probe_ids;  // staged, one per channel
-  cv::Mat reference;
-  cv::Mat mask;
-  ProcessingSettings settings;
-  std::optional<fusion::BosGeometry> geometry;
-  std::map<std::int64_t, ChannelCalibration> calibration;
-  // One for the run: the reference is prepared once and the buffers of one
-  // frame serve the next.
-  std::unique_ptr<fusion::DisplacementEvaluator> evaluator;
-  // One for the run too: the Poisson system's analysis is done once, and its
-  // factor is reused while the unmeasured nodes stay. Frames are finished one
-  // at a time (FinishingFrame waits for one before starting the next); the
-  // solver serialises its calls besides.
-  std::unique_ptr<fusion::TemperatureFieldSolver> temperature_solver;
-
-  // The one place frames meet the evaluator: the full field, or only the
-  // windows at the probes.
-  fusion::EvaluationResult evaluate(const cv::Mat& measurement) const {
-    return settings.probes_only ? evaluator->probe(measurement, points) : evaluator->evaluate(measurement);
-  }
-};
-
-// Everything measured at the probes of one frame, and the field rows.
-struct FrameResult {
-  std::vector<PointShift> shifts;
-  std::vector<std::optional<double>> model_temperature_c;
-  std::vector<storage::FieldRecord> fields;
-  json summary;
-};
-
-FrameResult finish_full(const FrameContext& ctx, const FrameRecord& frame, const fusion::EvaluationResult& evaluated,
-                        ProcessTimes& times) {
-  FrameResult out;
-  out.summary = evaluation_json(evaluated.summary);
-  const std::string stem = fmt::format("{}/frame_{:06d}", ctx.fields_dir, frame.id);
-  timed(times.csv_s, [&] { fusion::write_csv(evaluated.field, ctx.run_dir / (stem + "_displacement.csv")); });
-  out.fields.push_back({0, frame.id, "displacement", stem + "_displacement.csv", out.summary.dump()});
-  std::optional<fusion::TemperatureFieldResult> temperature;
-  if (evaluated.field.rows >= 3 && evaluated.field.cols >= 3) {
-    const auto& field_options = ctx.settings.geometry.temperature_field;
-    temperature = timed(times.temperature_field_s, [&] { return ctx.temperature_solver->recover(evaluated.field); });
-    timed(times.csv_s, [&] { fusion::write_csv(temperature->field, ctx.run_dir / (stem + "_temperature.csv")); });
-    const auto& s = temperature->summary;
-    out.fields.push_back({0, frame.id, "temperature", stem + "_temperature.csv",
-                          json{{"min_c", number_or_null(s.min_c)},
-                               {"max_c", number_or_null(s.max_c)},
-                               {"unmeasured_nodes", s.unmeasured_nodes},
-                               {"unphysical_nodes", s.unphysical_nodes},
-                               {"boundary", boundary_text(field_options)}}
-                              .dump()});
-  }
-  for (const auto& p : ctx.points) {
-    out.shifts.push_back(shift_at(evaluated.field, p));
-    out.model_temperature_c.push_back(temperature ? temperature->field.temperature_at(p.x, p.y) : std::nullopt);
-  }
-  return out;
-}
-
-FrameResult finish_probes(const fusion::EvaluationResult& evaluated) {
-  FrameResult out;
-  out.summary = evaluation_json(evaluated.summary);
-  for (const auto& v : evaluated.field.vectors) {
-    out.shifts.push_back({v.u_px, v.v_px, v.valid()});
-    out.model_temperature_c.push_back(std::nullopt);
-  }
-  return out;
-}
-
-// A frame's results as one transaction stages them, and what making them
-// took (temperature field, field files).
-struct FinishedFrame {
-  FrameRecord frame;
-  FrameResult result;
-  std::vector<storage::ProbeSampleRecord> samples;
-  ProcessTimes times;
-};
-
-// All of a frame's work after its evaluation: thread-safe against the next
-// frame's evaluation (it only reads `ctx` and writes the frame's own files).
-FinishedFrame finish_frame(const FrameContext& ctx, const FrameRecord& frame,
-                           const fusion::EvaluationResult& evaluated) {
-  FinishedFrame out{frame, {}, {}, {}};
-  out.result = ctx.settings.probes_only ? finish_probes(evaluated) : finish_full(ctx, frame, evaluated, out.times);
-  for (std::size_t p = 0; p < ctx.channels.size(); ++p) {
-    const PointShift& s = out.result.shifts[p];
-    const double shift = std::hypot(s.u_px, s.v_px);
-    auto t_c = calibrated_temperature_c(ctx.calibration, ctx.channels[p].id, shift);
-    if (!t_c) t_c = out.result.model_temperature_c[p];
-    out.samples.push_back(
-        {ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift, s.valid ? t_c : std::nullopt, s.valid});
-  }
-  return out;
 }
 
 // One frame's results into the processing's staging tables (one
@@ -226,98 +55,7 @@ void stage_finished(storage::ProcessingStore& results, std::int64_t processing_i
   times.temperature_field_s += f.times.temperature_field_s;
   times.csv_s += f.times.csv_s;
   timed(times.staging_s,
-        [&] { results.stage_frame(processing_id, f.frame.id, f.result.summary.dump(), f.samples, f.result.fields); });
-}
-
-// --- Frames evaluated by other processes (ProcessOptions::distributor) ---
-// They get a plan (the frame context's data and the frames to do) and send
-// back finished frames, both as CBOR: binary, so every double arrives bit
-// for bit (NaN included) and a distributed processing stores what one
-// process would.
-
-json frame_json(const FrameRecord& f) {
-  return {{"id", f.id},
-          {"t_ns", f.t_ns},
-          {"path", f.path},
-          {"width_px", f.width_px},
-          {"height_px", f.height_px},
-          {"bit_depth", f.bit_depth}};
-}
-
-FrameRecord frame_from_json(const json& j) {
-  FrameRecord f;
-  f.id = j.at("id").get<std::int64_t>();
-  f.t_ns = j.at("t_ns").get<std::int64_t>();
-  f.path = j.at("path").get<std::string>();
-  f.width_px = j.at("width_px").get<int>();
-  f.height_px = j.at("height_px").get<int>();
-  f.bit_depth = j.at("bit_depth").get<int>();
-  return f;
-}
-
-json sample_json(const storage::ProbeSampleRecord& s) {
-  return {s.probe_id,
-          s.frame_id,
-          s.t_ns,
-          s.u_px,
-          s.v_px,
-          s.shift_px,
-          s.temperature_c ? json(*s.temperature_c) : json(nullptr),
-          s.valid};
-}
-
-storage::ProbeSampleRecord sample_from_json(const json& j) {
-  const json& t = j.at(6);
-  return {j.at(0).get<std::int64_t>(),
-          j.at(1).get<std::int64_t>(),
-          j.at(2).get<std::int64_t>(),
-          j.at(3).get<double>(),
-          j.at(4).get<double>(),
-          j.at(5).get<double>(),
-          t.is_null() ? std::nullopt : std::optional<double>(t.get<double>()),
-          j.at(7).get<bool>()};
-}
-
-Bytes finished_bytes(const FinishedFrame& f) {
-  json samples = json::array(), fields = json::array();
-  for (const auto& s : f.samples) samples.push_back(sample_json(s));
-  for (const auto& r : f.result.fields) fields.push_back({r.frame_id, r.kind, r.path, r.json});
-  const json j = {{"frame", frame_json(f.frame)},
-                  {"summary", f.result.summary},
-                  {"samples", samples},
-                  {"fields", fields},
-                  {"times", {f.times.decode_s, f.times.evaluation_s, f.times.temperature_field_s, f.times.csv_s}}};
-  return json::to_cbor(j);
-}
-
-FinishedFrame finished_from_bytes(const Bytes& bytes) {
-  const json j = json::from_cbor(bytes);
-  FinishedFrame f;
-  f.frame = frame_from_json(j.at("frame"));
-  f.result.summary = j.at("summary");
-  for (const auto& s : j.at("samples")) f.samples.push_back(sample_from_json(s));
-  for (const auto& r : j.at("fields")) {
-    f.result.fields.push_back({0, r.at(0).get<std::int64_t>(), r.at(1).get<std::string>(), r.at(2).get<std::string>(),
-                               r.at(3).get<std::string>()});
-  }
-  const json& t = j.at("times");
-  f.times.decode_s = t.at(0).get<double>();
-  f.times.evaluation_s = t.at(1).get<double>();
-  f.times.temperature_field_s = t.at(2).get<double>();
-  f.times.csv_s = t.at(3).get<double>();
-  return f;
-}
-
-// A frame from its file to its finished results: what every process of a
-// distributed processing does with the frames it is handed.
-FinishedFrame evaluate_and_finish(const FrameContext& ctx, const FrameRecord& frame) {
-  ProcessTimes times;
-  const cv::Mat image = timed(times.decode_s, [&] { return load_frame(ctx.run_dir, frame); });
-  const auto evaluated = timed(times.evaluation_s, [&] { return ctx.evaluate(image); });
-  FinishedFrame f = finish_frame(ctx, frame, evaluated);
-  f.times.decode_s = times.decode_s;
-  f.times.evaluation_s = times.evaluation_s;
-  return f;
+        [&] { results.stage_frame(processing_id, f.frame.id, f.summary.dump(), f.samples, f.fields); });
 }
 
 // The frame being finished on a second thread while the next one is
@@ -505,21 +243,6 @@ std::vector<FrameRecord> frames_to_do(const RunFrames& frames, const std::set<st
   return out;
 }
 
-// The reference, the mask, the evaluator and the temperature solver of a
-// context whose data is set: made the same way by every process.
-void load_frame_context(FrameContext& ctx) {
-  // Every pass run, as in the full field; with the exact context (-1) a probe
-  // then equals the full field at its point.
-  ctx.settings.evaluator.xcorr.convergence_px = 0;
-  ctx.geometry.emplace(ctx.settings.geometry.geometry);
-  ctx.reference = load_frame(ctx.run_dir, ctx.reference_frame);
-  ctx.mask = load_mask(ctx.run_dir, ctx.settings.mask);
-  ctx.evaluator = std::make_unique<fusion::DisplacementEvaluator>(ctx.reference, ctx.settings.evaluator, ctx.mask);
-  ctx.temperature_solver =
-      std::make_unique<fusion::TemperatureFieldSolver>(*ctx.geometry, ctx.settings.geometry.temperature_field);
-  if (!ctx.settings.probes_only) fs::create_directories(ctx.run_dir / ctx.fields_dir);
-}
-
 // The context of the process that owns the run: probes staged, the ambient
 // and the calibration read from the store.
 FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& store, storage::ProcessingStore& results,
@@ -543,53 +266,6 @@ FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& sto
   ctx.calibration = stored_calibration(results);
   load_frame_context(ctx);
   return ctx;
-}
-
-// What another process needs to evaluate and finish any of `frames` as this
-// one would: the context's data (not the store: a run folder on a shared
-// filesystem is read by every node, but its database is written by one).
-Bytes plan_bytes(const FrameContext& ctx, const std::vector<FrameRecord>& frames) {
-  json channels = json::array(), calibration = json::array(), todo = json::array();
-  for (std::size_t p = 0; p < ctx.channels.size(); ++p) {
-    channels.push_back({ctx.channels[p].id, ctx.channels[p].name, ctx.points[p].x, ctx.points[p].y, ctx.probe_ids[p]});
-  }
-  for (const auto& [channel, c] : ctx.calibration) {
-    calibration.push_back({channel, c.slope_c_per_px, c.reference_temperature_c, c.camera_offset_s});
-  }
-  for (const auto& f : frames) todo.push_back(frame_json(f));
-  return json::to_cbor(json{{"run_dir", fs::absolute(ctx.run_dir).string()},
-                            {"fields_dir", ctx.fields_dir},
-                            {"reference", frame_json(ctx.reference_frame)},
-                            {"settings", to_json(ctx.settings)},
-                            {"channels", channels},
-                            {"calibration", calibration},
-                            {"frames", todo}});
-}
-
-// The context a plan describes, loaded, and the frames to do.
-std::pair<FrameContext, std::vector<FrameRecord>> context_from_plan(const Bytes& plan) {
-  const json j = json::from_cbor(plan);
-  FrameContext ctx;
-  ctx.run_dir = j.at("run_dir").get<std::string>();
-  ctx.fields_dir = j.at("fields_dir").get<std::string>();
-  ctx.reference_frame = frame_from_json(j.at("reference"));
-  ctx.settings = settings_from_json(j.at("settings"));
-  for (const auto& c : j.at("channels")) {
-    ChannelInfo info;
-    info.id = c.at(0).get<std::int64_t>();
-    info.name = c.at(1).get<std::string>();
-    ctx.channels.push_back(info);
-    ctx.points.emplace_back(c.at(2).get<double>(), c.at(3).get<double>());
-    ctx.probe_ids.push_back(c.at(4).get<std::int64_t>());
-  }
-  for (const auto& c : j.at("calibration")) {
-    ctx.calibration[c.at(0).get<std::int64_t>()] = {c.at(1).get<double>(), c.at(2).get<double>(),
-                                                    c.at(3).get<double>()};
-  }
-  std::vector<FrameRecord> frames;
-  for (const auto& f : j.at("frames")) frames.push_back(frame_from_json(f));
-  load_frame_context(ctx);
-  return {std::move(ctx), std::move(frames)};
 }
 
 // The frames of a processing, evaluated and staged in frame order, one
@@ -751,12 +427,6 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
                     report.fits_ok, report.fits, report.agreements, report.seconds, clock.basis()) +
                 fitted.text + (distributor ? distributor->brief_report() : "");
   return report;
-}
-
-FrameWork planned_frame_work(const Bytes& plan) {
-  auto planned = std::make_shared<std::pair<FrameContext, std::vector<FrameRecord>>>(context_from_plan(plan));
-  return
-      [planned](std::size_t i) { return finished_bytes(evaluate_and_finish(planned->first, planned->second.at(i))); };
 }
 
 }  // namespace bosfuse::pipeline

@@ -23,7 +23,9 @@
 // its temperature field and field files on another; results are staged on
 // the calling thread, in frame order, either way. A processing that is interrupted (Ctrl-C, a crash,
 // kill -9) leaves the current results as they were, and `resume` continues
-// it with its own settings from the first frame it had not finished.
+// it with its own settings from the first frame it had not finished. One
+// frame's work, and what other threads or processes exchange to do it, is
+// process_frame.h.
 
 #include <atomic>
 #include <cstdint>
@@ -107,11 +109,5 @@ struct ProcessReport {
 };
 
 ProcessReport process_run(const std::filesystem::path& run_dir, const ProcessOptions& options);
-
-// The other processes' side of a distributed processing: the work of frame i
-// of the plan the distributor sent them (the run folder at the same path,
-// as on a shared filesystem). Throws when this process cannot set up the
-// plan's evaluation (the reference unreadable here, say).
-FrameWork planned_frame_work(const Bytes& plan);
 
 }  // namespace bosfuse::pipeline

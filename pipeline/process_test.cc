@@ -1,4 +1,5 @@
 #include "pipeline/process.h"
+#include "pipeline/process_frame.h"
 
 #include <gtest/gtest.h>
 

@@ -1,0 +1,122 @@
+#pragma once
+// One frame's work in a processing (process.h): the context every process
+// of a processing holds — the settings, probes, calibration, reference and
+// its prepared evaluator and temperature solver — and a frame from its file
+// to the results one transaction stages. The context's data and a frame's
+// results also travel as bytes: CBOR, binary, so every double arrives bit
+// for bit (NaN included). A thread with its own context (frame_threads.h)
+// or an MPI rank (cluster/) that gets the plan evaluates a frame exactly as
+// the process that owns the run would, and that one stores what it gets.
+
+#include <chrono>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "fusion/bos_geometry.h"
+#include "fusion/displacement_evaluator.h"
+#include "fusion/temperature_field.h"
+#include "pipeline/frame_distributor.h"
+#include "pipeline/probe_calibration.h"
+#include "pipeline/process.h"
+#include "pipeline/processing_settings.h"
+#include "storage/processing_store.h"
+#include "storage/records.h"
+
+namespace bosfuse::pipeline {
+
+// Adds the wall time of its scope to `seconds`.
+class AddTime {
+ public:
+  explicit AddTime(double& seconds) : seconds_(seconds) {}
+  ~AddTime() { seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+  AddTime(const AddTime&) = delete;
+  AddTime& operator=(const AddTime&) = delete;
+
+ private:
+  double& seconds_;
+  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+template <class Work>
+decltype(auto) timed(double& seconds, Work&& work) {
+  const AddTime add(seconds);
+  return work();
+}
+
+// What every frame's evaluation needs besides the frame itself.
+struct FrameContext {
+  std::filesystem::path run_dir;
+  std::string fields_dir;  // relative to the run folder
+  storage::FrameRecord reference_frame;
+  std::vector<storage::ChannelInfo> channels;
+  std::vector<cv::Point2d> points;
+  std::vector<std::int64_t> probe_ids;  // staged, one per channel
+  cv::Mat reference;
+  cv::Mat mask;
+  ProcessingSettings settings;
+  std::optional<fusion::BosGeometry> geometry;
+  std::map<std::int64_t, ChannelCalibration> calibration;
+  // One for the run: the reference is prepared once and the buffers of one
+  // frame serve the next.
+  std::unique_ptr<fusion::DisplacementEvaluator> evaluator;
+  // One for the run too: the Poisson system's analysis is done once, and its
+  // factor is reused while the unmeasured nodes stay. Frames are finished one
+  // at a time (FinishingFrame waits for one before starting the next); the
+  // solver serialises its calls besides.
+  std::unique_ptr<fusion::TemperatureFieldSolver> temperature_solver;
+
+  // The one place frames meet the evaluator: the full field, or only the
+  // windows at the probes.
+  fusion::EvaluationResult evaluate(const cv::Mat& measurement) const {
+    return settings.probes_only ? evaluator->probe(measurement, points) : evaluator->evaluate(measurement);
+  }
+};
+
+// A frame's results as one transaction stages them, and what making them
+// took (decoding and evaluation when evaluate_and_finish made them, the
+// temperature field, the field files).
+struct FinishedFrame {
+  storage::FrameRecord frame;
+  nlohmann::ordered_json summary;  // the evaluation's, stored with the frame
+  std::vector<storage::FieldRecord> fields;
+  std::vector<storage::ProbeSampleRecord> samples;
+  ProcessTimes times;
+};
+
+// The reference, the mask, the evaluator and the temperature solver of a
+// context whose data is set (run_dir, fields_dir, reference_frame,
+// settings, channels, points, probe_ids, calibration).
+void load_frame_context(FrameContext& ctx);
+
+// All of a frame's work after its evaluation: thread-safe against other
+// frames' work with other contexts (it reads `ctx`, writes the frame's own files).
+FinishedFrame finish_frame(const FrameContext& ctx, const storage::FrameRecord& frame,
+                           const fusion::EvaluationResult& evaluated);
+
+// A frame from its file to its finished results, decoding and evaluation timed.
+FinishedFrame evaluate_and_finish(const FrameContext& ctx, const storage::FrameRecord& frame);
+
+// The plan: what another process needs to evaluate and finish any of
+// `frames` as this one would — the context's data, not the store (a run
+// folder on a shared filesystem is read by every node, its database written
+// by one); the run folder by its absolute path.
+Bytes plan_bytes(const FrameContext& ctx, const std::vector<storage::FrameRecord>& frames);
+// The context a plan describes, loaded, and its frames.
+std::pair<FrameContext, std::vector<storage::FrameRecord>> context_from_plan(const Bytes& plan);
+
+Bytes finished_bytes(const FinishedFrame& frame);
+FinishedFrame finished_from_bytes(const Bytes& bytes);
+
+// The other processes' side of a distributed processing: the work of frame i
+// of the plan (the run folder at the same path, as on a shared filesystem).
+// Throws when this process cannot set up the plan's evaluation (the
+// reference unreadable here, say).
+FrameWork planned_frame_work(const Bytes& plan);
+
+}  // namespace bosfuse::pipeline
