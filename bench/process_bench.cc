@@ -62,6 +62,7 @@
 #include "pipeline/process.h"
 #include "sim/synthetic_pair.h"
 #include "storage/run_store.h"
+#include "tests/support/subprocess.h"
 
 namespace bosfuse {
 namespace {
@@ -324,26 +325,21 @@ double number_after(const std::string& text, const std::string& label) {
   return at == std::string::npos ? 0 : std::atof(text.c_str() + at + label.size());
 }
 
-std::string output_of(const std::string& command) {
-  std::string out;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) throw std::runtime_error("cannot run " + command);
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe)) out += buffer;
-  if (pclose(pipe) != 0) throw std::runtime_error(command + " failed:\n" + out);
-  return out;
-}
-
 void BM_ProcessRun16MPRanks(benchmark::State& state) {
   const fs::path& run = sixteen_megapixel_run();
   // What Open MPI asks of root; harmless otherwise.
   setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
   setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
   const std::string command = fmt::format(
-      "mpirun --oversubscribe --bind-to none -n {} {}/bosfuse process {} --mode full --threads {} --frames-at-once 1 -q 2>&1",
+      "mpirun --oversubscribe --bind-to none -n {} {}/bosfuse process {} --mode full --threads {} --frames-at-once 1 "
+      "-q",
       state.range(0), BOSFUSE_BINARY_DIR, run.string(), state.range(1));
   std::string report;
-  for (auto _ : state) report = output_of(command);
+  for (auto _ : state) {
+    const auto job = testing::run_command(command, 900);
+    if (job.exit_code != 0) throw std::runtime_error(command + " failed:\n" + job.output);
+    report = job.output;
+  }
   state.counters["frames_per_s"] = benchmark::Counter(kFrames, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["kB_per_frame_to_rank0"] = number_after(report, "results sent to rank 0: ");
   state.counters["rank0_write_ms"] = number_after(report, "rank 0 wrote the results: ");
