@@ -108,7 +108,7 @@ void read_validity(const TomlReader& r, Channel& c) {
 
 template <typename Device>
 void read_schedule(const TomlReader& r, Device& d) {
-  d.poll_period = r.seconds("poll_period_s", 1.0, 0.001);
+  d.poll_period = r.seconds("poll_period_s", 1.0, kShortestPollPeriodS);
   if (r.has("poll_count")) d.poll_count = r.integer_in("poll_count", 1, 1, std::numeric_limits<int>::max());
   d.timeout = std::chrono::duration_cast<std::chrono::milliseconds>(r.seconds("timeout_s", 0.5, 0.001));
 }

@@ -24,6 +24,10 @@
 
 namespace bosfuse::acquisition {
 
+// A device is polled at most once a millisecond (poll_period_s) and at
+// least once a year (TomlReader::kLongestSeconds).
+constexpr double kShortestPollPeriodS = 0.001;
+
 struct ModbusDeviceConfig {
   std::string name;
   std::string profile;

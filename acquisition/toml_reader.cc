@@ -99,13 +99,10 @@ int TomlReader::integer_in(std::string_view key, int fallback, int low, int high
 }
 
 std::chrono::nanoseconds TomlReader::seconds(std::string_view key, double fallback_s, double minimum_s) const {
-  // A duration is kept in int64 nanoseconds (±292 years); a year of
-  // seconds is more than any period or timeout a run needs.
-  static constexpr double kMaximumS = 365.25 * 86400;
   const double value = optional_number(key).value_or(fallback_s);
-  if (!std::isfinite(value) || value < minimum_s || value > kMaximumS) {
+  if (!std::isfinite(value) || value < minimum_s || value > kLongestSeconds) {
     std::ostringstream text;
-    text << "must be a number of seconds from " << minimum_s << " to " << kMaximumS;
+    text << "must be a number of seconds from " << minimum_s << " to " << kLongestSeconds;
     fail(key, text.str());
   }
   return std::chrono::nanoseconds(static_cast<std::int64_t>(std::llround(value * 1e9)));

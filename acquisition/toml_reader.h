@@ -39,7 +39,11 @@ class TomlReader {
   std::optional<bool> optional_bool(std::string_view key) const;
   // An integer within [low, high], `fallback` when absent.
   int integer_in(std::string_view key, int fallback, int low, int high) const;
-  // A duration in seconds of at least `minimum_s`, `fallback_s` when absent.
+  // A duration is kept in int64 nanoseconds (±292 years); a year of
+  // seconds is more than any period or timeout a run needs.
+  static constexpr double kLongestSeconds = 365.25 * 86400;
+  // A duration in seconds of at least `minimum_s` and at most
+  // kLongestSeconds, `fallback_s` when absent.
   std::chrono::nanoseconds seconds(std::string_view key, double fallback_s, double minimum_s) const;
   // An optional [x, y] pair, e.g. a position in image pixels.
   std::optional<std::pair<double, double>> optional_pair(std::string_view key, const std::string& meaning) const;

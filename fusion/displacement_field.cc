@@ -1,10 +1,7 @@
 #include "fusion/displacement_field.h"
 
-#include <fmt/format.h>
-
 #include <algorithm>
-#include <fstream>
-#include <iterator>
+#include <ostream>
 #include <stdexcept>
 
 #include "fusion/field_csv.h"
@@ -34,25 +31,31 @@ std::size_t DisplacementField::count(VectorFlag flag) const {
       std::count_if(vectors.begin(), vectors.end(), [flag](const auto& v) { return v.flag == flag; }));
 }
 
-void write_csv(const DisplacementField& field, std::ostream& out) {
-  // Formatted into one buffer: a 16 MP field has 250 k rows, and a string
-  // and a stream insertion per row cost more than the formatting itself.
-  fmt::memory_buffer text;
-  const auto to = std::back_inserter(text);
-  fmt::format_to(to, "{}\n", field_csv_header(kDisplacementColumns));
+namespace {
+
+FieldCsvWriter field_text(const DisplacementField& field) {
+  FieldCsvWriter csv(kDisplacementColumns, field.vectors.size());
   for (const auto& v : field.vectors) {
     // Enough digits for 0.001 px work; the centre is exact in half pixels.
-    fmt::format_to(to, "{:.1f},{:.1f},{:.5f},{:.5f},{},{:.3f}\n", v.x_px, v.y_px, v.u_px, v.v_px, v.valid() ? 1 : 0,
-                   v.peak_ratio);
+    csv.fixed(v.x_px, 1);
+    csv.fixed(v.y_px, 1);
+    csv.fixed(v.u_px, 5);
+    csv.fixed(v.v_px, 5);
+    csv.integer(v.valid() ? 1 : 0);
+    csv.fixed(v.peak_ratio, 3);
+    csv.end_line();
   }
+  return csv;
+}
+
+}  // namespace
+
+void write_csv(const DisplacementField& field, std::ostream& out) {
+  const FieldCsvWriter csv = field_text(field);
+  const std::string_view text = csv.text();
   out.write(text.data(), static_cast<std::streamsize>(text.size()));
 }
 
-void write_csv(const DisplacementField& field, const std::filesystem::path& path) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path.string() + ": cannot open for writing");
-  write_csv(field, out);
-  if (!out.flush()) throw std::runtime_error(path.string() + ": write failed");
-}
+void write_csv(const DisplacementField& field, const std::filesystem::path& path) { field_text(field).save(path); }
 
 }  // namespace bosfuse::fusion

@@ -44,8 +44,45 @@ const cv::Mat& StoredFieldGrid::column(std::string_view name) const {
 
 std::string field_csv_header(std::span<const std::string_view> value_columns) {
   std::string header = "x,y";
-  for (const auto column : value_columns) header += "," + std::string(column);
+  for (const auto column : value_columns) {
+    header += ',';
+    header += column;
+  }
   return header;
+}
+
+FieldCsvWriter::FieldCsvWriter(std::span<const std::string_view> value_columns, std::size_t nodes) {
+  text_.reserve(64 * (nodes + 1));
+  text_ += field_csv_header(value_columns);
+  text_ += '\n';
+}
+
+void FieldCsvWriter::fixed(double value, int decimals) {
+  // Room for the widest fixed double: 309 digits, sign, point and decimals.
+  char cell[400];
+  const auto [end, error] = std::to_chars(cell, cell + sizeof cell, value, std::chars_format::fixed, decimals);
+  if (error != std::errc()) throw std::logic_error("a field value does not fit its cell");
+  text_.append(cell, end);
+  text_ += ',';
+}
+
+void FieldCsvWriter::integer(int value) {
+  char cell[16];
+  text_.append(cell, std::to_chars(cell, cell + sizeof cell, value).ptr);
+  text_ += ',';
+}
+
+void FieldCsvWriter::empty() { text_ += ','; }
+
+void FieldCsvWriter::end_line() {
+  if (!text_.empty() && text_.back() == ',') text_.back() = '\n';
+}
+
+void FieldCsvWriter::save(const std::filesystem::path& path) const {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw std::runtime_error(path.string() + ": cannot open for writing");
+  out.write(text_.data(), static_cast<std::streamsize>(text_.size()));
+  if (!out.flush()) throw std::runtime_error(path.string() + ": write failed");
 }
 
 StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<const std::string_view> value_columns) {

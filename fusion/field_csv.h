@@ -39,6 +39,28 @@ inline constexpr std::string_view kTemperatureColumns[] = {"temperature_c", "mea
 // The header line of a field file with these value columns ("x,y,u,v,...").
 std::string field_csv_header(std::span<const std::string_view> value_columns);
 
+// Builds a field file's text, the header and then a line per node, in one
+// buffer: a 16 MP field has 250 k lines, and a stream insertion per line
+// costs more than the formatting. Numbers are std::to_chars in fixed point
+// (shortest round trip of the rounded value, as printf's "%.Nf" prints it),
+// about twice as fast as fmt's fixed format here.
+class FieldCsvWriter {
+ public:
+  FieldCsvWriter(std::span<const std::string_view> value_columns, std::size_t nodes);
+
+  void fixed(double value, int decimals);  // a cell: "nan", "inf" for those
+  void integer(int value);                 // a cell
+  void empty();                            // a cell with nothing in it
+  void end_line();
+
+  std::string_view text() const { return text_; }
+  // Writes the text to `path`; throws std::runtime_error naming it.
+  void save(const std::filesystem::path& path) const;
+
+ private:
+  std::string text_;
+};
+
 // Reads `path`, whose header must be `x,y` followed by `value_columns`.
 // Throws std::runtime_error naming the file (and the line) when it cannot be
 // read, has another header, a short line or a cell that is not a number, or

@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
+#include <limits>
+#include <random>
 
 #include "tests/support/temp_dir.h"
 
@@ -17,6 +20,43 @@ std::string error_of(const std::filesystem::path& path, std::span<const std::str
     return e.what();
   }
   return "no error";
+}
+
+// The cells are what C's printf("%.Nf") prints: the exactly rounded value
+// (ties of binary fractions to even), nan and inf by name.
+TEST(FieldCsvWriter, CellsArePrintfsFixedPoint) {
+  std::vector<double> values = {0.0,   -0.0,   0.125,   2.5,   -1e-9,  1e300, -123456.789012345,
+                                std::numeric_limits<double>::quiet_NaN(),   -std::numeric_limits<double>::quiet_NaN(),
+                                std::numeric_limits<double>::infinity(),    -std::numeric_limits<double>::infinity()};
+  std::mt19937 random(7);
+  std::normal_distribution<double> spread(0.0, 3.0);
+  for (int i = 0; i < 2000; ++i) values.push_back(spread(random));
+  const std::string_view columns[] = {"a", "b"};
+  FieldCsvWriter csv(columns, values.size());
+  std::string expected = "x,y,a,b\n";
+  char cell[400];
+  for (const double value : values) {
+    for (const int decimals : {1, 3, 5}) csv.fixed(value, decimals);
+    csv.empty();
+    csv.integer(-7);
+    csv.end_line();
+    for (const int decimals : {1, 3, 5}) {
+      std::snprintf(cell, sizeof cell, "%.*f,", decimals, value);
+      expected += cell;
+    }
+    expected += ",-7\n";
+  }
+  EXPECT_EQ(csv.text(), expected);
+}
+
+TEST(FieldCsvWriter, AFileThatCannotBeWrittenIsNamed) {
+  const std::string_view columns[] = {"a"};
+  try {
+    FieldCsvWriter(columns, 0).save("/nonexistent-folder/field.csv");
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent-folder/field.csv"), std::string::npos) << e.what();
+  }
 }
 
 TEST(FieldCsv, ReadsTheGridInRowOrderWhateverTheLineOrder) {

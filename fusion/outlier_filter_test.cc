@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <random>
+
 namespace bosfuse::fusion {
 namespace {
 
@@ -57,6 +60,31 @@ TEST(OutlierFilter, PredictorFillsGapsFromNeighbours) {
   const GridField predictor = predictor_from(field, {0, 0, 1, 5, 5});
   EXPECT_NEAR(predictor.u_px.at<double>(2, 2), 0.52, 0.02);
   EXPECT_NEAR(predictor.v_px.at<double>(2, 2), 0.2, 1e-12);
+}
+
+// An interior node's eight neighbours are sorted by a network: its median is
+// the sorted middle pair's mean, ties and repeated values included.
+TEST(OutlierFilter, AMissingNodeTakesTheMedianOfItsEightNeighbours) {
+  std::mt19937 random(11);
+  std::uniform_int_distribution<int> coarse(-3, 3);  // many ties
+  std::normal_distribution<double> fine(0.0, 2.0);
+  for (int trial = 0; trial < 500; ++trial) {
+    DisplacementField field = smooth_field(3, 3);
+    std::vector<double> u, v;
+    for (auto& vec : field.vectors) {
+      vec.u_px = trial % 2 ? coarse(random) : fine(random);
+      vec.v_px = trial % 2 ? fine(random) : coarse(random);
+      if (&vec == &field.at(1, 1)) continue;
+      u.push_back(vec.u_px);
+      v.push_back(vec.v_px);
+    }
+    field.at(1, 1).flag = VectorFlag::kNoPeak;
+    const GridField predictor = predictor_from(field, {0, 0, 1, 3, 3});
+    std::sort(u.begin(), u.end());
+    std::sort(v.begin(), v.end());
+    ASSERT_EQ(predictor.u_px.at<double>(1, 1), 0.5 * (u[3] + u[4])) << "trial " << trial;
+    ASSERT_EQ(predictor.v_px.at<double>(1, 1), 0.5 * (v[3] + v[4])) << "trial " << trial;
+  }
 }
 
 TEST(OutlierFilter, NothingMeasuredGivesAZeroPredictor) {

@@ -8,8 +8,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <fstream>
-#include <iterator>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -344,26 +342,19 @@ TemperatureFieldResult recover_temperature_field(const DisplacementField& displa
 }
 
 void write_csv(const TemperatureField& field, const std::filesystem::path& path) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path.string() + ": cannot open for writing");
-  // One buffer, as the displacement field's CSV (displacement_field.cc).
-  fmt::memory_buffer text;
-  const auto to = std::back_inserter(text);
-  fmt::format_to(to, "{}\n", field_csv_header(kTemperatureColumns));
+  FieldCsvWriter csv(kTemperatureColumns, static_cast<std::size_t>(field.rows) * field.cols);
   for (int r = 0; r < field.rows; ++r) {
     for (int c = 0; c < field.cols; ++c) {
       const std::size_t i = field.index(r, c);
       const double t = field.temperature_c[i];
-      const double x_px = field.x0_px + c * field.step_px, y_px = field.y0_px + r * field.step_px;
-      if (std::isfinite(t)) {
-        fmt::format_to(to, "{:.1f},{:.1f},{:.4f},{}\n", x_px, y_px, t, int{field.measured[i]});
-      } else {
-        fmt::format_to(to, "{:.1f},{:.1f},,{}\n", x_px, y_px, int{field.measured[i]});
-      }
+      csv.fixed(field.x0_px + c * field.step_px, 1);
+      csv.fixed(field.y0_px + r * field.step_px, 1);
+      std::isfinite(t) ? csv.fixed(t, 4) : csv.empty();
+      csv.integer(int{field.measured[i]});
+      csv.end_line();
     }
   }
-  out.write(text.data(), static_cast<std::streamsize>(text.size()));
-  if (!out.flush()) throw std::runtime_error(path.string() + ": write failed");
+  csv.save(path);
 }
 
 }  // namespace bosfuse::fusion

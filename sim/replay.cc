@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "acquisition/experiment_config.h"
 #include "storage/run_paths.h"
 #include "storage/run_store.h"
 
@@ -58,15 +59,18 @@ std::chrono::nanoseconds typical_interval(const std::vector<storage::Sample>& sa
   std::vector<std::int64_t> sorted = gaps;
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
   const std::int64_t median = sorted[sorted.size() / 2];
+  // In double: three times a gap of a century overflows 64-bit nanoseconds.
+  const double outage_ns = 3.0 * static_cast<double>(median);
   double sum = 0;
   std::size_t count = 0;
   for (const std::int64_t gap : gaps) {
-    if (gap > 3 * median) continue;
+    if (static_cast<double>(gap) > outage_ns) continue;
     sum += static_cast<double>(gap);
     ++count;
   }
-  const auto mean = static_cast<std::int64_t>(sum / static_cast<double>(count));
-  return std::chrono::nanoseconds(std::max<std::int64_t>(mean, 1'000'000));
+  // A damaged file read out of time order can leave no gap below the bound.
+  const double mean_ns = count > 0 ? sum / static_cast<double>(count) : static_cast<double>(median);
+  return std::chrono::nanoseconds(std::max<std::int64_t>(static_cast<std::int64_t>(mean_ns), 1'000'000));
 }
 
 std::string number(double value) {
@@ -93,7 +97,12 @@ toml::table channel_table(const storage::ChannelInfo& channel, std::size_t index
 }
 
 toml::table device_table(const ReplayDevice& device, int port, double speed) {
-  const double period_s = std::chrono::duration<double>(device.period).count() / speed;
+  // Within the periods the logger accepts: a replay serves sample k at poll
+  // k whatever the period, and a record whose samples lie years apart (a
+  // damaged clock) still replays, at a poll a year.
+  const double period_s =
+      std::clamp(std::chrono::duration<double>(device.period).count() / speed, acquisition::kShortestPollPeriodS,
+                 acquisition::TomlReader::kLongestSeconds);
   toml::array channels;
   for (std::size_t c = 0; c < device.channels.size(); ++c) channels.push_back(channel_table(device.channels[c], c));
   return toml::table{{"name", device.name},
@@ -101,7 +110,7 @@ toml::table device_table(const ReplayDevice& device, int port, double speed) {
                      {"transport", "tcp"},
                      {"host", "127.0.0.1"},
                      {"port", port},
-                     {"poll_period_s", std::max(period_s, 0.001)},
+                     {"poll_period_s", period_s},
                      {"timeout_s", 1.0},
                      {"poll_count", static_cast<std::int64_t>(device.samples.front().size())},
                      {"channels", std::move(channels)}};

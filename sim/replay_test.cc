@@ -100,5 +100,26 @@ TEST(InspectRecordedRun, TheReplayPeriodIsTheMeanIntervalWithoutOutages) {
   EXPECT_NEAR(std::chrono::duration<double>(run.devices[0].period).count(), 7.0 / 6.0, 1e-9);
 }
 
+// Found by fuzzing: samples 99 years apart (within the century a run may
+// span) made three times the median gap overflow, which left no gap to
+// average and the period NaN. The period is the one gap.
+TEST(InspectRecordedRun, APeriodOfNinetyNineYearsIsThatGap) {
+  testing::TempDir dir;
+  constexpr std::int64_t kGapNs = 99LL * 365 * 86400 * 1'000'000'000;
+  {
+    auto store = storage::RunStore::create(dir / "run", {0, "slow", 0, {}, "", storage::RunStatus::kRunning, 1.0, {}},
+                                           storage::RunStore::CreateMode::kNew);
+    const auto device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", ""});
+    const auto channel = store.add_channel({0, device, "tc0", "thermocouple", "degC", "K", {}, {}});
+    const storage::Sample samples[] = {{channel, 0, {}, 20.0, {}, storage::SampleStatus::kOk},
+                                       {channel, kGapNs, {}, 20.0, {}, storage::SampleStatus::kOk}};
+    store.write_samples(samples);
+    store.finish(storage::RunStatus::kComplete, kGapNs);
+  }
+  const RecordedRun run = inspect_recorded_run(dir / "run");
+  ASSERT_EQ(run.devices.size(), 1u);
+  EXPECT_EQ(run.devices[0].period.count(), kGapNs);
+}
+
 }  // namespace
 }  // namespace bosfuse::sim

@@ -8,13 +8,22 @@ std::string database_path(const std::filesystem::path& run_dir) {
   return (run_dir / RunStore::kDatabaseFileName).string();
 }
 
+// The schema's CHECK (a value exactly when the status is ok) is checked
+// again here: a file whose schema text was damaged no longer enforces it,
+// and every reader relies on it.
 Sample read_sample(const Statement& stmt, int first) {
-  return {stmt.column_int64(first),
-          stmt.column_int64(first + 1),
-          stmt.column_optional_int64(first + 2),
-          stmt.column_optional_double(first + 3),
-          stmt.column_optional_double(first + 4),
-          sample_status_from_code(stmt.column_int64(first + 5))};
+  Sample sample{stmt.column_int64(first),
+                stmt.column_int64(first + 1),
+                stmt.column_optional_int64(first + 2),
+                stmt.column_optional_double(first + 3),
+                stmt.column_optional_double(first + 4),
+                sample_status_from_code(stmt.column_int64(first + 5))};
+  if (sample.value.has_value() != (sample.status == SampleStatus::kOk)) {
+    throw StorageError("a sample of channel " + std::to_string(sample.channel_id) + " at " +
+                       std::to_string(sample.t_ns) + " ns has status " + std::string(to_string(sample.status)) +
+                       (sample.value ? " and a value" : " and no value") + ": the run store is damaged");
+  }
+  return sample;
 }
 
 Event read_event(const Statement& stmt, int first) {

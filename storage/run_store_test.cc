@@ -169,6 +169,24 @@ TEST(RunStore, ASampleWithAnUnknownStatusCodeIsRefusedAsDamage) {
   }
 }
 
+// Found by fuzzing: a store whose schema text was damaged no longer had the
+// CHECK that only an ok sample has a value; such a sample is refused.
+TEST(RunStore, ASampleWithAValueAndAFailedStatusIsRefusedAsDamage) {
+  Fixture f;
+  {
+    Database db((f.dir.path() / "run" / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
+    db.execute("PRAGMA ignore_check_constraints = ON");
+    db.execute("INSERT INTO samples (channel_id, t_ns, value, status) VALUES (" + std::to_string(f.channel) + ", 5, 21.5, " +
+               std::to_string(static_cast<int>(SampleStatus::kTimeout)) + ")");
+  }
+  try {
+    f.store.read_samples(f.channel);
+    FAIL() << "a timed-out sample with a value was read";
+  } catch (const StorageError& e) {
+    EXPECT_NE(std::string(e.what()).find("has status timeout and a value"), std::string::npos) << e.what();
+  }
+}
+
 TEST(RunStore, OpeningAFolderWithoutARunSaysSo) {
   testing::TempDir dir;
   try {
