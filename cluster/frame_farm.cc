@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include "pipeline/frame_order.h"
+
 namespace bosfuse::cluster {
 namespace {
 
@@ -37,10 +39,9 @@ class FrameFarm::Round {
   Round(FrameFarm& farm, std::size_t count, const pipeline::FrameWork& local, const pipeline::TakeFrame& take,
         const std::atomic<bool>* stop)
       : farm_(farm),
-        count_(count),
         local_(local),
         take_(take),
-        stop_(stop),
+        order_(count, stop),
         state_(static_cast<std::size_t>(farm.session_.size()), State::kPreparing) {
     state_[0] = State::kIdle;
   }
@@ -69,14 +70,14 @@ class FrameFarm::Round {
       if (!local_running_.valid() && !remote_in_flight() && !handing_out()) break;
       if (!acted) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
-    if (failure_) std::rethrow_exception(failure_->second);
-    return taken_;
+    order_.rethrow_failure();
+    return order_.taken();
   }
 
  private:
   enum class State { kPreparing, kIdle, kBusy };
 
-  bool handing_out() const { return !closing_ && !failure_ && !(stop_ && stop_->load()) && next_ < count_; }
+  bool handing_out() const { return !closing_ && order_.handing_out(); }
 
   bool remote_in_flight() const {
     for (std::size_t rank = 1; rank < state_.size(); ++rank) {
@@ -92,7 +93,7 @@ class FrameFarm::Round {
     }
     since_[rank] = Clock::now();
     state_[rank] = State::kBusy;
-    farm_.session_.send(rank, kFrame, with_index(next_++));
+    farm_.session_.send(rank, kFrame, with_index(*order_.next()));
   }
 
   void handle(Message m) {
@@ -107,14 +108,13 @@ class FrameFarm::Round {
         tally.busy_s += seconds_between(since_[rank], Clock::now());
         farm_.result_bytes_ += m.bytes.size();
         ++farm_.remote_frames_;
-        done_[index_of(m.bytes)] = rest_of(m.bytes);
+        order_.done(index_of(m.bytes), rest_of(m.bytes));
         break;
       }
       case kError: {
         const std::uint64_t index = index_of(m.bytes);
         const Bytes text = rest_of(m.bytes);
-        fail(index == kSetUp ? 0 : index,
-             std::make_exception_ptr(std::runtime_error(std::string(text.begin(), text.end()))));
+        order_.failed(index == kSetUp ? 0 : index, std::make_exception_ptr(std::runtime_error(std::string(text.begin(), text.end()))));
         if (index == kSetUp) {
           state_[rank] = State::kIdle;  // never given a frame
           return;
@@ -122,15 +122,15 @@ class FrameFarm::Round {
         break;
       }
       default:
-        fail(0, std::make_exception_ptr(
-                    std::runtime_error(fmt::format("an unexpected MPI message (tag {}) from rank {}", m.tag, rank))));
+        order_.failed(0, std::make_exception_ptr(std::runtime_error(
+                             fmt::format("an unexpected MPI message (tag {}) from rank {}", m.tag, rank))));
     }
     give(rank);
   }
 
   bool start_local() {
     if (local_running_.valid() || !handing_out()) return false;
-    local_index_ = next_++;
+    local_index_ = *order_.next();
     local_since_ = Clock::now();
     local_running_ = std::async(std::launch::async, [this, index = local_index_] { return local_(index); });
     return true;
@@ -141,47 +141,32 @@ class FrameFarm::Round {
       return false;
     }
     try {
-      done_[local_index_] = local_running_.get();
+      order_.done(local_index_, local_running_.get());
       ++farm_.tally_[0].frames;
       farm_.tally_[0].busy_s += seconds_between(local_since_, Clock::now());
     } catch (...) {
-      fail(local_index_, std::current_exception());
+      order_.failed(local_index_, std::current_exception());
     }
     return true;
   }
 
-  // The first frame that failed is the one reported; frames from it on are
-  // not taken.
-  void fail(std::uint64_t index, std::exception_ptr error) {
-    if (!failure_ || index < failure_->first) failure_.emplace(index, std::move(error));
-  }
-
   void take_in_order() {
-    for (auto it = done_.find(taken_); it != done_.end(); it = done_.find(taken_)) {
-      if (failure_ && taken_ >= failure_->first) return;
-      const Bytes result = std::move(it->second);
-      done_.erase(it);
+    while (const auto result = order_.pop_next()) {
       const auto start = Clock::now();
-      take_(taken_, result);
+      take_(result->first, result->second);
       farm_.take_s_ += seconds_between(start, Clock::now());
-      ++taken_;
     }
   }
 
   FrameFarm& farm_;
-  const std::size_t count_;
   const pipeline::FrameWork& local_;
   const pipeline::TakeFrame& take_;
-  const std::atomic<bool>* stop_;
+  pipeline::FrameOrder order_;
   std::vector<State> state_;  // by rank; rank 0's own frames run in local_running_
   std::map<int, Clock::time_point> since_;
   std::future<Bytes> local_running_;
   std::size_t local_index_ = 0;
   Clock::time_point local_since_;
-  std::map<std::size_t, Bytes> done_;  // evaluated, not yet taken
-  std::size_t next_ = 0;               // the next frame to hand out
-  std::size_t taken_ = 0;
-  std::optional<std::pair<std::uint64_t, std::exception_ptr>> failure_;
   bool closing_ = false;
 };
 

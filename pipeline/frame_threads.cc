@@ -5,39 +5,38 @@
 #include <algorithm>
 #include <condition_variable>
 #include <exception>
-#include <map>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <thread>
 
+#include "pipeline/frame_order.h"
+
 namespace bosfuse::pipeline {
 
 namespace {
 
-// What the threads share: the next frame to hand out, the results not yet
-// taken and the first failure.
+// What the threads share: the frames' order (handed out, finished, the
+// first failure) under one lock, and how many threads have ended.
 class Round {
  public:
-  Round(std::size_t count, const std::atomic<bool>* stop) : count_(count), stop_(stop) {}
+  Round(std::size_t count, const std::atomic<bool>* stop) : order_(count, stop) {}
 
   // The next frame for a free thread; nothing when there is none to do.
   std::optional<std::size_t> next() {
     std::lock_guard lock(mutex_);
-    if (next_ >= count_ || failure_ || (stop_ && stop_->load())) return std::nullopt;
-    return next_++;
+    return order_.next();
   }
 
   void done(std::size_t index, Bytes result) {
     std::lock_guard lock(mutex_);
-    results_.emplace(index, std::move(result));
+    order_.done(index, std::move(result));
     changed_.notify_all();
   }
 
-  // The first frame that failed is the one reported.
   void failed(std::size_t index, std::exception_ptr error) {
     std::lock_guard lock(mutex_);
-    if (!failure_ || index < failure_->first) failure_.emplace(index, std::move(error));
+    order_.failed(index, std::move(error));
     changed_.notify_all();
   }
 
@@ -53,38 +52,29 @@ class Round {
     std::size_t taken = 0;
     std::unique_lock lock(mutex_);
     for (;;) {
-      changed_.wait(lock, [&] { return results_.count(taken) || ended_ == threads; });
-      auto it = results_.find(taken);
-      if (it == results_.end() || (failure_ && taken >= failure_->first)) break;
-      const Bytes result = std::move(it->second);
-      results_.erase(it);
+      std::optional<std::pair<std::size_t, Bytes>> result;
+      changed_.wait(lock, [&] { return (result = order_.pop_next()) || ended_ == threads; });
+      if (!result) return taken;
       lock.unlock();
       try {
-        take(taken, result);
+        take(result->first, result->second);
       } catch (...) {
         lock.lock();
-        failure_.emplace(taken, std::current_exception());  // stops the handing out; rethrown after the threads end
-        break;
+        order_.failed(result->first, std::current_exception());  // stops the handing out; rethrown after the threads end
+        return taken;
       }
       lock.lock();
       ++taken;
     }
-    return taken;
   }
 
-  void rethrow_failure() const {
-    if (failure_) std::rethrow_exception(failure_->second);
-  }
+  void rethrow_failure() const { order_.rethrow_failure(); }
 
  private:
-  const std::size_t count_;
-  const std::atomic<bool>* stop_;
   std::mutex mutex_;
   std::condition_variable changed_;
-  std::size_t next_ = 0;
+  FrameOrder order_;
   int ended_ = 0;
-  std::map<std::size_t, Bytes> results_;
-  std::optional<std::pair<std::size_t, std::exception_ptr>> failure_;
 };
 
 }  // namespace
