@@ -114,7 +114,8 @@ class FrameFarm::Round {
       case kError: {
         const std::uint64_t index = index_of(m.bytes);
         const Bytes text = rest_of(m.bytes);
-        order_.failed(index == kSetUp ? 0 : index, std::make_exception_ptr(std::runtime_error(std::string(text.begin(), text.end()))));
+        order_.failed(index == kSetUp ? 0 : index,
+                      std::make_exception_ptr(std::runtime_error(std::string(text.begin(), text.end()))));
         if (index == kSetUp) {
           state_[rank] = State::kIdle;  // never given a frame
           return;

@@ -25,9 +25,9 @@ std::string error_of(const std::filesystem::path& path, std::span<const std::str
 // The cells are what C's printf("%.Nf") prints: the exactly rounded value
 // (ties of binary fractions to even), nan and inf by name.
 TEST(FieldCsvWriter, CellsArePrintfsFixedPoint) {
-  std::vector<double> values = {0.0,   -0.0,   0.125,   2.5,   -1e-9,  1e300, -123456.789012345,
-                                std::numeric_limits<double>::quiet_NaN(),   -std::numeric_limits<double>::quiet_NaN(),
-                                std::numeric_limits<double>::infinity(),    -std::numeric_limits<double>::infinity()};
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::vector<double> values = {0.0, -0.0, 0.125, 2.5, -1e-9, 1e300, -123456.789012345, kNaN, -kNaN, kInf, -kInf};
   std::mt19937 random(7);
   std::normal_distribution<double> spread(0.0, 3.0);
   for (int i = 0; i < 2000; ++i) values.push_back(spread(random));

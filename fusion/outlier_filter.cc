@@ -14,9 +14,8 @@ bool has_value(VectorFlag flag) { return flag == VectorFlag::kOk || flag == Vect
 // (Knuth, TAOCP 5.3.4): branch-free min/max, where an insertion sort of an
 // interior node's eight neighbours mispredicts about every other step.
 void sort_eight(double* v) {
-  static constexpr int kPairs[19][2] = {{0, 2}, {1, 3}, {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6},
-                                        {3, 7}, {0, 1}, {2, 3}, {4, 5}, {6, 7}, {2, 4}, {3, 5},
-                                        {1, 4}, {3, 6}, {1, 2}, {3, 4}, {5, 6}};
+  static constexpr int kPairs[19][2] = {{0, 2}, {1, 3}, {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}, {0, 1}, {2, 3},
+                                        {4, 5}, {6, 7}, {2, 4}, {3, 5}, {1, 4}, {3, 6}, {1, 2}, {3, 4}, {5, 6}};
   for (const auto& [i, j] : kPairs) {
     const double low = std::min(v[i], v[j]), high = std::max(v[i], v[j]);
     v[i] = low;

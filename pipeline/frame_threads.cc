@@ -60,7 +60,8 @@ class Round {
         take(result->first, result->second);
       } catch (...) {
         lock.lock();
-        order_.failed(result->first, std::current_exception());  // stops the handing out; rethrown after the threads end
+        // Stops the handing out; rethrown once the threads have ended.
+        order_.failed(result->first, std::current_exception());
         return taken;
       }
       lock.lock();

@@ -100,9 +100,8 @@ toml::table device_table(const ReplayDevice& device, int port, double speed) {
   // Within the periods the logger accepts: a replay serves sample k at poll
   // k whatever the period, and a record whose samples lie years apart (a
   // damaged clock) still replays, at a poll a year.
-  const double period_s =
-      std::clamp(std::chrono::duration<double>(device.period).count() / speed, acquisition::kShortestPollPeriodS,
-                 acquisition::TomlReader::kLongestSeconds);
+  const double period_s = std::clamp(std::chrono::duration<double>(device.period).count() / speed,
+                                     acquisition::kShortestPollPeriodS, acquisition::TomlReader::kLongestSeconds);
   toml::array channels;
   for (std::size_t c = 0; c < device.channels.size(); ++c) channels.push_back(channel_table(device.channels[c], c));
   return toml::table{{"name", device.name},

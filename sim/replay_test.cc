@@ -60,7 +60,8 @@ TEST(InspectRecordedRun, TimesCenturiesApartAreRefusedAsDamaged) {
   testing::TempDir dir;
   {
     auto store = storage::RunStore::create(
-        dir / "run", {0, "damaged", -9'000'000'000'000'000'000, {}, "", storage::RunStatus::kRunning, 1.0, std::nullopt},
+        dir / "run",
+        {0, "damaged", -9'000'000'000'000'000'000, {}, "", storage::RunStatus::kRunning, 1.0, std::nullopt},
         storage::RunStore::CreateMode::kNew);
     const auto device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", ""});
     const auto channel = store.add_channel({0, device, "tc0", "thermocouple", "degC", "K", {}, {}});

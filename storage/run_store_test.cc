@@ -176,8 +176,8 @@ TEST(RunStore, ASampleWithAValueAndAFailedStatusIsRefusedAsDamage) {
   {
     Database db((f.dir.path() / "run" / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
     db.execute("PRAGMA ignore_check_constraints = ON");
-    db.execute("INSERT INTO samples (channel_id, t_ns, value, status) VALUES (" + std::to_string(f.channel) + ", 5, 21.5, " +
-               std::to_string(static_cast<int>(SampleStatus::kTimeout)) + ")");
+    db.execute("INSERT INTO samples (channel_id, t_ns, value, status) VALUES (" + std::to_string(f.channel) +
+               ", 5, 21.5, " + std::to_string(static_cast<int>(SampleStatus::kTimeout)) + ")");
   }
   try {
     f.store.read_samples(f.channel);
