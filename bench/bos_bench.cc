@@ -8,16 +8,22 @@
 // Figures and what they mean: docs/BENCHMARKS.md, "BOS evaluation".
 
 #include <benchmark/benchmark.h>
+#include <fmt/format.h>
 #include <sys/resource.h>
 
 #include <chrono>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <opencv2/core/utility.hpp>
+#include <random>
 #include <stdexcept>
 #include <vector>
 
 #include "fusion/displacement_evaluator.h"
+#include "fusion/field_csv.h"
+#include "fusion/outlier_filter.h"
 #include "sim/evaluation_study.h"
 
 namespace bosfuse {
@@ -223,6 +229,63 @@ void BM_FullFrame16MPEvaluator(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_FullFrame16MPEvaluator)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(2);
+
+// The displacement CSV of a 16 MP field (615×407 nodes) as `process`
+// writes it per frame: /0 formats with fmt, as write_csv did before
+// (kept here as the baseline), /1 is write_csv (std::to_chars). Written to
+// /dev/null, so the figure is the formatting alone.
+void BM_DisplacementCsv16MP(benchmark::State& state) {
+  fusion::DisplacementField field;
+  field.rows = 407;
+  field.cols = 615;
+  std::mt19937 random(3);
+  std::normal_distribution<double> shift_px(0.0, 0.7);
+  for (int r = 0; r < field.rows; ++r) {
+    for (int c = 0; c < field.cols; ++c) {
+      field.vectors.push_back({7.5 + 8 * c, 7.5 + 8 * r, shift_px(random), shift_px(random),
+                               3 + std::abs(shift_px(random)), fusion::VectorFlag::kOk});
+    }
+  }
+  std::ofstream out("/dev/null");
+  for (auto _ : state) {
+    if (state.range(0) == 1) {
+      fusion::write_csv(field, out);
+      continue;
+    }
+    fmt::memory_buffer text;
+    const auto to = std::back_inserter(text);
+    fmt::format_to(to, "{}\n", fusion::field_csv_header(fusion::kDisplacementColumns));
+    for (const auto& v : field.vectors) {
+      fmt::format_to(to, "{:.1f},{:.1f},{:.5f},{:.5f},{},{:.3f}\n", v.x_px, v.y_px, v.u_px, v.v_px, v.valid() ? 1 : 0,
+                     v.peak_ratio);
+    }
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+  }
+}
+BENCHMARK(BM_DisplacementCsv16MP)->ArgName("to_chars")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// The outlier test of one pass on a 16 MP field (615×407 nodes of noisy
+// shifts, a few per cent spurious), as each pass runs it.
+void BM_OutlierTest16MP(benchmark::State& state) {
+  fusion::DisplacementField field;
+  field.rows = 407;
+  field.cols = 615;
+  std::mt19937 random(5);
+  std::normal_distribution<double> shift_px(0.0, 0.05);
+  std::uniform_real_distribution<double> spurious(0.0, 1.0);
+  for (int r = 0; r < field.rows; ++r) {
+    for (int c = 0; c < field.cols; ++c) {
+      const double bump = spurious(random) < 0.02 ? 3.0 : 0.0;
+      field.vectors.push_back({7.5 + 8 * c, 7.5 + 8 * r, 0.5 + shift_px(random) + bump, shift_px(random), 3,
+                               fusion::VectorFlag::kOk});
+    }
+  }
+  for (auto _ : state) {
+    fusion::DisplacementField tested = field;
+    state.counters["replaced"] = double(fusion::replace_outliers(tested, fusion::OutlierOptions{}));
+  }
+}
+BENCHMARK(BM_OutlierTest16MP)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 // Probe mode: 10 thermocouple positions on the 16 MP pair, per pair.
 void BM_Probe10(benchmark::State& state) {
