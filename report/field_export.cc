@@ -18,10 +18,6 @@
 #include "storage/processing_store.h"
 #include "storage/run_paths.h"
 
-#ifndef BOSFUSE_VERSION
-#define BOSFUSE_VERSION "unknown"
-#endif
-
 namespace bosfuse::report {
 namespace {
 

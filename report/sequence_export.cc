@@ -15,10 +15,6 @@
 #include "report/xdmf_sidecar.h"
 #include "storage/experiment_clock.h"
 
-#ifndef BOSFUSE_VERSION
-#define BOSFUSE_VERSION "unknown"
-#endif
-
 namespace bosfuse::report {
 namespace {
 
