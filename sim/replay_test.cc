@@ -103,7 +103,8 @@ TEST(InspectRecordedRun, TheReplayPeriodIsTheMeanIntervalWithoutOutages) {
 
 // Found by fuzzing: samples 99 years apart (within the century a run may
 // span) made three times the median gap overflow, which left no gap to
-// average and the period NaN. The period is the one gap.
+// average and the period NaN. The period is the one gap, and the replay
+// polls at the longest period the logger accepts.
 TEST(InspectRecordedRun, APeriodOfNinetyNineYearsIsThatGap) {
   testing::TempDir dir;
   constexpr std::int64_t kGapNs = 99LL * 365 * 86400 * 1'000'000'000;
@@ -120,6 +121,10 @@ TEST(InspectRecordedRun, APeriodOfNinetyNineYearsIsThatGap) {
   const RecordedRun run = inspect_recorded_run(dir / "run");
   ASSERT_EQ(run.devices.size(), 1u);
   EXPECT_EQ(run.devices[0].period.count(), kGapNs);
+  const auto config = acquisition::parse_experiment(replay_experiment_toml(run, {5020}, 10.0), "replay.toml");
+  ASSERT_EQ(config.modbus_devices.size(), 1u);
+  EXPECT_EQ(config.modbus_devices[0].poll_period,
+            std::chrono::nanoseconds(std::llround(acquisition::TomlReader::kLongestSeconds * 1e9)));
 }
 
 }  // namespace
