@@ -5,6 +5,7 @@
 #include <png.h>
 #include <tiffio.h>
 
+#include <cctype>
 #include <climits>
 #include <csetjmp>
 #include <cstdlib>
@@ -138,28 +139,46 @@ bool starts_with(std::span<const std::uint8_t> bytes, std::string_view magic) {
   return bytes.size() >= magic.size() && std::memcmp(bytes.data(), magic.data(), magic.size()) == 0;
 }
 
-// The formats bosfuse reads: PNG, JPEG, TIFF (headers size-checked above),
-// BMP and PNM. Debian's OpenCV would also hand other bytes to GDCM (DICOM)
-// or GDAL, whose decoders allocate before any limit is consulted: a 166-byte
-// forged DICOM header asked for 1.7 GB when fuzzed.
+// PNM as OpenCV recognises it: P1…P6 and then a space. "P5" followed by
+// anything else is no PNM to OpenCV, which then tries its later decoders.
+bool is_pnm(std::span<const std::uint8_t> bytes) {
+  return bytes.size() >= 3 && bytes[0] == 'P' && bytes[1] >= '1' && bytes[1] <= '6' &&
+         std::isspace(static_cast<unsigned char>(bytes[2]));
+}
+
+// The formats bosfuse reads: PNG, JPEG, TIFF, BMP and PNM, each recognised
+// exactly as OpenCV recognises it. OpenCV tries its decoders in turn, these
+// before GDCM (DICOM) and GDAL, whose decoders allocate before any limit
+// is consulted and abort on forged headers: a 166-byte DICOM header asked
+// for 1.7 GB, and bytes starting "P5" but with "DICM" at offset 128 reached
+// GDCM's assert (both found by fuzzing).
 bool is_format_read(std::span<const std::uint8_t> bytes) {
-  static constexpr std::string_view kSignatures[] = {"\x89PNG\r\n\x1a\n"sv,
-                                                     "\xff\xd8\xff"sv,
-                                                     "II*\0"sv,
-                                                     "MM\0*"sv,
-                                                     "II+\0"sv,
-                                                     "MM\0+"sv,
-                                                     "BM"sv,
-                                                     "P1"sv,
-                                                     "P2"sv,
-                                                     "P3"sv,
-                                                     "P4"sv,
-                                                     "P5"sv,
-                                                     "P6"sv};
+  static constexpr std::string_view kSignatures[] = {
+      "\x89PNG\r\n\x1a\n"sv, "\xff\xd8\xff"sv, "II*\0"sv, "MM\0*"sv, "II+\0"sv, "MM\0+"sv, "BM"sv};
   for (const std::string_view signature : kSignatures) {
     if (starts_with(bytes, signature)) return true;
   }
-  return false;
+  return is_pnm(bytes);
+}
+
+// PNM: width and height are the first two numbers after the magic, with
+// whitespace and '#' comments between them.
+std::optional<DeclaredSize> pnm_header_size(std::span<const std::uint8_t> bytes) {
+  std::size_t at = 2;
+  std::int64_t numbers[2] = {0, 0};
+  for (std::int64_t& number : numbers) {
+    for (;;) {
+      while (at < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[at]))) ++at;
+      if (at >= bytes.size() || bytes[at] != '#') break;
+      while (at < bytes.size() && bytes[at] != '\n' && bytes[at] != '\r') ++at;
+    }
+    const std::size_t first = at;
+    while (at < bytes.size() && std::isdigit(static_cast<unsigned char>(bytes[at])) && at - first < 10) {
+      number = number * 10 + (bytes[at++] - '0');
+    }
+    if (at == first) return std::nullopt;
+  }
+  return DeclaredSize{numbers[0], numbers[1]};
 }
 
 }  // namespace
@@ -198,14 +217,18 @@ std::optional<DeclaredSize> declared_image_size(std::span<const std::uint8_t> by
     return tiff_header_size(bytes);
   } else if (starts_with(bytes, "BM"sv)) {
     return bmp_header_size(bytes);
+  } else if (is_pnm(bytes)) {
+    return pnm_header_size(bytes);
   }
   return std::nullopt;
 }
 
 cv::Mat decode_image(std::span<const std::uint8_t> bytes, const std::string& name, const ImageLimits& limits) {
   if (const auto size = declared_image_size(bytes)) {
-    const std::int64_t pixels = size->width_px * size->height_px;
-    if (size->width_px > limits.max_side_px || size->height_px > limits.max_side_px || pixels > limits.max_pixels) {
+    // In double: two 32-bit sides (TIFF) multiply past int64.
+    const double pixels = static_cast<double>(size->width_px) * static_cast<double>(size->height_px);
+    if (size->width_px > limits.max_side_px || size->height_px > limits.max_side_px ||
+        pixels > static_cast<double>(limits.max_pixels)) {
       throw ImageTooLarge(fmt::format(
           "{}: the image declares {}x{} px ({:.1f} megapixels), over the limit of {} px a side and {:.1f} "
           "megapixels (BOSFUSE_MAX_IMAGE_SIDE_PX, BOSFUSE_MAX_IMAGE_PIXELS); not decoded",

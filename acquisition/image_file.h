@@ -46,7 +46,7 @@ struct DeclaredSize {
   std::int64_t height_px = 0;
 };
 
-// The size a PNG, JPEG, TIFF or BMP header declares; nullopt for another format
+// The size a PNG, JPEG, TIFF, BMP or PNM header declares; nullopt for another format
 // or a header its library cannot read. Decodes no pixels.
 std::optional<DeclaredSize> declared_image_size(std::span<const std::uint8_t> bytes);
 

@@ -30,8 +30,8 @@ TEST(ImageFile, TheDeclaredSizeComesFromTheHeaderOfEachFormat) {
 // just inside OpenCV's own limit) made it allocate 3 GB. Its header now
 // refuses it.
 TEST(ImageFile, AHugeBmpIsRefusedByItsHeader) {
-  std::vector<std::uint8_t> bmp = {'B', 'M', 0xf6, 0, 0, 0, 0, 0xa1, 0, 0, 0x36, 0, 0, 0, 0x28, 0, 0, 0,
-                                   0,   0,   0x08, 0, 0, 0x08, 0, 0, 1, 0, 0x18, 0};
+  std::vector<std::uint8_t> bmp = {'B', 'M', 0xf6, 0, 0, 0,    0, 0xa1, 0,    0, 0x36, 0, 0, 0,    0x28,
+                                   0,   0,   0,    0, 0, 0x08, 0, 0,    0x08, 0, 0,    1, 0, 0x18, 0};
   bmp.resize(56, 0);
   const auto size = declared_image_size(bmp);
   ASSERT_TRUE(size);
@@ -98,6 +98,29 @@ TEST(ImageFile, OnlyTheFormatsBosfuseReadsAreDecoded) {
     const cv::Mat decoded = decode_image(bytes, std::string("frame") + extension);
     EXPECT_EQ(decoded.size(), image.size()) << extension;
   }
+}
+
+// Found by fuzzing: "P5" then no space is no PNM to OpenCV, which went on to
+// its DICOM decoder for the "DICM" at offset 128, and GDCM's assert aborted
+// the process. Bytes are taken as PNM only as OpenCV takes them.
+TEST(ImageFile, BytesOpenCvTakesForNoFormatOfOursAreNotDecoded) {
+  std::vector<std::uint8_t> bytes = {'P', '5', 0xb3, 0, 1, 0, 0, 0};
+  bytes.resize(128, 0);
+  for (char c : std::string("DICM\x02\x00\x00\xfc")) bytes.push_back(static_cast<std::uint8_t>(c));
+  bytes.resize(180, 0x20);
+  EXPECT_FALSE(declared_image_size(bytes));
+  EXPECT_TRUE(decode_image(bytes, "forged.pgm").empty());
+}
+
+TEST(ImageFile, AHugePnmIsRefusedByItsHeader) {
+  const std::string header = "P5\n# a comment 99999 99999\n40000 # another\n 30000\n65535\n";
+  std::vector<std::uint8_t> pgm(header.begin(), header.end());
+  pgm.resize(pgm.size() + 64, 0);
+  const auto size = declared_image_size(pgm);
+  ASSERT_TRUE(size);
+  EXPECT_EQ(size->width_px, 40000);
+  EXPECT_EQ(size->height_px, 30000);
+  EXPECT_THROW(decode_image(pgm, "bomb.pgm"), ImageTooLarge);
 }
 
 TEST(ImageFile, MissingOrUndecodableFilesAreEmpty) {
