@@ -230,22 +230,30 @@ void BM_FullFrame16MPEvaluator(benchmark::State& state) {
 }
 BENCHMARK(BM_FullFrame16MPEvaluator)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(2);
 
+// A field on the 16 MP pair's grid (615×407 nodes, IW 16, step 8), every
+// node measured; `node(x_px, y_px)` gives its vector.
+template <typename Node>
+fusion::DisplacementField field_16mp(Node node) {
+  fusion::DisplacementField field;
+  field.rows = 407;
+  field.cols = 615;
+  for (int r = 0; r < field.rows; ++r) {
+    for (int c = 0; c < field.cols; ++c) field.vectors.push_back(node(7.5 + 8 * c, 7.5 + 8 * r));
+  }
+  return field;
+}
+
 // The displacement CSV of a 16 MP field (615×407 nodes) as `process`
 // writes it per frame: /0 formats with fmt, as write_csv did before
 // (kept here as the baseline), /1 is write_csv (std::to_chars). Written to
 // /dev/null, so the figure is the formatting alone.
 void BM_DisplacementCsv16MP(benchmark::State& state) {
-  fusion::DisplacementField field;
-  field.rows = 407;
-  field.cols = 615;
   std::mt19937 random(3);
   std::normal_distribution<double> shift_px(0.0, 0.7);
-  for (int r = 0; r < field.rows; ++r) {
-    for (int c = 0; c < field.cols; ++c) {
-      field.vectors.push_back({7.5 + 8 * c, 7.5 + 8 * r, shift_px(random), shift_px(random),
-                               3 + std::abs(shift_px(random)), fusion::VectorFlag::kOk});
-    }
-  }
+  const auto field = field_16mp([&](double x_px, double y_px) {
+    return fusion::DisplacementVector{
+        x_px, y_px, shift_px(random), shift_px(random), 3 + std::abs(shift_px(random)), fusion::VectorFlag::kOk};
+  });
   std::ofstream out("/dev/null");
   for (auto _ : state) {
     if (state.range(0) == 1) {
@@ -267,19 +275,14 @@ BENCHMARK(BM_DisplacementCsv16MP)->ArgName("to_chars")->Arg(0)->Arg(1)->Unit(ben
 // The outlier test of one pass on a 16 MP field (615×407 nodes of noisy
 // shifts, a few per cent spurious), as each pass runs it.
 void BM_OutlierTest16MP(benchmark::State& state) {
-  fusion::DisplacementField field;
-  field.rows = 407;
-  field.cols = 615;
   std::mt19937 random(5);
   std::normal_distribution<double> shift_px(0.0, 0.05);
   std::uniform_real_distribution<double> spurious(0.0, 1.0);
-  for (int r = 0; r < field.rows; ++r) {
-    for (int c = 0; c < field.cols; ++c) {
-      const double bump = spurious(random) < 0.02 ? 3.0 : 0.0;
-      field.vectors.push_back({7.5 + 8 * c, 7.5 + 8 * r, 0.5 + shift_px(random) + bump, shift_px(random), 3,
-                               fusion::VectorFlag::kOk});
-    }
-  }
+  const auto field = field_16mp([&](double x_px, double y_px) {
+    const double bump = spurious(random) < 0.02 ? 3.0 : 0.0;
+    return fusion::DisplacementVector{
+        x_px, y_px, 0.5 + shift_px(random) + bump, shift_px(random), 3, fusion::VectorFlag::kOk};
+  });
   for (auto _ : state) {
     fusion::DisplacementField tested = field;
     state.counters["replaced"] = double(fusion::replace_outliers(tested, fusion::OutlierOptions{}));

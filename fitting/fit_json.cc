@@ -14,8 +14,6 @@ namespace {
 
 using nlohmann::ordered_json;
 
-ordered_json number_or_null(double value) { return std::isfinite(value) ? ordered_json(value) : ordered_json(nullptr); }
-
 using nlohmann::json;
 
 double number_or_nan(const json& j, const char* key) {
@@ -106,6 +104,8 @@ void read_diagnostics(const json& d, NewtonFit& fit) {
 }
 
 }  // namespace
+
+ordered_json number_or_null(double value) { return std::isfinite(value) ? ordered_json(value) : ordered_json(nullptr); }
 
 NewtonFit fit_from_json(const json& j) {
   NewtonFit fit;

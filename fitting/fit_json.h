@@ -13,6 +13,9 @@
 
 namespace bosfuse::fitting {
 
+// A finite number as itself, NaN and infinities as null (JSON has neither).
+nlohmann::ordered_json number_or_null(double value);
+
 nlohmann::ordered_json to_json(const Estimate& estimate, double confidence);
 // model, origin_s, ok, status, error (when failed), parameters, uncertainty,
 // diagnostics (with t_critical when ok), covariance (when ok: "parameters"

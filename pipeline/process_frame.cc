@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "fitting/fit_json.h"
 #include "pipeline/run_selection.h"
 
 namespace bosfuse::pipeline {
@@ -13,8 +14,6 @@ namespace fs = std::filesystem;
 using json = nlohmann::ordered_json;
 using storage::ChannelInfo;
 using storage::FrameRecord;
-
-json number_or_null(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
 
 // The displacement grid interpolated bilinearly at a point; valid only when
 // every node it uses is.
@@ -88,8 +87,8 @@ FrameResult finish_full(const FrameContext& ctx, const FrameRecord& frame, const
     timed(times.csv_s, [&] { fusion::write_csv(temperature->field, ctx.run_dir / (stem + "_temperature.csv")); });
     const auto& s = temperature->summary;
     out.fields.push_back({0, frame.id, "temperature", stem + "_temperature.csv",
-                          json{{"min_c", number_or_null(s.min_c)},
-                               {"max_c", number_or_null(s.max_c)},
+                          json{{"min_c", fitting::number_or_null(s.min_c)},
+                               {"max_c", fitting::number_or_null(s.max_c)},
                                {"unmeasured_nodes", s.unmeasured_nodes},
                                {"unphysical_nodes", s.unphysical_nodes},
                                {"boundary", boundary_text(field_options)}}
