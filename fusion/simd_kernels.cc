@@ -5,9 +5,8 @@
 #define HWY_TARGET_INCLUDE "fusion/simd_kernels.cc"
 #include "hwy/foreach_target.h"  // IWYU pragma: keep
 // Must follow foreach_target.h.
-#include "hwy/highway.h"
-
 #include "fusion/simd_kernels.h"
+#include "hwy/highway.h"
 
 // After foreach_target.h too, so that each target sees them.
 #include <algorithm>
@@ -37,12 +36,14 @@ HWY_INLINE double AddLanes(D /*d*/, hn::Vec<D> v, double total) {
 
 // Four neighbouring shifts share each load of the reference, so a multiply-
 // add costs 1.25 loads rather than 2 (loads, not arithmetic, bound this
-// loop), and four independent sums hide the multiply-add's latency.
+// loop), and four independent sums hide the multiply-add's latency. The
+// shifts are `step` floats apart in the patch: 1 for four along a row, the
+// patch's stride for four down a column.
 // Columns [i, n) in vectors of d, then the rest in halves of d down to one
 // lane, so no load reaches past column n of the window.
 template <class D>
-HWY_INLINE void FourShifts(D d, const float* HWY_RESTRICT a, const float* HWY_RESTRICT b, std::size_t stride, int n,
-                           int i, double* totals) {
+HWY_INLINE void FourShifts(D d, const float* HWY_RESTRICT a, const float* HWY_RESTRICT b, std::size_t stride,
+                           std::size_t step, int n, int i, double* totals) {
   const int lanes = static_cast<int>(hn::Lanes(d));
   for (; i + lanes <= n; i += lanes) {
     auto s0 = hn::Zero(d), s1 = hn::Zero(d), s2 = hn::Zero(d), s3 = hn::Zero(d);
@@ -50,9 +51,9 @@ HWY_INLINE void FourShifts(D d, const float* HWY_RESTRICT a, const float* HWY_RE
       const auto va = hn::LoadU(d, a + static_cast<std::size_t>(y) * n + i);
       const float* row = b + y * stride + i;
       s0 = hn::MulAdd(va, hn::LoadU(d, row), s0);
-      s1 = hn::MulAdd(va, hn::LoadU(d, row + 1), s1);
-      s2 = hn::MulAdd(va, hn::LoadU(d, row + 2), s2);
-      s3 = hn::MulAdd(va, hn::LoadU(d, row + 3), s3);
+      s1 = hn::MulAdd(va, hn::LoadU(d, row + step), s1);
+      s2 = hn::MulAdd(va, hn::LoadU(d, row + 2 * step), s2);
+      s3 = hn::MulAdd(va, hn::LoadU(d, row + 3 * step), s3);
     }
     totals[0] = AddLanes(d, s0, totals[0]);
     totals[1] = AddLanes(d, s1, totals[1]);
@@ -60,11 +61,11 @@ HWY_INLINE void FourShifts(D d, const float* HWY_RESTRICT a, const float* HWY_RE
     totals[3] = AddLanes(d, s3, totals[3]);
   }
   if constexpr (hn::MaxLanes(D()) > 1) {
-    if (i < n) FourShifts(hn::Half<D>(), a, b, stride, n, i, totals);
+    if (i < n) FourShifts(hn::Half<D>(), a, b, stride, step, n, i, totals);
   }
 }
 
-// One shift: the last side % 4 of a row of shifts.
+// One shift: the last of a side not a multiple of four.
 template <class D>
 HWY_INLINE void OneShift(D d, const float* HWY_RESTRICT a, const float* HWY_RESTRICT b, std::size_t stride, int n,
                          int i, double& total) {
@@ -81,22 +82,30 @@ HWY_INLINE void OneShift(D d, const float* HWY_RESTRICT a, const float* HWY_REST
   }
 }
 
+// Shifts in fours along each row; the columns left over (side % 4 of them)
+// in fours down the column, so that only the corner of side % 4 squared
+// shifts goes one at a time (one of ±2 px's 25, not five). A lone shift's
+// single sum waits on the multiply-add's latency and costs as much as four.
 void AccumulateProducts(const float* reference, const float* patch, std::size_t patch_stride, int n, int side,
                         double* products) {
   const hn::ScalableTag<float> d;
+  const int row_end = side / 4 * 4;
+  const auto four = [&](int dx, int dy, std::size_t step, std::size_t out_step) {
+    double totals[4] = {0, 0, 0, 0};
+    FourShifts(d, reference, patch + dy * patch_stride + dx, patch_stride, step, n, 0, totals);
+    double* out = products + static_cast<std::size_t>(dy) * side + dx;
+    for (int k = 0; k < 4; ++k) out[k * out_step] = totals[k];
+  };
   for (int dy = 0; dy < side; ++dy) {
-    const float* rows = patch + dy * patch_stride;
-    double* out = products + static_cast<std::size_t>(dy) * side;
-    int dx = 0;
-    for (; dx + 4 <= side; dx += 4) {
-      double totals[4] = {0, 0, 0, 0};
-      FourShifts(d, reference, rows + dx, patch_stride, n, 0, totals);
-      for (int k = 0; k < 4; ++k) out[dx + k] = totals[k];
-    }
-    for (; dx < side; ++dx) {
+    for (int dx = 0; dx < row_end; dx += 4) four(dx, dy, 1, 1);
+  }
+  for (int dx = row_end; dx < side; ++dx) {
+    int dy = 0;
+    for (; dy + 4 <= side; dy += 4) four(dx, dy, patch_stride, static_cast<std::size_t>(side));
+    for (; dy < side; ++dy) {
       double total = 0;
-      OneShift(d, reference, rows + dx, patch_stride, n, 0, total);
-      out[dx] = total;
+      OneShift(d, reference, patch + dy * patch_stride + dx, patch_stride, n, 0, total);
+      products[static_cast<std::size_t>(dy) * side + dx] = total;
     }
   }
 }
@@ -179,6 +188,75 @@ void CentredPeriodicTile(const float* window, std::size_t stride, int n, int rad
     for (int x = 0; x < radius; ++x) o[x] = row[n - radius + x] - mean;
     SubtractRow(row, n, mean, o + radius);
     for (int x = 0; x < radius; ++x) o[radius + n + x] = row[x] - mean;
+  }
+}
+
+// The equal-windows correlation of an n×n window pair when a window row is
+// exactly one vector (n = 16 with AVX-512, 8 with AVX2): the measurement
+// window is centred and each of its rows rotated by every horizontal shift
+// in registers, so the periodic tile never goes through memory, and all
+// (2r+1)² shifts are summed at once, each reference row loaded once per
+// node. kRadius is a template argument so the sums stay in registers.
+template <int kRadius, class D>
+HWY_INLINE void CorrelateFullRows(D d, const float* HWY_RESTRICT reference, std::size_t reference_stride,
+                                  float reference_mean, const float* HWY_RESTRICT window, std::size_t stride,
+                                  double* HWY_RESTRICT products, double* mean, double* energy) {
+  constexpr int kSide = 2 * kRadius + 1;
+  constexpr int kMaxLanes = static_cast<int>(hn::MaxLanes(D()));
+  const int n = static_cast<int>(hn::Lanes(d));
+  auto total = hn::Zero(d);
+  for (int y = 0; y < n; ++y) total = hn::Add(total, hn::LoadU(d, window + y * stride));
+  *mean = AddLanes(d, total, 0.0) / (double(n) * n);
+  const auto vmean = hn::Set(d, static_cast<float>(*mean));
+  // rotated[(y·kSide + dx)·n + x] = centred window (y, (x + dx − r) mod n).
+  HWY_ALIGN float rotated[kMaxLanes * kSide * kMaxLanes];
+  HWY_ALIGN int32_t lane_of[kMaxLanes];
+  const hn::RebindToSigned<D> di;
+  using Indices = decltype(hn::IndicesFromVec(d, hn::Zero(di)));
+  Indices rotation[kSide];
+  for (int dx = 0; dx < kSide; ++dx) {
+    for (int x = 0; x < n; ++x) lane_of[x] = (x + dx - kRadius + n) % n;
+    rotation[dx] = hn::IndicesFromVec(d, hn::Load(di, lane_of));
+  }
+  auto squares = hn::Zero(d);
+  for (int y = 0; y < n; ++y) {
+    const auto centred = hn::Sub(hn::LoadU(d, window + y * stride), vmean);
+    squares = hn::MulAdd(centred, centred, squares);
+    for (int dx = 0; dx < kSide; ++dx) {
+      hn::Store(hn::TableLookupLanes(centred, rotation[dx]), d, rotated + (y * kSide + dx) * n);
+    }
+  }
+  *energy = AddLanes(d, squares, 0.0);
+  hn::Vec<D> sums[kSide * kSide];
+  for (auto& sum : sums) sum = hn::Zero(d);
+  const auto vreference_mean = hn::Set(d, reference_mean);
+  for (int y = 0; y < n; ++y) {
+    const auto a = hn::Sub(hn::LoadU(d, reference + y * reference_stride), vreference_mean);
+    for (int dy = 0; dy < kSide; ++dy) {
+      const float* row = rotated + ((y + dy - kRadius + n) % n) * kSide * n;
+      for (int dx = 0; dx < kSide; ++dx) {
+        sums[dy * kSide + dx] = hn::MulAdd(a, hn::Load(d, row + dx * n), sums[dy * kSide + dx]);
+      }
+    }
+  }
+  for (int i = 0; i < kSide * kSide; ++i) products[i] = AddLanes(d, sums[i], 0.0);
+}
+
+bool EqualWindowProducts(const float* reference, std::size_t reference_stride, double reference_mean,
+                         const float* window, std::size_t stride, int n, int radius, double* products, double* mean,
+                         double* energy) {
+  const hn::ScalableTag<float> d;
+  if (static_cast<int>(hn::Lanes(d)) != n || 2 * radius >= n) return false;
+  const auto a_mean = static_cast<float>(reference_mean);
+  switch (radius) {
+    case 1:
+      CorrelateFullRows<1>(d, reference, reference_stride, a_mean, window, stride, products, mean, energy);
+      return true;
+    case 2:
+      CorrelateFullRows<2>(d, reference, reference_stride, a_mean, window, stride, products, mean, energy);
+      return true;
+    default:
+      return false;
   }
 }
 
@@ -281,13 +359,15 @@ HWY_INLINE void Transpose8x8(D d, hn::Vec<D>* r) {
 // rows interpolated (as in SampleSeparable), then transposed to one vector
 // per tap. Summed as the scalar reference sums: each row of taps, then the
 // rows weighted in order. False (nothing written) when the points are not
-// so arranged or their taps leave the image.
-template <class D>
+// so arranged or their taps leave the image. The taps are a template
+// argument so that the tap loops unroll.
+template <int kTaps, class D>
 HWY_INLINE bool SampleEightAlongRow(D d, const float* HWY_RESTRICT image, std::size_t stride, int cols, int rows,
                                     const TabulatedKernel& kernel, const double* HWY_RESTRICT xs,
                                     const double* HWY_RESTRICT ys, float* HWY_RESTRICT out) {
-  const int taps = kernel.taps, steps = kernel.steps, first = 1 - taps / 2;
-  HWY_ALIGN int32_t floor_x[8], floor_y[8], entry_x[8], entry_y[8];
+  constexpr int kFirst = 1 - kTaps / 2;
+  const int steps = kernel.steps;
+  HWY_ALIGN int32_t entry_x[8], entry_y[8];
   HWY_ALIGN float frac_x[8], frac_y[8];
   // Positions in double, as the reference takes them: the whole pixel, the
   // table entry below the sub-pixel part and the fraction past it.
@@ -296,45 +376,47 @@ HWY_INLINE bool SampleEightAlongRow(D d, const float* HWY_RESTRICT image, std::s
   const hn::Rebind<float, decltype(dd)> df4;
   const int double_lanes = static_cast<int>(hn::Lanes(dd));
   const auto last_entry = hn::Set(dd, double(steps - 1)), vsteps = hn::Set(dd, double(steps));
-  const auto split = [&](const double* p, int32_t* whole, int32_t* entry, float* frac, int i) {
+  const auto split = [&](const double* p, int32_t* entry, float* frac, int i) {
     const auto v = hn::LoadU(dd, p + i);
     const auto floor = hn::Floor(v);
     const auto position = hn::Mul(hn::Sub(v, floor), vsteps);
     const auto e = hn::Min(hn::Floor(position), last_entry);
-    hn::StoreU(hn::DemoteTo(di4, floor), di4, whole + i);
     hn::StoreU(hn::DemoteTo(di4, e), di4, entry + i);
     hn::StoreU(hn::DemoteTo(df4, hn::Sub(position, e)), df4, frac + i);
+    return floor;
   };
+  // The arrangement is checked on the whole pixels in double, in registers:
+  // reading back eight ints stored as two halves stalls store forwarding.
+  const double floor_x0 = std::floor(xs[0]), floor_y0 = std::floor(ys[0]);
+  bool arranged = true;
   for (int i = 0; i < 8; i += double_lanes) {
-    split(xs, floor_x, entry_x, frac_x, i);
-    split(ys, floor_y, entry_y, frac_y, i);
+    const auto fx = split(xs, entry_x, frac_x, i);
+    const auto fy = split(ys, entry_y, frac_y, i);
+    const auto next_column = hn::Eq(hn::Sub(fx, hn::Iota(dd, double(i))), hn::Set(dd, floor_x0));
+    arranged = arranged && hn::AllTrue(dd, hn::And(next_column, hn::Eq(fy, hn::Set(dd, floor_y0))));
   }
-  const int x0 = floor_x[0] + first, y0 = floor_y[0] + first;
-  if (x0 < 0 || y0 < 0 || x0 + 7 + taps > cols || y0 + taps > rows) return false;
-  const hn::RebindToSigned<D> di;
-  const auto same_row = hn::Eq(hn::Load(di, floor_y), hn::Set(di, floor_y[0]));
-  const auto next_column = hn::Eq(hn::Sub(hn::Load(di, floor_x), hn::Iota(di, 0)), hn::Set(di, floor_x[0]));
-  if (!hn::AllTrue(di, hn::And(same_row, next_column))) return false;
+  const int x0 = static_cast<int>(floor_x0) + kFirst, y0 = static_cast<int>(floor_y0) + kFirst;
+  if (!arranged || x0 < 0 || y0 < 0 || x0 + 7 + kTaps > cols || y0 + kTaps > rows) return false;
 
   // Lanes past the taps hold the next entry's weights; those columns of the
   // transposed block are never used.
   hn::Vec<D> wx[8], wy[8];
   for (int k = 0; k < 8; ++k) {
-    const float* a = kernel.weights + static_cast<std::size_t>(entry_x[k]) * taps;
+    const float* a = kernel.weights + static_cast<std::size_t>(entry_x[k]) * kTaps;
     const auto va = hn::LoadU(d, a);
-    wx[k] = hn::MulAdd(hn::Set(d, frac_x[k]), hn::Sub(hn::LoadU(d, a + taps), va), va);
-    const float* b = kernel.weights + static_cast<std::size_t>(entry_y[k]) * taps;
+    wx[k] = hn::MulAdd(hn::Set(d, frac_x[k]), hn::Sub(hn::LoadU(d, a + kTaps), va), va);
+    const float* b = kernel.weights + static_cast<std::size_t>(entry_y[k]) * kTaps;
     const auto vb = hn::LoadU(d, b);
-    wy[k] = hn::MulAdd(hn::Set(d, frac_y[k]), hn::Sub(hn::LoadU(d, b + taps), vb), vb);
+    wy[k] = hn::MulAdd(hn::Set(d, frac_y[k]), hn::Sub(hn::LoadU(d, b + kTaps), vb), vb);
   }
   Transpose8x8(d, wx);
   Transpose8x8(d, wy);
   const float* top = image + static_cast<std::size_t>(y0) * stride + x0;
   auto total = hn::Zero(d);
-  for (int j = 0; j < taps; ++j) {
+  for (int j = 0; j < kTaps; ++j) {
     const float* row = top + static_cast<std::size_t>(j) * stride;
     auto row_total = hn::Mul(wx[0], hn::LoadU(d, row));
-    for (int i = 1; i < taps; ++i) row_total = hn::MulAdd(wx[i], hn::LoadU(d, row + i), row_total);
+    for (int i = 1; i < kTaps; ++i) row_total = hn::MulAdd(wx[i], hn::LoadU(d, row + i), row_total);
     total = j == 0 ? hn::Mul(wy[0], row_total) : hn::MulAdd(wy[j], row_total, total);
   }
   hn::StoreU(total, d, out);
@@ -342,21 +424,40 @@ HWY_INLINE bool SampleEightAlongRow(D d, const float* HWY_RESTRICT image, std::s
 }
 
 // Points in groups of eight along the row where the targets have 8-lane
-// float vectors (AVX2, AVX-512), the rest one by one.
-template <class D8>
-HWY_INLINE int SampleInEights(D8 d8, const float* image, std::size_t stride, int cols, int rows,
-                              const TabulatedKernel& kernel, const double* x, const double* y, int count, float* out) {
+// float vectors (AVX2, AVX-512), the groups not so arranged one by one.
+template <int kTaps, class D8>
+HWY_INLINE int SampleInEightsOf(D8 d8, const float* image, std::size_t stride, int cols, int rows,
+                                const TabulatedKernel& kernel, const double* x, const double* y, int count,
+                                float* out) {
   int k = 0;
-  if constexpr (hn::MaxLanes(D8()) == 8) {
-    if (hn::Lanes(d8) == 8 && kernel.taps <= 8) {
-      for (; k + 8 <= count; k += 8) {
-        if (!SampleEightAlongRow(d8, image, stride, cols, rows, kernel, x + k, y + k, out + k)) {
-          SampleSeparable(hn::CappedTag<float, 8>(), image, stride, cols, rows, kernel, x + k, y + k, 8, out + k);
-        }
-      }
+  for (; k + 8 <= count; k += 8) {
+    if (!SampleEightAlongRow<kTaps>(d8, image, stride, cols, rows, kernel, x + k, y + k, out + k)) {
+      SampleSeparable(d8, image, stride, cols, rows, kernel, x + k, y + k, 8, out + k);
     }
   }
   return k;
+}
+
+// How many points SampleInEightsOf took: none where the target's vectors
+// are shorter than eight floats or the kernel is not one of ours.
+template <class D8>
+HWY_INLINE int SampleInEights(D8 d8, const float* image, std::size_t stride, int cols, int rows,
+                              const TabulatedKernel& kernel, const double* x, const double* y, int count, float* out) {
+  if constexpr (hn::MaxLanes(D8()) == 8) {
+    if (hn::Lanes(d8) == 8) {
+      switch (kernel.taps) {
+        case 4:
+          return SampleInEightsOf<4>(d8, image, stride, cols, rows, kernel, x, y, count, out);
+        case 6:
+          return SampleInEightsOf<6>(d8, image, stride, cols, rows, kernel, x, y, count, out);
+        case 8:
+          return SampleInEightsOf<8>(d8, image, stride, cols, rows, kernel, x, y, count, out);
+        default:
+          break;
+      }
+    }
+  }
+  return 0;
 }
 #endif
 
@@ -397,6 +498,7 @@ HWY_EXPORT(SampleSeparablePoints);
 HWY_EXPORT(WindowMeanEnergy);
 HWY_EXPORT(CentredPeriodicTile);
 HWY_EXPORT(CentreWindow);
+HWY_EXPORT(EqualWindowProducts);
 
 namespace {
 
@@ -489,6 +591,26 @@ void scalar_centred_periodic_tile(const float* window, std::size_t stride, int n
       out[y * p + x] = window[static_cast<std::size_t>((y - radius + n) % n) * stride + (x - radius + n) % n] - mean;
     }
   }
+}
+
+bool equal_window_products(const float* reference, std::size_t reference_stride, double reference_mean,
+                           const float* window, std::size_t stride, int n, int radius, double* products, double* mean,
+                           double* energy) {
+  apply_environment_once();
+  return HWY_DYNAMIC_DISPATCH(EqualWindowProducts)(reference, reference_stride, reference_mean, window, stride, n,
+                                                   radius, products, mean, energy);
+}
+
+void scalar_equal_window_products(const float* reference, std::size_t reference_stride, double reference_mean,
+                                  const float* window, std::size_t stride, int n, int radius, double* products,
+                                  double* mean, double* energy) {
+  std::vector<float> centred(static_cast<std::size_t>(n) * n);
+  scalar_centre_window(reference, reference_stride, n, reference_mean, centred.data());
+  scalar_window_mean_energy(window, stride, n, mean, energy);
+  const int p = n + 2 * radius;
+  std::vector<float> tile(static_cast<std::size_t>(p) * p);
+  scalar_centred_periodic_tile(window, stride, n, radius, static_cast<float>(*mean), tile.data());
+  scalar_accumulate_products(centred.data(), tile.data(), static_cast<std::size_t>(p), n, 2 * radius + 1, products);
 }
 
 void tabulated_weights(const TabulatedKernel& kernel, double t, float* weights) {

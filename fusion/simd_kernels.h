@@ -73,6 +73,28 @@ void centred_periodic_tile(const float* window, std::size_t stride, int n, int r
 // The reference for centred_periodic_tile: plain loops with a modulo.
 void scalar_centred_periodic_tile(const float* window, std::size_t stride, int n, int radius, float mean, float* out);
 
+// The equal-windows correlation (window_correlator.h) of an n×n reference
+// window and an n×n measurement window in one call: the measurement's mean
+// and energy, as window_mean_energy gives them, and
+//   products[dy·side + dx] = Σ_{y,x < n} (ref(y, x) − reference_mean) ·
+//                            (win((y + dy − r) mod n, (x + dx − r) mod n) − mean)
+// for side = 2r + 1, i.e. accumulate_products of the centred reference over
+// centred_periodic_tile's tile. The SIMD kernel does it only where a window
+// row is exactly one vector of the target (n = 16 with AVX-512, 8 with
+// AVX2) and r is 1 or 2, the refinement passes' usual case; it then keeps
+// the tile in registers and sums in float within a lane, so it agrees with
+// the reference to float rounding. Elsewhere it returns false and writes
+// nothing: the caller takes the general kernels.
+bool equal_window_products(const float* reference, std::size_t reference_stride, double reference_mean,
+                           const float* window, std::size_t stride, int n, int radius, double* products, double* mean,
+                           double* energy);
+
+// The reference for equal_window_products, for any n and 0 ≤ r < n/2:
+// the scalar references of the kernels it replaces, one after the other.
+void scalar_equal_window_products(const float* reference, std::size_t reference_stride, double reference_mean,
+                                  const float* window, std::size_t stride, int n, int radius, double* products,
+                                  double* mean, double* energy);
+
 // A separable interpolation kernel tabulated over the sub-pixel position
 // t ∈ [0, 1]: entry e (0 ≤ e ≤ steps) holds its `taps` weights at
 // t = e / steps, the first for the tap at floor(x) + 1 − taps/2 (taps even,

@@ -115,6 +115,66 @@ void expect_all_window_kernels_match() {
   }
 }
 
+// The equal-windows correlation in one call against the kernels it
+// replaces: a bright reference window and measurement window of `texture`
+// contrast, in wider buffers. False (nothing written) is allowed: the SIMD
+// kernel declines windows that are not one vector wide.
+bool expect_equal_window_products_match(int n, int radius, float texture, unsigned seed) {
+  SCOPED_TRACE(testing::Message() << "n=" << n << " radius=" << radius << " texture=" << texture
+                                  << " target=" << simd_target_name());
+  const std::size_t reference_stride = static_cast<std::size_t>(n) + 5, stride = static_cast<std::size_t>(n) + 3;
+  std::vector<float> reference_buffer(reference_stride * (n + 1)), buffer(stride * (n + 2));
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> grey(0.f, 1.f);
+  for (auto& a : reference_buffer) a = 0.9f + texture * grey(rng);
+  for (auto& b : buffer) b = 0.9f + texture * grey(rng);
+  const float* reference = reference_buffer.data() + 3;
+  const float* window = buffer.data() + stride + 1;
+  double reference_mean = 0, reference_energy = 0;
+  scalar_window_mean_energy(reference, reference_stride, n, &reference_mean, &reference_energy);
+  const int side = 2 * radius + 1;
+  std::vector<double> simd(static_cast<std::size_t>(side) * side, -1.0), expected(simd.size(), -2.0);
+  double mean = -1, energy = -1, expected_mean = -2, expected_energy = -2;
+  const bool applied = equal_window_products(reference, reference_stride, reference_mean, window, stride, n, radius,
+                                             simd.data(), &mean, &energy);
+  if (!applied) {
+    for (const double v : simd) EXPECT_EQ(v, -1.0);
+    EXPECT_EQ(mean, -1.0);
+    return false;
+  }
+  scalar_equal_window_products(reference, reference_stride, reference_mean, window, stride, n, radius, expected.data(),
+                               &expected_mean, &expected_energy);
+  // Float sums of n values of order 1 per lane: the mean is off by a few
+  // float roundings, a constant shift of the centred window that the
+  // products over a whole period do not see.
+  EXPECT_NEAR(mean, expected_mean, 1e-6 * expected_mean);
+  EXPECT_NEAR(energy, expected_energy, 1e-5 * expected_energy);
+  EXPECT_GT(energy, 0.0);
+  // Float sums of n² products of values of order `texture`.
+  const double tolerance = 1e-6 * n * n * texture * texture;
+  for (std::size_t i = 0; i < simd.size(); ++i) {
+    EXPECT_NEAR(simd[i], expected[i], tolerance) << "dx=" << i % side << " dy=" << i / side;
+  }
+  return true;
+}
+
+// On every target but the one-lane SCALAR one some window width is one
+// vector (4, 8 or 16 floats), so the SIMD kernel must have been tested.
+void expect_all_equal_window_products_match() {
+  unsigned seed = 400;
+  int applied = 0;
+  for (const int n : {4, 8, 16, 32}) {
+    for (const int radius : {0, 1, 2, 3}) {
+      if (2 * radius >= n) continue;
+      for (const float texture : {1.f, 1e-3f})
+        applied += expect_equal_window_products_match(n, radius, texture, seed++);
+    }
+  }
+  if (simd_target_name() != "SCALAR") {
+    EXPECT_GT(applied, 0);
+  }
+}
+
 // The window deformation's sampling: a random image inside a wider buffer,
 // and the points of a region reaching past every edge of the image, moved
 // by a random smooth displacement field (up to ±4 px).
@@ -258,6 +318,7 @@ class SimdKernels : public testing::Test {
 TEST_F(SimdKernels, MatchTheScalarReference) {
   expect_all_sizes_match();
   expect_all_window_kernels_match();
+  expect_all_equal_window_products_match();
 }
 
 TEST_F(SimdKernels, SamplingMatchesTheScalarReference) {
@@ -282,6 +343,7 @@ TEST_F(SimdKernels, MatchTheScalarReferenceOnEveryTargetOfThisCpu) {
     EXPECT_EQ(simd_target_name(), hwy::TargetName(target));
     expect_all_sizes_match();
     expect_all_window_kernels_match();
+    expect_all_equal_window_products_match();
   }
 }
 
@@ -292,6 +354,7 @@ TEST_F(SimdKernels, TheEnvironmentForcesThePortableTarget) {
   EXPECT_TRUE(name == "SCALAR" || name == "EMU128") << name;
   expect_all_sizes_match();
   expect_all_window_kernels_match();
+  expect_all_equal_window_products_match();
   expect_all_samplings_match();
   expect_warp_matches_reference();
   ASSERT_EQ(unsetenv("BOSFUSE_SIMD"), 0);

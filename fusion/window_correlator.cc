@@ -49,8 +49,15 @@ void WindowCorrelator::correlate(const cv::Mat& reference_window, const cv::Mat&
             search_patch.cols == n + 2 * radius_px);
   plane.radius = radius_px;
   plane.value.assign(static_cast<std::size_t>(plane.side() * plane.side()), 0.0);
-  prepare_reference(reference_window, reference_stats ? *reference_stats : window_stats(reference_window), plane);
+  const WindowStats stats = reference_stats ? *reference_stats : window_stats(reference_window);
+  reference_energy_ = stats.energy;
+  plane.reference_std = n > 1 ? std::sqrt(reference_energy_ / (double(n) * n - 1)) : 0.0;
   method = resolve(method, n, radius_px);
+  if (pairing == WindowPairing::kEqualWindows && method == CorrelationMethod::kDirect &&
+      correlate_in_registers(reference_window, stats.mean, search_patch, radius_px, plane)) {
+    return;
+  }
+  centre_reference(reference_window, stats.mean);
   if (pairing == WindowPairing::kEqualWindows) {
     correlate_equal_windows(search_patch, radius_px, n, method, plane);
     return;
@@ -64,13 +71,25 @@ void WindowCorrelator::correlate(const cv::Mat& reference_window, const cv::Mat&
   normalise(radius_px, n, plane);
 }
 
-void WindowCorrelator::prepare_reference(const cv::Mat& reference_window, const WindowStats& stats,
-                                         CorrelationPlane& plane) {
+void WindowCorrelator::centre_reference(const cv::Mat& reference_window, double mean) {
   const int n = reference_window.rows;
   centred_reference_.resize(static_cast<std::size_t>(n) * n);
-  centre_window(reference_window.ptr<float>(), reference_window.step1(), n, stats.mean, centred_reference_.data());
-  reference_energy_ = stats.energy;
-  plane.reference_std = n > 1 ? std::sqrt(reference_energy_ / (double(n) * n - 1)) : 0.0;
+  centre_window(reference_window.ptr<float>(), reference_window.step1(), n, mean, centred_reference_.data());
+}
+
+bool WindowCorrelator::correlate_in_registers(const cv::Mat& reference_window, double reference_mean,
+                                              const cv::Mat& search_patch, int radius_px, CorrelationPlane& plane) {
+  const int n = reference_window.rows;
+  const int side = 2 * radius_px + 1;
+  products_.resize(static_cast<std::size_t>(side) * side);
+  double mean = 0, energy = 0;
+  const float* window = search_patch.ptr<float>(radius_px) + radius_px;
+  if (!equal_window_products(reference_window.ptr<float>(), reference_window.step1(), reference_mean, window,
+                             search_patch.step1(), n, radius_px, products_.data(), &mean, &energy)) {
+    return false;
+  }
+  normalise_equal_windows(energy, plane);
+  return true;
 }
 
 void WindowCorrelator::prepare_patch_sums(const cv::Mat& search_patch) {
@@ -150,8 +169,12 @@ void WindowCorrelator::correlate_equal_windows(const cv::Mat& search_patch, int 
       }
     }
   }
-  const bool flat = reference_energy_ < kMinEnergy || energy < kMinEnergy;
-  const double denominator = std::sqrt(reference_energy_ * energy);
+  normalise_equal_windows(energy, plane);
+}
+
+void WindowCorrelator::normalise_equal_windows(double measurement_energy, CorrelationPlane& plane) const {
+  const bool flat = reference_energy_ < kMinEnergy || measurement_energy < kMinEnergy;
+  const double denominator = std::sqrt(reference_energy_ * measurement_energy);
   for (std::size_t i = 0; i < plane.value.size(); ++i) plane.value[i] = flat ? 0.0 : products_[i] / denominator;
 }
 

@@ -68,7 +68,12 @@ class WindowCorrelator {
   static CorrelationMethod cheaper_method(int window_px, int radius_px);
 
  private:
-  void prepare_reference(const cv::Mat& reference_window, const WindowStats& stats, CorrelationPlane& plane);
+  void centre_reference(const cv::Mat& reference_window, double mean);
+  // The equal-windows correlation in one SIMD kernel, where the target's
+  // vectors fit the window (simd_kernels.h); false when they do not.
+  bool correlate_in_registers(const cv::Mat& reference_window, double reference_mean, const cv::Mat& search_patch,
+                              int radius_px, CorrelationPlane& plane);
+  void normalise_equal_windows(double measurement_energy, CorrelationPlane& plane) const;
   CorrelationMethod resolve(CorrelationMethod method, int window_px, int radius_px);
   void prepare_patch_sums(const cv::Mat& search_patch);
   void direct_products(const cv::Mat& search_patch, int radius_px, int window_px);
