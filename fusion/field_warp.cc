@@ -104,6 +104,37 @@ const WeightTable& table_of(Interpolator interpolator) {
   return interpolator == Interpolator::kCubic ? cubic : interpolator == Interpolator::kLanczos3 ? lanczos3 : lanczos4;
 }
 
+// The columns of a region between the same two node columns: along a row
+// the field there is one linear piece, u0 + t·(u1 − u0).
+struct ColumnRun {
+  int begin = 0, end = 0;  // columns of the region
+  int i0 = 0, i1 = 0;      // node columns
+};
+
+// Each column's position in the image and its weight t between its node
+// columns, as contiguous arrays so that the per-pixel loop vectorises.
+struct RegionColumns {
+  std::vector<double> x_px, t;
+  std::vector<ColumnRun> runs;
+};
+
+RegionColumns region_columns(cv::Rect region, const GridGeometry& g) {
+  RegionColumns columns;
+  const auto width = static_cast<std::size_t>(region.width);
+  columns.x_px.resize(width);
+  columns.t.resize(width);
+  for (int x = 0; x < region.width; ++x) {
+    const AxisWeight w = axis_weight(region.x + x, g.x0_px, g.step_px, g.cols);
+    columns.x_px[x] = region.x + x;
+    columns.t[x] = w.t;
+    if (columns.runs.empty() || columns.runs.back().i0 != w.i0 || columns.runs.back().i1 != w.i1) {
+      columns.runs.push_back({x, x, w.i0, w.i1});
+    }
+    columns.runs.back().end = x + 1;
+  }
+  return columns;
+}
+
 // Rows `rows` of the warped region; most of a deformation pass's cost: the
 // field at each pixel here, the resampling in sample_separable (or, with
 // `simd` false, its scalar reference). The field is interpolated between
@@ -113,9 +144,8 @@ const WeightTable& table_of(Interpolator interpolator) {
 void warp_rows(const cv::Mat& image, const TabulatedKernel& kernel, bool simd, const GridField& field, cv::Rect region,
                cv::Range rows, cv::Mat& out) {
   const auto& g = field.grid;
+  const RegionColumns columns = region_columns(region, g);
   const auto width = static_cast<std::size_t>(region.width);
-  std::vector<AxisWeight> column_weights(width);
-  for (int x = 0; x < region.width; ++x) column_weights[x] = axis_weight(region.x + x, g.x0_px, g.step_px, g.cols);
   std::vector<double> xs(width), ys(width);
   std::vector<double> u_row(static_cast<std::size_t>(g.cols)), v_row(static_cast<std::size_t>(g.cols));
   const auto stride = static_cast<std::size_t>(image.step1());
@@ -130,10 +160,13 @@ void warp_rows(const cv::Mat& image, const TabulatedKernel& kernel, bool simd, c
     };
     lerp_rows(field.u_px, u_row);
     lerp_rows(field.v_px, v_row);
-    for (int x = 0; x < region.width; ++x) {
-      const AxisWeight& wx = column_weights[x];
-      xs[x] = region.x + x + (u_row[wx.i0] + wx.t * (u_row[wx.i1] - u_row[wx.i0]));
-      ys[x] = image_y + (v_row[wx.i0] + wx.t * (v_row[wx.i1] - v_row[wx.i0]));
+    for (const ColumnRun& run : columns.runs) {
+      const double u0 = u_row[run.i0], du = u_row[run.i1] - u0;
+      const double v0 = v_row[run.i0], dv = v_row[run.i1] - v0;
+      for (int x = run.begin; x < run.end; ++x) {
+        xs[x] = columns.x_px[x] + (u0 + columns.t[x] * du);
+        ys[x] = image_y + (v0 + columns.t[x] * dv);
+      }
     }
     sample(image.ptr<float>(), stride, image.cols, image.rows, kernel, xs.data(), ys.data(), region.width,
            out.ptr<float>(y));
