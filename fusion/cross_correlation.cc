@@ -282,7 +282,7 @@ struct PassWorkspace {
 // would page-fault its 64 MB (16 MP) again.
 cv::Mat reuse(cv::Mat& storage, cv::Size size) {
   if (storage.rows < size.height || storage.cols < size.width) {
-    storage.create(std::max(storage.rows, size.height), std::max(storage.cols, size.width), CV_32F);
+    create_large_image(storage, std::max(storage.rows, size.height), std::max(storage.cols, size.width), CV_32F);
   }
   return storage(cv::Rect({0, 0}, size));
 }

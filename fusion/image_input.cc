@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+#include <sys/mman.h>
 
+#include <cstdint>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
@@ -34,6 +36,18 @@ cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name, bool w
   return unit;
 }
 
+void create_large_image(cv::Mat& image, int rows, int cols, int type) {
+  constexpr std::uintptr_t kHugePage = 2u << 20;
+  if (image.rows == rows && image.cols == cols && image.type() == type) return;
+  image.create(rows, cols, type);
+  // Untouched yet (fresh from mmap at this size): only the whole 2 MB pages
+  // inside the buffer can be huge.
+  const auto begin = reinterpret_cast<std::uintptr_t>(image.datastart);
+  const auto end = reinterpret_cast<std::uintptr_t>(image.dataend);
+  const std::uintptr_t first = (begin + kHugePage - 1) & ~(kHugePage - 1), last = end & ~(kHugePage - 1);
+  if (last > first) madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+}
+
 void to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn_colour, cv::Mat& out) {
   if (image.empty()) throw std::invalid_argument(name + ": the image is empty (unreadable file or no pixels)");
   cv::Mat grey = image;
@@ -44,6 +58,7 @@ void to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn
     throw std::invalid_argument(fmt::format("{}: {} channels, expected grey or colour", name, image.channels()));
   }
   CV_Assert(out.empty() || out.data != grey.data);
+  create_large_image(out, grey.rows, grey.cols, CV_32F);
   grey.convertTo(out, CV_32F, 1.0 / full_scale(grey.depth()));
   // Non-finite pixels in a float input would poison every sum they enter;
   // integer input cannot hold them, and the test is a whole pass over the
