@@ -192,6 +192,61 @@ void CentredPeriodicTile(const float* window, std::size_t stride, int n, int rad
   }
 }
 
+// Adds (kSign +1) or subtracts (−1) a patch row, widened to double, and its
+// squares to the column sums; the last columns % lanes scalar.
+template <int kSign>
+HWY_INLINE void AddRowToColumns(const float* HWY_RESTRICT row, int p, double* HWY_RESTRICT sums,
+                                double* HWY_RESTRICT squares) {
+  const hn::ScalableTag<double> dd;
+  const hn::Rebind<float, decltype(dd)> df;
+  const int lanes = static_cast<int>(hn::Lanes(dd));
+  int c = 0;
+  for (; c + lanes <= p; c += lanes) {
+    const auto v = hn::PromoteTo(dd, hn::LoadU(df, row + c));
+    const auto sq = hn::Mul(v, v);
+    hn::StoreU(kSign > 0 ? hn::Add(hn::LoadU(dd, sums + c), v) : hn::Sub(hn::LoadU(dd, sums + c), v), dd, sums + c);
+    hn::StoreU(kSign > 0 ? hn::Add(hn::LoadU(dd, squares + c), sq) : hn::Sub(hn::LoadU(dd, squares + c), sq), dd,
+               squares + c);
+  }
+  for (; c < p; ++c) {
+    const double v = row[c];
+    sums[c] += kSign * v;
+    squares[c] += kSign * (v * v);
+  }
+}
+
+// Column sums over the window's n rows, slid down one row per dy; along
+// each row of shifts, the box slid right one column per dx.
+void PatchBoxSums(const float* patch, std::size_t stride, int p, int n, double* column_scratch, double* sums,
+                  double* squares) {
+  const int side = p - n + 1;
+  double* columns = column_scratch;
+  double* column_squares = column_scratch + p;
+  std::fill(column_scratch, column_scratch + 2 * p, 0.0);
+  for (int y = 0; y < n; ++y) AddRowToColumns<1>(patch + y * stride, p, columns, column_squares);
+  for (int dy = 0; dy < side; ++dy) {
+    if (dy > 0) {
+      AddRowToColumns<1>(patch + (dy + n - 1) * stride, p, columns, column_squares);
+      AddRowToColumns<-1>(patch + (dy - 1) * stride, p, columns, column_squares);
+    }
+    double box = 0, box_squares = 0;
+    for (int c = 0; c < n; ++c) {
+      box += columns[c];
+      box_squares += column_squares[c];
+    }
+    double* out = sums + static_cast<std::size_t>(dy) * side;
+    double* out_squares = squares + static_cast<std::size_t>(dy) * side;
+    out[0] = box;
+    out_squares[0] = box_squares;
+    for (int dx = 1; dx < side; ++dx) {
+      box += columns[dx + n - 1] - columns[dx - 1];
+      box_squares += column_squares[dx + n - 1] - column_squares[dx - 1];
+      out[dx] = box;
+      out_squares[dx] = box_squares;
+    }
+  }
+}
+
 // The equal-windows correlation of an n×n window pair when a window row is
 // exactly one vector (n = 16 with AVX-512, 8 with AVX2): the measurement
 // window is centred and each of its rows rotated by every horizontal shift
@@ -507,6 +562,7 @@ HWY_EXPORT(WindowMeanEnergy);
 HWY_EXPORT(CentredPeriodicTile);
 HWY_EXPORT(CentreWindow);
 HWY_EXPORT(EqualWindowProducts);
+HWY_EXPORT(PatchBoxSums);
 
 namespace {
 
@@ -619,6 +675,30 @@ void scalar_equal_window_products(const float* reference, std::size_t reference_
   std::vector<float> tile(static_cast<std::size_t>(p) * p);
   scalar_centred_periodic_tile(window, stride, n, radius, static_cast<float>(*mean), tile.data());
   scalar_accumulate_products(centred.data(), tile.data(), static_cast<std::size_t>(p), n, 2 * radius + 1, products);
+}
+
+void patch_box_sums(const float* patch, std::size_t stride, int p, int n, double* column_scratch, double* sums,
+                    double* squares) {
+  apply_environment_once();
+  HWY_DYNAMIC_DISPATCH(PatchBoxSums)(patch, stride, p, n, column_scratch, sums, squares);
+}
+
+void scalar_patch_box_sums(const float* patch, std::size_t stride, int p, int n, double* sums, double* squares) {
+  const int side = p - n + 1;
+  for (int dy = 0; dy < side; ++dy) {
+    for (int dx = 0; dx < side; ++dx) {
+      double box = 0, box_squares = 0;
+      for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+          const double v = patch[(dy + y) * stride + dx + x];
+          box += v;
+          box_squares += v * v;
+        }
+      }
+      sums[dy * side + dx] = box;
+      squares[dy * side + dx] = box_squares;
+    }
+  }
 }
 
 void tabulated_weights(const TabulatedKernel& kernel, double t, float* weights) {

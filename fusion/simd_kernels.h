@@ -73,6 +73,20 @@ void centred_periodic_tile(const float* window, std::size_t stride, int n, int r
 // The reference for centred_periodic_tile: plain loops with a modulo.
 void scalar_centred_periodic_tile(const float* window, std::size_t stride, int n, int radius, float mean, float* out);
 
+// For every n×n box of a p×p patch (rows `stride` floats apart), at offset
+// (dx, dy) in [0, side)² with side = p − n + 1: the sum of its values and of
+// their squares, in double, at sums[dy·side + dx] and squares[dy·side + dx].
+// They normalise a search-area correlation (each shifted window's energy is
+// squares − sums²/n²). The kernel slides: column sums over n rows moved down
+// a row at a time, boxes moved right a column at a time, all in double,
+// which differs from summing each box afresh by double rounding only.
+// `column_scratch` holds 2·p doubles.
+void patch_box_sums(const float* patch, std::size_t stride, int p, int n, double* column_scratch, double* sums,
+                    double* squares);
+
+// The reference for patch_box_sums: each box summed afresh, in row order.
+void scalar_patch_box_sums(const float* patch, std::size_t stride, int p, int n, double* sums, double* squares);
+
 // The equal-windows correlation (window_correlator.h) of an n×n reference
 // window and an n×n measurement window in one call: the measurement's mean
 // and energy, as window_mean_energy gives them, and

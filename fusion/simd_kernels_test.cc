@@ -175,6 +175,40 @@ void expect_all_equal_window_products_match() {
   }
 }
 
+// Box sums of a patch inside a wider buffer, bright and of little texture
+// (where the energy squares − sums²/n² is a small difference).
+void expect_patch_box_sums_match(int n, int radius, unsigned seed) {
+  SCOPED_TRACE(testing::Message() << "n=" << n << " radius=" << radius << " target=" << simd_target_name());
+  const int p = n + 2 * radius, side = 2 * radius + 1;
+  const std::size_t stride = static_cast<std::size_t>(p) + 3;
+  std::vector<float> buffer(stride * (p + 1));
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> grey(0.f, 1.f);
+  for (auto& b : buffer) b = 0.9f + 1e-3f * grey(rng);
+  const float* patch = buffer.data() + stride + 2;
+  const auto count = static_cast<std::size_t>(side) * side;
+  std::vector<double> sums(count, -1), squares(count, -1), expected_sums(count, -2), expected_squares(count, -2);
+  std::vector<double> scratch(2 * static_cast<std::size_t>(p));
+  patch_box_sums(patch, stride, p, n, scratch.data(), sums.data(), squares.data());
+  scalar_patch_box_sums(patch, stride, p, n, expected_sums.data(), expected_squares.data());
+  // Double rounding of sliding sums of values of order 1; the energies
+  // (about 1e-7·n² here) keep at least six digits.
+  for (std::size_t i = 0; i < count; ++i) {
+    ASSERT_NEAR(sums[i], expected_sums[i], 1e-13 * n * n) << "at " << i % side << ", " << i / side;
+    ASSERT_NEAR(squares[i], expected_squares[i], 1e-13 * n * n) << "at " << i % side << ", " << i / side;
+    const double energy = squares[i] - sums[i] * sums[i] / (n * n);
+    const double expected_energy = expected_squares[i] - expected_sums[i] * expected_sums[i] / (n * n);
+    ASSERT_NEAR(energy, expected_energy, 1e-6 * expected_energy);
+  }
+}
+
+void expect_all_patch_box_sums_match() {
+  unsigned seed = 600;
+  for (const int n : {1, 3, 8, 16, 17, 32, 64}) {
+    for (const int radius : {0, 1, 2, 4, 9}) expect_patch_box_sums_match(n, radius, seed++);
+  }
+}
+
 // The window deformation's sampling: a random image inside a wider buffer,
 // and the points of a region reaching past every edge of the image, moved
 // by a random smooth displacement field (up to ±4 px).
@@ -319,6 +353,7 @@ TEST_F(SimdKernels, MatchTheScalarReference) {
   expect_all_sizes_match();
   expect_all_window_kernels_match();
   expect_all_equal_window_products_match();
+  expect_all_patch_box_sums_match();
 }
 
 TEST_F(SimdKernels, SamplingMatchesTheScalarReference) {
@@ -344,6 +379,8 @@ TEST_F(SimdKernels, MatchTheScalarReferenceOnEveryTargetOfThisCpu) {
     expect_all_sizes_match();
     expect_all_window_kernels_match();
     expect_all_equal_window_products_match();
+    expect_all_patch_box_sums_match();
+    expect_all_patch_box_sums_match();
   }
 }
 
@@ -355,6 +392,7 @@ TEST_F(SimdKernels, TheEnvironmentForcesThePortableTarget) {
   expect_all_sizes_match();
   expect_all_window_kernels_match();
   expect_all_equal_window_products_match();
+  expect_all_patch_box_sums_match();
   expect_all_samplings_match();
   expect_warp_matches_reference();
   ASSERT_EQ(unsetenv("BOSFUSE_SIMD"), 0);

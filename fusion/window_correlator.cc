@@ -62,13 +62,13 @@ void WindowCorrelator::correlate(const cv::Mat& reference_window, const cv::Mat&
     correlate_equal_windows(search_patch, radius_px, n, method, plane);
     return;
   }
-  prepare_patch_sums(search_patch);
+  prepare_patch_sums(search_patch, n);
   if (method == CorrelationMethod::kDirect) {
     direct_products(search_patch, radius_px, n);
   } else {
     fft_products(search_patch, radius_px, n);
   }
-  normalise(radius_px, n, plane);
+  normalise(n, plane);
 }
 
 void WindowCorrelator::centre_reference(const cv::Mat& reference_window, double mean) {
@@ -92,21 +92,14 @@ bool WindowCorrelator::correlate_in_registers(const cv::Mat& reference_window, d
   return true;
 }
 
-void WindowCorrelator::prepare_patch_sums(const cv::Mat& search_patch) {
+void WindowCorrelator::prepare_patch_sums(const cv::Mat& search_patch, int window_px) {
   const int p = search_patch.rows;
-  const std::size_t stride = static_cast<std::size_t>(p) + 1;
-  sum_.assign(stride * stride, 0.0);
-  sum_sq_.assign(stride * stride, 0.0);
-  for (int y = 0; y < p; ++y) {
-    const float* row = search_patch.ptr<float>(y);
-    double row_sum = 0, row_sum_sq = 0;
-    for (int x = 0; x < p; ++x) {
-      row_sum += row[x];
-      row_sum_sq += double(row[x]) * row[x];
-      sum_[(y + 1) * stride + x + 1] = sum_[y * stride + x + 1] + row_sum;
-      sum_sq_[(y + 1) * stride + x + 1] = sum_sq_[y * stride + x + 1] + row_sum_sq;
-    }
-  }
+  const auto side = static_cast<std::size_t>(p - window_px + 1);
+  column_scratch_.resize(2 * static_cast<std::size_t>(p));
+  box_sum_.resize(side * side);
+  box_sum_sq_.resize(side * side);
+  patch_box_sums(search_patch.ptr<float>(), search_patch.step1(), p, window_px, column_scratch_.data(), box_sum_.data(),
+                 box_sum_sq_.data());
 }
 
 void WindowCorrelator::direct_products(const cv::Mat& search_patch, int radius_px, int n) {
@@ -178,23 +171,12 @@ void WindowCorrelator::normalise_equal_windows(double measurement_energy, Correl
   for (std::size_t i = 0; i < plane.value.size(); ++i) plane.value[i] = flat ? 0.0 : products_[i] / denominator;
 }
 
-void WindowCorrelator::normalise(int radius_px, int n, CorrelationPlane& plane) const {
-  const int side = 2 * radius_px + 1;
-  const std::size_t stride = static_cast<std::size_t>(n) + 2 * radius_px + 1;
+void WindowCorrelator::normalise(int n, CorrelationPlane& plane) const {
   const double count = double(n) * n;
-  for (int dy = 0; dy < side; ++dy) {
-    for (int dx = 0; dx < side; ++dx) {
-      auto box = [&](const std::vector<double>& s) {
-        return s[(dy + n) * stride + dx + n] - s[dy * stride + dx + n] - s[(dy + n) * stride + dx] +
-               s[dy * stride + dx];
-      };
-      const double sum = box(sum_);
-      const double energy = box(sum_sq_) - sum * sum / count;
-      const double denominator = reference_energy_ * energy;
-      const std::size_t i = static_cast<std::size_t>(dy) * side + dx;
-      const bool flat = reference_energy_ < kMinEnergy || energy < kMinEnergy;
-      plane.value[i] = flat ? 0.0 : products_[i] / std::sqrt(denominator);
-    }
+  for (std::size_t i = 0; i < plane.value.size(); ++i) {
+    const double energy = box_sum_sq_[i] - box_sum_[i] * box_sum_[i] / count;
+    const bool flat = reference_energy_ < kMinEnergy || energy < kMinEnergy;
+    plane.value[i] = flat ? 0.0 : products_[i] / std::sqrt(reference_energy_ * energy);
   }
 }
 

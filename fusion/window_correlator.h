@@ -75,18 +75,19 @@ class WindowCorrelator {
                               int radius_px, CorrelationPlane& plane);
   void normalise_equal_windows(double measurement_energy, CorrelationPlane& plane) const;
   CorrelationMethod resolve(CorrelationMethod method, int window_px, int radius_px);
-  void prepare_patch_sums(const cv::Mat& search_patch);
+  void prepare_patch_sums(const cv::Mat& search_patch, int window_px);
   void direct_products(const cv::Mat& search_patch, int radius_px, int window_px);
   void fft_products(const cv::Mat& search_patch, int radius_px, int window_px);
-  void normalise(int radius_px, int window_px, CorrelationPlane& plane) const;
+  void normalise(int window_px, CorrelationPlane& plane) const;
   void correlate_equal_windows(const cv::Mat& search_patch, int radius_px, int window_px, CorrelationMethod method,
                                CorrelationPlane& plane);
 
   std::vector<float> centred_reference_;
-  double reference_energy_ = 0;       // Σ a'²
-  std::vector<double> products_;      // Σ a'·b per shift
-  std::vector<double> sum_, sum_sq_;  // integral images of the patch, (P+1)²
-  std::vector<float> periodic_;       // the centred measurement window tiled periodically, (n+2r)²
+  double reference_energy_ = 0;   // Σ a'²
+  std::vector<double> products_;  // Σ a'·b per shift
+  // Each shifted window's sum and sum of squares, (2r+1)² like the plane.
+  std::vector<double> box_sum_, box_sum_sq_, column_scratch_;
+  std::vector<float> periodic_;  // the centred measurement window tiled periodically, (n+2r)²
   // kAuto's choice for the last window size and radius: the operation count
   // costs more than a 16 px window's products.
   int auto_window_px_ = -1, auto_radius_px_ = -1;
