@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <stdexcept>
 
@@ -61,13 +62,17 @@ DisplacementField field_on_grid(const GridGeometry& grid) {
 }
 
 void count_flags(const DisplacementField& field, EvaluationSummary& summary) {
+  // One pass over the field (250,000 vectors for 16 MP), not one per flag.
+  std::array<std::size_t, 256> counts{};
+  for (const auto& v : field.vectors) ++counts[static_cast<std::uint8_t>(v.flag)];
+  const auto count = [&](VectorFlag flag) { return counts[static_cast<std::uint8_t>(flag)]; };
   summary.vectors = field.size();
-  summary.valid = field.count(VectorFlag::kOk);
-  summary.outliers_replaced = field.count(VectorFlag::kOutlierReplaced);
-  summary.no_texture = field.count(VectorFlag::kNoTexture);
-  summary.masked = field.count(VectorFlag::kMasked);
-  summary.out_of_roi = field.count(VectorFlag::kOutOfRoi);
-  summary.no_peak = field.count(VectorFlag::kNoPeak);
+  summary.valid = count(VectorFlag::kOk);
+  summary.outliers_replaced = count(VectorFlag::kOutlierReplaced);
+  summary.no_texture = count(VectorFlag::kNoTexture);
+  summary.masked = count(VectorFlag::kMasked);
+  summary.out_of_roi = count(VectorFlag::kOutOfRoi);
+  summary.no_peak = count(VectorFlag::kNoPeak);
 }
 
 }  // namespace bosfuse::fusion

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <opencv2/core/utility.hpp>
 
@@ -9,6 +10,21 @@ namespace bosfuse::fusion {
 namespace {
 
 bool has_value(VectorFlag flag) { return flag == VectorFlag::kOk || flag == VectorFlag::kOutlierReplaced; }
+
+// body(row) for every row, the rows of a large field on both cores (each
+// row's work writes only that row); a small field's cost less than waking
+// the other thread.
+template <typename Body>
+void for_rows(int rows, Body body) {
+  auto range = [&](const cv::Range& r) {
+    for (int row = r.start; row < r.end; ++row) body(row);
+  };
+  if (rows < 64) {
+    range(cv::Range(0, rows));
+  } else {
+    cv::parallel_for_(cv::Range(0, rows), range);
+  }
+}
 
 // Sorts eight values with the 19 compare-exchanges of the optimal network
 // (Knuth, TAOCP 5.3.4): branch-free min/max, where an insertion sort of an
@@ -95,30 +111,23 @@ std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& opt
   auto measured = [](const DisplacementVector& v) { return v.flag == VectorFlag::kOk; };
   // The test reads only the snapshot, so rows can be tested in parallel.
   std::vector<std::uint8_t> is_outlier(field.vectors.size(), 0);
-  auto test_rows = [&](const cv::Range& rows) {
-    for (int row = rows.start; row < rows.end; ++row) {
-      for (int col = 0; col < field.cols; ++col) {
-        const auto& vec = snapshot.at(row, col);
-        if (!measured(vec)) continue;
-        const bool on_edge = row == 0 || col == 0 || row == field.rows - 1 || col == field.cols - 1;
-        if (on_edge && !options.test_grid_edges) continue;
-        const Neighbours n = neighbours_of(snapshot, row, col, measured);
-        if (n.count < options.min_neighbours) continue;
-        const double ru = normalised_residual(vec.u_px, n.u, n.count, options.epsilon_px);
-        const double rv = normalised_residual(vec.v_px, n.v, n.count, options.epsilon_px);
-        // |(ru, rv)| > threshold without hypot's care for overflow, which
-        // costs more than the rest of the test: an overflowing square is
-        // infinite and so still above the threshold.
-        is_outlier[static_cast<std::size_t>(row) * field.cols + col] =
-            ru * ru + rv * rv > options.threshold * options.threshold;
-      }
+  for_rows(field.rows, [&](int row) {
+    for (int col = 0; col < field.cols; ++col) {
+      const auto& vec = snapshot.at(row, col);
+      if (!measured(vec)) continue;
+      const bool on_edge = row == 0 || col == 0 || row == field.rows - 1 || col == field.cols - 1;
+      if (on_edge && !options.test_grid_edges) continue;
+      const Neighbours n = neighbours_of(snapshot, row, col, measured);
+      if (n.count < options.min_neighbours) continue;
+      const double ru = normalised_residual(vec.u_px, n.u, n.count, options.epsilon_px);
+      const double rv = normalised_residual(vec.v_px, n.v, n.count, options.epsilon_px);
+      // |(ru, rv)| > threshold without hypot's care for overflow, which
+      // costs more than the rest of the test: an overflowing square is
+      // infinite and so still above the threshold.
+      is_outlier[static_cast<std::size_t>(row) * field.cols + col] =
+          ru * ru + rv * rv > options.threshold * options.threshold;
     }
-  };
-  if (field.size() < 4096) {
-    test_rows(cv::Range(0, field.rows));
-  } else {
-    cv::parallel_for_(cv::Range(0, field.rows), test_rows);
-  }
+  });
   std::vector<std::size_t> outliers;
   for (std::size_t i = 0; i < is_outlier.size(); ++i) {
     if (is_outlier[i]) outliers.push_back(i);
@@ -143,16 +152,27 @@ GridField predictor_from(const DisplacementField& field, const GridGeometry& gri
   GridField predictor{grid, cv::Mat::zeros(field.rows, field.cols, CV_64F),
                       cv::Mat::zeros(field.rows, field.cols, CV_64F)};
   cv::Mat filled = cv::Mat::zeros(field.rows, field.cols, CV_8U);
-  DisplacementField work = field;  // flags double as "has a value" below
-  for (int row = 0; row < field.rows; ++row) {
+  std::atomic<bool> gaps{false};
+  for_rows(field.rows, [&](int row) {
+    bool row_has_gap = false;
     for (int col = 0; col < field.cols; ++col) {
       const auto& vec = field.at(row, col);
-      if (!has_value(vec.flag)) continue;
+      if (!has_value(vec.flag)) {
+        row_has_gap = true;
+        continue;
+      }
       predictor.u_px.at<double>(row, col) = vec.u_px;
       predictor.v_px.at<double>(row, col) = vec.v_px;
       filled.at<std::uint8_t>(row, col) = 1;
-      work.at(row, col).flag = VectorFlag::kOk;
     }
+    if (row_has_gap) gaps = true;
+  });
+  // A field with a value at every node (the usual case) needs no filling,
+  // nor the copy of it that filling works on.
+  if (!gaps) return predictor;
+  DisplacementField work = field;  // flags double as "has a value" below
+  for (std::size_t i = 0; i < work.vectors.size(); ++i) {
+    if (filled.data[i]) work.vectors[i].flag = VectorFlag::kOk;
   }
   for (int sweep = 0; sweep < max_sweeps; ++sweep) {
     std::vector<std::pair<std::size_t, cv::Point2d>> updates;
@@ -181,7 +201,7 @@ GridField predictor_from(const DisplacementField& field, const GridGeometry& gri
 void smooth_predictor(GridField& predictor) {
   for (cv::Mat* values : {&predictor.u_px, &predictor.v_px}) {
     const cv::Mat source = values->clone();
-    for (int row = 0; row < source.rows; ++row) {
+    for_rows(source.rows, [&](int row) {
       for (int col = 0; col < source.cols; ++col) {
         double sum = 0, weight = 0;
         for (int dr = -1; dr <= 1; ++dr) {
@@ -195,7 +215,7 @@ void smooth_predictor(GridField& predictor) {
         }
         values->at<double>(row, col) = sum / weight;
       }
-    }
+    });
   }
 }
 
