@@ -275,6 +275,7 @@ struct PassWorkspace {
   cv::Mat warped_storage, warped_reference_storage;
   bool cache_reference_stats = false;
   std::map<int, std::vector<WindowStats>> reference_stats;  // by window size
+  DisplacementField previous_field;                         // the field before a pass, for its change
 };
 
 // The top-left `size` of `storage`, which grows when too small: the regions
@@ -525,7 +526,9 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     } else {
       warp_pass(pair.measurement, warp ? predictor : GridField{}, in.warped);
     }
-    const DisplacementField before = pass > 0 ? field : DisplacementField{};
+    // Into a buffer kept between passes and frames: a fresh 12 MB copy (16 MP)
+    // each pass would page-fault it anew.
+    if (pass > 0) workspace.previous_field = field;
     run_pass(pair, in, options, field);
     if (options.replace_outliers) replace_outliers(field, options.outliers);
     if (adaptive.active()) keep_first_pass(adaptive, field);
@@ -535,7 +538,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     }
     summary.passes_run = pass + 1;
     summary.window_px_per_pass.push_back(in.window_px);
-    if (pass > 0) summary.last_change_px = max_change_px(before, field);
+    if (pass > 0) summary.last_change_px = max_change_px(workspace.previous_field, field);
     const bool same_window = pass > 0 && windows[pass] == windows[pass - 1];
     if (finish_now) break;
     if (same_window && options.convergence_px > 0 && summary.last_change_px < options.convergence_px) {

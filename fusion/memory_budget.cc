@@ -25,14 +25,14 @@ using Bytes = std::uint64_t;
 constexpr Bytes kFixedBytes = Bytes{8} << 20;
 
 // A refinement pass's grid at its peak (replace_outliers after run_pass):
-// the field, the copy `before` it that measures the change, the outlier
-// test's snapshot, the predictor's u and v, the outlier flags and, at worst
-// for every node, an outlier's index. predictor_from's peak (the field, two
-// predictors, a work copy, fill flags and updates: 153 B) is below it.
-// Three field copies, the predictor, outlier flags and indices, and the
+// the field, the copy of it before the pass that measures the change (kept
+// between passes), the predictor's u and v, the outlier flags and, at worst
+// for every node, an outlier's index and its replacement value, and the
 // reference window's mean and energy kept per node for each window size.
-constexpr Bytes kXcorrBytesPerNode =
-    3 * sizeof(DisplacementVector) + 2 * sizeof(double) + 1 + sizeof(std::size_t) + 2 * 2 * sizeof(double);
+// predictor_from's peak (the field, two predictors, a work copy when there
+// are gaps, fill flags and updates: 153 B) is below it.
+constexpr Bytes kXcorrBytesPerNode = 2 * sizeof(DisplacementVector) + 2 * sizeof(double) + 1 + sizeof(std::size_t) +
+                                     sizeof(cv::Point2d) + 2 * 2 * sizeof(double);
 
 // OpenCV's own buffers per pixel, full resolution (finest scale 0 for DIS):
 // pyramids, gradients, flow components at every scale and, for DIS fast and
@@ -252,7 +252,7 @@ PairShape PairShape::of(const cv::Mat& reference, const cv::Mat& mask) {
 //     its 0/1 copy and CV_32S integral (6 B/px);
 //   a pass: the float copies, the mask and its integral (5 B/px), the warped
 //     regions (4 B/px of the ROI grown by the search reach, in one buffer
-//     all passes reuse; two with symmetric deformation) and 201 B per grid
+//     all passes reuse; two with symmetric deformation) and 169 B per grid
 //     node (kXcorrBytesPerNode).
 std::uint64_t xcorr_bytes_needed(const PairShape& pair, const XcorrOptions& options) {
   const cv::Rect roi = effective_roi(options.roi, pair.size);
