@@ -165,18 +165,19 @@ void WindowCorrelator::correlate_equal_windows(const cv::Mat& search_patch, int 
   normalise_equal_windows(energy, plane);
 }
 
-void WindowCorrelator::normalise_equal_windows(double measurement_energy, CorrelationPlane& plane) const {
+double WindowCorrelator::normalised(std::size_t shift, double measurement_energy) const {
   const bool flat = reference_energy_ < kMinEnergy || measurement_energy < kMinEnergy;
-  const double denominator = std::sqrt(reference_energy_ * measurement_energy);
-  for (std::size_t i = 0; i < plane.value.size(); ++i) plane.value[i] = flat ? 0.0 : products_[i] / denominator;
+  return flat ? 0.0 : products_[shift] / std::sqrt(reference_energy_ * measurement_energy);
+}
+
+void WindowCorrelator::normalise_equal_windows(double measurement_energy, CorrelationPlane& plane) const {
+  for (std::size_t i = 0; i < plane.value.size(); ++i) plane.value[i] = normalised(i, measurement_energy);
 }
 
 void WindowCorrelator::normalise(int n, CorrelationPlane& plane) const {
   const double count = double(n) * n;
   for (std::size_t i = 0; i < plane.value.size(); ++i) {
-    const double energy = box_sum_sq_[i] - box_sum_[i] * box_sum_[i] / count;
-    const bool flat = reference_energy_ < kMinEnergy || energy < kMinEnergy;
-    plane.value[i] = flat ? 0.0 : products_[i] / std::sqrt(reference_energy_ * energy);
+    plane.value[i] = normalised(i, box_sum_sq_[i] - box_sum_[i] * box_sum_[i] / count);
   }
 }
 
