@@ -5,9 +5,12 @@
 #define HWY_TARGET_INCLUDE "fusion/simd_kernels.cc"
 #include "hwy/foreach_target.h"  // IWYU pragma: keep
 // Must follow foreach_target.h.
-#include "fusion/simd_kernels.h"
-#include "hwy/cache_control.h"
+// clang-format off
 #include "hwy/highway.h"
+#include "hwy/cache_control.h"
+// clang-format on
+
+#include "fusion/simd_kernels.h"
 
 // After foreach_target.h too, so that each target sees them.
 #include <algorithm>
