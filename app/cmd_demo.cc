@@ -15,6 +15,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 
 #include "acquisition/clock.h"
 #include "acquisition/experiment_config.h"
@@ -42,6 +43,9 @@ struct DemoArgs {
   double speed = 16;             // times faster than real time
   double frame_interval_s = 10;  // experiment time between frames
   std::string live;              // --live HOST:PORT; empty: no live page
+  // The background pattern's and the thermocouples' noise seed; unset: the
+  // start time, so that every demo is a new run.
+  std::optional<std::uint64_t> seed;
 };
 
 // The paper's experiment at a scale that runs in seconds: a 20 mm heater
@@ -84,8 +88,8 @@ std::string demo_experiment(const DemoSetup& setup, int port, double poll_period
       "# the plume rises out of the image\n\n"
       "[[devices]]\nname = \"sim-adam\"\nprofile = \"adam-6018\"\nhost = \"127.0.0.1\"\nport = {}\n"
       "poll_period_s = {}\ntimeout_s = 0.5\n",
-      s.duration_s, speed, speed, s.z_d_m, s.depth_m, s.px_per_mm * setup.pixel_pitch_um * 1e-3, setup.pixel_pitch_um, s.pressure_pa,
-      s.ambient_c, port, poll_period_s);
+      s.duration_s, speed, speed, s.z_d_m, s.depth_m, s.px_per_mm * setup.pixel_pitch_um * 1e-3, setup.pixel_pitch_um,
+      s.pressure_pa, s.ambient_c, port, poll_period_s);
   const sim::ConvectionScene& scene = *setup.model;
   for (std::size_t i = 0; i < setup.thermocouples.size(); ++i) {
     const auto& tc = setup.thermocouples[i];
@@ -108,9 +112,9 @@ struct Recording {
 Recording record_demo(const DemoArgs& args, const DemoSetup& setup, const std::filesystem::path& run_dir,
                       ProgressDisplay& display) {
   const std::int64_t started_ns = acquisition::utc_now_ns();
+  const std::uint64_t seed = args.seed.value_or(static_cast<std::uint64_t>(started_ns));
   const auto& scene = setup.model;
-  const auto table = std::make_shared<const sim::SceneThermocoupleTable>(*scene, setup.thermocouples, args.speed,
-                                                                         static_cast<std::uint64_t>(started_ns));
+  const auto table = std::make_shared<const sim::SceneThermocoupleTable>(*scene, setup.thermocouples, args.speed, seed);
   sim::ModbusSimServer server(sim::scene_module_options(table, "adam-6018", setup.scene.ambient_c, 0));
   server.start();
   const double poll_period_s = 1.0 / args.speed;  // one reading per second of experiment time
@@ -132,18 +136,18 @@ Recording record_demo(const DemoArgs& args, const DemoSetup& setup, const std::f
   pattern.width_px = setup.scene.width_px;
   pattern.height_px = setup.scene.height_px;
   pattern.dot_diameter_px = 3;
-  pattern.seed = static_cast<std::uint64_t>(started_ns);
+  pattern.seed = seed;
   acquisition::FrameRecorder::Options camera;
   camera.interval = std::chrono::duration_cast<std::chrono::nanoseconds>(
       std::chrono::duration<double>(args.frame_interval_s / args.speed));
   logger.add_camera(
       std::make_unique<sim::SceneCamera>(scene, sim::generate_pattern(pattern), sim::CameraModel{}, args.speed, 1),
       "camera", camera);
-  display.note(fmt::format(
-      "demo: simulating {:.0f} s of cooling ({:.0f} -> {:.0f} °C, k = {:.5f} 1/s at the cylinder) at {}x, "
-      "logging thermocouples over Modbus TCP (127.0.0.1:{}) and frames from the virtual camera",
-      args.experiment_s, setup.scene.initial_c, setup.scene.ambient_c, scene->initial_cooling_rate_per_s(), args.speed,
-      server.port()));
+  display.note(
+      fmt::format("demo: simulating {:.0f} s of cooling ({:.0f} -> {:.0f} °C, k = {:.5f} 1/s at the cylinder) at {}x, "
+                  "logging thermocouples over Modbus TCP (127.0.0.1:{}) and frames from the virtual camera",
+                  args.experiment_s, setup.scene.initial_c, setup.scene.ambient_c, scene->initial_cooling_rate_per_s(),
+                  args.speed, server.port()));
   Recording recording{run_dir, logger.run(stop_requested_by_signal()), std::move(live)};
   server.stop();
   return recording;
@@ -200,8 +204,8 @@ void print_rates(const std::filesystem::path& run_dir, double true_k_per_s) {
     }
     const double k_per_s = k["value"].get<double>();
     std::cout << fmt::format("  {:<28} k = {:.5f} ± {:.5f} 1/s ({:+.1f}% from the truth)\n",
-                             (thermocouple ? "thermocouple " : "BOS ") + name, k_per_s,
-                             k["std_error"].get<double>(), 100 * (k_per_s / true_k_per_s - 1));
+                             (thermocouple ? "thermocouple " : "BOS ") + name, k_per_s, k["std_error"].get<double>(),
+                             100 * (k_per_s / true_k_per_s - 1));
   }
   for (const auto& agreement : results.agreements()) {
     std::cout << "  " << nlohmann::json::parse(agreement.json)["verdict"].get<std::string>() << "\n";
@@ -234,8 +238,8 @@ void run_demo(const DemoArgs& args) {
                                            "; `bosfuse process " + run_dir.string() + "` processes it");
   }
   if (!process_and_report(args, setup, run_dir, display)) {
-    throw CommandFailure(kExitStopped, "stopped while processing; `bosfuse process " + run_dir.string() +
-                                           " --resume` continues");
+    throw CommandFailure(kExitStopped,
+                         "stopped while processing; `bosfuse process " + run_dir.string() + " --resume` continues");
   }
   std::cout << "\n";
   print_rates(run_dir, true_plume_cooling_rate(setup));
@@ -269,6 +273,9 @@ void add_demo(CLI::App& root) {
       ->capture_default_str();
   cmd->add_option("--frame-interval", *frame_interval, "Experiment time between frames (1s .. 10m)")
       ->capture_default_str();
+  cmd->add_option("--seed", args->seed,
+                  "Seed of the random background and the thermocouples' noise: the same seed simulates the same "
+                  "signals (default: the start time, a new run each time)");
   cmd->callback([args, experiment_time, frame_interval] {
     args->experiment_s = seconds_within(*experiment_time, "--experiment-time", 20, 3600);
     args->frame_interval_s = seconds_within(*frame_interval, "--frame-interval", 1, 600);

@@ -6,16 +6,15 @@
 // `export` + `fit`, and a `replay --speed 2` processed and reported the
 // same way, and every one of them must state the same k.
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include <cmath>
 #include <fstream>
 #include <functional>
 #include <map>
-#include <signal.h>
 #include <nlohmann/json.hpp>
-
-#include <fmt/format.h>
 
 #include "fitting/fit_json.h"
 #include "storage/processing_store.h"
@@ -84,8 +83,8 @@ StoredRates stored_rates(const fs::path& run) {
   for (const auto& fit : results.fits()) {
     EXPECT_TRUE(fit.ok) << fit.json;
     const auto f = fitting::fit_from_json(nlohmann::json::parse(fit.json));
-    out.k[fit.subject == storage::FitSubject::kChannel ? channel_names[fit.subject_id]
-                                                       : probe_names[fit.subject_id]] = f.k_per_s;
+    out.k[fit.subject == storage::FitSubject::kChannel ? channel_names[fit.subject_id] : probe_names[fit.subject_id]] =
+        f.k_per_s;
   }
   for (const auto& a : results.agreements()) {
     const auto agreement = fitting::agreement_from_json(nlohmann::json::parse(a.json));
@@ -119,7 +118,11 @@ void expect_report_states(const fs::path& report_dir, const StoredRates& stored)
 
 TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
   testing::TempDir dir;
-  const auto demo = bosfuse("demo --out " + quoted(dir / "demo") + " --experiment-time 150s --speed 10");
+  // One background and noise draw, so that the test checks a reproducible
+  // scene: from pattern to pattern the probes' k spreads by a few percent
+  // (docs/RELIABILITY.md), which a new draw per run would turn into a test
+  // that fails now and then rather than one that finds a change.
+  const auto demo = bosfuse("demo --out " + quoted(dir / "demo") + " --experiment-time 150s --speed 10 --seed 1");
   ASSERT_EQ(demo.exit_code, 0) << demo.output;
   ASSERT_EQ(std::distance(fs::directory_iterator(dir / "demo"), fs::directory_iterator()), 1);
   const fs::path run = fs::directory_iterator(dir / "demo")->path();
@@ -150,8 +153,8 @@ TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
   // 3. export + fit on the thermocouple's column: the stored fit's k.
   const auto csv = dir / "samples.csv";
   ASSERT_EQ(bosfuse("export " + quoted(run) + " --csv -o " + quoted(csv)).exit_code, 0);
-  const auto fitted = bosfuse("fit " + quoted(csv) + " --temperature-column 'tc-35mm [degC]' --json " +
-                              quoted(dir / "fit.json"));
+  const auto fitted =
+      bosfuse("fit " + quoted(csv) + " --temperature-column 'tc-35mm [degC]' --json " + quoted(dir / "fit.json"));
   ASSERT_EQ(fitted.exit_code, 0) << fitted.output;
   const auto exported_fit = fitting::fit_from_json(nlohmann::json::parse(read_text(dir / "fit.json")));
   const auto& stored_tc = by_demo.k.at("tc-35mm");
