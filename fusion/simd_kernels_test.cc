@@ -69,6 +69,15 @@ void expect_all_sizes_match() {
   expect_kernel_matches_reference(128, 5, seed++);
 }
 
+// `size` grey values of a bright image with `texture` contrast:
+// 0.9 + texture·U(0, 1), drawn from `rng`.
+std::vector<float> bright_values(std::size_t size, float texture, std::mt19937& rng) {
+  std::uniform_real_distribution<float> grey(0.f, 1.f);
+  std::vector<float> values(size);
+  for (auto& v : values) v = 0.9f + texture * grey(rng);
+  return values;
+}
+
 // A window's mean and energy, the window centred, and its centred periodic
 // tile, on a window inside a wider buffer (rows not contiguous). Bright
 // windows with little texture are the hard case for the energy: Σ (x − mean)²
@@ -77,10 +86,8 @@ void expect_window_kernels_match(int n, int radius, float texture, unsigned seed
   SCOPED_TRACE(testing::Message() << "n=" << n << " radius=" << radius << " texture=" << texture
                                   << " target=" << simd_target_name());
   const std::size_t stride = static_cast<std::size_t>(n) + 5;
-  std::vector<float> buffer(stride * (n + 2));
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> grey(0.f, 1.f);
-  for (auto& b : buffer) b = 0.9f + texture * grey(rng);
+  const std::vector<float> buffer = bright_values(stride * (n + 2), texture, rng);
   const float* window = buffer.data() + stride + 2;
   double mean = -1, energy = -1, reference_mean = -2, reference_energy = -2;
   window_mean_energy(window, stride, n, &mean, &energy);
@@ -123,11 +130,9 @@ bool expect_equal_window_products_match(int n, int radius, float texture, unsign
   SCOPED_TRACE(testing::Message() << "n=" << n << " radius=" << radius << " texture=" << texture
                                   << " target=" << simd_target_name());
   const std::size_t reference_stride = static_cast<std::size_t>(n) + 5, stride = static_cast<std::size_t>(n) + 3;
-  std::vector<float> reference_buffer(reference_stride * (n + 1)), buffer(stride * (n + 2));
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> grey(0.f, 1.f);
-  for (auto& a : reference_buffer) a = 0.9f + texture * grey(rng);
-  for (auto& b : buffer) b = 0.9f + texture * grey(rng);
+  const std::vector<float> reference_buffer = bright_values(reference_stride * (n + 1), texture, rng);
+  const std::vector<float> buffer = bright_values(stride * (n + 2), texture, rng);
   const float* reference = reference_buffer.data() + 3;
   const float* window = buffer.data() + stride + 1;
   double reference_mean = 0, reference_energy = 0;
@@ -181,10 +186,8 @@ void expect_patch_box_sums_match(int n, int radius, unsigned seed) {
   SCOPED_TRACE(testing::Message() << "n=" << n << " radius=" << radius << " target=" << simd_target_name());
   const int p = n + 2 * radius, side = 2 * radius + 1;
   const std::size_t stride = static_cast<std::size_t>(p) + 3;
-  std::vector<float> buffer(stride * (p + 1));
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> grey(0.f, 1.f);
-  for (auto& b : buffer) b = 0.9f + 1e-3f * grey(rng);
+  const std::vector<float> buffer = bright_values(stride * (p + 1), 1e-3f, rng);
   const float* patch = buffer.data() + stride + 2;
   const auto count = static_cast<std::size_t>(side) * side;
   std::vector<double> sums(count, -1), squares(count, -1), expected_sums(count, -2), expected_squares(count, -2);
