@@ -276,13 +276,14 @@ HWY_INLINE void CorrelateFullRows(D d, const float* HWY_RESTRICT reference, std:
   const auto vmean = hn::Set(d, static_cast<float>(*mean));
   // rotated[(y·kSide + dx)·n + x] = centred window (y, (x + dx − r) mod n).
   HWY_ALIGN float rotated[kMaxLanes * kSide * kMaxLanes];
-  HWY_ALIGN int32_t lane_of[kMaxLanes];
+  // Lane x of rotation dx takes lane (x + dx − r) mod n; n, a vector's lane
+  // count, is a power of two, so the modulo is a mask, in registers.
   const hn::RebindToSigned<D> di;
   using Indices = decltype(hn::IndicesFromVec(d, hn::Zero(di)));
   Indices rotation[kSide];
   for (int dx = 0; dx < kSide; ++dx) {
-    for (int x = 0; x < n; ++x) lane_of[x] = (x + dx - kRadius + n) % n;
-    rotation[dx] = hn::IndicesFromVec(d, hn::Load(di, lane_of));
+    const auto lane = hn::And(hn::Iota(di, dx - kRadius + n), hn::Set(di, n - 1));
+    rotation[dx] = hn::IndicesFromVec(d, lane);
   }
   auto squares = hn::Zero(d);
   for (int y = 0; y < n; ++y) {
