@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "fusion/for_rows.h"
+
 namespace bosfuse::fusion {
 namespace {
 
@@ -41,9 +43,11 @@ double node_gradient(const DisplacementField& field, int row, int col, int dr, i
 }  // namespace
 
 double field_noise_floor_px(const DisplacementField& field) {
-  std::vector<double> residuals;
-  residuals.reserve(2 * field.vectors.size());
-  for (int row = 0; row < field.rows; ++row) {
+  // Each node's two residuals in its own slots, rows in parallel, then
+  // gathered in node order: the median sees what a serial loop would give it.
+  std::vector<double> per_node(2 * field.vectors.size());
+  std::vector<std::uint8_t> has_residual(field.vectors.size(), 0);
+  for_rows(field.rows, [&](int row) {
     for (int col = 0; col < field.cols; ++col) {
       const auto& vec = field.at(row, col);
       if (!measured(vec)) continue;
@@ -60,9 +64,18 @@ double field_noise_floor_px(const DisplacementField& field) {
         }
       }
       if (count < 3) continue;
-      residuals.push_back(std::abs(vec.u_px - median_of(u.data(), count)));
-      residuals.push_back(std::abs(vec.v_px - median_of(v.data(), count)));
+      const std::size_t i = static_cast<std::size_t>(row) * field.cols + col;
+      per_node[2 * i] = std::abs(vec.u_px - median_of(u.data(), count));
+      per_node[2 * i + 1] = std::abs(vec.v_px - median_of(v.data(), count));
+      has_residual[i] = 1;
     }
+  });
+  std::vector<double> residuals;
+  residuals.reserve(per_node.size());
+  for (std::size_t i = 0; i < has_residual.size(); ++i) {
+    if (!has_residual[i]) continue;
+    residuals.push_back(per_node[2 * i]);
+    residuals.push_back(per_node[2 * i + 1]);
   }
   if (residuals.size() < 16) return -1;  // 8 vectors, two components each
   const double mad = median_of(residuals.data(), static_cast<int>(residuals.size()));
@@ -71,7 +84,7 @@ double field_noise_floor_px(const DisplacementField& field) {
 
 cv::Mat displaced_nodes(const DisplacementField& field, double threshold_px) {
   cv::Mat displaced = cv::Mat::zeros(field.rows, field.cols, CV_8U);
-  for (int row = 0; row < field.rows; ++row) {
+  for_rows(field.rows, [&](int row) {
     for (int col = 0; col < field.cols; ++col) {
       const auto& vec = field.at(row, col);
       if (vec.flag == VectorFlag::kOutOfRoi) continue;
@@ -84,7 +97,7 @@ cv::Mat displaced_nodes(const DisplacementField& field, double threshold_px) {
       // A NaN (which no evaluator should give) counts as displaced: refining it is safe.
       if (show || !std::isfinite(vec.u_px) || !std::isfinite(vec.v_px)) displaced.at<std::uint8_t>(row, col) = 1;
     }
-  }
+  });
   return displaced;
 }
 
@@ -109,7 +122,7 @@ RefinementSelection select_refinement(const DisplacementField& first_pass, const
       const int i0 = std::min(static_cast<int>(g), nodes - 1);
       return std::pair{i0, g > i0 ? std::min(i0 + 1, nodes - 1) : i0};  // not the node of weight 0
     };
-    for (int row = 0; row < target.rows; ++row) {
+    for_rows(target.rows, [&](int row) {
       const auto [r0, r1] =
           stencil(target_grid.y0_px + row * target_grid.step_px, first_grid.y0_px, first_grid.step_px, first_grid.rows);
       for (int col = 0; col < target.cols; ++col) {
@@ -118,7 +131,7 @@ RefinementSelection select_refinement(const DisplacementField& first_pass, const
         refine.at<std::uint8_t>(row, col) = displaced.at<std::uint8_t>(r0, c0) | displaced.at<std::uint8_t>(r0, c1) |
                                             displaced.at<std::uint8_t>(r1, c0) | displaced.at<std::uint8_t>(r1, c1);
       }
-    }
+    });
     if (context_nodes > 0 && !refine.empty()) {
       const cv::Mat square = cv::Mat::ones(2 * context_nodes + 1, 2 * context_nodes + 1, CV_8U);
       cv::dilate(refine, refine, square, cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
@@ -148,7 +161,7 @@ void smooth_unrefined(DisplacementField& field, const cv::Mat& refine, double si
   }
   if (sigma_nodes == 0 || field.vectors.empty()) return;
   cv::Mat weight(field.rows, field.cols, CV_64F), u(field.rows, field.cols, CV_64F), v(field.rows, field.cols, CV_64F);
-  for (int row = 0; row < field.rows; ++row) {
+  for_rows(field.rows, [&](int row) {
     for (int col = 0; col < field.cols; ++col) {
       const auto& vec = field.at(row, col);
       const double w = !refine.at<std::uint8_t>(row, col) && measured(vec) ? 1.0 : 0.0;
@@ -156,14 +169,14 @@ void smooth_unrefined(DisplacementField& field, const cv::Mat& refine, double si
       u.at<double>(row, col) = w * vec.u_px;
       v.at<double>(row, col) = w * vec.v_px;
     }
-  }
+  });
   const int half = static_cast<int>(std::ceil(3 * sigma_nodes));
   const cv::Mat kernel = cv::getGaussianKernel(2 * half + 1, sigma_nodes, CV_64F);
   // Zero outside the grid: with the weights filtered alike, edges are normalised like the rest.
   for (cv::Mat* m : {&weight, &u, &v}) {
     cv::sepFilter2D(*m, *m, CV_64F, kernel, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
   }
-  for (int row = 0; row < field.rows; ++row) {
+  for_rows(field.rows, [&](int row) {
     for (int col = 0; col < field.cols; ++col) {
       auto& vec = field.at(row, col);
       if (refine.at<std::uint8_t>(row, col) || !measured(vec)) continue;
@@ -171,7 +184,7 @@ void smooth_unrefined(DisplacementField& field, const cv::Mat& refine, double si
       vec.u_px = u.at<double>(row, col) / w;
       vec.v_px = v.at<double>(row, col) / w;
     }
-  }
+  });
 }
 
 int refinement_context_nodes(int window_px, int search_radius_px, int step_px) {

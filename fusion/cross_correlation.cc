@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "fusion/adaptive_refinement.h"
+#include "fusion/for_rows.h"
 #include "fusion/image_input.h"
 #include "fusion/memory_budget.h"
 
@@ -363,14 +364,17 @@ void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, P
   if (options.replace_outliers) replace_outliers(sparse, options.outliers);
   const GridField predictor = predictor_from(sparse, coarse.grid);
   measured = {sparse, coarse.grid};
-  for (auto& vec : field.vectors) {
-    if (vec.flag == VectorFlag::kOutOfRoi) continue;
-    const cv::Point2d p = interpolate_field(predictor, vec.x_px, vec.y_px);
-    vec.u_px = p.x;
-    vec.v_px = p.y;
-    vec.peak_ratio = 0;
-    vec.flag = VectorFlag::kOk;  // provisional: the next pass measures every node
-  }
+  for_rows(field.rows, [&](int row) {
+    for (int col = 0; col < field.cols; ++col) {
+      auto& vec = field.at(row, col);
+      if (vec.flag == VectorFlag::kOutOfRoi) continue;
+      const cv::Point2d p = interpolate_field(predictor, vec.x_px, vec.y_px);
+      vec.u_px = p.x;
+      vec.v_px = p.y;
+      vec.peak_ratio = 0;
+      vec.flag = VectorFlag::kOk;  // provisional: the next pass measures every node
+    }
+  });
 }
 
 // ---- Adaptive refinement (fusion/adaptive_refinement.h) ----
@@ -378,6 +382,10 @@ void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, P
 // The selection of the refinement passes and what the others keep.
 struct AdaptivePasses {
   RefinementSelection selection;
+  // The selection grown by one node: the outlier test of the refinement
+  // passes, tested there only, treats every selected node as the whole
+  // field's test would (the others are put back from first_pass after it).
+  cv::Mat outlier_tested;
   DisplacementField first_pass;  // the field after the first pass, unselected nodes marked first_pass_only
   // Selecting every node is full refinement, without the tiles' bookkeeping.
   bool active() const { return !selection.refine.empty() && selection.selected < selection.candidates; }
@@ -396,6 +404,7 @@ AdaptivePasses select_for_refinement(const MeasuredPass& measured, const Displac
     vec.first_pass_only = !adaptive.selection.refine.data[i] && vec.flag != VectorFlag::kOutOfRoi;
   }
   smooth_unrefined(adaptive.first_pass, adaptive.selection.refine, options.adaptive_smoothing_nodes);
+  cv::dilate(adaptive.selection.refine, adaptive.outlier_tested, cv::Mat::ones(3, 3, CV_8U));
   spdlog::debug("adaptive refinement: noise floor {:.4f} px, threshold {:.4f} px, {:.1f} % of the windows refined",
                 adaptive.selection.noise_floor_px, adaptive.selection.threshold_px,
                 100 * adaptive.selection.fraction());
@@ -405,9 +414,12 @@ AdaptivePasses select_for_refinement(const MeasuredPass& measured, const Displac
 // Unselected nodes as the first pass left them, smoothed (the outlier test
 // of a refinement pass sees them as neighbours, but does not change them).
 void keep_first_pass(const AdaptivePasses& adaptive, DisplacementField& field) {
-  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
-    if (!adaptive.selection.refine.data[i]) field.vectors[i] = adaptive.first_pass.vectors[i];
-  }
+  for_rows(field.rows, [&](int row) {
+    const std::uint8_t* refined = adaptive.selection.refine.ptr<std::uint8_t>(row);
+    for (int col = 0; col < field.cols; ++col) {
+      if (!refined[col]) field.at(row, col) = adaptive.first_pass.at(row, col);
+    }
+  });
 }
 
 // The parts of in.region the selected windows read (window and search,
@@ -530,7 +542,9 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     // each pass would page-fault it anew.
     if (pass > 0) workspace.previous_field = field;
     run_pass(pair, in, options, field);
-    if (options.replace_outliers) replace_outliers(field, options.outliers);
+    if (options.replace_outliers) {
+      replace_outliers(field, options.outliers, adaptive.active() ? &adaptive.outlier_tested : nullptr);
+    }
     if (adaptive.active()) keep_first_pass(adaptive, field);
     if (pass == 0 && windows.size() > 1 && options.adaptive_refinement) {
       adaptive = select_for_refinement({field, grid}, field, grid, options);

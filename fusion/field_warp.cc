@@ -173,12 +173,12 @@ void warp_rows(const cv::Mat& image, const TabulatedKernel& kernel, bool simd, c
   }
 }
 
-// Rows of the image inside the region copied whole, only the columns past
-// its edges one by one.
-void copy_with_replicated_border(const cv::Mat& image, cv::Rect region, cv::Mat& out) {
+// Rows `rows` of the region: the part inside the image copied whole, only
+// the columns past its edges one by one.
+void copy_with_replicated_border(const cv::Mat& image, cv::Rect region, cv::Range rows, cv::Mat& out) {
   const int inside_begin = std::clamp(-region.x, 0, region.width);
   const int inside_end = std::clamp(image.cols - region.x, inside_begin, region.width);
-  for (int y = 0; y < region.height; ++y) {
+  for (int y = rows.start; y < rows.end; ++y) {
     const float* src = image.ptr<float>(std::clamp(region.y + y, 0, image.rows - 1));
     float* dst = out.ptr<float>(y);
     for (int x = 0; x < inside_begin; ++x) dst[x] = src[std::clamp(region.x + x, 0, image.cols - 1)];
@@ -203,18 +203,20 @@ void warp(const cv::Mat& image, const GridField& field, cv::Rect region, Interpo
   CV_Assert(image.type() == CV_32FC1);
   out.create(region.size(), CV_32F);
   CV_Assert(out.data != image.data);
+  // Small regions (probes) cost less than waking the other thread.
+  const auto for_region_rows = [&](auto rows_of) {
+    if (region.area() < 16384) {
+      rows_of(cv::Range(0, region.height));
+    } else {
+      cv::parallel_for_(cv::Range(0, region.height), rows_of);
+    }
+  };
   if (field.grid.rows == 0 || field.grid.cols == 0) {
-    copy_with_replicated_border(image, region, out);
+    for_region_rows([&](const cv::Range& rows) { copy_with_replicated_border(image, region, rows, out); });
     return;
   }
   const TabulatedKernel kernel = table_of(interpolator).kernel();
-  // Small regions (probes) cost less than waking the other thread.
-  if (region.area() < 16384) {
-    warp_rows(image, kernel, simd, field, region, cv::Range(0, region.height), out);
-  } else {
-    cv::parallel_for_(cv::Range(0, region.height),
-                      [&](const cv::Range& rows) { warp_rows(image, kernel, simd, field, region, rows, out); });
-  }
+  for_region_rows([&](const cv::Range& rows) { warp_rows(image, kernel, simd, field, region, rows, out); });
 }
 
 }  // namespace

@@ -5,26 +5,14 @@
 #include <atomic>
 #include <cmath>
 #include <opencv2/core/utility.hpp>
+#include <stdexcept>
+
+#include "fusion/for_rows.h"
 
 namespace bosfuse::fusion {
 namespace {
 
 bool has_value(VectorFlag flag) { return flag == VectorFlag::kOk || flag == VectorFlag::kOutlierReplaced; }
-
-// body(row) for every row, the rows of a large field on both cores (each
-// row's work writes only that row); a small field's cost less than waking
-// the other thread.
-template <typename Body>
-void for_rows(int rows, Body body) {
-  auto range = [&](const cv::Range& r) {
-    for (int row = r.start; row < r.end; ++row) body(row);
-  };
-  if (rows < 64) {
-    range(cv::Range(0, rows));
-  } else {
-    cv::parallel_for_(cv::Range(0, rows), range);
-  }
-}
 
 // Sorts eight values with the 19 compare-exchanges of the optimal network
 // (Knuth, TAOCP 5.3.4): branch-free min/max, where an insertion sort of an
@@ -106,16 +94,20 @@ std::string OutlierOptions::Validate() const {
   return {};
 }
 
-std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& options) {
+std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& options, const cv::Mat* only) {
+  if (only && (only->rows != field.rows || only->cols != field.cols || only->type() != CV_8U)) {
+    throw std::invalid_argument("outlier test: the nodes to test do not match the field");
+  }
   auto measured = [](const DisplacementVector& v) { return v.flag == VectorFlag::kOk; };
   // Nothing is written before every test and every replacement value is
   // known, so all of them read the field as it came, rows in parallel, with
   // no 12 MB copy of a 16 MP frame's field.
   std::vector<std::uint8_t> is_outlier(field.vectors.size(), 0);
   for_rows(field.rows, [&](int row) {
+    const std::uint8_t* tested = only ? only->ptr<std::uint8_t>(row) : nullptr;
     for (int col = 0; col < field.cols; ++col) {
       const auto& vec = field.at(row, col);
-      if (!measured(vec)) continue;
+      if (!measured(vec) || (tested && !tested[col])) continue;
       const bool on_edge = row == 0 || col == 0 || row == field.rows - 1 || col == field.cols - 1;
       if (on_edge && !options.test_grid_edges) continue;
       const Neighbours n = neighbours_of(field, row, col, measured);

@@ -32,8 +32,12 @@ struct OutlierOptions {
   std::string Validate() const;  // empty when valid
 };
 
-// Tests vectors flagged kOk; returns how many were replaced.
-std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& options);
+// Tests vectors flagged kOk; returns how many were replaced. With `only`
+// (CV_8U, the field's rows×cols) just the nodes marked non-zero there are
+// tested and replaced. A test and a replacement read the node's neighbours
+// as the whole field's test does, so a node whose 3×3 neighbourhood is all
+// marked ends as the whole field's test would leave it.
+std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& options, const cv::Mat* only = nullptr);
 
 // The predictor for the next pass on `grid` (the field's own grid):
 // measured and replaced vectors as they are; every other node the median of

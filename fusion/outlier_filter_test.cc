@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <opencv2/imgproc.hpp>
 #include <random>
+#include <stdexcept>
 
 namespace bosfuse::fusion {
 namespace {
@@ -51,6 +53,40 @@ TEST(OutlierFilter, LeavesASmoothFieldAlone) {
   const DisplacementField before = field;
   EXPECT_EQ(replace_outliers(field, OutlierOptions{}), 0u);
   for (std::size_t i = 0; i < field.size(); ++i) EXPECT_EQ(field.vectors[i].u_px, before.vectors[i].u_px);
+}
+
+// Adaptive refinement tests only the refined nodes, grown by one: there the
+// result must be the whole field's, clusters of outliers and outliers on the
+// marked region's border included, and nothing unmarked may change.
+TEST(OutlierFilter, TestingOnlyMarkedNodesLeavesThemAsTheWholeFieldsTestDoes) {
+  std::mt19937 random(5);
+  std::bernoulli_distribution spurious(0.08);
+  std::normal_distribution<double> wild(0.0, 3.0);
+  DisplacementField field = smooth_field(40, 50);
+  for (auto& vec : field.vectors) {
+    if (spurious(random)) vec.u_px += wild(random);
+  }
+  cv::Mat marked = cv::Mat::zeros(field.rows, field.cols, CV_8U);
+  cv::circle(marked, {20, 18}, 11, cv::Scalar(1), cv::FILLED);
+  cv::Mat tested;
+  cv::dilate(marked, tested, cv::Mat::ones(3, 3, CV_8U));
+  DisplacementField whole = field, restricted = field;
+  const std::size_t replaced_whole = replace_outliers(whole, OutlierOptions{});
+  const std::size_t replaced_restricted = replace_outliers(restricted, OutlierOptions{}, &tested);
+  ASSERT_GT(replaced_restricted, 10u);
+  ASSERT_LT(replaced_restricted, replaced_whole);
+  for (int r = 0; r < field.rows; ++r) {
+    for (int c = 0; c < field.cols; ++c) {
+      const auto& got = restricted.at(r, c);
+      const auto& want = marked.at<std::uint8_t>(r, c) ? whole.at(r, c) : field.at(r, c);
+      if (tested.at<std::uint8_t>(r, c) && !marked.at<std::uint8_t>(r, c)) continue;  // the ring: tested, not kept
+      ASSERT_EQ(got.u_px, want.u_px) << r << ", " << c;
+      ASSERT_EQ(got.v_px, want.v_px) << r << ", " << c;
+      ASSERT_EQ(got.flag, want.flag) << r << ", " << c;
+    }
+  }
+  const cv::Mat wrong_size = cv::Mat::ones(field.rows, field.cols + 1, CV_8U);
+  EXPECT_THROW(replace_outliers(restricted, OutlierOptions{}, &wrong_size), std::invalid_argument);
 }
 
 TEST(OutlierFilter, PredictorFillsGapsFromNeighbours) {

@@ -1,0 +1,26 @@
+#pragma once
+// for_rows(rows, body) calls body(row) for every row of a grid of nodes,
+// the rows of a large grid on all cores. Use it for per-node work over a
+// displacement field (outlier test, predictor, adaptive selection) whose
+// work for a row writes only that row: a 16 MP frame's field has 250,000
+// nodes, and a serial loop over it is time the other core idles. A grid of
+// fewer than 64 rows (a probe's) runs on the calling thread, which costs
+// less than waking another.
+
+#include <opencv2/core/utility.hpp>
+
+namespace bosfuse::fusion {
+
+template <typename Body>
+void for_rows(int rows, Body body) {
+  auto range = [&](const cv::Range& r) {
+    for (int row = r.start; row < r.end; ++row) body(row);
+  };
+  if (rows < 64) {
+    range(cv::Range(0, rows));
+  } else {
+    cv::parallel_for_(cv::Range(0, rows), range);
+  }
+}
+
+}  // namespace bosfuse::fusion
