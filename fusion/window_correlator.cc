@@ -1,5 +1,6 @@
 #include "fusion/window_correlator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
 
@@ -171,7 +172,15 @@ double WindowCorrelator::normalised(std::size_t shift, double measurement_energy
 }
 
 void WindowCorrelator::normalise_equal_windows(double measurement_energy, CorrelationPlane& plane) const {
-  for (std::size_t i = 0; i < plane.value.size(); ++i) plane.value[i] = normalised(i, measurement_energy);
+  // One denominator for every shift: normalised() would take its square root
+  // for each (the refinement passes' 25 per node), and errno keeps the
+  // compiler from hoisting it. The quotients are the same.
+  if (reference_energy_ < kMinEnergy || measurement_energy < kMinEnergy) {
+    std::fill(plane.value.begin(), plane.value.end(), 0.0);
+    return;
+  }
+  const double denominator = std::sqrt(reference_energy_ * measurement_energy);
+  for (std::size_t i = 0; i < plane.value.size(); ++i) plane.value[i] = products_[i] / denominator;
 }
 
 void WindowCorrelator::normalise(int n, CorrelationPlane& plane) const {
