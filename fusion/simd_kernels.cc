@@ -392,11 +392,10 @@ HWY_INLINE void SampleSeparable(D d, const float* HWY_RESTRICT image, std::size_
 }
 
 #if HWY_TARGET != HWY_SCALAR
-// The first stages of an 8×8 transpose, which work within 128-bit blocks:
-// unpacks of lanes, then of 64-bit pairs. u[0…7] are left for the blocks to
-// be combined.
+// r[i] (row i of an 8×8 block) becomes column i: unpacks within 128-bit
+// blocks, then of 64-bit pairs, then the blocks combined.
 template <class D>
-HWY_INLINE void TransposeWithinBlocks(D d, const hn::Vec<D>* r, hn::Vec<D>* u) {
+HWY_INLINE void Transpose8x8(D d, hn::Vec<D>* r) {
   const hn::Repartition<double, D> dd;
   const auto lower64 = [&](hn::Vec<D> a, hn::Vec<D> b) {
     return hn::BitCast(d, hn::InterleaveLower(dd, hn::BitCast(dd, a), hn::BitCast(dd, b)));
@@ -408,61 +407,35 @@ HWY_INLINE void TransposeWithinBlocks(D d, const hn::Vec<D>* r, hn::Vec<D>* u) {
   const auto t2 = hn::InterleaveLower(d, r[2], r[3]), t3 = hn::InterleaveUpper(d, r[2], r[3]);
   const auto t4 = hn::InterleaveLower(d, r[4], r[5]), t5 = hn::InterleaveUpper(d, r[4], r[5]);
   const auto t6 = hn::InterleaveLower(d, r[6], r[7]), t7 = hn::InterleaveUpper(d, r[6], r[7]);
-  u[0] = lower64(t0, t2), u[1] = upper64(t0, t2), u[2] = lower64(t1, t3), u[3] = upper64(t1, t3);
-  u[4] = lower64(t4, t6), u[5] = upper64(t4, t6), u[6] = lower64(t5, t7), u[7] = upper64(t5, t7);
+  const auto u0 = lower64(t0, t2), u1 = upper64(t0, t2), u2 = lower64(t1, t3), u3 = upper64(t1, t3);
+  const auto u4 = lower64(t4, t6), u5 = upper64(t4, t6), u6 = lower64(t5, t7), u7 = upper64(t5, t7);
+  r[0] = hn::ConcatLowerLower(d, u4, u0);
+  r[1] = hn::ConcatLowerLower(d, u5, u1);
+  r[2] = hn::ConcatLowerLower(d, u6, u2);
+  r[3] = hn::ConcatLowerLower(d, u7, u3);
+  r[4] = hn::ConcatUpperUpper(d, u4, u0);
+  r[5] = hn::ConcatUpperUpper(d, u5, u1);
+  r[6] = hn::ConcatUpperUpper(d, u6, u2);
+  r[7] = hn::ConcatUpperUpper(d, u7, u3);
 }
 
-// r[i] (row i of an 8×8 block) becomes column i: the blocks' stages, then
-// the blocks combined.
-template <class D>
-HWY_INLINE void Transpose8x8(D d, hn::Vec<D>* r) {
-  hn::Vec<D> u[8];
-  TransposeWithinBlocks(d, r, u);
-  for (int i = 0; i < 4; ++i) {
-    r[i] = hn::ConcatLowerLower(d, u[i + 4], u[i]);
-    r[i + 4] = hn::ConcatUpperUpper(d, u[i + 4], u[i]);
-  }
-}
-
-#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
-#define BOSFUSE_SIXTEEN_POINT_GROUPS 1
-// r[k] holds point k's weights in its lower 256 bits and point k + 8's in
-// its upper: both 8×8 blocks transposed at once, so that r[t] holds tap t
-// of the sixteen points in order. The blocks' stages are Transpose8x8's;
-// each half then takes the 128-bit blocks ConcatLowerLower and
-// ConcatUpperUpper would take, from both halves in one two-table permute.
-HWY_INLINE void TransposeTwo8x8(hn::Full512<float> d, hn::Vec512<float>* r) {
-  hn::Vec512<float> u[8];
-  TransposeWithinBlocks(d, r, u);
-  const __m512i lower = _mm512_setr_epi32(0, 1, 2, 3, 16, 17, 18, 19, 8, 9, 10, 11, 24, 25, 26, 27);
-  const __m512i upper = _mm512_setr_epi32(4, 5, 6, 7, 20, 21, 22, 23, 12, 13, 14, 15, 28, 29, 30, 31);
-  for (int i = 0; i < 4; ++i) {
-    r[i] = hn::Vec512<float>{_mm512_permutex2var_ps(u[i].raw, lower, u[i + 4].raw)};
-    r[i + 4] = hn::Vec512<float>{_mm512_permutex2var_ps(u[i].raw, upper, u[i + 4].raw)};
-  }
-}
-#endif
-
-// A group of neighbouring points of a row (as many as D's lanes, 8 or 16),
-// one per lane. Where the field is smooth (a window deformation's is) their
-// taps start in one image row at consecutive columns, so each tap of the
-// whole group is one contiguous load and no point needs a sum across lanes.
-// Each point's weights are its table rows interpolated (as in
-// SampleSeparable), then transposed to one vector per tap. Summed as the
-// scalar reference sums: each row of taps, then the rows weighted in order;
-// a lane's sums are the same whatever the group's size. False (nothing
-// written) when the points are not so arranged or their taps leave the
-// image. The taps are a template argument so that the tap loops unroll.
+// Eight neighbouring points of a row, one per lane. Where the field is
+// smooth (a window deformation's is) their taps start in one image row at
+// consecutive columns, so each tap of all eight is one contiguous load and
+// no point needs a sum across lanes. Each point's weights are its table
+// rows interpolated (as in SampleSeparable), then transposed to one vector
+// per tap. Summed as the scalar reference sums: each row of taps, then the
+// rows weighted in order. False (nothing written) when the points are not
+// so arranged or their taps leave the image. The taps are a template
+// argument so that the tap loops unroll.
 template <int kTaps, class D>
-HWY_INLINE bool SampleGroupAlongRow(D d, const float* HWY_RESTRICT image, std::size_t stride, int cols, int rows,
+HWY_INLINE bool SampleEightAlongRow(D d, const float* HWY_RESTRICT image, std::size_t stride, int cols, int rows,
                                     const TabulatedKernel& kernel, const double* HWY_RESTRICT xs,
                                     const double* HWY_RESTRICT ys, float* HWY_RESTRICT out) {
-  constexpr int kPoints = static_cast<int>(hn::MaxLanes(D()));
-  static_assert(kPoints == 8 || kPoints == 16, "groups of 8 or 16 points");
   constexpr int kFirst = 1 - kTaps / 2;
   const int steps = kernel.steps;
-  HWY_ALIGN int32_t entry_x[kPoints], entry_y[kPoints];
-  HWY_ALIGN float frac_x[kPoints], frac_y[kPoints];
+  HWY_ALIGN int32_t entry_x[8], entry_y[8];
+  HWY_ALIGN float frac_x[8], frac_y[8];
   // Positions in double, as the reference takes them: the whole pixel, the
   // table entry below the sub-pixel part and the fraction past it.
   const hn::CappedTag<double, 4> dd;
@@ -480,45 +453,31 @@ HWY_INLINE bool SampleGroupAlongRow(D d, const float* HWY_RESTRICT image, std::s
     return floor;
   };
   // The arrangement is checked on the whole pixels in double, in registers:
-  // reading back ints stored in parts stalls store forwarding.
+  // reading back eight ints stored as two halves stalls store forwarding.
   const double floor_x0 = std::floor(xs[0]), floor_y0 = std::floor(ys[0]);
   bool arranged = true;
-  for (int i = 0; i < kPoints; i += double_lanes) {
+  for (int i = 0; i < 8; i += double_lanes) {
     const auto fx = split(xs, entry_x, frac_x, i);
     const auto fy = split(ys, entry_y, frac_y, i);
     const auto next_column = hn::Eq(hn::Sub(fx, hn::Iota(dd, double(i))), hn::Set(dd, floor_x0));
     arranged = arranged && hn::AllTrue(dd, hn::And(next_column, hn::Eq(fy, hn::Set(dd, floor_y0))));
   }
   const int x0 = static_cast<int>(floor_x0) + kFirst, y0 = static_cast<int>(floor_y0) + kFirst;
-  if (!arranged || x0 < 0 || y0 < 0 || x0 + kPoints - 1 + kTaps > cols || y0 + kTaps > rows) return false;
+  if (!arranged || x0 < 0 || y0 < 0 || x0 + 7 + kTaps > cols || y0 + kTaps > rows) return false;
 
-  // A point's weights in eight lanes; lanes past the taps hold the next
-  // entry's weights, and those columns of the transposed block are never used.
-  const hn::CappedTag<float, 8> d8;
-  const auto weights = [&](int entry, float frac) {
-    const float* a = kernel.weights + static_cast<std::size_t>(entry) * kTaps;
-    const auto va = hn::LoadU(d8, a);
-    return hn::MulAdd(hn::Set(d8, frac), hn::Sub(hn::LoadU(d8, a + kTaps), va), va);
-  };
+  // Lanes past the taps hold the next entry's weights; those columns of the
+  // transposed block are never used.
   hn::Vec<D> wx[8], wy[8];
-  if constexpr (kPoints == 8) {
-    for (int k = 0; k < 8; ++k) {
-      wx[k] = weights(entry_x[k], frac_x[k]);
-      wy[k] = weights(entry_y[k], frac_y[k]);
-    }
-    Transpose8x8(d, wx);
-    Transpose8x8(d, wy);
+  for (int k = 0; k < 8; ++k) {
+    const float* a = kernel.weights + static_cast<std::size_t>(entry_x[k]) * kTaps;
+    const auto va = hn::LoadU(d, a);
+    wx[k] = hn::MulAdd(hn::Set(d, frac_x[k]), hn::Sub(hn::LoadU(d, a + kTaps), va), va);
+    const float* b = kernel.weights + static_cast<std::size_t>(entry_y[k]) * kTaps;
+    const auto vb = hn::LoadU(d, b);
+    wy[k] = hn::MulAdd(hn::Set(d, frac_y[k]), hn::Sub(hn::LoadU(d, b + kTaps), vb), vb);
   }
-#ifdef BOSFUSE_SIXTEEN_POINT_GROUPS
-  if constexpr (kPoints == 16) {
-    for (int k = 0; k < 8; ++k) {
-      wx[k] = hn::Combine(d, weights(entry_x[k + 8], frac_x[k + 8]), weights(entry_x[k], frac_x[k]));
-      wy[k] = hn::Combine(d, weights(entry_y[k + 8], frac_y[k + 8]), weights(entry_y[k], frac_y[k]));
-    }
-    TransposeTwo8x8(d, wx);
-    TransposeTwo8x8(d, wy);
-  }
-#endif
+  Transpose8x8(d, wx);
+  Transpose8x8(d, wy);
   const float* top = image + static_cast<std::size_t>(y0) * stride + x0;
   auto total = hn::Zero(d);
   for (int j = 0; j < kTaps; ++j) {
@@ -532,46 +491,34 @@ HWY_INLINE bool SampleGroupAlongRow(D d, const float* HWY_RESTRICT image, std::s
 }
 
 // Points in groups of eight along the row where the targets have 8-lane
-// float vectors (AVX2, AVX-512), in groups of sixteen first with AVX-512:
-// half the loads and multiply-adds per point. A group not so arranged is
-// tried as two of eight, a group of eight point by point.
+// float vectors (AVX2, AVX-512), the groups not so arranged one by one.
 template <int kTaps, class D8>
-HWY_INLINE int SampleInGroupsOf(D8 d8, const float* image, std::size_t stride, int cols, int rows,
+HWY_INLINE int SampleInEightsOf(D8 d8, const float* image, std::size_t stride, int cols, int rows,
                                 const TabulatedKernel& kernel, const double* x, const double* y, int count,
                                 float* out) {
-  const auto eight = [&](int k) {
-    if (!SampleGroupAlongRow<kTaps>(d8, image, stride, cols, rows, kernel, x + k, y + k, out + k)) {
+  int k = 0;
+  for (; k + 8 <= count; k += 8) {
+    if (!SampleEightAlongRow<kTaps>(d8, image, stride, cols, rows, kernel, x + k, y + k, out + k)) {
       SampleSeparable(d8, image, stride, cols, rows, kernel, x + k, y + k, 8, out + k);
     }
-  };
-  int k = 0;
-#ifdef BOSFUSE_SIXTEEN_POINT_GROUPS
-  const hn::Full512<float> d16;
-  for (; k + 16 <= count; k += 16) {
-    if (!SampleGroupAlongRow<kTaps>(d16, image, stride, cols, rows, kernel, x + k, y + k, out + k)) {
-      eight(k);
-      eight(k + 8);
-    }
   }
-#endif
-  for (; k + 8 <= count; k += 8) eight(k);
   return k;
 }
 
-// How many points SampleInGroupsOf took: none where the target's vectors
+// How many points SampleInEightsOf took: none where the target's vectors
 // are shorter than eight floats or the kernel is not one of ours.
 template <class D8>
-HWY_INLINE int SampleInGroups(D8 d8, const float* image, std::size_t stride, int cols, int rows,
+HWY_INLINE int SampleInEights(D8 d8, const float* image, std::size_t stride, int cols, int rows,
                               const TabulatedKernel& kernel, const double* x, const double* y, int count, float* out) {
   if constexpr (hn::MaxLanes(D8()) == 8) {
     if (hn::Lanes(d8) == 8) {
       switch (kernel.taps) {
         case 4:
-          return SampleInGroupsOf<4>(d8, image, stride, cols, rows, kernel, x, y, count, out);
+          return SampleInEightsOf<4>(d8, image, stride, cols, rows, kernel, x, y, count, out);
         case 6:
-          return SampleInGroupsOf<6>(d8, image, stride, cols, rows, kernel, x, y, count, out);
+          return SampleInEightsOf<6>(d8, image, stride, cols, rows, kernel, x, y, count, out);
         case 8:
-          return SampleInGroupsOf<8>(d8, image, stride, cols, rows, kernel, x, y, count, out);
+          return SampleInEightsOf<8>(d8, image, stride, cols, rows, kernel, x, y, count, out);
         default:
           break;
       }
@@ -579,14 +526,13 @@ HWY_INLINE int SampleInGroups(D8 d8, const float* image, std::size_t stride, int
   }
   return 0;
 }
-#undef BOSFUSE_SIXTEEN_POINT_GROUPS
 #endif
 
 void SampleSeparablePoints(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
                            const double* x, const double* y, int count, float* out) {
   int k = 0;
 #if HWY_TARGET != HWY_SCALAR
-  k = SampleInGroups(hn::CappedTag<float, 8>(), image, stride, cols, rows, kernel, x, y, count, out);
+  k = SampleInEights(hn::CappedTag<float, 8>(), image, stride, cols, rows, kernel, x, y, count, out);
 #endif
   if (kernel.taps <= 4) {
     SampleSeparable(hn::CappedTag<float, 4>(), image, stride, cols, rows, kernel, x + k, y + k, count - k, out + k);
