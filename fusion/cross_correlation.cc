@@ -410,9 +410,10 @@ void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, P
 // The selection of the refinement passes and what the others keep.
 struct AdaptivePasses {
   RefinementSelection selection;
-  // The selection grown by one node: the outlier test of the refinement
-  // passes, tested there only, treats every selected node as the whole
-  // field's test would (the others are put back from first_pass after it).
+  // Where the refinement passes' outlier test runs: the selection grown by
+  // one node, so that every selected node ends as the whole field's test
+  // would leave it (the nodes outside the selection are put back from
+  // first_pass after the test anyway).
   cv::Mat outlier_tested;
   DisplacementField first_pass;  // the field after the first pass, unselected nodes marked first_pass_only
   // Selecting every node is full refinement, without the tiles' bookkeeping.
