@@ -4,7 +4,6 @@
 #include <array>
 #include <atomic>
 #include <cmath>
-#include <opencv2/core/utility.hpp>
 #include <stdexcept>
 
 #include "fusion/for_rows.h"

@@ -1,6 +1,5 @@
 #include "fusion/window_correlator.h"
 
-#include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
 
@@ -166,27 +165,26 @@ void WindowCorrelator::correlate_equal_windows(const cv::Mat& search_patch, int 
   normalise_equal_windows(energy, plane);
 }
 
-double WindowCorrelator::normalised(std::size_t shift, double measurement_energy) const {
+double WindowCorrelator::denominator(double measurement_energy) const {
   const bool flat = reference_energy_ < kMinEnergy || measurement_energy < kMinEnergy;
-  return flat ? 0.0 : products_[shift] / std::sqrt(reference_energy_ * measurement_energy);
+  return flat ? 0.0 : std::sqrt(reference_energy_ * measurement_energy);
+}
+
+double WindowCorrelator::normalised(std::size_t shift, double denominator) const {
+  return denominator == 0.0 ? 0.0 : products_[shift] / denominator;
 }
 
 void WindowCorrelator::normalise_equal_windows(double measurement_energy, CorrelationPlane& plane) const {
-  // One denominator for every shift: normalised() would take its square root
-  // for each (the refinement passes' 25 per node), and errno keeps the
-  // compiler from hoisting it. The quotients are the same.
-  if (reference_energy_ < kMinEnergy || measurement_energy < kMinEnergy) {
-    std::fill(plane.value.begin(), plane.value.end(), 0.0);
-    return;
-  }
-  const double denominator = std::sqrt(reference_energy_ * measurement_energy);
-  for (std::size_t i = 0; i < plane.value.size(); ++i) plane.value[i] = products_[i] / denominator;
+  // One denominator for every shift, taken once: errno keeps the compiler
+  // from hoisting a square root out of the loop itself.
+  const double d = denominator(measurement_energy);
+  for (std::size_t i = 0; i < plane.value.size(); ++i) plane.value[i] = normalised(i, d);
 }
 
 void WindowCorrelator::normalise(int n, CorrelationPlane& plane) const {
   const double count = double(n) * n;
   for (std::size_t i = 0; i < plane.value.size(); ++i) {
-    plane.value[i] = normalised(i, box_sum_sq_[i] - box_sum_[i] * box_sum_[i] / count);
+    plane.value[i] = normalised(i, denominator(box_sum_sq_[i] - box_sum_[i] * box_sum_[i] / count));
   }
 }
 

@@ -73,8 +73,10 @@ class WindowCorrelator {
   // vectors fit the window (simd_kernels.h); false when they do not.
   bool correlate_in_registers(const cv::Mat& reference_window, double reference_mean, const cv::Mat& search_patch,
                               int radius_px, CorrelationPlane& plane);
-  // products_[shift] over both windows' energies; 0 where either is flat.
-  double normalised(std::size_t shift, double measurement_energy) const;
+  // √(Σa'² · the measurement window's energy); 0 where either window is flat.
+  double denominator(double measurement_energy) const;
+  // products_[shift] over a denominator; 0 over a flat pair's.
+  double normalised(std::size_t shift, double denominator) const;
   void normalise_equal_windows(double measurement_energy, CorrelationPlane& plane) const;
   CorrelationMethod resolve(CorrelationMethod method, int window_px, int radius_px);
   void prepare_patch_sums(const cv::Mat& search_patch, int window_px);
