@@ -135,8 +135,10 @@ const sim::SyntheticPair& full_frame() {
 
 // The full-field benchmarks' evaluation: IW 16, step 8, with deformation,
 // every pass run; max shift 2 px (BOS).
-fusion::EvaluatorOptions full_frame_options(int method = 0, int passes = 3) {
+// first_window_px 32 with 2 passes: the 32→16 schedule.
+fusion::EvaluatorOptions full_frame_options(int method = 0, int passes = 3, int first_window_px = 0) {
   auto e = evaluator(method, 16, passes);
+  e.xcorr.first_window_px = first_window_px;
   e.set_grid(16, 8);
   e.xcorr.max_shift_px = 2;
   e.xcorr.convergence_px = 0;
@@ -197,8 +199,7 @@ double full_frame_rms_px(const fusion::DisplacementField& field) {
 void BM_FullFrame16MPMethods(benchmark::State& state) {
   const auto& pair = full_frame();
   const int method = int(state.range(0));
-  auto e = full_frame_options(method >= 3 ? 1 : 0, method == 1 ? 2 : 3);
-  if (method == 1 || method == 2) e.xcorr.first_window_px = 32;
+  auto e = full_frame_options(method >= 3 ? 1 : 0, method == 1 ? 2 : 3, method == 1 || method == 2 ? 32 : 0);
   e.flow.dis_preset = method == 4 ? fusion::DisPreset::kUltrafast : fusion::DisPreset::kMedium;
   fusion::EvaluationResult result;
   for (auto _ : state) result = fusion::evaluate_displacement(pair.reference, pair.measurement, e);
@@ -218,10 +219,12 @@ BENCHMARK(BM_FullFrame16MPMethods)
 // BM_FullFrame16MP frame after frame, as a run's processing does it: one
 // evaluator for all iterations, so the reference's preparation and the
 // buffers of the first frame serve the others (the first iteration, which
-// prepares them, is outside the timing).
+// prepares them, is outside the timing). schedule 0: 3 passes at IW 16;
+// 1: 32→16 (BM_FullFrame16MPMethods' method 1).
 void BM_FullFrame16MPEvaluator(benchmark::State& state) {
   const auto& pair = full_frame();
-  fusion::DisplacementEvaluator frames(pair.reference, full_frame_options());
+  const bool from_32 = state.range(0) == 1;
+  fusion::DisplacementEvaluator frames(pair.reference, full_frame_options(0, from_32 ? 2 : 3, from_32 ? 32 : 0));
   frames.evaluate(pair.measurement);
   for (auto _ : state) {
     const auto result = frames.evaluate(pair.measurement);
@@ -229,7 +232,12 @@ void BM_FullFrame16MPEvaluator(benchmark::State& state) {
     state.counters["valid_pct"] = 100.0 * result.summary.valid / result.field.size();
   }
 }
-BENCHMARK(BM_FullFrame16MPEvaluator)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(2);
+BENCHMARK(BM_FullFrame16MPEvaluator)
+    ->ArgName("schedule")
+    ->DenseRange(0, 1)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(2);
 
 // A field on the 16 MP pair's grid (615×407 nodes, IW 16, step 8), every
 // node measured; `node(x_px, y_px)` gives its vector.

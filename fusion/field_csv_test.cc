@@ -49,6 +49,35 @@ TEST(FieldCsvWriter, CellsArePrintfsFixedPoint) {
   EXPECT_EQ(csv.text(), expected);
 }
 
+// Most cells are rounded by one product in double; near a half-way point,
+// where that product could round the other way, the exact formatter takes
+// over. Both must print what printf prints, at every scale and number of
+// decimals, ties and their neighbouring doubles included.
+TEST(FieldCsvWriter, CellsNearHalfWayPointsArePrintfsToo) {
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> mantissa(-10.0, 10.0);
+  std::uniform_int_distribution<int> exponent(-12, 15), units(0, 1'000'000);
+  std::vector<std::pair<double, int>> cells;
+  for (int decimals = 0; decimals <= 11; ++decimals) {
+    for (int i = 0; i < 3000; ++i) cells.emplace_back(mantissa(random) * std::pow(10.0, exponent(random)), decimals);
+    for (int i = 0; i < 1000; ++i) {
+      const double tie = (units(random) + 0.5) / std::pow(10.0, decimals);
+      for (const double value : {tie, std::nextafter(tie, 0.0), std::nextafter(tie, 1e300), -tie}) {
+        cells.emplace_back(value, decimals);
+      }
+    }
+  }
+  const std::string_view columns[] = {"a"};
+  char expected[400];
+  for (const auto& [value, decimals] : cells) {
+    FieldCsvWriter csv(columns, 1);
+    csv.fixed(value, decimals);
+    csv.end_line();
+    std::snprintf(expected, sizeof expected, "x,y,a\n%.*f\n", decimals, value);
+    ASSERT_EQ(csv.text(), std::string(expected)) << std::hexfloat << value << " to " << decimals << " decimals";
+  }
+}
+
 TEST(FieldCsvWriter, AFileThatCannotBeWrittenIsNamed) {
   const std::string_view columns[] = {"a"};
   try {
