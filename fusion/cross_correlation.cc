@@ -21,8 +21,13 @@ namespace bosfuse::fusion {
 namespace {
 
 struct PreparedPair {
-  cv::Mat reference;      // CV_32F, [0,1]
-  cv::Mat measurement;    // CV_32F, [0,1]
+  cv::Mat reference;    // CV_32F, [0,1]
+  cv::Mat measurement;  // CV_32F, [0,1]; the inside of measurement_storage
+  // The measurement with `measurement_border_px` replicated pixels on every
+  // side: the first pass searches past the image's edge, and reads it here
+  // in place instead of a copy of the whole image with its border.
+  cv::Mat measurement_storage;
+  int measurement_border_px = 0;
   cv::Mat mask_integral;  // CV_32S integral of the 0/1 exclusion mask; empty without mask
   cv::Mat excluded;       // CV_8U, non-zero excluded; empty without mask
   cv::Rect roi;
@@ -55,15 +60,37 @@ PreparedPair prepare_reference(const cv::Mat& reference, const cv::Mat& mask, co
   return pair;
 }
 
-// Into the pair's measurement buffer, reused when it has the size already.
-void prepare_measurement(const cv::Mat& measurement, cv::Rect crop, bool warn_colour, PreparedPair& pair) {
+// The `border_px` outermost pixels of `storage` on each side set to the
+// nearest pixel inside them, as clamped coordinates would read it.
+void replicate_border(cv::Mat& storage, int border_px) {
+  const int last_row = storage.rows - 1 - border_px, last_col = storage.cols - 1 - border_px;
+  for (int y = border_px; y <= last_row; ++y) {
+    float* row = storage.ptr<float>(y);
+    std::fill(row, row + border_px, row[border_px]);
+    std::fill(row + last_col + 1, row + storage.cols, row[last_col]);
+  }
+  for (int y = 0; y < border_px; ++y) {
+    storage.row(border_px).copyTo(storage.row(y));
+    storage.row(last_row).copyTo(storage.row(last_row + 1 + y));
+  }
+}
+
+// Into the pair's measurement buffer, reused when it has the size already,
+// with a border as wide as the first pass's search.
+void prepare_measurement(const cv::Mat& measurement, cv::Rect crop, bool warn_colour, const XcorrOptions& options,
+                         PreparedPair& pair) {
+  const int b = options.search_radius_px(0);
+  create_large_image(pair.measurement_storage, crop.height + 2 * b, crop.width + 2 * b, CV_32F);
+  pair.measurement_border_px = b;
+  pair.measurement = pair.measurement_storage(cv::Rect(b, b, crop.width, crop.height));
   to_grey_unit_float(measurement(crop), "measurement", warn_colour, pair.measurement);
+  replicate_border(pair.measurement_storage, b);
 }
 
 PreparedPair prepare(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
                      const XcorrOptions& options, cv::Rect crop, bool warn_colour) {
   PreparedPair pair = prepare_reference(reference, mask, options, crop, warn_colour);
-  prepare_measurement(measurement, crop, warn_colour, pair);
+  prepare_measurement(measurement, crop, warn_colour, options, pair);
   return pair;
 }
 
@@ -317,6 +344,19 @@ cv::Mat reuse(cv::Mat& storage, cv::Size size) {
   return storage(cv::Rect({0, 0}, size));
 }
 
+// The measurement over `region`, undeformed (a first pass, or shifts by
+// whole pixels): in place where `region` lies within the measurement's
+// border, else copied into `storage` with the border replicated as far as
+// it reaches. Either holds the same pixels.
+cv::Mat undeformed_measurement(const PreparedPair& pair, cv::Rect region, Interpolator interpolator, cv::Mat& storage) {
+  const int b = pair.measurement_border_px;
+  const cv::Rect bordered(-b, -b, pair.measurement.cols + 2 * b, pair.measurement.rows + 2 * b);
+  if ((region & bordered) == region) return pair.measurement_storage(region + cv::Point(b, b));
+  cv::Mat out = reuse(storage, region.size());
+  warp_region(pair.measurement, GridField{}, region, interpolator, out);
+  return out;
+}
+
 // Windows of `window_px` at every node of `field`, whose node positions
 // never change for an evaluator: computed at its first frame.
 const std::vector<WindowStats>& reference_stats_for(const PreparedPair& pair, const DisplacementField& field,
@@ -383,8 +423,7 @@ void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, P
     }
   }
   in.region = pass_region(pair, sparse, in.window_px, in.radius_px);
-  in.warped = reuse(workspace.warped_storage, in.region.size());
-  warp_region(pair.measurement, GridField{}, in.region, options.interpolator, in.warped);
+  in.warped = undeformed_measurement(pair, in.region, options.interpolator, workspace.warped_storage);
   in.stats_row0 = coarse.row0;
   in.stats_col0 = coarse.col0;
   in.stats_stride = 2;
@@ -550,7 +589,6 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     // pass with the accurate kernel finishes.
     const bool last = pass + 1 == static_cast<int>(windows.size()) || finish_now;
     const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
-    in.warped = reuse(workspace.warped_storage, in.region.size());
     auto warp_pass = [&](const cv::Mat& image, const GridField& by, cv::Mat& out) {
       if (in.refine) {
         warp_tiles(image, by, in.region, tiles, interpolator, out);
@@ -558,14 +596,18 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
         warp_region(image, by, in.region, interpolator, out);
       }
     };
-    if (warp_reference) {
+    if (!warp) {
+      in.warped = undeformed_measurement(pair, in.region, interpolator, workspace.warped_storage);
+    } else if (warp_reference) {
       // Each image moves half-way: both are interpolated at half the offset,
       // and the interpolation errors of the two largely cancel.
+      in.warped = reuse(workspace.warped_storage, in.region.size());
       in.warped_reference = reuse(workspace.warped_reference_storage, in.region.size());
       warp_pass(pair.measurement, scaled(predictor, 0.5), in.warped);
       warp_pass(pair.reference, scaled(predictor, -0.5), in.warped_reference);
     } else {
-      warp_pass(pair.measurement, warp ? predictor : GridField{}, in.warped);
+      in.warped = reuse(workspace.warped_storage, in.region.size());
+      warp_pass(pair.measurement, predictor, in.warped);
     }
     // Into a buffer kept between passes and frames: a fresh 12 MB copy (16 MP)
     // each pass would page-fault it anew.
@@ -754,7 +796,7 @@ EvaluationResult XcorrEvaluator::evaluate(const cv::Mat& measurement) {
     s.workspace.cache_reference_stats = true;
     s.prepared = true;
   }
-  prepare_measurement(measurement, whole, !s.colour_warned, s.pair);
+  prepare_measurement(measurement, whole, !s.colour_warned, s.options, s.pair);
   s.colour_warned = s.colour_warned || measurement.channels() > 1;
   EvaluationResult result;
   result.field = field_on_grid(s.grid);
