@@ -285,14 +285,17 @@ void BM_ProcessRun16MP(benchmark::State& state) {
   options.prefetch_frames = static_cast<int>(state.range(0));
   options.finish_aside = state.range(1) != 0;
   options.frames_at_once = static_cast<int>(state.range(2));
-  pipeline::ProcessTimes times;
+  pipeline::ProcessReport report;
   bool peak_reset = true;
   for (auto _ : state) {
     state.PauseTiming();
     peak_reset = reset_peak_resident() && peak_reset;
     state.ResumeTiming();
-    times = pipeline::process_run(run, options).times;
+    report = pipeline::process_run(run, options);
   }
+  const pipeline::ProcessTimes& times = report.times;
+  state.counters["temperature_analyses"] = report.temperature_analyses;
+  state.counters["temperature_factorisations"] = report.temperature_factorisations;
   rusage usage{};
   ::getrusage(RUSAGE_SELF, &usage);
   state.counters["frames_per_s"] = benchmark::Counter(kFrames, benchmark::Counter::kIsIterationInvariantRate);

@@ -245,6 +245,7 @@ struct TemperatureFieldSolver::State {
   std::unique_ptr<Factorisation> factorisation;
   bool analysed = false;
   std::vector<std::uint8_t> factorised_for;  // the measured nodes of the factorised matrix; empty: none
+  int fields = 0;
   int analyses = 0;
   int factorisations = 0;
   bool one_shot = false;  // recover_temperature_field's: the cheaper analysis
@@ -271,6 +272,11 @@ TemperatureFieldSolver::TemperatureFieldSolver(const BosGeometry& geometry, cons
 }
 
 TemperatureFieldSolver::~TemperatureFieldSolver() = default;
+
+int TemperatureFieldSolver::fields() const {
+  std::lock_guard lock(state_->mutex);
+  return state_->fields;
+}
 
 int TemperatureFieldSolver::analyses() const {
   std::lock_guard lock(state_->mutex);
@@ -331,6 +337,7 @@ TemperatureFieldResult TemperatureFieldSolver::recover(const DisplacementField& 
   TemperatureFieldResult result =
       field_from_solution(displacement, layout, geometry_, state.unknown, measured, delta_n);
   result.summary.seconds = seconds_since(start);
+  ++state.fields;
   return result;
 }
 

@@ -121,8 +121,9 @@ class TemperatureFieldSolver {
   // Same result and errors as recover_temperature_field.
   TemperatureFieldResult recover(const DisplacementField& displacement);
 
-  // What the calls so far have cost: symbolic analyses (orderings) and
-  // numeric factorisations; the rest of the calls only solved.
+  // The fields recovered so far, and what they cost: symbolic analyses
+  // (orderings) and numeric factorisations; the rest of the calls only solved.
+  int fields() const;
   int analyses() const;
   int factorisations() const;
 

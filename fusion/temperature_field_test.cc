@@ -305,6 +305,7 @@ TEST(TemperatureFieldSolver, FramesEqualFreshSolves) {
       EXPECT_NE(kept.summary.max_c, previous_peak) << "each frame is its own field, not the one before";
       previous_peak = kept.summary.max_c;
     }
+    EXPECT_EQ(solver.fields(), 3);
     EXPECT_EQ(solver.analyses(), 1);
     EXPECT_EQ(solver.factorisations(), 2) << "the second frame's unmeasured nodes are the first's";
   }

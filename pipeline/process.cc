@@ -360,9 +360,11 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   const std::vector<FrameRecord> todo = frames_to_do(frames, done);
   // Started before the context is read, so the first frame decodes beside the reference.
   std::optional<FrameThreads> side_by_side;
+  std::shared_ptr<fusion::TemperatureFieldSolver> run_solver;  // set with the context, before the threads start
   const int frames_at_once = options.frames_at_once ? options.frames_at_once : FrameThreads::default_threads();
   if (!options.distributor && frames_at_once > 1 && todo.size() > 1) {
-    side_by_side.emplace(frames_at_once, planned_frame_work);
+    side_by_side.emplace(frames_at_once,
+                         [&run_solver](const Bytes& plan) { return planned_frame_work_sharing(plan, run_solver); });
   }
   FrameDistributor* const distributor = options.distributor ? options.distributor
                                         : side_by_side      ? &*side_by_side
@@ -370,6 +372,7 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   std::optional<FramePrefetch> ahead;
   if (!distributor) ahead.emplace(run_dir, todo, options.prefetch_frames);
   const FrameContext ctx = frame_context(run_dir, store, results, processing, frames, clock);
+  run_solver = ctx.temperature_solver;
 
   ProcessReport report;
   report.processing_id = processing.id;
@@ -394,6 +397,9 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   // The quality index's, kept rather than decoded twice.
   const cv::Mat last_image = distributor ? loop.distributed(*distributor, todo, options.stop)
                                          : loop.here(*ahead, options, frames.measurements.back().id);
+  report.temperature_fields = ctx.temperature_solver->fields();
+  report.temperature_analyses = ctx.temperature_solver->analyses();
+  report.temperature_factorisations = ctx.temperature_solver->factorisations();
   if (n < report.frames) {
     report.text = processing.note + fmt::format(
                                         "stopped after {} of {} frames; the run's earlier results are "

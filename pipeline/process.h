@@ -103,6 +103,13 @@ struct ProcessReport {
   std::size_t fits = 0;
   std::size_t agreements = 0;
   std::string temperature_source;  // calibration, physical model, none
+  // This process's temperature solver, which its frames side by side share:
+  // the fields it recovered, its analyses of the Poisson system and its
+  // numeric factorisations (the other fields only solved). Other MPI ranks
+  // count their own.
+  int temperature_fields = 0;
+  int temperature_analyses = 0;
+  int temperature_factorisations = 0;
   double seconds = 0;
   ProcessTimes times;
   std::string text;  // what a person reads at the end

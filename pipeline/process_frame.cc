@@ -231,7 +231,7 @@ void load_frame_context(FrameContext& ctx) {
   ctx.mask = load_mask(ctx.run_dir, ctx.settings.mask);
   ctx.evaluator = std::make_unique<fusion::DisplacementEvaluator>(ctx.reference, ctx.settings.evaluator, ctx.mask);
   ctx.temperature_solver =
-      std::make_unique<fusion::TemperatureFieldSolver>(*ctx.geometry, ctx.settings.geometry.temperature_field);
+      std::make_shared<fusion::TemperatureFieldSolver>(*ctx.geometry, ctx.settings.geometry.temperature_field);
   if (!ctx.settings.probes_only) fs::create_directories(ctx.run_dir / ctx.fields_dir);
 }
 
@@ -282,10 +282,13 @@ std::pair<FrameContext, std::vector<FrameRecord>> context_from_plan(const Bytes&
   return {std::move(ctx), std::move(frames)};
 }
 
-FrameWork planned_frame_work(const Bytes& plan) {
+FrameWork planned_frame_work_sharing(const Bytes& plan, std::shared_ptr<fusion::TemperatureFieldSolver> solver) {
   auto planned = std::make_shared<std::pair<FrameContext, std::vector<FrameRecord>>>(context_from_plan(plan));
+  if (solver) planned->first.temperature_solver = std::move(solver);
   return
       [planned](std::size_t i) { return finished_bytes(evaluate_and_finish(planned->first, planned->second.at(i))); };
 }
+
+FrameWork planned_frame_work(const Bytes& plan) { return planned_frame_work_sharing(plan, nullptr); }
 
 }  // namespace bosfuse::pipeline

@@ -68,8 +68,9 @@ struct FrameContext {
   // One for the run too: the Poisson system's analysis is done once, and its
   // factor is reused while the unmeasured nodes stay. Frames are finished one
   // at a time (FinishingFrame waits for one before starting the next); the
-  // solver serialises its calls besides.
-  std::unique_ptr<fusion::TemperatureFieldSolver> temperature_solver;
+  // solver serialises its calls besides, so the contexts of frames side by
+  // side in one process share it (planned_frame_work).
+  std::shared_ptr<fusion::TemperatureFieldSolver> temperature_solver;
 
   // The one place frames meet the evaluator: the full field, or only the
   // windows at the probes.
@@ -118,5 +119,10 @@ FinishedFrame finished_from_bytes(const Bytes& bytes);
 // Throws when this process cannot set up the plan's evaluation (the
 // reference unreadable here, say).
 FrameWork planned_frame_work(const Bytes& plan);
+// The same, for another thread of this process: its context uses `solver`,
+// the temperature solver of the plan's context here, instead of one of its
+// own, so one analysis of the Poisson system (~1 s at 16 MP) serves every
+// thread, and frames coming in sequence keep its factor longer.
+FrameWork planned_frame_work_sharing(const Bytes& plan, std::shared_ptr<fusion::TemperatureFieldSolver> solver);
 
 }  // namespace bosfuse::pipeline

@@ -1,5 +1,4 @@
 #include "pipeline/process.h"
-#include "pipeline/process_frame.h"
 
 #include <gtest/gtest.h>
 
@@ -9,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 
+#include "pipeline/process_frame.h"
 #include "sim/synthetic_pair.h"
 #include "storage/processing_store.h"
 #include "storage/run_lock.h"
@@ -342,6 +342,9 @@ TEST_F(Process, FramesSideBySideStoreWhatOneAtATimeStores) {
     ASSERT_TRUE(side_by_side.complete);
     EXPECT_NE(side_by_side.text.find("3 frames side by side"), std::string::npos) << side_by_side.text;
     expect_equal(Results(run()), one_at_a_time);
+    // The threads share one temperature solver: every frame's field, one analysis of the Poisson system.
+    EXPECT_EQ(side_by_side.temperature_fields, probes_only ? 0 : int(side_by_side.frames));
+    EXPECT_EQ(side_by_side.temperature_analyses, probes_only ? 0 : 1);
   }
 }
 
