@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -467,10 +468,13 @@ AdaptivePasses select_for_refinement(const MeasuredPass& measured, const Displac
   adaptive.selection =
       select_refinement(measured.field, measured.grid, field, grid, options.adaptive_threshold, context);
   adaptive.first_pass = field;
-  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
-    auto& vec = adaptive.first_pass.vectors[i];
-    vec.first_pass_only = !adaptive.selection.refine.data[i] && vec.flag != VectorFlag::kOutOfRoi;
-  }
+  for_rows(field.rows, [&](int row) {
+    const std::uint8_t* refined = adaptive.selection.refine.ptr<std::uint8_t>(row);
+    for (int col = 0; col < field.cols; ++col) {
+      auto& vec = adaptive.first_pass.at(row, col);
+      vec.first_pass_only = !refined[col] && vec.flag != VectorFlag::kOutOfRoi;
+    }
+  });
   smooth_unrefined(adaptive.first_pass, adaptive.selection.refine, options.adaptive_smoothing_nodes);
   cv::dilate(adaptive.selection.refine, adaptive.outlier_tested, cv::Mat::ones(3, 3, CV_8U));
   spdlog::debug("adaptive refinement: noise floor {:.4f} px, threshold {:.4f} px, {:.1f} % of the windows refined",
@@ -481,11 +485,16 @@ AdaptivePasses select_for_refinement(const MeasuredPass& measured, const Displac
 
 // Unselected nodes as the first pass left them, smoothed (the outlier test
 // of a refinement pass sees them as neighbours, but does not change them).
-void keep_first_pass(const AdaptivePasses& adaptive, DisplacementField& field) {
+// After a refinement pass only those its outlier test may have replaced
+// (`touched`, the selection's ring) differ from that: the pass evaluated
+// none of them.
+void keep_first_pass(const AdaptivePasses& adaptive, DisplacementField& field, const cv::Mat* touched = nullptr) {
   for_rows(field.rows, [&](int row) {
     const std::uint8_t* refined = adaptive.selection.refine.ptr<std::uint8_t>(row);
+    const std::uint8_t* maybe_changed = touched ? touched->ptr<std::uint8_t>(row) : nullptr;
     for (int col = 0; col < field.cols; ++col) {
-      if (!refined[col]) field.at(row, col) = adaptive.first_pass.at(row, col);
+      if (!refined[col] && (!maybe_changed || maybe_changed[col]))
+        field.at(row, col) = adaptive.first_pass.at(row, col);
     }
   });
 }
@@ -499,18 +508,26 @@ std::vector<cv::Rect> tiles_read(const PreparedPair& pair, const DisplacementFie
   constexpr int kTilePx = 64;
   const cv::Rect& region = in.region;
   cv::Mat used = cv::Mat::zeros((region.height + kTilePx - 1) / kTilePx, (region.width + kTilePx - 1) / kTilePx, CV_8U);
-  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
-    const auto& vec = field.vectors[i];
-    if (vec.flag == VectorFlag::kOutOfRoi || !in.refine->data[i]) continue;
-    const cv::Rect window(window_origin(vec.x_px, vec.y_px, in.window_px, pair.roi),
-                          cv::Size(in.window_px, in.window_px));
-    if (window_masked(pair, window, options.max_masked_fraction, vec.x_px, vec.y_px)) continue;
-    const cv::Rect read = (window + cv::Point(-reach_px, -reach_px) + cv::Size(2 * reach_px, 2 * reach_px)) & region;
-    if (read.empty()) continue;
-    const int tx0 = (read.x - region.x) / kTilePx, tx1 = (read.x + read.width - 1 - region.x) / kTilePx;
-    const int ty0 = (read.y - region.y) / kTilePx, ty1 = (read.y + read.height - 1 - region.y) / kTilePx;
-    used(cv::Range(ty0, ty1 + 1), cv::Range(tx0, tx1 + 1)).setTo(1);
-  }
+  // Node rows on both cores; neighbouring rows mark the same tiles, with the
+  // same value, through atomic stores.
+  for_rows(field.rows, [&](int row) {
+    for (int col = 0; col < field.cols; ++col) {
+      const std::size_t i = static_cast<std::size_t>(row) * field.cols + col;
+      const auto& vec = field.vectors[i];
+      if (vec.flag == VectorFlag::kOutOfRoi || !in.refine->data[i]) continue;
+      const cv::Rect window(window_origin(vec.x_px, vec.y_px, in.window_px, pair.roi),
+                            cv::Size(in.window_px, in.window_px));
+      if (window_masked(pair, window, options.max_masked_fraction, vec.x_px, vec.y_px)) continue;
+      const cv::Rect read = (window + cv::Point(-reach_px, -reach_px) + cv::Size(2 * reach_px, 2 * reach_px)) & region;
+      if (read.empty()) continue;
+      const int tx0 = (read.x - region.x) / kTilePx, tx1 = (read.x + read.width - 1 - region.x) / kTilePx;
+      const int ty0 = (read.y - region.y) / kTilePx, ty1 = (read.y + read.height - 1 - region.y) / kTilePx;
+      for (int ty = ty0; ty <= ty1; ++ty) {
+        for (int tx = tx0; tx <= tx1; ++tx)
+          std::atomic_ref(used.at<std::uint8_t>(ty, tx)).store(1, std::memory_order_relaxed);
+      }
+    }
+  });
   std::vector<cv::Rect> tiles;
   for (int ty = 0; ty < used.rows; ++ty) {
     for (int tx = 0; tx < used.cols;) {
@@ -616,7 +633,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     if (options.replace_outliers) {
       replace_outliers(field, options.outliers, adaptive.active() ? &adaptive.outlier_tested : nullptr);
     }
-    if (adaptive.active()) keep_first_pass(adaptive, field);
+    if (adaptive.active()) keep_first_pass(adaptive, field, &adaptive.outlier_tested);
     if (pass == 0 && windows.size() > 1 && options.adaptive_refinement) {
       adaptive = select_for_refinement({field, grid}, field, grid, options);
       keep_first_pass(adaptive, field);
