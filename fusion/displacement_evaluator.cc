@@ -35,6 +35,11 @@ void DisplacementEvaluator::check_memory() const {
   }
 }
 
+GridGeometry DisplacementEvaluator::grid() const {
+  return evaluation_grid(effective_roi(options_.xcorr.roi, reference_.size()), options_.xcorr.window_px,
+                         options_.xcorr.step_px);
+}
+
 EvaluationResult DisplacementEvaluator::evaluate(const cv::Mat& measurement) {
   if (xcorr_) return xcorr_->evaluate(measurement);
   return evaluate_flow(reference_, measurement, options_.flow, mask_);

@@ -47,6 +47,8 @@ class DisplacementEvaluator {
   void check_memory() const;
 
   EvaluationResult evaluate(const cv::Mat& measurement);
+  // The grid of the fields evaluate() gives, known before any frame.
+  GridGeometry grid() const;
   // See probe_displacement below.
   EvaluationResult probe(const cv::Mat& measurement, const std::vector<cv::Point2d>& points);
 

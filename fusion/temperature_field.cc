@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "fusion/evaluation.h"
 #include "fusion/field_csv.h"
 
 namespace bosfuse::fusion {
@@ -288,17 +289,43 @@ int TemperatureFieldSolver::factorisations() const {
   return state_->factorisations;
 }
 
-TemperatureFieldResult TemperatureFieldSolver::recover(const DisplacementField& displacement) {
-  const auto start = std::chrono::steady_clock::now();
+// Under the state's lock: the grid's numbering of unknowns, set up anew
+// when the field's grid is not the last one's.
+void TemperatureFieldSolver::use_grid_of(const DisplacementField& displacement) {
   const GridLayout layout = grid_layout(displacement);
   if (displacement.size() > static_cast<std::size_t>(options_.max_nodes)) {
     throw std::invalid_argument(
         fmt::format("temperature field: {} nodes exceed max_nodes {}", displacement.size(), options_.max_nodes));
   }
-  std::lock_guard lock(state_->mutex);
-  State& state = *state_;
   const GridKey key{displacement.rows, displacement.cols, layout};
-  if (!state.grid || !(*state.grid == key)) state.start_grid(key, displacement, options_);
+  if (!state_->grid || !(*state_->grid == key)) state_->start_grid(key, displacement, options_);
+}
+
+void TemperatureFieldSolver::prepare(const GridGeometry& grid) {
+  const DisplacementField field = field_on_grid(grid);
+  std::lock_guard lock(state_->mutex);
+  use_grid_of(field);
+  State& state = *state_;
+  if (state.analysed) return;
+  EdgeSystem system(state.unknown, state.unknowns, true);
+  for (int r = 0; r < field.rows; ++r) {
+    for (int c = 0; c < field.cols; ++c) {
+      const std::size_t i = static_cast<std::size_t>(r) * field.cols + c;
+      if (c + 1 < field.cols) system.add_edge(i, i + 1, 0.0, 1.0);
+      if (r + 1 < field.rows) system.add_edge(i, i + field.cols, 0.0, 1.0);
+    }
+  }
+  state.factorisation->analyse(system.matrix());
+  state.analysed = true;
+  ++state.analyses;
+}
+
+TemperatureFieldResult TemperatureFieldSolver::recover(const DisplacementField& displacement) {
+  const auto start = std::chrono::steady_clock::now();
+  std::lock_guard lock(state_->mutex);
+  use_grid_of(displacement);
+  State& state = *state_;
+  const GridLayout layout = grid_layout(displacement);
   std::vector<std::uint8_t> measured = measured_nodes(displacement, options_);
   const bool refactorise = measured != state.factorised_for;
 

@@ -45,6 +45,7 @@
 
 #include "fusion/bos_geometry.h"
 #include "fusion/displacement_field.h"
+#include "fusion/field_warp.h"
 
 namespace bosfuse::fusion {
 
@@ -121,6 +122,12 @@ class TemperatureFieldSolver {
   // Same result and errors as recover_temperature_field.
   TemperatureFieldResult recover(const DisplacementField& displacement);
 
+  // The analysis of the Poisson system for fields on `grid`, ahead of the
+  // first recover() on it (the system's pattern does not depend on which
+  // nodes are measured): a run can have it done beside its first frames'
+  // evaluation. Throws as recover() would for the grid.
+  void prepare(const GridGeometry& grid);
+
   // The fields recovered so far, and what they cost: symbolic analyses
   // (orderings) and numeric factorisations; the rest of the calls only solved.
   int fields() const;
@@ -131,6 +138,7 @@ class TemperatureFieldSolver {
   friend TemperatureFieldResult recover_temperature_field(const DisplacementField&, const BosGeometry&,
                                                           const TemperatureFieldOptions&);
   struct State;
+  void use_grid_of(const DisplacementField& displacement);
   BosGeometry geometry_;
   TemperatureFieldOptions options_;
   std::unique_ptr<State> state_;

@@ -311,6 +311,29 @@ TEST(TemperatureFieldSolver, FramesEqualFreshSolves) {
   }
 }
 
+// The analysis done ahead of the first frame (as a run does it beside its
+// first frames' evaluation) serves the frames: no second analysis, and
+// fields equal to those of a solver that analysed at its first frame.
+TEST(TemperatureFieldSolver, AnAnalysisAheadOfTheFramesServesThem) {
+  const BosGeometry g(paper_like_setup());
+  const std::vector<DisplacementField> frames = {
+      with_masked_block(analytic_displacement(HotSpot{512, 380, 80, 30}, g, 48, 64, 16), 30, 28, 6),
+      with_masked_block(analytic_displacement(HotSpot{600, 200, 90, 20}, g, 48, 64, 16), 10, 40, 8),
+  };
+  TemperatureFieldSolver prepared(g), at_first_frame(g);
+  prepared.prepare(GridGeometry{7.5, 7.5, 16, 48, 64});
+  EXPECT_EQ(prepared.analyses(), 1);
+  EXPECT_EQ(prepared.factorisations(), 0);
+  for (const auto& frame : frames) {
+    const auto ahead = prepared.recover(frame), later = at_first_frame.recover(frame);
+    EXPECT_EQ(ahead.field.temperature_c, later.field.temperature_c);
+    EXPECT_EQ(ahead.field.measured, later.field.measured);
+  }
+  EXPECT_EQ(prepared.analyses(), 1);
+  EXPECT_EQ(prepared.factorisations(), 2);
+  EXPECT_THROW(prepared.prepare(GridGeometry{7.5, 7.5, 16, 2, 64}), std::invalid_argument);
+}
+
 // The two factorisations solve the same system.
 TEST(TemperatureFieldSolver, CholmodAndEigenAgree) {
   const BosGeometry g(paper_like_setup());
