@@ -36,8 +36,12 @@ void DisplacementEvaluator::check_memory() const {
 }
 
 GridGeometry DisplacementEvaluator::grid() const {
-  return evaluation_grid(effective_roi(options_.xcorr.roi, reference_.size()), options_.xcorr.window_px,
-                         options_.xcorr.step_px);
+  if (xcorr_) {
+    return evaluation_grid(effective_roi(options_.xcorr.roi, reference_.size()), options_.xcorr.window_px,
+                           options_.xcorr.step_px);
+  }
+  return evaluation_grid(effective_roi(options_.flow.roi, reference_.size()), options_.flow.window_px,
+                         options_.flow.step_px);
 }
 
 EvaluationResult DisplacementEvaluator::evaluate(const cv::Mat& measurement) {

@@ -69,7 +69,7 @@ struct FrameContext {
   // factor is reused while the unmeasured nodes stay. Frames are finished one
   // at a time (FinishingFrame waits for one before starting the next); the
   // solver serialises its calls besides, so the contexts of frames side by
-  // side in one process share it (planned_frame_work).
+  // side in one process share it (planned_frame_work_sharing).
   std::shared_ptr<fusion::TemperatureFieldSolver> temperature_solver;
 
   // The one place frames meet the evaluator: the full field, or only the

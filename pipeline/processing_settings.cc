@@ -67,10 +67,8 @@ GeometryConfig geometry_from_json(const nlohmann::json& j) {
   for (const auto& edge : j.at("open_edges")) {
     const auto name = edge.get<std::string>();
     auto& f = g.temperature_field;
-    (name == "top"      ? f.open_top
-     : name == "bottom" ? f.open_bottom
-     : name == "left"   ? f.open_left
-                        : f.open_right) = true;
+    (name == "top" ? f.open_top : name == "bottom" ? f.open_bottom : name == "left" ? f.open_left : f.open_right) =
+        true;
   }
   g.camera_offset_s = j.at("camera_offset_s").get<double>();
   g.source = j.at("source").get<std::string>();
@@ -282,11 +280,10 @@ ProcessingSettings resolve_runless_settings(const std::string& settings_file, co
 
 std::string describe(const ProcessingSettings& s) {
   const auto& x = s.evaluator.xcorr;
-  std::string text =
-      fmt::format("{}, {}, window {} px, step {} px, {} passes, largest shift {:g} px",
-                  s.probes_only ? "probe mode" : "full fields",
-                  s.evaluator.method == fusion::Method::kOpticalFlow ? "optical flow" : "cross-correlation",
-                  x.window_px, x.step_px, x.passes, x.max_shift_px);
+  std::string text = fmt::format("{}, {}, window {} px, step {} px, {} passes, largest shift {:g} px",
+                                 s.probes_only ? "probe mode" : "full fields",
+                                 s.evaluator.method == fusion::Method::kOpticalFlow ? "optical flow" : "cross-correlation",
+                                 x.window_px, x.step_px, x.passes, x.max_shift_px);
   if (s.probes_only) text += fmt::format(", probe context {}", x.probe_context_nodes);
   if (x.adaptive_refinement && !s.probes_only) {
     text += fmt::format(", adaptive refinement ({:g} × noise floor)", x.adaptive_threshold);

@@ -18,9 +18,10 @@
 // and a folder's read the same; docs/CONFIG.md lists them.
 
 #include <filesystem>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "fusion/displacement_evaluator.h"
 #include "pipeline/geometry_config.h"
