@@ -615,16 +615,17 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     };
     if (!warp) {
       in.warped = undeformed_measurement(pair, in.region, interpolator, workspace.warped_storage);
-    } else if (warp_reference) {
-      // Each image moves half-way: both are interpolated at half the offset,
-      // and the interpolation errors of the two largely cancel.
-      in.warped = reuse(workspace.warped_storage, in.region.size());
-      in.warped_reference = reuse(workspace.warped_reference_storage, in.region.size());
-      warp_pass(pair.measurement, scaled(predictor, 0.5), in.warped);
-      warp_pass(pair.reference, scaled(predictor, -0.5), in.warped_reference);
     } else {
       in.warped = reuse(workspace.warped_storage, in.region.size());
-      warp_pass(pair.measurement, predictor, in.warped);
+      if (warp_reference) {
+        // Each image moves half-way: both are interpolated at half the offset,
+        // and the interpolation errors of the two largely cancel.
+        in.warped_reference = reuse(workspace.warped_reference_storage, in.region.size());
+        warp_pass(pair.measurement, scaled(predictor, 0.5), in.warped);
+        warp_pass(pair.reference, scaled(predictor, -0.5), in.warped_reference);
+      } else {
+        warp_pass(pair.measurement, predictor, in.warped);
+      }
     }
     // Into a buffer kept between passes and frames: a fresh 12 MB copy (16 MP)
     // each pass would page-fault it anew.

@@ -36,12 +36,10 @@ void DisplacementEvaluator::check_memory() const {
 }
 
 GridGeometry DisplacementEvaluator::grid() const {
-  if (xcorr_) {
-    return evaluation_grid(effective_roi(options_.xcorr.roi, reference_.size()), options_.xcorr.window_px,
-                           options_.xcorr.step_px);
-  }
-  return evaluation_grid(effective_roi(options_.flow.roi, reference_.size()), options_.flow.window_px,
-                         options_.flow.step_px);
+  const auto grid_of = [&](const auto& method) {
+    return evaluation_grid(effective_roi(method.roi, reference_.size()), method.window_px, method.step_px);
+  };
+  return xcorr_ ? grid_of(options_.xcorr) : grid_of(options_.flow);
 }
 
 EvaluationResult DisplacementEvaluator::evaluate(const cv::Mat& measurement) {

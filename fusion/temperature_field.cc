@@ -48,6 +48,19 @@ bool on_ambient_border(const DisplacementField& f, int row, int col, const Tempe
          (col == f.cols - 1 && !o.open_right);
 }
 
+// Every edge between neighbouring nodes of a rows×cols grid, once:
+// add(i, j, along_x) with j the node right of i or below it.
+template <typename Add>
+void for_each_edge(int rows, int cols, Add add) {
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const std::size_t i = static_cast<std::size_t>(r) * cols + c;
+      if (c + 1 < cols) add(i, i + 1, true);
+      if (r + 1 < rows) add(i, i + cols, false);
+    }
+  }
+}
+
 // The least-squares system for δn at interior nodes: each edge i→j asks
 // δn_j − δn_i = target with a weight, border nodes are fixed at δn = 0
 // (ambient). The matrix depends only on the grid and on which nodes are
@@ -265,6 +278,13 @@ struct TemperatureFieldSolver::State {
     analysed = false;
     factorised_for.clear();
   }
+
+  // The pattern's analysis (any matrix of the grid's pattern serves).
+  void analyse(const Eigen::SparseMatrix<double>& a) {
+    factorisation->analyse(a);
+    analysed = true;
+    ++analyses;
+  }
 };
 
 TemperatureFieldSolver::TemperatureFieldSolver(const BosGeometry& geometry, const TemperatureFieldOptions& options)
@@ -308,16 +328,8 @@ void TemperatureFieldSolver::prepare(const GridGeometry& grid) {
   State& state = *state_;
   if (state.analysed) return;
   EdgeSystem system(state.unknown, state.unknowns, true);
-  for (int r = 0; r < field.rows; ++r) {
-    for (int c = 0; c < field.cols; ++c) {
-      const std::size_t i = static_cast<std::size_t>(r) * field.cols + c;
-      if (c + 1 < field.cols) system.add_edge(i, i + 1, 0.0, 1.0);
-      if (r + 1 < field.rows) system.add_edge(i, i + field.cols, 0.0, 1.0);
-    }
-  }
-  state.factorisation->analyse(system.matrix());
-  state.analysed = true;
-  ++state.analyses;
+  for_each_edge(field.rows, field.cols, [&](std::size_t i, std::size_t j, bool) { system.add_edge(i, j, 0.0, 1.0); });
+  state.analyse(system.matrix());
 }
 
 TemperatureFieldResult TemperatureFieldSolver::recover(const DisplacementField& displacement) {
@@ -340,22 +352,12 @@ TemperatureFieldResult TemperatureFieldSolver::recover(const DisplacementField& 
     const double mean_shift_px = along_x ? 0.5 * (a.u_px + b.u_px) : 0.5 * (a.v_px + b.v_px);
     system.add_edge(i, j, geometry_.gradient_per_m(mean_shift_px) * step_m, 1.0);
   };
-  for (int r = 0; r < displacement.rows; ++r) {
-    for (int c = 0; c < cols; ++c) {
-      const std::size_t i = static_cast<std::size_t>(r) * cols + c;
-      if (c + 1 < cols) add_edge(i, i + 1, true);
-      if (r + 1 < displacement.rows) add_edge(i, i + cols, false);
-    }
-  }
+  for_each_edge(displacement.rows, cols, add_edge);
   if (refactorise) {
     const Eigen::SparseMatrix<double> a = system.matrix();
     // Dropped first, so that a failed factorisation is not taken for a good one next frame.
     state.factorised_for.clear();
-    if (!state.analysed) {
-      state.factorisation->analyse(a);
-      state.analysed = true;
-      ++state.analyses;
-    }
+    if (!state.analysed) state.analyse(a);
     state.factorisation->factorise(a);
     ++state.factorisations;
     state.factorised_for = measured;

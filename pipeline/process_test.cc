@@ -1,4 +1,5 @@
 #include "pipeline/process.h"
+#include "pipeline/process_frame.h"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +9,6 @@
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 
-#include "pipeline/process_frame.h"
 #include "sim/synthetic_pair.h"
 #include "storage/processing_store.h"
 #include "storage/run_lock.h"
