@@ -1,10 +1,10 @@
 #include "acquisition/frame_recorder.h"
 
 #include <cstdio>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 
 #include "acquisition/clock.h"
+#include "acquisition/frame_png.h"
 
 namespace bosfuse::acquisition {
 namespace fs = std::filesystem;
@@ -75,7 +75,7 @@ void FrameRecorder::store(const CapturedFrame& frame) {
   const fs::path relative = frame_dir_ / frame_file_name(stats().frames);
   const fs::path partial = run_dir_ / (relative.string() + ".partial.png");
   try {
-    if (!cv::imwrite(partial.string(), frame.image)) throw std::runtime_error("the PNG encoder refused it");
+    write_frame_png(partial, frame.image);
     fs::rename(partial, run_dir_ / relative);
   } catch (const std::exception& e) {
     std::error_code ignored;
@@ -85,8 +85,8 @@ void FrameRecorder::store(const CapturedFrame& frame) {
     ++stats_.failures;
     return;
   }
-  push(storage::FrameRecord{0, device_id(), frame.t_ns, frame.device_t_ns, relative.generic_string(),
-                            frame.image.cols, frame.image.rows, bit_depth_of(frame.image), reference});
+  push(storage::FrameRecord{0, device_id(), frame.t_ns, frame.device_t_ns, relative.generic_string(), frame.image.cols,
+                            frame.image.rows, bit_depth_of(frame.image), reference});
   std::lock_guard lock(stats_mutex_);
   ++stats_.frames;
   if (reference) ++stats_.reference_frames;

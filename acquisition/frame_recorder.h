@@ -1,7 +1,8 @@
 #pragma once
 // A FrameRecorder takes frames from one FrameSource on its own thread and
 // stores them in the run: each frame as a lossless PNG at the bit depth the
-// camera delivered (8 or 16 bit), under frames/<camera>/ in the run folder,
+// camera delivered (8 or 16 bit; stored uncompressed, acquisition/frame_png.h),
+// under frames/<camera>/ in the run folder,
 // written under a temporary name and renamed so no half-written image ever
 // carries a frame's name, then referenced from the run store with its t_ns.
 // Live cameras are read on a fixed schedule (frame k at start + k·interval);

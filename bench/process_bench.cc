@@ -17,13 +17,18 @@
 // decoded ahead (/prefetch:1/aside:0), and also the last frame's
 // temperature field and field files made aside (/prefetch:1/aside:1), each
 // one frame at a time (/at_once:1); and two frames side by side
-// (/at_once:2, the default on two cores: pipeline/frame_threads.h).
+// (/at_once:2, the default on two cores: pipeline/frame_threads.h). The
+// frames are PNGs as bosfuse's recorder writes them (/png:0: unfiltered and
+// uncompressed, acquisition/frame_png.h), or, for comparison, as OpenCV
+// writes a PNG by default (/png:1: compressed, filtered rows), as frames
+// from other software may come; the pixels are the same.
 // Counters: frames per second (wall); the peak resident memory of the
 // processing (VmHWM, reset before each run; where the kernel cannot reset
 // it, peak_is_lifetime = 1 and it is getrusage's maximum over the process's
 // life: then run one variant per process); per frame, the costs besides the
 // evaluation (ProcessReport::times). The frames are rendered once into a
-// cache ($BOSFUSE_BENCH_CACHE, else $TMPDIR/bosfuse-bench-cache: 650 MB) and
+// cache ($BOSFUSE_BENCH_CACHE, else $TMPDIR/bosfuse-bench-cache: 680 MB for
+// /png:0, 660 MB more once /png:1 has run) and
 // linked into a scratch run; rendering is never timed. Each run takes a
 // minute or more: run it on its own, on a loaded machine one variant per
 // process, alternating, e.g.
@@ -52,10 +57,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
 
+#include "acquisition/frame_png.h"
+#include "acquisition/image_file.h"
 #include "fusion/bos_geometry.h"
 #include "fusion/displacement_evaluator.h"
 #include "fusion/temperature_field.h"
@@ -186,38 +194,33 @@ cv::Point2d plume_shift_px(double x_px, double y_px, double peak_px) {
 
 double plume_peak_px(int frame) { return -1.5 * std::exp(-0.1 * frame); }
 
-fs::path frame_cache_dir() {
+// How the run's frames are written: 0, as bosfuse's recorder writes them
+// (acquisition/frame_png.h: unfiltered, uncompressed); 1, as OpenCV writes
+// a PNG by default (zlib level 1, libpng's adaptive row filters), as frames
+// from other software may come.
+enum FramePng { kAsRecorded = 0, kOpenCvDefault = 1 };
+
+fs::path frame_cache_dir(FramePng png) {
   const char* cache = std::getenv("BOSFUSE_BENCH_CACHE");
   // The name changes with anything that changes the frames.
   return (cache && *cache ? fs::path(cache) : fs::temp_directory_path() / "bosfuse-bench-cache") /
-         "process16mp-v1-4928x3264-16bit-plume";
+         (png == kAsRecorded ? "process16mp-v2-4928x3264-16bit-plume-recorded"
+                             : "process16mp-v2-4928x3264-16bit-plume-opencv-default");
 }
 
 std::string frame_name(int frame) { return fmt::format("f{}.png", frame); }
 
-// The reference (frame 0) and kFrames measurements as 16-bit PNG, rendered
-// into the cache when it does not hold them yet (a partial rendering is
-// never taken for one: the folder gets its name when complete).
-fs::path cached_16mp_frames() {
-  const fs::path dir = frame_cache_dir();
+// The reference (frame 0) and kFrames measurements as 16-bit PNG, written
+// into the cache by `write(frame, path)` when it does not hold them yet (a
+// partial writing is never taken for one: the folder gets its name when
+// complete).
+template <class WriteFrame>
+fs::path cached_frames(const fs::path& dir, const WriteFrame& write) {
   if (fs::is_regular_file(dir / "complete")) return dir;
   const fs::path partial = dir.string() + ".partial-" + std::to_string(::getpid());
   fs::remove_all(partial);
   fs::create_directories(partial);
-  sim::PatternOptions options;
-  options.width_px = kWidth16MP;
-  options.height_px = kHeight16MP;
-  const sim::BackgroundPattern pattern = sim::generate_pattern(options);
-  for (int i = 0; i <= kFrames; ++i) {
-    const double peak_px = plume_peak_px(i);
-    cv::Mat dots =
-        i == 0 ? sim::render_dots(pattern, nullptr)
-               : sim::render_dots(pattern, [peak_px](double x, double y) { return plume_shift_px(x, y, peak_px); });
-    const cv::Mat image = sim::camera_image(std::move(dots), 0, 0.01, 16, static_cast<std::uint64_t>(i + 1), 1);
-    if (!cv::imwrite((partial / frame_name(i)).string(), image)) {
-      throw std::runtime_error("cannot write " + (partial / frame_name(i)).string());
-    }
-  }
+  for (int i = 0; i <= kFrames; ++i) write(i, partial / frame_name(i));
   std::ofstream(partial / "complete") << "done\n";
   std::error_code taken;
   fs::rename(partial, dir, taken);  // another process may have finished first: then its frames serve
@@ -225,40 +228,93 @@ fs::path cached_16mp_frames() {
   return dir;
 }
 
-// A fresh run over the cached frames (hard links, else copies), removed at exit.
-const fs::path& sixteen_megapixel_run() {
-  static const ScratchDir dir{[] {
-    const fs::path frames = cached_16mp_frames();
-    const fs::path run = fs::temp_directory_path() / ("bosfuse-process-bench-16mp-" + std::to_string(::getpid()));
-    fs::remove_all(run);
-    auto store = storage::RunStore::create(run, {0, "bench 16 MP", kStartNs, std::nullopt, "", {}, 1.0, std::nullopt},
-                                           storage::RunStore::CreateMode::kNew);
-    const auto device = store.add_device({0, "daq", "modbus-tcp", "generic", "sim"});
-    std::vector<std::int64_t> channels{
-        store.add_channel({0, device, "tc1", "thermocouple", "degC", "K", kPlumeAxisXPx + 150, 2200.0}),
-        store.add_channel({0, device, "tc2", "thermocouple", "degC", "K", kPlumeAxisXPx - 250, 1400.0})};
-    std::vector<storage::Sample> samples;
-    for (int i = 0; i <= 2 * kFrames; ++i) {
-      for (auto c : channels) {
-        samples.push_back(
-            {c, kStartNs + i * 1'000'000'000LL, std::nullopt, 20 + 30 * std::exp(-0.05 * i), std::nullopt, {}});
+// The frames rendered once (as recorded), and re-encoded from those for
+// kOpenCvDefault: the same pixels either way.
+fs::path cached_16mp_frames(FramePng png) {
+  if (png == kOpenCvDefault) {
+    const fs::path recorded = cached_16mp_frames(kAsRecorded);
+    return cached_frames(frame_cache_dir(png), [&](int i, const fs::path& path) {
+      if (!cv::imwrite(path.string(), cv::imread((recorded / frame_name(i)).string(), cv::IMREAD_UNCHANGED))) {
+        throw std::runtime_error("cannot write " + path.string());
       }
-    }
-    store.write_samples(samples);
-    fs::create_directories(run / "frames");
-    for (int i = 0; i <= kFrames; ++i) {
-      const std::string path = "frames/" + frame_name(i);
-      std::error_code not_linked;
-      fs::create_hard_link(frames / frame_name(i), run / path, not_linked);
-      if (not_linked) fs::copy_file(frames / frame_name(i), run / path);
-      store.add_frame({0, std::nullopt, kStartNs + 2LL * i * 1'000'000'000, std::nullopt, path, kWidth16MP, kHeight16MP,
-                       16, i == 0});
-    }
-    store.finish(storage::RunStatus::kComplete, kStartNs + 2LL * kFrames * 1'000'000'000);
-    return run;
-  }()};
-  return dir.path;
+    });
+  }
+  sim::PatternOptions options;
+  options.width_px = kWidth16MP;
+  options.height_px = kHeight16MP;
+  const sim::BackgroundPattern pattern = sim::generate_pattern(options);
+  return cached_frames(frame_cache_dir(png), [&](int i, const fs::path& path) {
+    const double peak_px = plume_peak_px(i);
+    cv::Mat dots =
+        i == 0 ? sim::render_dots(pattern, nullptr)
+               : sim::render_dots(pattern, [peak_px](double x, double y) { return plume_shift_px(x, y, peak_px); });
+    acquisition::write_frame_png(path,
+                                 sim::camera_image(std::move(dots), 0, 0.01, 16, static_cast<std::uint64_t>(i + 1), 1));
+  });
 }
+
+// A fresh run over the cached frames (hard links, else copies), removed at exit.
+const fs::path& sixteen_megapixel_run(FramePng png = kAsRecorded) {
+  static std::map<FramePng, ScratchDir> runs;
+  if (const auto made = runs.find(png); made != runs.end()) return made->second.path;
+  const fs::path frames = cached_16mp_frames(png);
+  const fs::path run =
+      fs::temp_directory_path() / fmt::format("bosfuse-process-bench-16mp-{}-{}", static_cast<int>(png), ::getpid());
+  fs::remove_all(run);
+  auto store = storage::RunStore::create(run, {0, "bench 16 MP", kStartNs, std::nullopt, "", {}, 1.0, std::nullopt},
+                                         storage::RunStore::CreateMode::kNew);
+  const auto device = store.add_device({0, "daq", "modbus-tcp", "generic", "sim"});
+  std::vector<std::int64_t> channels{
+      store.add_channel({0, device, "tc1", "thermocouple", "degC", "K", kPlumeAxisXPx + 150, 2200.0}),
+      store.add_channel({0, device, "tc2", "thermocouple", "degC", "K", kPlumeAxisXPx - 250, 1400.0})};
+  std::vector<storage::Sample> samples;
+  for (int i = 0; i <= 2 * kFrames; ++i) {
+    for (auto c : channels) {
+      samples.push_back(
+          {c, kStartNs + i * 1'000'000'000LL, std::nullopt, 20 + 30 * std::exp(-0.05 * i), std::nullopt, {}});
+    }
+  }
+  store.write_samples(samples);
+  fs::create_directories(run / "frames");
+  for (int i = 0; i <= kFrames; ++i) {
+    const std::string path = "frames/" + frame_name(i);
+    std::error_code not_linked;
+    fs::create_hard_link(frames / frame_name(i), run / path, not_linked);
+    if (not_linked) fs::copy_file(frames / frame_name(i), run / path);
+    store.add_frame(
+        {0, std::nullopt, kStartNs + 2LL * i * 1'000'000'000, std::nullopt, path, kWidth16MP, kHeight16MP, 16, i == 0});
+  }
+  store.finish(storage::RunStatus::kComplete, kStartNs + 2LL * kFrames * 1'000'000'000);
+  return runs[png].path = run;
+}
+
+// One 16 MP 16-bit frame of the run written and read back as each kind of
+// PNG (op 0: written to a file, op 1: read with acquisition::read_image_file,
+// as process reads a frame); file_MB, its size.
+void BM_FramePng16MP(benchmark::State& state) {
+  const auto png = static_cast<FramePng>(state.range(0));
+  const bool reading = state.range(1) == 1;
+  const fs::path source = cached_16mp_frames(png) / frame_name(5);
+  const cv::Mat frame = acquisition::read_image_file(source);
+  const ScratchDir dir{fs::temp_directory_path() / ("bosfuse-frame-png-bench-" + std::to_string(::getpid()))};
+  fs::create_directories(dir.path);
+  const fs::path written = dir.path / "frame.png";
+  for (auto _ : state) {
+    if (reading) {
+      benchmark::DoNotOptimize(acquisition::read_image_file(source));
+    } else if (png == kAsRecorded) {
+      acquisition::write_frame_png(written, frame);
+    } else if (!cv::imwrite(written.string(), frame)) {
+      throw std::runtime_error("cannot write " + written.string());
+    }
+  }
+  state.counters["file_MB"] = static_cast<double>(fs::file_size(source)) / 1e6;
+}
+BENCHMARK(BM_FramePng16MP)
+    ->ArgNames({"png", "op"})
+    ->ArgsProduct({{kAsRecorded, kOpenCvDefault}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // The peak resident memory, VmHWM, in MB; -1 when /proc does not say.
 double peak_resident_mb() {
@@ -279,7 +335,7 @@ bool reset_peak_resident() {
 }
 
 void BM_ProcessRun16MP(benchmark::State& state) {
-  const fs::path& run = sixteen_megapixel_run();
+  const fs::path& run = sixteen_megapixel_run(static_cast<FramePng>(state.range(3)));
   pipeline::ProcessOptions options;
   options.overrides.probes_only = false;
   options.prefetch_frames = static_cast<int>(state.range(0));
@@ -313,11 +369,12 @@ void BM_ProcessRun16MP(benchmark::State& state) {
   state.counters["finish_ms"] = times.finishing_s * 1e3;  // once per run
 }
 BENCHMARK(BM_ProcessRun16MP)
-    ->ArgNames({"prefetch", "aside", "at_once"})
-    ->Args({0, 0, 1})
-    ->Args({1, 0, 1})
-    ->Args({1, 1, 1})
-    ->Args({1, 0, 2})
+    ->ArgNames({"prefetch", "aside", "at_once", "png"})
+    ->Args({0, 0, 1, kAsRecorded})
+    ->Args({1, 0, 1, kAsRecorded})
+    ->Args({1, 1, 1, kAsRecorded})
+    ->Args({1, 0, 2, kAsRecorded})
+    ->Args({1, 0, 2, kOpenCvDefault})
     ->Iterations(1)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();
