@@ -2,10 +2,10 @@
 // How bosfuse stores a camera frame: a PNG whose rows are not filtered and
 // whose deflate stream is not compressed (stored blocks). A BOS frame is a
 // random-dot pattern under sensor noise, which deflate cannot shrink: a
-// 16-bit 16 MP frame is 31.5 MB with OpenCV's default PNG settings and
-// 32.2 MB stored, but it encodes in ~70 ms instead of ~1 s and every
-// command that reads it decodes it in ~45 ms instead of ~320 ms (libpng's
-// Paeth unfiltering and zlib's inflate; figures in docs/BENCHMARKS.md). The
+// 16-bit 16 MP frame is 31.5 MB as OpenCV writes a PNG by default and
+// 32.2 MB stored, but it is written in ~90 ms instead of ~350 ms, and every
+// command that reads it decodes it in ~40 ms instead of ~170 ms (libpng's
+// unfiltering and zlib's inflate; BM_FramePng16MP in docs/BENCHMARKS.md). The
 // file is an ordinary PNG that any reader opens; bosfuse reads it, like any
 // other image, through acquisition/image_file.h.
 //

@@ -45,14 +45,16 @@ class ScriptedCamera : public FrameSource {
 
 struct Harness {
   testing::TempDir dir;
-  storage::RunStore store = storage::RunStore::create(dir / "run", {0, "t", 0, {}, "", storage::RunStatus::kRunning, 1.0, std::nullopt},
-                                                      storage::RunStore::CreateMode::kNew);
+  storage::RunStore store =
+      storage::RunStore::create(dir / "run", {0, "t", 0, {}, "", storage::RunStatus::kRunning, 1.0, std::nullopt},
+                                storage::RunStore::CreateMode::kNew);
   std::int64_t device = store.add_device({0, "cam", "camera", "virtual", ""});
 
   FrameRecorder::Stats record(std::unique_ptr<ScriptedCamera> camera, FrameRecorder::Options options,
                               std::size_t expected_frames) {
     storage::RunWriter writer(store, {20ms, 10'000});
-    const auto recorder = std::make_shared<FrameRecorder>(std::move(camera), "cam", device, store.dir(), writer, options);
+    const auto recorder =
+        std::make_shared<FrameRecorder>(std::move(camera), "cam", device, store.dir(), writer, options);
     recorder->start();
     for (int i = 0; i < 300 && recorder->stats().frames < static_cast<std::int64_t>(expected_frames); ++i) {
       std::this_thread::sleep_for(10ms);
@@ -88,6 +90,24 @@ TEST(FrameRecorder, StoresLosslessFramesAtTheirBitDepthWithTheFirstAsReference) 
     ASSERT_EQ(stored.type(), originals[i].type());
     EXPECT_EQ(cv::norm(stored, originals[i], cv::NORM_INF), 0.0) << "frame " << i;
   }
+  for (const auto& entry : std::filesystem::directory_iterator(h.store.dir() / "frames/cam")) {
+    EXPECT_EQ(entry.path().string().find("partial"), std::string::npos) << entry.path();
+  }
+}
+
+TEST(FrameRecorder, AFramePngCannotHoldIsReportedByTypeAndTheNextIsStored) {
+  Harness h;
+  auto camera = std::make_unique<ScriptedCamera>();
+  camera->frames = {cv::Mat(48, 64, CV_32F, cv::Scalar(0.5)), testing::textured_frame(1, CV_16U)};
+  const auto stats = h.record(std::move(camera), fast_options(), 1);
+  EXPECT_EQ(stats.frames, 1);
+  EXPECT_EQ(stats.failures, 1);
+  const auto frames = h.store.frames();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].bit_depth, 16);
+  bool reported = false;
+  for (const auto& e : h.store.events()) reported |= e.kind == "error" && e.message.find("32FC1") != std::string::npos;
+  EXPECT_TRUE(reported) << "no error event naming the frame's type";
   for (const auto& entry : std::filesystem::directory_iterator(h.store.dir() / "frames/cam")) {
     EXPECT_EQ(entry.path().string().find("partial"), std::string::npos) << entry.path();
   }

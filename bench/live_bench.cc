@@ -4,7 +4,8 @@
 //            event read by an HTTP client of the viewer, 300 samples 50 ms
 //            apart; median and 95th percentile
 //   probes   LiveProbes::evaluate on a 16-megapixel frame (4928×3264, the
-//            paper's camera, 8-bit PNG as the logger records it) with 4
+//            paper's camera, 8-bit PNG as the logger records it:
+//            acquisition/frame_png.h) with 4
 //            thermocouples: decoding, probes, band temperatures, quality
 //            index and view; median of 5
 //   jitter   the logger's poll schedule (a simulated Modbus TCP module
@@ -14,23 +15,24 @@
 //   build/bench/live_bench [latency|probes|jitter]   (all three by default)
 
 #include <fmt/format.h>
+#include <httplib.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <httplib.h>
 #include <iostream>
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
-#include <unistd.h>
 #include <vector>
 
 #include "acquisition/experiment_config.h"
+#include "acquisition/frame_png.h"
 #include "acquisition/logger.h"
 #include "pipeline/live_probes.h"
 #include "sim/convection_scene.h"
@@ -65,11 +67,12 @@ double percentile(std::vector<double> values, double p) {
 
 // A viewer of `run` on a free loopback port, serving on its own thread.
 struct Viewer {
-  explicit Viewer(const fs::path& run) : server(run, [] {
-    view::ViewOptions o;
-    o.port = 0;
-    return o;
-  }()) {
+  explicit Viewer(const fs::path& run)
+      : server(run, [] {
+          view::ViewOptions o;
+          o.port = 0;
+          return o;
+        }()) {
     port = server.listen();
     thread = std::thread([this] { server.serve(); });
   }
@@ -132,11 +135,13 @@ void latency() {
   reader.join();
   std::vector<double> ms;
   for (int i = 0; i < kSamples; ++i) {
-    if (received[i] != Clock::time_point{}) ms.push_back(std::chrono::duration<double, std::milli>(received[i] - committed[i]).count());
+    if (received[i] != Clock::time_point{})
+      ms.push_back(std::chrono::duration<double, std::milli>(received[i] - committed[i]).count());
   }
-  fmt::print("latency: {} of {} samples received; commit -> SSE event median {:.1f} ms, p95 {:.1f} ms, max {:.1f} ms "
-             "(viewer poll period 100 ms)\n",
-             ms.size(), kSamples, percentile(ms, 0.5), percentile(ms, 0.95), percentile(ms, 1.0));
+  fmt::print(
+      "latency: {} of {} samples received; commit -> SSE event median {:.1f} ms, p95 {:.1f} ms, max {:.1f} ms "
+      "(viewer poll period 100 ms)\n",
+      ms.size(), kSamples, percentile(ms, 0.5), percentile(ms, 0.95), percentile(ms, 1.0));
 }
 
 // A 16 MP run of the convection scene at the paper's 30 px/mm with four
@@ -161,16 +166,21 @@ SceneRun sixteen_megapixel_run(const fs::path& dir) {
   const fs::path run = dir / "run16";
   constexpr double kPitchUm = 5;
   storage::RunInfo info{.name = "16 MP", .started_ns = 1'000'000'000};
-  info.config_toml = fmt::format("[geometry]\nz_d_m = {}\ndepth_m = {}\nmagnification = {}\npixel_pitch_um = {}\n"
-                                 "ambient_temperature_c = {}\n",
-                                 s.z_d_m, s.depth_m, s.px_per_mm * kPitchUm * 1e-3, kPitchUm, s.ambient_c);
+  info.config_toml = fmt::format(
+      "[geometry]\nz_d_m = {}\ndepth_m = {}\nmagnification = {}\npixel_pitch_um = {}\n"
+      "ambient_temperature_c = {}\n",
+      s.z_d_m, s.depth_m, s.px_per_mm * kPitchUm * 1e-3, kPitchUm, s.ambient_c);
   auto store = storage::RunStore::create(run, info, storage::RunStore::CreateMode::kNew);
   const auto device = store.add_device({.name = "daq", .kind = "modbus-tcp"});
   const std::vector<cv::Point2d> tcs_m{{0, 0.035}, {0, 0.045}, {0.004, 0.045}, {0, 0.055}};
   for (std::size_t i = 0; i < tcs_m.size(); ++i) {
     const auto at = scene.image_position_px(tcs_m[i].x, tcs_m[i].y);
-    store.add_channel({.device_id = device, .name = fmt::format("tc{}", i), .kind = "thermocouple", .unit = "degC",
-                       .image_x_px = at.x, .image_y_px = at.y});
+    store.add_channel({.device_id = device,
+                       .name = fmt::format("tc{}", i),
+                       .kind = "thermocouple",
+                       .unit = "degC",
+                       .image_x_px = at.x,
+                       .image_y_px = at.y});
   }
   sim::PatternOptions pattern;
   pattern.width_px = s.width_px;
@@ -180,9 +190,13 @@ SceneRun sixteen_megapixel_run(const fs::path& dir) {
   fs::create_directories(run / "frames");
   for (int f = 0; f < 2; ++f) {
     const std::string path = fmt::format("frames/{:06d}.png", f);
-    cv::imwrite((run / path).string(), scene.render_frame(background, {}, kFrameTimeS * f, f == 1, f));
-    store.add_frame({.t_ns = 1'000'000'000 + f * static_cast<std::int64_t>(kFrameTimeS * 1e9), .path = path, .width_px = s.width_px,
-                     .height_px = s.height_px, .bit_depth = 8, .is_reference = f == 0});
+    acquisition::write_frame_png(run / path, scene.render_frame(background, {}, kFrameTimeS * f, f == 1, f));
+    store.add_frame({.t_ns = 1'000'000'000 + f * static_cast<std::int64_t>(kFrameTimeS * 1e9),
+                     .path = path,
+                     .width_px = s.width_px,
+                     .height_px = s.height_px,
+                     .bit_depth = 8,
+                     .is_reference = f == 0});
   }
   store.finish(storage::RunStatus::kComplete, 21'000'000'000);
   return {run, shared_scene};
@@ -201,10 +215,11 @@ void probes() {
     evaluate.push_back(last.evaluate_seconds * 1e3);
     total.push_back(decode.back() + evaluate.back());
   }
-  fmt::print("probes: 16 MP (4928x3264, 8-bit PNG {:.1f} MB), 4 probes, temperatures from {}: median of 5: "
-             "decode {:.0f} ms + evaluate {:.0f} ms = {:.0f} ms per frame\n",
-             fs::file_size(run.dir / frame.path) / 1e6, live.temperature_source(), percentile(decode, 0.5),
-             percentile(evaluate, 0.5), percentile(total, 0.5));
+  fmt::print(
+      "probes: 16 MP (4928x3264, 8-bit PNG {:.1f} MB), 4 probes, temperatures from {}: median of 5: "
+      "decode {:.0f} ms + evaluate {:.0f} ms = {:.0f} ms per frame\n",
+      fs::file_size(run.dir / frame.path) / 1e6, live.temperature_source(), percentile(decode, 0.5),
+      percentile(evaluate, 0.5), percentile(total, 0.5));
   const sim::ConvectionScene& scene = *run.scene;
   for (const auto& p : last.probes) {
     const cv::Point2d at_m = scene.flow_position_m(p.position_px.x, p.position_px.y);
@@ -245,8 +260,8 @@ Jitter poll_jitter(const fs::path& run, int clients) {
                   "\"tc0\"\ninput = 0\n",
                   module.port()),
       "jitter.toml");
-  auto store = storage::RunStore::create(run, acquisition::run_info(config, 1'000'000'000),
-                                         storage::RunStore::CreateMode::kNew);
+  auto store =
+      storage::RunStore::create(run, acquisition::run_info(config, 1'000'000'000), storage::RunStore::CreateMode::kNew);
   acquisition::Logger::Options options;
   options.duration = 10s;
   acquisition::Logger logger(store, options);
@@ -290,9 +305,10 @@ void jitter() {
   for (int round = 0; round < 2 * kRounds; ++round) {
     const int clients = round % 2 ? 10 : 0;
     const Jitter j = poll_jitter(dir.path / fmt::format("jitter{}", round), clients);
-    fmt::print("jitter: {:>2} page clients: {} polls in 10 s, |interval - 20 ms|: median {:.2f} ms, rms {:.2f} ms, "
-               "p99 {:.2f} ms, max {:.2f} ms\n",
-               clients, j.polls, j.median_ms, j.rms_ms, j.p99_ms, j.max_ms);
+    fmt::print(
+        "jitter: {:>2} page clients: {} polls in 10 s, |interval - 20 ms|: median {:.2f} ms, rms {:.2f} ms, "
+        "p99 {:.2f} ms, max {:.2f} ms\n",
+        clients, j.polls, j.median_ms, j.rms_ms, j.p99_ms, j.max_ms);
     by_clients[clients].push_back(j);
   }
   for (const auto& [clients, rounds] : by_clients) {
@@ -301,10 +317,11 @@ void jitter() {
       for (const auto& j : rounds) v.push_back(j.*field);
       return percentile(v, 0.5);
     };
-    fmt::print("jitter: median of {} rounds, {:>2} page clients: median {:.2f} ms, rms {:.2f} ms, p99 {:.2f} ms, max "
-               "{:.2f} ms\n",
-               rounds.size(), clients, median_of(&Jitter::median_ms), median_of(&Jitter::rms_ms),
-               median_of(&Jitter::p99_ms), median_of(&Jitter::max_ms));
+    fmt::print(
+        "jitter: median of {} rounds, {:>2} page clients: median {:.2f} ms, rms {:.2f} ms, p99 {:.2f} ms, max "
+        "{:.2f} ms\n",
+        rounds.size(), clients, median_of(&Jitter::median_ms), median_of(&Jitter::rms_ms), median_of(&Jitter::p99_ms),
+        median_of(&Jitter::max_ms));
   }
 }
 
