@@ -250,6 +250,30 @@ void PatchBoxSums(const float* patch, std::size_t stride, int p, int n, double* 
   }
 }
 
+// A vector of shifts at a time; the shifts left over (count % lanes) by the
+// scalar reference, which does the same operations in the same order.
+void NormaliseByEnergies(const double* products, const double* sums, const double* squares, std::size_t count,
+                         double window_pixels, double reference_energy, double min_energy, double* out) {
+  if (reference_energy < min_energy) {
+    std::fill(out, out + count, 0.0);
+    return;
+  }
+  const hn::ScalableTag<double> d;
+  const std::size_t lanes = hn::Lanes(d);
+  const auto pixels = hn::Set(d, window_pixels), reference = hn::Set(d, reference_energy);
+  const auto floor = hn::Set(d, min_energy), zero = hn::Zero(d);
+  std::size_t i = 0;
+  for (; i + lanes <= count; i += lanes) {
+    const auto s = hn::LoadU(d, sums + i);
+    const auto energy = hn::Sub(hn::LoadU(d, squares + i), hn::Div(hn::Mul(s, s), pixels));
+    // Flat lanes take the root of a negative number or of ~0, then drop it.
+    const auto root = hn::IfThenZeroElse(hn::Lt(energy, floor), hn::Sqrt(hn::Mul(reference, energy)));
+    hn::StoreU(hn::IfThenZeroElse(hn::Eq(root, zero), hn::Div(hn::LoadU(d, products + i), root)), d, out + i);
+  }
+  scalar_normalise_by_energies(products + i, sums + i, squares + i, count - i, window_pixels, reference_energy,
+                               min_energy, out + i);
+}
+
 // The equal-windows correlation of an n×n window pair when a window row is
 // exactly one vector (n = 16 with AVX-512, 8 with AVX2): the measurement
 // window is centred and each of its rows rotated by every horizontal shift
@@ -567,6 +591,7 @@ HWY_EXPORT(CentredPeriodicTile);
 HWY_EXPORT(CentreWindow);
 HWY_EXPORT(EqualWindowProducts);
 HWY_EXPORT(PatchBoxSums);
+HWY_EXPORT(NormaliseByEnergies);
 
 namespace {
 
@@ -702,6 +727,23 @@ void scalar_patch_box_sums(const float* patch, std::size_t stride, int p, int n,
       sums[dy * side + dx] = box;
       squares[dy * side + dx] = box_squares;
     }
+  }
+}
+
+void normalise_by_energies(const double* products, const double* sums, const double* squares, std::size_t count,
+                           double window_pixels, double reference_energy, double min_energy, double* out) {
+  apply_environment_once();
+  HWY_DYNAMIC_DISPATCH(NormaliseByEnergies)
+  (products, sums, squares, count, window_pixels, reference_energy, min_energy, out);
+}
+
+void scalar_normalise_by_energies(const double* products, const double* sums, const double* squares, std::size_t count,
+                                  double window_pixels, double reference_energy, double min_energy, double* out) {
+  for (std::size_t i = 0; i < count; ++i) {
+    const double energy = squares[i] - sums[i] * sums[i] / window_pixels;
+    const bool flat = reference_energy < min_energy || energy < min_energy;
+    const double root = flat ? 0.0 : std::sqrt(reference_energy * energy);
+    out[i] = root == 0.0 ? 0.0 : products[i] / root;
   }
 }
 

@@ -87,6 +87,20 @@ void patch_box_sums(const float* patch, std::size_t stride, int p, int n, double
 // The reference for patch_box_sums: each box summed afresh, in row order.
 void scalar_patch_box_sums(const float* patch, std::size_t stride, int p, int n, double* sums, double* squares);
 
+// The search-area correlation's normalisation, for `count` shifts:
+// out[i] = products[i] / √(reference_energy · energy_i), where a shifted
+// window's energy is energy_i = squares[i] − sums[i]²/window_pixels
+// (patch_box_sums' boxes), and 0 where either energy is below min_energy (a
+// flat window: no texture to correlate) or the root is 0. The SIMD kernel
+// does the scalar reference's IEEE operations in its order, so the two are
+// equal exactly.
+void normalise_by_energies(const double* products, const double* sums, const double* squares, std::size_t count,
+                           double window_pixels, double reference_energy, double min_energy, double* out);
+
+// The reference for normalise_by_energies: one shift at a time.
+void scalar_normalise_by_energies(const double* products, const double* sums, const double* squares, std::size_t count,
+                                  double window_pixels, double reference_energy, double min_energy, double* out);
+
 // The equal-windows correlation (window_correlator.h) of an n×n reference
 // window and an n×n measurement window in one call: the measurement's mean
 // and energy, as window_mean_energy gives them, and

@@ -212,6 +212,56 @@ void expect_all_patch_box_sums_match() {
   }
 }
 
+// The search-area normalisation on the box sums of real patches: textured,
+// bright and nearly flat, and flat (energy 0, below the floor), with a
+// textured and a flat reference; every count of shifts from one to past a
+// 512-bit vector's multiple. Exactly equal: the same IEEE operations.
+void expect_normalisations_match(std::size_t count, float texture, double reference_energy, unsigned seed) {
+  SCOPED_TRACE(testing::Message() << "count=" << count << " texture=" << texture
+                                  << " reference_energy=" << reference_energy << " target=" << simd_target_name());
+  constexpr int kWindow = 16;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> product(-1, 1);
+  std::vector<double> sums(count), squares(count), products(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::vector<float> box = bright_values(kWindow * kWindow, texture, rng);
+    double scratch[2 * kWindow];
+    patch_box_sums(box.data(), kWindow, kWindow, kWindow, scratch, &sums[i], &squares[i]);
+    products[i] = product(rng) * std::sqrt(std::max(reference_energy, 0.0) * 1e-3);
+  }
+  constexpr double kMinEnergy = 1e-12;
+  // Energies just under and just over the floor (sums 0: energy = squares).
+  const std::size_t under = count / 2, over = count - 1;
+  sums[under] = sums[over] = 0;
+  squares[under] = 0.5 * kMinEnergy;
+  if (over != under) squares[over] = 2 * kMinEnergy;
+  std::vector<double> out(count + 1, -7), expected(count + 1, -7);
+  normalise_by_energies(products.data(), sums.data(), squares.data(), count, kWindow * kWindow, reference_energy,
+                        kMinEnergy, out.data());
+  scalar_normalise_by_energies(products.data(), sums.data(), squares.data(), count, kWindow * kWindow, reference_energy,
+                               kMinEnergy, expected.data());
+  for (std::size_t i = 0; i < count; ++i) ASSERT_EQ(out[i], expected[i]) << "shift " << i;
+  ASSERT_EQ(out[count], -7) << "written past the last shift";
+  ASSERT_EQ(out[under], 0.0) << "an energy under the floor is flat";
+  if (texture == 0.f || reference_energy < kMinEnergy) {
+    for (std::size_t i = 0; i < count; ++i) {
+      if (i != over || reference_energy < kMinEnergy)
+        ASSERT_EQ(out[i], 0.0) << "a flat pair correlates as 0, shift " << i;
+    }
+  }
+}
+
+void expect_all_normalisations_match() {
+  unsigned seed = 900;
+  for (const std::size_t count : {1, 7, 8, 9, 16, 25, 81, 83}) {
+    for (const float texture : {0.1f, 1e-3f, 0.f}) {
+      for (const double reference_energy : {0.5, 1e-14}) {
+        expect_normalisations_match(count, texture, reference_energy, seed++);
+      }
+    }
+  }
+}
+
 // The window deformation's sampling: a random image inside a wider buffer,
 // and the points of a region reaching past every edge of the image, moved
 // by a random smooth displacement field (up to ±4 px).
@@ -357,6 +407,7 @@ TEST_F(SimdKernels, MatchTheScalarReference) {
   expect_all_window_kernels_match();
   expect_all_equal_window_products_match();
   expect_all_patch_box_sums_match();
+  expect_all_normalisations_match();
 }
 
 TEST_F(SimdKernels, SamplingMatchesTheScalarReference) {
@@ -383,7 +434,7 @@ TEST_F(SimdKernels, MatchTheScalarReferenceOnEveryTargetOfThisCpu) {
     expect_all_window_kernels_match();
     expect_all_equal_window_products_match();
     expect_all_patch_box_sums_match();
-    expect_all_patch_box_sums_match();
+    expect_all_normalisations_match();
   }
 }
 
@@ -396,6 +447,7 @@ TEST_F(SimdKernels, TheEnvironmentForcesThePortableTarget) {
   expect_all_window_kernels_match();
   expect_all_equal_window_products_match();
   expect_all_patch_box_sums_match();
+  expect_all_normalisations_match();
   expect_all_samplings_match();
   expect_warp_matches_reference();
   ASSERT_EQ(unsetenv("BOSFUSE_SIMD"), 0);

@@ -182,10 +182,8 @@ void WindowCorrelator::normalise_equal_windows(double measurement_energy, Correl
 }
 
 void WindowCorrelator::normalise(int n, CorrelationPlane& plane) const {
-  const double count = double(n) * n;
-  for (std::size_t i = 0; i < plane.value.size(); ++i) {
-    plane.value[i] = normalised(i, denominator(box_sum_sq_[i] - box_sum_[i] * box_sum_[i] / count));
-  }
+  normalise_by_energies(products_.data(), box_sum_.data(), box_sum_sq_.data(), plane.value.size(), double(n) * n,
+                        reference_energy_, kMinEnergy, plane.value.data());
 }
 
 }  // namespace bosfuse::fusion
