@@ -279,6 +279,18 @@ struct TemperatureFieldSolver::State {
     factorised_for.clear();
   }
 
+  // Under the lock: the grid's numbering of unknowns, set up anew when the
+  // field's grid (`layout`, grid_layout's) is not the last one's.
+  void use_grid(const DisplacementField& displacement, const GridLayout& layout,
+                const TemperatureFieldOptions& options) {
+    if (displacement.size() > static_cast<std::size_t>(options.max_nodes)) {
+      throw std::invalid_argument(
+          fmt::format("temperature field: {} nodes exceed max_nodes {}", displacement.size(), options.max_nodes));
+    }
+    const GridKey key{displacement.rows, displacement.cols, layout};
+    if (!grid || !(*grid == key)) start_grid(key, displacement, options);
+  }
+
   // The pattern's analysis (any matrix of the grid's pattern serves).
   void analyse(const Eigen::SparseMatrix<double>& a) {
     factorisation->analyse(a);
@@ -309,23 +321,12 @@ int TemperatureFieldSolver::factorisations() const {
   return state_->factorisations;
 }
 
-// Under the state's lock: the grid's numbering of unknowns, set up anew
-// when the field's grid is not the last one's.
-void TemperatureFieldSolver::use_grid_of(const DisplacementField& displacement) {
-  const GridLayout layout = grid_layout(displacement);
-  if (displacement.size() > static_cast<std::size_t>(options_.max_nodes)) {
-    throw std::invalid_argument(
-        fmt::format("temperature field: {} nodes exceed max_nodes {}", displacement.size(), options_.max_nodes));
-  }
-  const GridKey key{displacement.rows, displacement.cols, layout};
-  if (!state_->grid || !(*state_->grid == key)) state_->start_grid(key, displacement, options_);
-}
-
 void TemperatureFieldSolver::prepare(const GridGeometry& grid) {
   const DisplacementField field = field_on_grid(grid);
+  const GridLayout layout = grid_layout(field);
   std::lock_guard lock(state_->mutex);
-  use_grid_of(field);
   State& state = *state_;
+  state.use_grid(field, layout, options_);
   if (state.analysed) return;
   EdgeSystem system(state.unknown, state.unknowns, true);
   for_each_edge(field.rows, field.cols, [&](std::size_t i, std::size_t j, bool) { system.add_edge(i, j, 0.0, 1.0); });
@@ -334,10 +335,10 @@ void TemperatureFieldSolver::prepare(const GridGeometry& grid) {
 
 TemperatureFieldResult TemperatureFieldSolver::recover(const DisplacementField& displacement) {
   const auto start = std::chrono::steady_clock::now();
-  std::lock_guard lock(state_->mutex);
-  use_grid_of(displacement);
-  State& state = *state_;
   const GridLayout layout = grid_layout(displacement);
+  std::lock_guard lock(state_->mutex);
+  State& state = *state_;
+  state.use_grid(displacement, layout, options_);
   std::vector<std::uint8_t> measured = measured_nodes(displacement, options_);
   const bool refactorise = measured != state.factorised_for;
 

@@ -138,7 +138,6 @@ class TemperatureFieldSolver {
   friend TemperatureFieldResult recover_temperature_field(const DisplacementField&, const BosGeometry&,
                                                           const TemperatureFieldOptions&);
   struct State;
-  void use_grid_of(const DisplacementField& displacement);
   BosGeometry geometry_;
   TemperatureFieldOptions options_;
   std::unique_ptr<State> state_;
