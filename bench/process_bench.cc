@@ -210,6 +210,11 @@ fs::path frame_cache_dir(FramePng png) {
 
 std::string frame_name(int frame) { return fmt::format("f{}.png", frame); }
 
+void write_png(FramePng png, const fs::path& path, const cv::Mat& frame) {
+  if (png == kAsRecorded) return acquisition::write_frame_png(path, frame);
+  if (!cv::imwrite(path.string(), frame)) throw std::runtime_error("cannot write " + path.string());
+}
+
 // The reference (frame 0) and kFrames measurements as 16-bit PNG, written
 // into the cache by `write(frame, path)` when it does not hold them yet (a
 // partial writing is never taken for one: the folder gets its name when
@@ -234,9 +239,7 @@ fs::path cached_16mp_frames(FramePng png) {
   if (png == kOpenCvDefault) {
     const fs::path recorded = cached_16mp_frames(kAsRecorded);
     return cached_frames(frame_cache_dir(png), [&](int i, const fs::path& path) {
-      if (!cv::imwrite(path.string(), cv::imread((recorded / frame_name(i)).string(), cv::IMREAD_UNCHANGED))) {
-        throw std::runtime_error("cannot write " + path.string());
-      }
+      write_png(png, path, acquisition::read_image_file(recorded / frame_name(i)));
     });
   }
   sim::PatternOptions options;
@@ -248,8 +251,7 @@ fs::path cached_16mp_frames(FramePng png) {
     cv::Mat dots =
         i == 0 ? sim::render_dots(pattern, nullptr)
                : sim::render_dots(pattern, [peak_px](double x, double y) { return plume_shift_px(x, y, peak_px); });
-    acquisition::write_frame_png(path,
-                                 sim::camera_image(std::move(dots), 0, 0.01, 16, static_cast<std::uint64_t>(i + 1), 1));
+    write_png(png, path, sim::camera_image(std::move(dots), 0, 0.01, 16, static_cast<std::uint64_t>(i + 1), 1));
   });
 }
 
@@ -302,10 +304,8 @@ void BM_FramePng16MP(benchmark::State& state) {
   for (auto _ : state) {
     if (reading) {
       benchmark::DoNotOptimize(acquisition::read_image_file(source));
-    } else if (png == kAsRecorded) {
-      acquisition::write_frame_png(written, frame);
-    } else if (!cv::imwrite(written.string(), frame)) {
-      throw std::runtime_error("cannot write " + written.string());
+    } else {
+      write_png(png, written, frame);
     }
   }
   state.counters["file_MB"] = static_cast<double>(fs::file_size(source)) / 1e6;
