@@ -376,8 +376,7 @@ HWY_INLINE void SampleSeparable(D d, const float* HWY_RESTRICT image, std::size_
   const int lanes = static_cast<int>(hn::Lanes(d));
   const int taps = kernel.taps, steps = kernel.steps, first = 1 - taps / 2;
   const int span = (taps + lanes - 1) / lanes * lanes;
-  HWY_ALIGN float wy[16];
-  float wx_scalar[8];
+  HWY_ALIGN float wx[16], wy[16];
   // In the last vector of a point's taps, lanes past the taps hold the next
   // table entry's weights and pixels the reference never reads: zeroing
   // the pixels' column sums removes both (not even an infinity there
@@ -395,9 +394,17 @@ HWY_INLINE void SampleSeparable(D d, const float* HWY_RESTRICT image, std::size_
     const double fx = std::floor(xs[k]), fy = std::floor(ys[k]);
     const int x = static_cast<int>(fx) + first, y = static_cast<int>(fy) + first;
     if (x < 0 || y < 0 || x + span > cols || y + taps > rows) {
-      tabulated_weights(kernel, xs[k] - fx, wx_scalar);
-      tabulated_weights(kernel, ys[k] - fy, wy);
-      out[k] = SampleClamped(image, stride, cols, rows, taps, x, y, wx_scalar, wy);
+      // The weights as the vectors below take them. Not tabulated_weights:
+      // compiled for the baseline CPU it rounds a + f·(b − a) twice, but
+      // where the compiler inlines it here, into an AVX2 or AVX-512 function,
+      // it may fuse that into one multiply-add — and whether it inlines
+      // depends on the rest of this file, so unrelated edits moved the edge
+      // pixels of every warp (by ~1e-7) and every field after them.
+      for (int i = 0; i < taps; i += lanes) {
+        hn::Store(weights_at(xs[k] - fx, i), d, wx + i);
+        hn::Store(weights_at(ys[k] - fy, i), d, wy + i);
+      }
+      out[k] = SampleClamped(image, stride, cols, rows, taps, x, y, wx, wy);
       continue;
     }
     for (int i = 0; i < taps; i += lanes) hn::Store(weights_at(ys[k] - fy, i), d, wy + i);
