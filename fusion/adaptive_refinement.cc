@@ -8,18 +8,12 @@
 #include <vector>
 
 #include "fusion/for_rows.h"
+#include "fusion/outlier_filter.h"
 
 namespace bosfuse::fusion {
 namespace {
 
 bool measured(const DisplacementVector& v) { return v.flag == VectorFlag::kOk; }
-
-double median_of(double* begin, int n) {
-  std::nth_element(begin, begin + n / 2, begin + n);
-  const double upper = begin[n / 2];
-  if (n % 2 == 1) return upper;
-  return 0.5 * (*std::max_element(begin, begin + n / 2) + upper);
-}
 
 // The component's central difference at (row, col), halved (change per
 // node); one-sided at the grid's edge and beside unmeasured nodes, 0 where
@@ -65,8 +59,8 @@ double field_noise_floor_px(const DisplacementField& field) {
       }
       if (count < 3) continue;
       const std::size_t i = static_cast<std::size_t>(row) * field.cols + col;
-      per_node[2 * i] = std::abs(vec.u_px - median_of(u.data(), count));
-      per_node[2 * i + 1] = std::abs(vec.v_px - median_of(v.data(), count));
+      per_node[2 * i] = std::abs(vec.u_px - median_in_place(u.data(), count));
+      per_node[2 * i + 1] = std::abs(vec.v_px - median_in_place(v.data(), count));
       has_residual[i] = 1;
     }
   });
@@ -78,7 +72,7 @@ double field_noise_floor_px(const DisplacementField& field) {
     residuals.push_back(per_node[2 * i + 1]);
   }
   if (residuals.size() < 16) return -1;  // 8 vectors, two components each
-  const double mad = median_of(residuals.data(), static_cast<int>(residuals.size()));
+  const double mad = median_in_place(residuals.data(), static_cast<int>(residuals.size()));
   return std::isfinite(mad) ? 1.4826 * mad : -1;
 }
 
@@ -153,6 +147,11 @@ RefinementSelection select_refinement(const DisplacementField& first_pass, const
 }
 
 void smooth_unrefined(DisplacementField& field, const cv::Mat& refine, double sigma_nodes) {
+  SmoothingBuffers buffers;
+  smooth_unrefined(field, refine, sigma_nodes, buffers);
+}
+
+void smooth_unrefined(DisplacementField& field, const cv::Mat& refine, double sigma_nodes, SmoothingBuffers& buffers) {
   if (!(sigma_nodes >= 0) || !std::isfinite(sigma_nodes)) {
     throw std::invalid_argument("adaptive refinement smoothing must be 0 or more nodes");
   }
@@ -160,29 +159,41 @@ void smooth_unrefined(DisplacementField& field, const cv::Mat& refine, double si
     throw std::invalid_argument("adaptive refinement: the selection does not match the field");
   }
   if (sigma_nodes == 0 || field.vectors.empty()) return;
-  cv::Mat weight(field.rows, field.cols, CV_64F), u(field.rows, field.cols, CV_64F), v(field.rows, field.cols, CV_64F);
+  // Per node (w, w·u, w·v), w = 1 for the nodes averaged: one filter over
+  // the three channels filters each as it would alone.
+  cv::Mat& weighted = buffers.weighted;
+  cv::Mat& smoothed = buffers.smoothed;
+  weighted.create(field.rows, field.cols, CV_64FC3);
+  smoothed.create(field.rows, field.cols, CV_64FC3);
   for_rows(field.rows, [&](int row) {
+    auto* out = weighted.ptr<cv::Vec3d>(row);
     for (int col = 0; col < field.cols; ++col) {
       const auto& vec = field.at(row, col);
       const double w = !refine.at<std::uint8_t>(row, col) && measured(vec) ? 1.0 : 0.0;
-      weight.at<double>(row, col) = w;
-      u.at<double>(row, col) = w * vec.u_px;
-      v.at<double>(row, col) = w * vec.v_px;
+      out[col] = {w, w * vec.u_px, w * vec.v_px};
     }
   });
   const int half = static_cast<int>(std::ceil(3 * sigma_nodes));
   const cv::Mat kernel = cv::getGaussianKernel(2 * half + 1, sigma_nodes, CV_64F);
-  // Zero outside the grid: with the weights filtered alike, edges are normalised like the rest.
-  for (cv::Mat* m : {&weight, &u, &v}) {
-    cv::sepFilter2D(*m, *m, CV_64F, kernel, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
-  }
+  // In bands of rows on both cores: a band's filter reads the rows around it
+  // from the whole grid (a view's neighbourhood is image, not border), so the
+  // bands equal one filter over the grid. Zero outside the grid: with the
+  // weights filtered alike, edges are normalised like the rest.
+  cv::parallel_for_(
+      cv::Range(0, field.rows),
+      [&](const cv::Range& rows) {
+        cv::sepFilter2D(weighted.rowRange(rows.start, rows.end), smoothed.rowRange(rows.start, rows.end), CV_64F,
+                        kernel, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
+      },
+      cv::getNumThreads());
   for_rows(field.rows, [&](int row) {
+    const auto* in = smoothed.ptr<cv::Vec3d>(row);
     for (int col = 0; col < field.cols; ++col) {
       auto& vec = field.at(row, col);
       if (refine.at<std::uint8_t>(row, col) || !measured(vec)) continue;
-      const double w = weight.at<double>(row, col);  // ≥ the node's own weight, > 0
-      vec.u_px = u.at<double>(row, col) / w;
-      vec.v_px = v.at<double>(row, col) / w;
+      const double w = in[col][0];  // ≥ the node's own weight, > 0
+      vec.u_px = in[col][1] / w;
+      vec.v_px = in[col][2] / w;
     }
   });
 }

@@ -83,6 +83,13 @@ RefinementSelection select_refinement(const DisplacementField& first_pass, const
 // are left alone. sigma_nodes 0 leaves everything.
 void smooth_unrefined(DisplacementField& field, const cv::Mat& refine, double sigma_nodes);
 
+// What smooth_unrefined works in: kept by a caller that smooths every frame,
+// they are not page-faulted anew each time (2 × 6 MB for a 16 MP field).
+struct SmoothingBuffers {
+  cv::Mat weighted, smoothed;
+};
+void smooth_unrefined(DisplacementField& field, const cv::Mat& refine, double sigma_nodes, SmoothingBuffers& buffers);
+
 // How many nodes around a refined one its value depends on in a pass: its
 // window, search and interpolation kernel reach ceil((window/2 + search +
 // 4) / step) nodes of the predictor, the predictor's smoothing one more and

@@ -345,6 +345,20 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
   cv::parallel_for_(cv::Range(0, node_count), evaluate_range, std::max(1.0, node_count / 256.0));
 }
 
+// The selection of the refinement passes and what the others keep.
+struct AdaptivePasses {
+  RefinementSelection selection;
+  // Where the refinement passes' outlier test runs: the selection grown by
+  // one node, so that every selected node ends as the whole field's test
+  // would leave it (the nodes outside the selection are put back from
+  // first_pass after the test anyway).
+  cv::Mat outlier_tested;
+  DisplacementField first_pass;  // the field after the first pass, unselected nodes marked first_pass_only
+  SmoothingBuffers smoothing;
+  // Selecting every node is full refinement, without the tiles' bookkeeping.
+  bool active() const { return !selection.refine.empty() && selection.selected < selection.candidates; }
+};
+
 // What run_passes keeps between passes and, in an XcorrEvaluator, between
 // frames: the warped images' buffers, and each reference window's mean and
 // energy per window size for the nodes of the full grid (probes leave
@@ -354,6 +368,9 @@ struct PassWorkspace {
   bool cache_reference_stats = false;
   std::map<int, std::vector<WindowStats>> reference_stats;  // by window size
   DisplacementField previous_field;                         // the field before a pass, for its change
+  GridField predictor;                                      // a refinement pass's, and its smoothing's scratch
+  cv::Mat predictor_scratch;
+  AdaptivePasses adaptive;  // adaptive refinement's selection and the first pass it keeps
 };
 
 // The top-left `size` of `storage`, which grows when too small: the regions
@@ -468,27 +485,14 @@ void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, P
 
 // ---- Adaptive refinement (fusion/adaptive_refinement.h) ----
 
-// The selection of the refinement passes and what the others keep.
-struct AdaptivePasses {
-  RefinementSelection selection;
-  // Where the refinement passes' outlier test runs: the selection grown by
-  // one node, so that every selected node ends as the whole field's test
-  // would leave it (the nodes outside the selection are put back from
-  // first_pass after the test anyway).
-  cv::Mat outlier_tested;
-  DisplacementField first_pass;  // the field after the first pass, unselected nodes marked first_pass_only
-  // Selecting every node is full refinement, without the tiles' bookkeeping.
-  bool active() const { return !selection.refine.empty() && selection.selected < selection.candidates; }
-};
-
-AdaptivePasses select_for_refinement(const MeasuredPass& measured, const DisplacementField& field,
-                                     const GridGeometry& grid, const XcorrOptions& options) {
-  AdaptivePasses adaptive;
+// Into `adaptive`, whose buffers an evaluator keeps between frames.
+void select_for_refinement(const MeasuredPass& measured, const DisplacementField& field, const GridGeometry& grid,
+                           const XcorrOptions& options, AdaptivePasses& adaptive) {
   const int context = refinement_context_nodes(options.window_px_per_pass()[1], options.search_radius_px(1),
                                                static_cast<int>(std::ceil(grid.step_px)));
   adaptive.selection =
       select_refinement(measured.field, measured.grid, field, grid, options.adaptive_threshold, context);
-  adaptive.first_pass = field;
+  copy_field(field, adaptive.first_pass);
   for_rows(field.rows, [&](int row) {
     const std::uint8_t* refined = adaptive.selection.refine.ptr<std::uint8_t>(row);
     for (int col = 0; col < field.cols; ++col) {
@@ -496,12 +500,12 @@ AdaptivePasses select_for_refinement(const MeasuredPass& measured, const Displac
       vec.first_pass_only = !refined[col] && vec.flag != VectorFlag::kOutOfRoi;
     }
   });
-  smooth_unrefined(adaptive.first_pass, adaptive.selection.refine, options.adaptive_smoothing_nodes);
+  smooth_unrefined(adaptive.first_pass, adaptive.selection.refine, options.adaptive_smoothing_nodes,
+                   adaptive.smoothing);
   cv::dilate(adaptive.selection.refine, adaptive.outlier_tested, cv::Mat::ones(3, 3, CV_8U));
   spdlog::debug("adaptive refinement: noise floor {:.4f} px, threshold {:.4f} px, {:.1f} % of the windows refined",
                 adaptive.selection.noise_floor_px, adaptive.selection.threshold_px,
                 100 * adaptive.selection.fraction());
-  return adaptive;
 }
 
 // Unselected nodes as the first pass left them, smoothed (the outlier test
@@ -587,15 +591,16 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
   EvaluationSummary summary;
   summary.method = "xcorr";
   const std::vector<int> windows = options.window_px_per_pass();
-  GridField predictor;
-  AdaptivePasses adaptive;
+  GridField& predictor = workspace.predictor;
+  AdaptivePasses& adaptive = workspace.adaptive;
+  adaptive.selection = {};  // none until this frame's first pass selects
   bool finish_now = false;
   for (int pass = 0; pass < static_cast<int>(windows.size()); ++pass) {
     PassInput in;
     in.window_px = windows[pass];
     in.radius_px = options.search_radius_px(pass);
-    if (pass > 0) predictor = predictor_from(field, grid);
-    if (pass > 0 && options.deform && options.smooth_predictor) smooth_predictor(predictor);
+    if (pass > 0) predictor_from(field, grid, predictor);
+    if (pass > 0 && options.deform && options.smooth_predictor) smooth_predictor(predictor, workspace.predictor_scratch);
     in.predictor = pass > 0 ? &predictor : nullptr;
     in.shift_whole_pixels = pass > 0 && !options.deform;
     const int reach_px = in.radius_px + (in.shift_whole_pixels ? max_abs_shift_px(predictor) : 0);
@@ -616,7 +621,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
         summary.passes_run = 1;
         summary.window_px_per_pass.push_back(in.window_px);
         if (options.adaptive_refinement) {
-          adaptive = select_for_refinement(measured, field, grid, options);
+          select_for_refinement(measured, field, grid, options, adaptive);
           keep_first_pass(adaptive, field);  // the refined nodes' predictor sees the smoothed values
         }
         continue;
@@ -657,7 +662,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     }
     if (adaptive.active()) keep_first_pass(adaptive, field, &adaptive.outlier_tested);
     if (pass == 0 && windows.size() > 1 && options.adaptive_refinement) {
-      adaptive = select_for_refinement({field, grid}, field, grid, options);
+      select_for_refinement({field, grid}, field, grid, options, adaptive);
       keep_first_pass(adaptive, field);
     }
     summary.passes_run = pass + 1;

@@ -26,13 +26,19 @@ constexpr Bytes kFixedBytes = Bytes{8} << 20;
 
 // A refinement pass's grid at its peak (replace_outliers after run_pass):
 // the field, the copy of it before the pass that measures the change (kept
-// between passes), the predictor's u and v, the outlier flags and, at worst
-// for every node, an outlier's index and its replacement value, and the
-// reference window's mean and energy kept per node for each window size.
+// between passes), the predictor's u and v and its smoothing's scratch
+// component (kept between passes and frames), the outlier flags and, at
+// worst for every node, an outlier's index and its replacement value, and
+// the reference window's mean and energy kept per node for each window size.
 // predictor_from's peak (the field, two predictors, a work copy when there
 // are gaps, fill flags and updates: 153 B) is below it.
-constexpr Bytes kXcorrBytesPerNode = 2 * sizeof(DisplacementVector) + 2 * sizeof(double) + 1 + sizeof(std::size_t) +
+constexpr Bytes kXcorrBytesPerNode = 2 * sizeof(DisplacementVector) + 3 * sizeof(double) + 1 + sizeof(std::size_t) +
                                      sizeof(cv::Point2d) + 2 * 2 * sizeof(double);
+
+// Adaptive refinement's, kept between frames: the first pass's field the
+// unrefined nodes keep, its smoothing's two three-channel buffers, and the
+// selection and the outlier test's masks.
+constexpr Bytes kAdaptiveBytesPerNode = sizeof(DisplacementVector) + 2 * 3 * sizeof(double) + 2;
 
 // OpenCV's own buffers per pixel, full resolution (finest scale 0 for DIS):
 // pyramids, gradients, flow components at every scale and, for DIS fast and
@@ -252,8 +258,8 @@ PairShape PairShape::of(const cv::Mat& reference, const cv::Mat& mask) {
 //     its 0/1 copy and CV_32S integral (6 B/px);
 //   a pass: the float copies, the mask and its integral (5 B/px), the warped
 //     regions (4 B/px of the ROI grown by the search reach, in one buffer
-//     all passes reuse; two with symmetric deformation) and 169 B per grid
-//     node (kXcorrBytesPerNode).
+//     all passes reuse; two with symmetric deformation) and 177 B per grid
+//     node (kXcorrBytesPerNode), 98 B more with adaptive refinement.
 std::uint64_t xcorr_bytes_needed(const PairShape& pair, const XcorrOptions& options) {
   const cv::Rect roi = effective_roi(options.roi, pair.size);
   const Bytes n = pixels(pair.size);
@@ -266,7 +272,8 @@ std::uint64_t xcorr_bytes_needed(const PairShape& pair, const XcorrOptions& opti
                               masked ? mask_bytes + std::max(n, grey_copy_bytes(pair.size, pair.mask_type)) : 0);
   const Bytes pass = float_copies + mask_bytes +
                      Bytes(warped_images_at_once(options)) * warped_region_pixels(roi, options) * sizeof(float) +
-                     nodes(roi, options.window_px, options.step_px) * kXcorrBytesPerNode;
+                     nodes(roi, options.window_px, options.step_px) *
+                         (kXcorrBytesPerNode + (options.adaptive_refinement ? kAdaptiveBytesPerNode : 0));
   return std::max(preparing, pass) + kFixedBytes;
 }
 

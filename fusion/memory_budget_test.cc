@@ -160,8 +160,12 @@ TEST(MemoryBudget, EstimateFollowsTheSettings) {
   const XcorrOptions defaults;
   const std::uint64_t base = xcorr_bytes_needed(pair, defaults);
   // Float copies, the passes' one warped region (the ROI grown by the 5 px
-  // search reach), 186626 nodes of 169 B, and 8 MB.
-  EXPECT_EQ(base, 96 * kMB + 4ull * 4010 * 3010 + 186626ull * 169 + (8ull << 20));
+  // search reach), 186626 nodes of 177 B, and 8 MB.
+  EXPECT_EQ(base, 96 * kMB + 4ull * 4010 * 3010 + 186626ull * 177 + (8ull << 20));
+  XcorrOptions adaptive = defaults;
+  adaptive.adaptive_refinement = true;
+  EXPECT_EQ(xcorr_bytes_needed(pair, adaptive), base + 186626ull * 98)
+      << "the first pass kept for the unrefined nodes, its smoothing and the masks";
   XcorrOptions fine = defaults;
   fine.step_px = 4;
   EXPECT_GT(xcorr_bytes_needed(pair, fine), base + 80 * kMB) << "four times the nodes";

@@ -4,6 +4,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "fusion/for_rows.h"
@@ -26,31 +27,6 @@ void sort_eight(double* v) {
     v[i] = low;
     v[j] = high;
   }
-}
-
-// The same value whichever way the middle is found. A node has at most 8
-// neighbours: sorting them by a network or by insertion costs a fraction of
-// nth_element and max_element on so few (the test runs twice per component,
-// per node and pass: 4 % of a 16 MP frame's time before).
-double median(double* begin, int n) {
-  if (n == 8) {
-    sort_eight(begin);
-    return 0.5 * (begin[3] + begin[4]);
-  }
-  if (n >= 1 && n < 8) {
-    for (int i = 1; i < n; ++i) {
-      const double value = begin[i];
-      int j = i;
-      for (; j > 0 && begin[j - 1] > value; --j) begin[j] = begin[j - 1];
-      begin[j] = value;
-    }
-    return n % 2 == 1 ? begin[n / 2] : 0.5 * (begin[n / 2 - 1] + begin[n / 2]);
-  }
-  std::nth_element(begin, begin + n / 2, begin + n);
-  const double upper = begin[n / 2];
-  if (n % 2 == 1) return upper;
-  const double lower = *std::max_element(begin, begin + n / 2);
-  return 0.5 * (lower + upper);
 }
 
 struct Neighbours {
@@ -78,13 +54,39 @@ Neighbours neighbours_of(const DisplacementField& field, int row, int col, Accep
 
 // Normalised residual of one component against its neighbours.
 double normalised_residual(double value, std::array<double, 8> neighbours, int count, double epsilon_px) {
-  const double med = median(neighbours.data(), count);
+  const double med = median_in_place(neighbours.data(), count);
   std::array<double, 8> residuals{};
   for (int i = 0; i < count; ++i) residuals[i] = std::abs(neighbours[i] - med);
-  return std::abs(value - med) / (median(residuals.data(), count) + epsilon_px);
+  return std::abs(value - med) / (median_in_place(residuals.data(), count) + epsilon_px);
 }
 
 }  // namespace
+
+// The same value whichever way the middle is found. A node has at most 8
+// neighbours: sorting them by a network or by insertion costs a fraction of
+// nth_element and max_element on so few (the test runs twice per component,
+// per node and pass: 4 % of a 16 MP frame's time before).
+double median_in_place(double* begin, int n) {
+  if (n <= 0) return std::numeric_limits<double>::quiet_NaN();
+  if (n == 8) {
+    sort_eight(begin);
+    return 0.5 * (begin[3] + begin[4]);
+  }
+  if (n < 8) {
+    for (int i = 1; i < n; ++i) {
+      const double value = begin[i];
+      int j = i;
+      for (; j > 0 && begin[j - 1] > value; --j) begin[j] = begin[j - 1];
+      begin[j] = value;
+    }
+    return n % 2 == 1 ? begin[n / 2] : 0.5 * (begin[n / 2 - 1] + begin[n / 2]);
+  }
+  std::nth_element(begin, begin + n / 2, begin + n);
+  const double upper = begin[n / 2];
+  if (n % 2 == 1) return upper;
+  const double lower = *std::max_element(begin, begin + n / 2);
+  return 0.5 * (lower + upper);
+}
 
 std::string OutlierOptions::Validate() const {
   if (!(threshold > 0)) return "outlier threshold must be positive";
@@ -134,7 +136,7 @@ std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& opt
              !std::binary_search(outliers.begin(), outliers.end(), static_cast<std::size_t>(&v - field.vectors.data()));
     });
     if (n.count == 0) n = neighbours_of(field, row, col, measured);
-    replacements[k] = {median(n.u.data(), n.count), median(n.v.data(), n.count)};
+    replacements[k] = {median_in_place(n.u.data(), n.count), median_in_place(n.v.data(), n.count)};
   }
   for (std::size_t k = 0; k < outliers.size(); ++k) {
     auto& vec = field.vectors[outliers[k]];
@@ -146,27 +148,35 @@ std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& opt
 }
 
 GridField predictor_from(const DisplacementField& field, const GridGeometry& grid, int max_sweeps) {
-  GridField predictor{grid, cv::Mat::zeros(field.rows, field.cols, CV_64F),
-                      cv::Mat::zeros(field.rows, field.cols, CV_64F)};
-  cv::Mat filled = cv::Mat::zeros(field.rows, field.cols, CV_8U);
+  GridField predictor;
+  predictor_from(field, grid, predictor, max_sweeps);
+  return predictor;
+}
+
+void predictor_from(const DisplacementField& field, const GridGeometry& grid, GridField& predictor, int max_sweeps) {
+  predictor.grid = grid;
+  predictor.u_px.create(field.rows, field.cols, CV_64F);
+  predictor.v_px.create(field.rows, field.cols, CV_64F);
+  cv::Mat filled(field.rows, field.cols, CV_8U);
   std::atomic<bool> gaps{false};
+  // Every node written here, on both cores: no serial zero fill first.
   for_rows(field.rows, [&](int row) {
     bool row_has_gap = false;
+    double* u = predictor.u_px.ptr<double>(row);
+    double* v = predictor.v_px.ptr<double>(row);
+    std::uint8_t* has = filled.ptr<std::uint8_t>(row);
     for (int col = 0; col < field.cols; ++col) {
       const auto& vec = field.at(row, col);
-      if (!has_value(vec.flag)) {
-        row_has_gap = true;
-        continue;
-      }
-      predictor.u_px.at<double>(row, col) = vec.u_px;
-      predictor.v_px.at<double>(row, col) = vec.v_px;
-      filled.at<std::uint8_t>(row, col) = 1;
+      has[col] = has_value(vec.flag);
+      u[col] = has[col] ? vec.u_px : 0.0;
+      v[col] = has[col] ? vec.v_px : 0.0;
+      row_has_gap = row_has_gap || !has[col];
     }
     if (row_has_gap) gaps = true;
   });
   // A field with a value at every node (the usual case) needs no filling,
   // nor the copy of it that filling works on.
-  if (!gaps) return predictor;
+  if (!gaps) return;
   DisplacementField work = field;  // flags double as "has a value" below
   for (std::size_t i = 0; i < work.vectors.size(); ++i) {
     if (filled.data[i]) work.vectors[i].flag = VectorFlag::kOk;
@@ -180,7 +190,7 @@ GridField predictor_from(const DisplacementField& field, const GridGeometry& gri
             neighbours_of(work, row, col, [](const DisplacementVector& v) { return v.flag == VectorFlag::kOk; });
         if (n.count == 0) continue;
         updates.push_back({static_cast<std::size_t>(row) * field.cols + col,
-                           {median(n.u.data(), n.count), median(n.v.data(), n.count)}});
+                           {median_in_place(n.u.data(), n.count), median_in_place(n.v.data(), n.count)}});
       }
     }
     if (updates.empty()) break;
@@ -192,12 +202,20 @@ GridField predictor_from(const DisplacementField& field, const GridGeometry& gri
       work.vectors[i] = {0, 0, value.x, value.y, 0, VectorFlag::kOk};
     }
   }
-  return predictor;
 }
 
 void smooth_predictor(GridField& predictor) {
+  cv::Mat scratch;
+  smooth_predictor(predictor, scratch);
+}
+
+void smooth_predictor(GridField& predictor, cv::Mat& scratch) {
   for (cv::Mat* values : {&predictor.u_px, &predictor.v_px}) {
-    const cv::Mat source = values->clone();
+    // The smoothed values into `scratch`, which then becomes the component
+    // (and the component's buffer the next scratch).
+    const cv::Mat source = *values;
+    if (scratch.data == source.data) scratch.release();
+    scratch.create(source.rows, source.cols, CV_64F);
     for_rows(source.rows, [&](int row) {
       for (int col = 0; col < source.cols; ++col) {
         double sum = 0, weight = 0;
@@ -210,9 +228,10 @@ void smooth_predictor(GridField& predictor) {
             weight += w;
           }
         }
-        values->at<double>(row, col) = sum / weight;
+        scratch.at<double>(row, col) = sum / weight;
       }
     });
+    cv::swap(*values, scratch);
   }
 }
 

@@ -32,6 +32,11 @@ struct OutlierOptions {
   std::string Validate() const;  // empty when valid
 };
 
+// The median of values[0 … count) (the mean of the middle two for an even
+// count), reordering them; NaN for none. Eight values, a node's neighbours,
+// by a sorting network, fewer by insertion, more by nth_element.
+double median_in_place(double* values, int count);
+
 // Tests vectors flagged kOk; returns how many were replaced. With `only`
 // (CV_8U, the field's rows×cols) just the nodes marked non-zero there are
 // tested and replaced. A test and a replacement read the node's neighbours
@@ -44,11 +49,20 @@ std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& opt
 // its already-filled neighbours, spreading outwards for at most `max_sweeps`
 // sweeps, and 0 where nothing reaches.
 GridField predictor_from(const DisplacementField& field, const GridGeometry& grid, int max_sweeps = 32);
+// The same into `predictor`, whose buffers are reused when they have the
+// field's size (a 16 MP field's predictor is 4 MB, page-faulted anew when
+// allocated for every pass of every frame); they are written in place, so
+// no other cv::Mat may share them.
+void predictor_from(const DisplacementField& field, const GridGeometry& grid, GridField& predictor,
+                    int max_sweeps = 32);
 
 // Smooths a predictor with the 3×3 binomial kernel (weights 1-2-1 in x and y,
 // renormalised at the grid's edge). Iterated window deformation is unstable
 // for errors at the grid's Nyquist wavelength — each pass would amplify them
 // (Schrijer & Scarano 2008) — and this kernel removes exactly that component.
 void smooth_predictor(GridField& predictor);
+// The same, working in `scratch` (reused when it has the predictor's size),
+// which afterwards holds a buffer of the predictor's old values.
+void smooth_predictor(GridField& predictor, cv::Mat& scratch);
 
 }  // namespace bosfuse::fusion

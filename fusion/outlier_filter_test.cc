@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <stdexcept>
+#include <vector>
 
 namespace bosfuse::fusion {
 namespace {
@@ -22,6 +24,25 @@ DisplacementField smooth_field(int rows, int cols) {
     }
   }
   return field;
+}
+
+// Each way of finding the middle (network, insertion, nth_element) against
+// a full sort: equal exactly, ties and negative values included.
+TEST(OutlierFilter, TheMedianIsTheSortedMiddleForEveryCount) {
+  std::mt19937 rng(31);
+  std::uniform_int_distribution<int> level(-4, 4);
+  for (const int count : {1, 2, 3, 5, 7, 8, 9, 16, 101}) {
+    for (int trial = 0; trial < 50; ++trial) {
+      std::vector<double> values(static_cast<std::size_t>(count));
+      for (double& v : values) v = 0.25 * level(rng) + (trial % 2 ? 1e-3 * level(rng) : 0.0);
+      std::vector<double> sorted = values;
+      std::sort(sorted.begin(), sorted.end());
+      const double expected =
+          count % 2 ? sorted[count / 2] : 0.5 * (sorted[count / 2 - 1] + sorted[count / 2]);
+      ASSERT_EQ(median_in_place(values.data(), count), expected) << count << " values, trial " << trial;
+    }
+  }
+  EXPECT_TRUE(std::isnan(median_in_place(nullptr, 0)));
 }
 
 TEST(OutlierFilter, ReplacesASpuriousVectorWithItsNeighboursMedian) {

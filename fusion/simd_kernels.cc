@@ -195,58 +195,160 @@ void CentredPeriodicTile(const float* window, std::size_t stride, int n, int rad
   }
 }
 
-// Adds (kSign +1) or subtracts (−1) a patch row, widened to double, and its
-// squares to the column sums; the last columns % lanes scalar.
-template <int kSign>
-HWY_INLINE void AddRowToColumns(const float* HWY_RESTRICT row, int p, double* HWY_RESTRICT sums,
-                                double* HWY_RESTRICT squares) {
+// The column sums' table of a patch: row dy holds, for each of the p
+// columns, the sum over patch rows dy … dy+n−1 widened to double (and the
+// squares' table the sum of their squares): the first row by adding n patch
+// rows to 0, each next by adding the row below it and then taking its top
+// row off. Rows of p % lanes columns end scalar.
+HWY_INLINE void ColumnTable(const float* HWY_RESTRICT patch, std::size_t stride, int p, int n, int side,
+                            double* HWY_RESTRICT columns, double* HWY_RESTRICT column_squares) {
   const hn::ScalableTag<double> dd;
   const hn::Rebind<float, decltype(dd)> df;
   const int lanes = static_cast<int>(hn::Lanes(dd));
-  int c = 0;
-  for (; c + lanes <= p; c += lanes) {
-    const auto v = hn::PromoteTo(dd, hn::LoadU(df, row + c));
-    const auto sq = hn::Mul(v, v);
-    hn::StoreU(kSign > 0 ? hn::Add(hn::LoadU(dd, sums + c), v) : hn::Sub(hn::LoadU(dd, sums + c), v), dd, sums + c);
-    hn::StoreU(kSign > 0 ? hn::Add(hn::LoadU(dd, squares + c), sq) : hn::Sub(hn::LoadU(dd, squares + c), sq), dd,
-               squares + c);
+  std::fill(columns, columns + p, 0.0);
+  std::fill(column_squares, column_squares + p, 0.0);
+  for (int y = 0; y < n; ++y) {
+    const float* row = patch + y * stride;
+    int c = 0;
+    for (; c + lanes <= p; c += lanes) {
+      const auto v = hn::PromoteTo(dd, hn::LoadU(df, row + c));
+      hn::StoreU(hn::Add(hn::LoadU(dd, columns + c), v), dd, columns + c);
+      hn::StoreU(hn::Add(hn::LoadU(dd, column_squares + c), hn::Mul(v, v)), dd, column_squares + c);
+    }
+    for (; c < p; ++c) {
+      const double v = row[c];
+      columns[c] += v;
+      column_squares[c] += v * v;
+    }
   }
-  for (; c < p; ++c) {
-    const double v = row[c];
-    sums[c] += kSign * v;
-    squares[c] += kSign * (v * v);
+  for (int dy = 1; dy < side; ++dy) {
+    const float* row_in = patch + (dy + n - 1) * stride;
+    const float* row_out = patch + (dy - 1) * stride;
+    const double* above = columns + (dy - 1) * p;
+    const double* above_squares = column_squares + (dy - 1) * p;
+    double* next = columns + dy * p;
+    double* next_squares = column_squares + dy * p;
+    int c = 0;
+    for (; c + lanes <= p; c += lanes) {
+      const auto in = hn::PromoteTo(dd, hn::LoadU(df, row_in + c));
+      const auto out = hn::PromoteTo(dd, hn::LoadU(df, row_out + c));
+      hn::StoreU(hn::Sub(hn::Add(hn::LoadU(dd, above + c), in), out), dd, next + c);
+      hn::StoreU(hn::Sub(hn::Add(hn::LoadU(dd, above_squares + c), hn::Mul(in, in)), hn::Mul(out, out)), dd,
+                 next_squares + c);
+    }
+    for (; c < p; ++c) {
+      const double in = row_in[c], out = row_out[c];
+      next[c] = (above[c] + in) - out;
+      next_squares[c] = (above_squares[c] + in * in) - out * out;
+    }
   }
 }
 
-// Column sums over the window's n rows, slid down one row per dy; along
-// each row of shifts, the box slid right one column per dx.
+// ColumnTable for a patch row of kVectors vectors, the last of them ending
+// at column p (it overlaps the one before when p is not a multiple of the
+// lanes, and computes the shared columns alike): the same operations, with
+// the running sums in registers instead of a store and a reload per patch
+// row. The first pass's patches, 16 px windows with ±3 to ±5 px searches,
+// are 22 to 26 columns: three or four vectors with AVX-512, six or seven
+// with AVX2 (whose sixteen registers hold the sums of six).
+template <int kVectors>
+HWY_INLINE void ColumnTableInRegisters(const float* HWY_RESTRICT patch, std::size_t stride, int p, int n, int side,
+                                       double* HWY_RESTRICT columns, double* HWY_RESTRICT column_squares) {
+  const hn::ScalableTag<double> dd;
+  const hn::Rebind<float, decltype(dd)> df;
+  const int lanes = static_cast<int>(hn::Lanes(dd));
+  int first_column[kVectors];
+  for (int v = 0; v < kVectors; ++v) first_column[v] = std::min(v * lanes, p - lanes);
+  hn::Vec<decltype(dd)> sums[kVectors], squares[kVectors];
+  for (int v = 0; v < kVectors; ++v) sums[v] = squares[v] = hn::Zero(dd);
+  for (int y = 0; y < n; ++y) {
+    for (int v = 0; v < kVectors; ++v) {
+      const auto x = hn::PromoteTo(dd, hn::LoadU(df, patch + y * stride + first_column[v]));
+      sums[v] = hn::Add(sums[v], x);
+      squares[v] = hn::Add(squares[v], hn::Mul(x, x));
+    }
+  }
+  for (int dy = 0; dy < side; ++dy) {
+    for (int v = 0; v < kVectors; ++v) {
+      if (dy > 0) {
+        const auto in = hn::PromoteTo(dd, hn::LoadU(df, patch + (dy + n - 1) * stride + first_column[v]));
+        const auto out = hn::PromoteTo(dd, hn::LoadU(df, patch + (dy - 1) * stride + first_column[v]));
+        sums[v] = hn::Sub(hn::Add(sums[v], in), out);
+        squares[v] = hn::Sub(hn::Add(squares[v], hn::Mul(in, in)), hn::Mul(out, out));
+      }
+      hn::StoreU(sums[v], dd, columns + dy * p + first_column[v]);
+      hn::StoreU(squares[v], dd, column_squares + dy * p + first_column[v]);
+    }
+  }
+}
+
+// Along rows of shifts first … first+count−1 (count ≤ kRows) of the table,
+// the box: the sum of the first n column sums, then slid right one column
+// per dx. Each box is a chain of dependent additions; the rows' chains
+// advance together, so the adder has other rows' work while one waits (one
+// row at a time, the chains' latency was most of the kernel's time).
+template <int kRows>
+HWY_INLINE void SlideBoxRows(const double* HWY_RESTRICT columns, const double* HWY_RESTRICT column_squares, int p,
+                             int n, int side, int first, int count, double* HWY_RESTRICT sums,
+                             double* HWY_RESTRICT squares) {
+  double box[kRows], box_squares[kRows];
+  const int rows = std::min(count, kRows);
+  for (int i = 0; i < rows; ++i) box[i] = box_squares[i] = 0;
+  for (int c = 0; c < n; ++c) {
+    for (int i = 0; i < rows; ++i) {
+      box[i] += columns[(first + i) * p + c];
+      box_squares[i] += column_squares[(first + i) * p + c];
+    }
+  }
+  for (int dx = 0; dx < side; ++dx) {
+    for (int i = 0; i < rows; ++i) {
+      if (dx > 0) {
+        const double* row = columns + (first + i) * p;
+        const double* row_squares = column_squares + (first + i) * p;
+        box[i] += row[dx + n - 1] - row[dx - 1];
+        box_squares[i] += row_squares[dx + n - 1] - row_squares[dx - 1];
+      }
+      sums[(first + i) * side + dx] = box[i];
+      squares[(first + i) * side + dx] = box_squares[i];
+    }
+  }
+}
+
+// The column sums' table, then the boxes along its rows, nine rows (a ±4 px
+// search's) at a time.
 void PatchBoxSums(const float* patch, std::size_t stride, int p, int n, double* column_scratch, double* sums,
                   double* squares) {
   const int side = p - n + 1;
   double* columns = column_scratch;
-  double* column_squares = column_scratch + p;
-  std::fill(column_scratch, column_scratch + 2 * p, 0.0);
-  for (int y = 0; y < n; ++y) AddRowToColumns<1>(patch + y * stride, p, columns, column_squares);
-  for (int dy = 0; dy < side; ++dy) {
-    if (dy > 0) {
-      AddRowToColumns<1>(patch + (dy + n - 1) * stride, p, columns, column_squares);
-      AddRowToColumns<-1>(patch + (dy - 1) * stride, p, columns, column_squares);
-    }
-    double box = 0, box_squares = 0;
-    for (int c = 0; c < n; ++c) {
-      box += columns[c];
-      box_squares += column_squares[c];
-    }
-    double* out = sums + static_cast<std::size_t>(dy) * side;
-    double* out_squares = squares + static_cast<std::size_t>(dy) * side;
-    out[0] = box;
-    out_squares[0] = box_squares;
-    for (int dx = 1; dx < side; ++dx) {
-      box += columns[dx + n - 1] - columns[dx - 1];
-      box_squares += column_squares[dx + n - 1] - column_squares[dx - 1];
-      out[dx] = box;
-      out_squares[dx] = box_squares;
-    }
+  double* column_squares = column_scratch + static_cast<std::size_t>(side) * p;
+#if HWY_HAVE_SCALABLE  // no arrays of vectors
+  const int vectors = 0;
+#else
+  const int lanes = static_cast<int>(hn::Lanes(hn::ScalableTag<double>()));
+  const int vectors = p >= lanes ? (p + lanes - 1) / lanes : 0;
+#endif
+  switch (vectors) {
+    case 2:
+      ColumnTableInRegisters<2>(patch, stride, p, n, side, columns, column_squares);
+      break;
+    case 3:
+      ColumnTableInRegisters<3>(patch, stride, p, n, side, columns, column_squares);
+      break;
+    case 4:
+      ColumnTableInRegisters<4>(patch, stride, p, n, side, columns, column_squares);
+      break;
+    case 5:
+      ColumnTableInRegisters<5>(patch, stride, p, n, side, columns, column_squares);
+      break;
+    case 6:
+      ColumnTableInRegisters<6>(patch, stride, p, n, side, columns, column_squares);
+      break;
+    default:
+      ColumnTable(patch, stride, p, n, side, columns, column_squares);
+  }
+  constexpr int kRows = 9;
+  for (int first = 0; first < side; first += kRows) {
+    SlideBoxRows<kRows>(columns, column_squares, p, n, side, first, side - first, sums, squares);
   }
 }
 

@@ -79,8 +79,11 @@ void scalar_centred_periodic_tile(const float* window, std::size_t stride, int n
 // They normalise a search-area correlation (each shifted window's energy is
 // squares − sums²/n²). The kernel slides: column sums over n rows moved down
 // a row at a time, boxes moved right a column at a time, all in double,
-// which differs from summing each box afresh by double rounding only.
-// `column_scratch` holds 2·p doubles.
+// which differs from summing each box afresh by double rounding only. Every
+// target does the same operations in the same order, so all give the same
+// sums (a float's square is exact in double, so whether the compiler fuses
+// square and sum into one multiply-add does not matter either).
+// `column_scratch` holds 2·(p − n + 1)·p doubles.
 void patch_box_sums(const float* patch, std::size_t stride, int p, int n, double* column_scratch, double* sums,
                     double* squares);
 

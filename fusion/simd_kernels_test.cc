@@ -191,7 +191,7 @@ void expect_patch_box_sums_match(int n, int radius, unsigned seed) {
   const float* patch = buffer.data() + stride + 2;
   const auto count = static_cast<std::size_t>(side) * side;
   std::vector<double> sums(count, -1), squares(count, -1), expected_sums(count, -2), expected_squares(count, -2);
-  std::vector<double> scratch(2 * static_cast<std::size_t>(p));
+  std::vector<double> scratch(2 * static_cast<std::size_t>(side) * p);
   patch_box_sums(patch, stride, p, n, scratch.data(), sums.data(), squares.data());
   scalar_patch_box_sums(patch, stride, p, n, expected_sums.data(), expected_squares.data());
   // Double rounding of sliding sums of values of order 1; the energies
@@ -212,6 +212,42 @@ void expect_all_patch_box_sums_match() {
   }
 }
 
+// The box sums on whatever target: every one does the same operations in the
+// same order (patch rows of three and six vectors in registers, others
+// through memory), so a field does not depend on the CPU it was evaluated on.
+// Pixels of magnitudes nine decades apart, so that the sums round and their
+// order shows (sums of similar floats are exact in double in any order).
+std::vector<float> pixels_of_mixed_magnitude(std::size_t size, std::mt19937& rng) {
+  std::uniform_real_distribution<float> grey(0.f, 1.f);
+  const float scales[] = {1.f, 1e-4f, 1e-9f};
+  std::vector<float> values(size);
+  for (auto& v : values) v = scales[rng() % 3] * grey(rng);
+  return values;
+}
+
+struct BoxSums {
+  std::vector<double> sums, squares;
+};
+
+std::vector<BoxSums> box_sums_of_every_size() {
+  std::vector<BoxSums> all;
+  unsigned seed = 700;
+  for (const int n : {3, 8, 16, 32}) {
+    for (const int radius : {1, 2, 4, 8, 9}) {
+      const int p = n + 2 * radius, side = 2 * radius + 1;
+      const std::size_t stride = static_cast<std::size_t>(p) + 5;
+      std::mt19937 rng(seed++);
+      const std::vector<float> buffer = pixels_of_mixed_magnitude(stride * (p + 1), rng);
+      const auto count = static_cast<std::size_t>(side) * side;
+      BoxSums out{std::vector<double>(count), std::vector<double>(count)};
+      std::vector<double> scratch(2 * static_cast<std::size_t>(side) * p);
+      patch_box_sums(buffer.data() + 1, stride, p, n, scratch.data(), out.sums.data(), out.squares.data());
+      all.push_back(std::move(out));
+    }
+  }
+  return all;
+}
+
 // The search-area normalisation on the box sums of real patches: textured,
 // bright and nearly flat, and flat (energy 0, below the floor), with a
 // textured and a flat reference; every count of shifts from one to past a
@@ -225,7 +261,7 @@ void expect_normalisations_match(std::size_t count, float texture, double refere
   std::vector<double> sums(count), squares(count), products(count);
   for (std::size_t i = 0; i < count; ++i) {
     const std::vector<float> box = bright_values(kWindow * kWindow, texture, rng);
-    double scratch[2 * kWindow];
+    double scratch[2 * kWindow];  // side 1: one row of column sums per table
     patch_box_sums(box.data(), kWindow, kWindow, kWindow, scratch, &sums[i], &squares[i]);
     products[i] = product(rng) * std::sqrt(std::max(reference_energy, 0.0) * 1e-3);
   }
@@ -245,8 +281,9 @@ void expect_normalisations_match(std::size_t count, float texture, double refere
   ASSERT_EQ(out[under], 0.0) << "an energy under the floor is flat";
   if (texture == 0.f || reference_energy < kMinEnergy) {
     for (std::size_t i = 0; i < count; ++i) {
-      if (i != over || reference_energy < kMinEnergy)
+      if (i != over || reference_energy < kMinEnergy) {
         ASSERT_EQ(out[i], 0.0) << "a flat pair correlates as 0, shift " << i;
+      }
     }
   }
 }
@@ -435,6 +472,22 @@ TEST_F(SimdKernels, MatchTheScalarReferenceOnEveryTargetOfThisCpu) {
     expect_all_equal_window_products_match();
     expect_all_patch_box_sums_match();
     expect_all_normalisations_match();
+  }
+}
+
+TEST_F(SimdKernels, BoxSumsAreTheSameOnEveryTargetOfThisCpu) {
+  limit_simd_targets(SimdLimit::kPortable);
+  const std::vector<BoxSums> portable = box_sums_of_every_size();
+  limit_simd_targets(SimdLimit::kAuto);
+  for (const std::int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    SCOPED_TRACE(simd_target_name());
+    const std::vector<BoxSums> sums = box_sums_of_every_size();
+    ASSERT_EQ(sums.size(), portable.size());
+    for (std::size_t i = 0; i < sums.size(); ++i) {
+      EXPECT_EQ(sums[i].sums, portable[i].sums) << "patch " << i;
+      EXPECT_EQ(sums[i].squares, portable[i].squares) << "patch " << i;
+    }
   }
 }
 

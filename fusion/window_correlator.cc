@@ -95,7 +95,7 @@ bool WindowCorrelator::correlate_in_registers(const cv::Mat& reference_window, d
 void WindowCorrelator::prepare_patch_sums(const cv::Mat& search_patch, int window_px) {
   const int p = search_patch.rows;
   const auto side = static_cast<std::size_t>(p - window_px + 1);
-  column_scratch_.resize(2 * static_cast<std::size_t>(p));
+  column_scratch_.resize(2 * static_cast<std::size_t>(side) * p);
   box_sum_.resize(side * side);
   box_sum_sq_.resize(side * side);
   patch_box_sums(search_patch.ptr<float>(), search_patch.step1(), p, window_px, column_scratch_.data(), box_sum_.data(),
