@@ -250,7 +250,7 @@ HWY_INLINE void ColumnTable(const float* HWY_RESTRICT patch, std::size_t stride,
 // the running sums in registers instead of a store and a reload per patch
 // row. The first pass's patches, 16 px windows with ±3 to ±5 px searches,
 // are 22 to 26 columns: three or four vectors with AVX-512, six or seven
-// with AVX2 (whose sixteen registers hold the sums of six).
+// with AVX2.
 template <int kVectors>
 HWY_INLINE void ColumnTableInRegisters(const float* HWY_RESTRICT patch, std::size_t stride, int p, int n, int side,
                                        double* HWY_RESTRICT columns, double* HWY_RESTRICT column_squares) {
@@ -280,6 +280,22 @@ HWY_INLINE void ColumnTableInRegisters(const float* HWY_RESTRICT patch, std::siz
       hn::StoreU(squares[v], dd, column_squares + dy * p + first_column[v]);
     }
   }
+}
+
+// ColumnTableInRegisters for a row of `vectors` vectors, 2 … kMaxVectors;
+// false for any other count (six vectors' sums are twelve registers, which
+// AVX2's sixteen hold).
+template <int kMaxVectors>
+HWY_INLINE bool ColumnTableOfVectors(int vectors, const float* HWY_RESTRICT patch, std::size_t stride, int p, int n,
+                                     int side, double* HWY_RESTRICT columns, double* HWY_RESTRICT column_squares) {
+  if (vectors == kMaxVectors) {
+    ColumnTableInRegisters<kMaxVectors>(patch, stride, p, n, side, columns, column_squares);
+    return true;
+  }
+  if constexpr (kMaxVectors > 2) {
+    return ColumnTableOfVectors<kMaxVectors - 1>(vectors, patch, stride, p, n, side, columns, column_squares);
+  }
+  return false;
 }
 
 // Along rows of shifts first … first+count−1 (count ≤ kRows) of the table,
@@ -327,24 +343,8 @@ void PatchBoxSums(const float* patch, std::size_t stride, int p, int n, double* 
   const int lanes = static_cast<int>(hn::Lanes(hn::ScalableTag<double>()));
   const int vectors = p >= lanes ? (p + lanes - 1) / lanes : 0;
 #endif
-  switch (vectors) {
-    case 2:
-      ColumnTableInRegisters<2>(patch, stride, p, n, side, columns, column_squares);
-      break;
-    case 3:
-      ColumnTableInRegisters<3>(patch, stride, p, n, side, columns, column_squares);
-      break;
-    case 4:
-      ColumnTableInRegisters<4>(patch, stride, p, n, side, columns, column_squares);
-      break;
-    case 5:
-      ColumnTableInRegisters<5>(patch, stride, p, n, side, columns, column_squares);
-      break;
-    case 6:
-      ColumnTableInRegisters<6>(patch, stride, p, n, side, columns, column_squares);
-      break;
-    default:
-      ColumnTable(patch, stride, p, n, side, columns, column_squares);
+  if (!ColumnTableOfVectors<6>(vectors, patch, stride, p, n, side, columns, column_squares)) {
+    ColumnTable(patch, stride, p, n, side, columns, column_squares);
   }
   constexpr int kRows = 9;
   for (int first = 0; first < side; first += kRows) {
