@@ -600,7 +600,9 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     in.window_px = windows[pass];
     in.radius_px = options.search_radius_px(pass);
     if (pass > 0) predictor_from(field, grid, predictor);
-    if (pass > 0 && options.deform && options.smooth_predictor) smooth_predictor(predictor, workspace.predictor_scratch);
+    if (pass > 0 && options.deform && options.smooth_predictor) {
+      smooth_predictor(predictor, workspace.predictor_scratch);
+    }
     in.predictor = pass > 0 ? &predictor : nullptr;
     in.shift_whole_pixels = pass > 0 && !options.deform;
     const int reach_px = in.radius_px + (in.shift_whole_pixels ? max_abs_shift_px(predictor) : 0);

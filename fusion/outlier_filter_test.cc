@@ -37,8 +37,7 @@ TEST(OutlierFilter, TheMedianIsTheSortedMiddleForEveryCount) {
       for (double& v : values) v = 0.25 * level(rng) + (trial % 2 ? 1e-3 * level(rng) : 0.0);
       std::vector<double> sorted = values;
       std::sort(sorted.begin(), sorted.end());
-      const double expected =
-          count % 2 ? sorted[count / 2] : 0.5 * (sorted[count / 2 - 1] + sorted[count / 2]);
+      const double expected = count % 2 ? sorted[count / 2] : 0.5 * (sorted[count / 2 - 1] + sorted[count / 2]);
       ASSERT_EQ(median_in_place(values.data(), count), expected) << count << " values, trial " << trial;
     }
   }
