@@ -495,21 +495,19 @@ HWY_INLINE void SampleSeparable(D d, const float* HWY_RESTRICT image, std::size_
   for (int k = 0; k < count; ++k) {
     const double fx = std::floor(xs[k]), fy = std::floor(ys[k]);
     const int x = static_cast<int>(fx) + first, y = static_cast<int>(fy) + first;
+    for (int i = 0; i < taps; i += lanes) hn::Store(weights_at(ys[k] - fy, i), d, wy + i);
     if (x < 0 || y < 0 || x + span > cols || y + taps > rows) {
-      // The weights as the vectors below take them. Not tabulated_weights:
-      // compiled for the baseline CPU it rounds a + f·(b − a) twice, but
-      // where the compiler inlines it here, into an AVX2 or AVX-512 function,
-      // it may fuse that into one multiply-add — and whether it inlines
-      // depends on the rest of this file, so unrelated edits moved the edge
-      // pixels of every warp (by ~1e-7) and every field after them.
-      for (int i = 0; i < taps; i += lanes) {
-        hn::Store(weights_at(xs[k] - fx, i), d, wx + i);
-        hn::Store(weights_at(ys[k] - fy, i), d, wy + i);
-      }
+      // The weights along x as the vectors below take them. Not
+      // tabulated_weights: compiled for the baseline CPU it rounds
+      // a + f·(b − a) twice, but where the compiler inlines it here, into an
+      // AVX2 or AVX-512 function, it may fuse that into one multiply-add — and
+      // whether it inlines depends on the rest of this file, so unrelated
+      // edits moved the edge pixels of every warp (by ~1e-7) and every field
+      // after them.
+      for (int i = 0; i < taps; i += lanes) hn::Store(weights_at(xs[k] - fx, i), d, wx + i);
       out[k] = SampleClamped(image, stride, cols, rows, taps, x, y, wx, wy);
       continue;
     }
-    for (int i = 0; i < taps; i += lanes) hn::Store(weights_at(ys[k] - fy, i), d, wy + i);
     const float* top = image + static_cast<std::size_t>(y) * stride + x;
     auto acc = hn::Zero(d);
     for (int i = 0; i < taps; i += lanes) {

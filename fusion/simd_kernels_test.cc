@@ -213,8 +213,8 @@ void expect_all_patch_box_sums_match() {
 }
 
 // The box sums on whatever target: every one does the same operations in the
-// same order (patch rows of three and six vectors in registers, others
-// through memory), so a field does not depend on the CPU it was evaluated on.
+// same order (patch rows of two to six vectors in registers, others through
+// memory), so a field does not depend on the CPU it was evaluated on.
 // Pixels of magnitudes nine decades apart, so that the sums round and their
 // order shows (sums of similar floats are exact in double in any order).
 std::vector<float> pixels_of_mixed_magnitude(std::size_t size, std::mt19937& rng) {
