@@ -15,6 +15,7 @@
 // After foreach_target.h too, so that each target sees them.
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 HWY_BEFORE_NAMESPACE();
 namespace bosfuse::fusion {
@@ -86,6 +87,72 @@ HWY_INLINE void OneShift(D d, const float* HWY_RESTRICT a, const float* HWY_REST
   }
 }
 
+// AccumulateProducts when a window row is one vector (n = 16 with AVX-512)
+// and the whole window fits in registers beside a column of shifts' sums:
+// the n reference rows are loaded once, and each patch row, loaded once per
+// dx, feeds every dy whose window covers it. A multiply-add then costs 0.2
+// loads rather than 1.25. Each shift's sum still runs over the window rows
+// in order, as in FourShifts: the sums are the same to the bit. The loops
+// are unrolled by templates so the rows and sums have fixed registers.
+template <int kN, int kSide, class D>
+struct ProductsInRegisters {
+  using V = hn::Vec<D>;
+  static constexpr int kPatchRows = kN + kSide - 1;
+
+  // Patch row kRow's share of shift dy's sum: window row kRow − dy, if any.
+  template <int kRow, int kDy>
+  static HWY_INLINE void AddRow(const V* reference, V v, V* sums) {
+    if constexpr (kRow - kDy >= 0 && kRow - kDy < kN) sums[kDy] = hn::MulAdd(reference[kRow - kDy], v, sums[kDy]);
+  }
+
+  template <int kRow, int... kDy>
+  static HWY_INLINE void PatchRow(D d, const float* HWY_RESTRICT row, const V* reference, V* sums,
+                                  std::integer_sequence<int, kDy...>) {
+    const V v = hn::LoadU(d, row);
+    (AddRow<kRow, kDy>(reference, v, sums), ...);
+  }
+
+  template <int... kRow>
+  static HWY_INLINE void Column(D d, const float* HWY_RESTRICT patch, std::size_t stride, const V* reference, V* sums,
+                                std::integer_sequence<int, kRow...>) {
+    (PatchRow<kRow>(d, patch + kRow * stride, reference, sums, std::make_integer_sequence<int, kSide>()), ...);
+  }
+
+  static HWY_INLINE void Run(D d, const float* HWY_RESTRICT reference, const float* HWY_RESTRICT patch,
+                             std::size_t stride, double* HWY_RESTRICT products) {
+    V rows[kN];
+    for (int y = 0; y < kN; ++y) rows[y] = hn::LoadU(d, reference + y * kN);
+    for (int dx = 0; dx < kSide; ++dx) {
+      V sums[kSide];
+      for (auto& sum : sums) sum = hn::Zero(d);
+      Column(d, patch + dx, stride, rows, sums, std::make_integer_sequence<int, kPatchRows>());
+      for (int dy = 0; dy < kSide; ++dy) products[dy * kSide + dx] = AddLanes(d, sums[dy], 0.0);
+    }
+  }
+};
+
+// ProductsInRegisters for odd sides kSide … kMaxSide, where the registers
+// hold them (32 with AVX-512: n rows, a column of sums and the patch row);
+// false for any other shape.
+template <int kSide, int kMaxSide, class D>
+HWY_INLINE bool ProductsOfSide(D d, const float* reference, const float* patch, std::size_t stride, int n, int side,
+                               double* products) {
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3 && !HWY_HAVE_SCALABLE
+  constexpr int kN = static_cast<int>(hn::MaxLanes(D()));
+  if constexpr (kN + kSide + 1 <= 32) {
+    if (n == kN && static_cast<int>(hn::Lanes(d)) == kN && side == kSide) {
+      ProductsInRegisters<kN, kSide, D>::Run(d, reference, patch, stride, products);
+      return true;
+    }
+  }
+  if constexpr (kSide + 2 <= kMaxSide)
+    return ProductsOfSide<kSide + 2, kMaxSide>(d, reference, patch, stride, n, side, products);
+#else
+  (void)d, (void)reference, (void)patch, (void)stride, (void)n, (void)side, (void)products;
+#endif
+  return false;
+}
+
 // Shifts in fours along each row; the columns left over (side % 4 of them)
 // in fours down the column, so that only the corner of side % 4 squared
 // shifts goes one at a time (one of ±2 px's 25, not five). A lone shift's
@@ -93,6 +160,7 @@ HWY_INLINE void OneShift(D d, const float* HWY_RESTRICT a, const float* HWY_REST
 void AccumulateProducts(const float* reference, const float* patch, std::size_t patch_stride, int n, int side,
                         double* products) {
   const hn::ScalableTag<float> d;
+  if (ProductsOfSide<5, 11>(d, reference, patch, patch_stride, n, side, products)) return;
   const int row_end = side / 4 * 4;
   const auto four = [&](int dx, int dy, std::size_t step, std::size_t out_step) {
     double totals[4] = {0, 0, 0, 0};
