@@ -5,6 +5,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "fusion/for_rows.h"
@@ -116,14 +117,19 @@ RefinementSelection select_refinement(const DisplacementField& first_pass, const
       const int i0 = std::min(static_cast<int>(g), nodes - 1);
       return std::pair{i0, g > i0 ? std::min(i0 + 1, nodes - 1) : i0};  // not the node of weight 0
     };
+    std::vector<std::pair<int, int>> columns(static_cast<std::size_t>(target.cols));
+    for (int col = 0; col < target.cols; ++col) {
+      columns[static_cast<std::size_t>(col)] =
+          stencil(target_grid.x0_px + col * target_grid.step_px, first_grid.x0_px, first_grid.step_px, first_grid.cols);
+    }
     for_rows(target.rows, [&](int row) {
       const auto [r0, r1] =
           stencil(target_grid.y0_px + row * target_grid.step_px, first_grid.y0_px, first_grid.step_px, first_grid.rows);
+      const std::uint8_t *above = displaced.ptr<std::uint8_t>(r0), *below = displaced.ptr<std::uint8_t>(r1);
+      std::uint8_t* out = refine.ptr<std::uint8_t>(row);
       for (int col = 0; col < target.cols; ++col) {
-        const auto [c0, c1] = stencil(target_grid.x0_px + col * target_grid.step_px, first_grid.x0_px,
-                                      first_grid.step_px, first_grid.cols);
-        refine.at<std::uint8_t>(row, col) = displaced.at<std::uint8_t>(r0, c0) | displaced.at<std::uint8_t>(r0, c1) |
-                                            displaced.at<std::uint8_t>(r1, c0) | displaced.at<std::uint8_t>(r1, c1);
+        const auto [c0, c1] = columns[static_cast<std::size_t>(col)];
+        out[col] = above[c0] | above[c1] | below[c0] | below[c1];
       }
     });
     if (context_nodes > 0 && !refine.empty()) {
@@ -131,16 +137,23 @@ RefinementSelection select_refinement(const DisplacementField& first_pass, const
       cv::dilate(refine, refine, square, cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
     }
   }
-  for (int row = 0; row < target.rows; ++row) {
+  // Counted per row on all cores, then added.
+  std::vector<std::pair<std::size_t, std::size_t>> counts(static_cast<std::size_t>(target.rows));
+  for_rows(target.rows, [&](int row) {
+    auto& [candidates, selected] = counts[static_cast<std::size_t>(row)];
+    std::uint8_t* nodes = refine.ptr<std::uint8_t>(row);
     for (int col = 0; col < target.cols; ++col) {
-      auto& node = refine.at<std::uint8_t>(row, col);
       if (target.at(row, col).flag == VectorFlag::kOutOfRoi) {
-        node = 0;
+        nodes[col] = 0;
         continue;
       }
-      ++selection.candidates;
-      selection.selected += node;
+      ++candidates;
+      selected += nodes[col];
     }
+  });
+  for (const auto& [candidates, selected] : counts) {
+    selection.candidates += candidates;
+    selection.selected += selected;
   }
   selection.refine = refine;
   return selection;

@@ -257,8 +257,9 @@ cv::Rect pass_region(const PreparedPair& pair, const DisplacementField& field, i
     Box& box = rows[static_cast<std::size_t>(row)];
     for (int col = 0; col < field.cols; ++col) {
       const std::size_t i = static_cast<std::size_t>(row) * field.cols + col;
+      if (refine && !refine->data[i]) continue;  // before the vector: most nodes are not selected
       const auto& vec = field.vectors[i];
-      if (vec.flag == VectorFlag::kOutOfRoi || (refine && !refine->data[i])) continue;
+      if (vec.flag == VectorFlag::kOutOfRoi) continue;
       const cv::Point o = window_origin(vec.x_px, vec.y_px, n, roi);
       box = {std::min(box.x_min, o.x), std::min(box.y_min, o.y), std::max(box.x_max, o.x + n),
              std::max(box.y_max, o.y + n)};
@@ -291,11 +292,15 @@ int max_abs_shift_px(const GridField& field) {
          1;
 }
 
-double max_change_px(const DisplacementField& before, const DisplacementField& after) {
+// Over the nodes `only` marks, when given (the others are known not to
+// have changed).
+double max_change_px(const DisplacementField& before, const DisplacementField& after, const cv::Mat* only = nullptr) {
   std::vector<double> row_change(static_cast<std::size_t>(after.rows), 0.0);
   for_rows(after.rows, [&](int row) {
     double& change = row_change[static_cast<std::size_t>(row)];
+    const std::uint8_t* marked = only ? only->ptr<std::uint8_t>(row) : nullptr;
     for (int col = 0; col < after.cols; ++col) {
+      if (marked && !marked[col]) continue;
       const auto &b = before.at(row, col), &a = after.at(row, col);
       if (!a.valid() || !b.valid()) continue;
       change = std::max({change, std::abs(a.u_px - b.u_px), std::abs(a.v_px - b.v_px)});
@@ -304,14 +309,24 @@ double max_change_px(const DisplacementField& before, const DisplacementField& a
   return row_change.empty() ? 0.0 : *std::max_element(row_change.begin(), row_change.end());
 }
 
-// `to` = `from`, rows on all cores into the buffer `to` already has.
-void copy_field(const DisplacementField& from, DisplacementField& to) {
+// `to` = `from`, rows on all cores into the buffer `to` already has; only
+// at the nodes `only` marks, when given (the rest of `to` is left as it
+// was, for a reader of those nodes alone).
+void copy_field(const DisplacementField& from, DisplacementField& to, const cv::Mat* only = nullptr) {
   to.rows = from.rows;
   to.cols = from.cols;
   to.vectors.resize(from.vectors.size());
   for_rows(from.rows, [&](int row) {
-    const auto begin = from.vectors.begin() + static_cast<std::ptrdiff_t>(row) * from.cols;
-    std::copy(begin, begin + from.cols, to.vectors.begin() + static_cast<std::ptrdiff_t>(row) * from.cols);
+    const std::size_t begin = static_cast<std::size_t>(row) * from.cols;
+    if (!only) {
+      std::copy_n(from.vectors.begin() + static_cast<std::ptrdiff_t>(begin), from.cols,
+                  to.vectors.begin() + static_cast<std::ptrdiff_t>(begin));
+      return;
+    }
+    const std::uint8_t* marked = only->ptr<std::uint8_t>(row);
+    for (int col = 0; col < from.cols; ++col) {
+      if (marked[col]) to.vectors[begin + col] = from.vectors[begin + col];
+    }
   });
 }
 
@@ -538,8 +553,9 @@ std::vector<cv::Rect> tiles_read(const PreparedPair& pair, const DisplacementFie
   for_rows(field.rows, [&](int row) {
     for (int col = 0; col < field.cols; ++col) {
       const std::size_t i = static_cast<std::size_t>(row) * field.cols + col;
+      if (!in.refine->data[i]) continue;
       const auto& vec = field.vectors[i];
-      if (vec.flag == VectorFlag::kOutOfRoi || !in.refine->data[i]) continue;
+      if (vec.flag == VectorFlag::kOutOfRoi) continue;
       const cv::Rect window(window_origin(vec.x_px, vec.y_px, in.window_px, pair.roi),
                             cv::Size(in.window_px, in.window_px));
       if (window_masked(pair, window, options.max_masked_fraction, vec.x_px, vec.y_px)) continue;
@@ -607,9 +623,6 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     in.shift_whole_pixels = pass > 0 && !options.deform;
     const int reach_px = in.radius_px + (in.shift_whole_pixels ? max_abs_shift_px(predictor) : 0);
     in.refine = adaptive.active() ? &adaptive.selection.refine : nullptr;
-    in.region = pass_region(pair, field, in.window_px, reach_px, in.refine);
-    const std::vector<cv::Rect> tiles =
-        in.refine ? tiles_read(pair, field, in, reach_px, options) : std::vector<cv::Rect>{};
     const bool warp = pass > 0 && options.deform;
     const bool warp_reference = warp && options.symmetric_deformation;
     if (workspace.cache_reference_stats && !warp_reference) {
@@ -629,6 +642,9 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
         continue;
       }
     }
+    in.region = pass_region(pair, field, in.window_px, reach_px, in.refine);
+    const std::vector<cv::Rect> tiles =
+        in.refine ? tiles_read(pair, field, in, reach_px, options) : std::vector<cv::Rect>{};
     // Passes before the last only feed the next pass's predictor: the
     // cheaper cubic kernel serves them as well; when they have converged, one
     // pass with the accurate kernel finishes.
@@ -655,21 +671,24 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
         warp_pass(pair.measurement, predictor, in.warped);
       }
     }
+    // Under adaptive refinement only the nodes its outlier test sees can
+    // change in a pass; the rest keep the first pass's values.
+    const cv::Mat* changeable = adaptive.active() ? &adaptive.outlier_tested : nullptr;
     // Into a buffer kept between passes and frames: a fresh 12 MB copy (16 MP)
     // each pass would page-fault it anew.
-    if (pass > 0) copy_field(field, workspace.previous_field);
+    if (pass > 0) copy_field(field, workspace.previous_field, changeable);
     run_pass(pair, in, options, field);
     if (options.replace_outliers) {
-      replace_outliers(field, options.outliers, adaptive.active() ? &adaptive.outlier_tested : nullptr);
+      replace_outliers(field, options.outliers, changeable);
     }
-    if (adaptive.active()) keep_first_pass(adaptive, field, &adaptive.outlier_tested);
+    if (changeable) keep_first_pass(adaptive, field, changeable);
     if (pass == 0 && windows.size() > 1 && options.adaptive_refinement) {
       select_for_refinement({field, grid}, field, grid, options, adaptive);
       keep_first_pass(adaptive, field);
     }
     summary.passes_run = pass + 1;
     summary.window_px_per_pass.push_back(in.window_px);
-    if (pass > 0) summary.last_change_px = max_change_px(workspace.previous_field, field);
+    if (pass > 0) summary.last_change_px = max_change_px(workspace.previous_field, field, changeable);
     const bool same_window = pass > 0 && windows[pass] == windows[pass - 1];
     if (finish_now) break;
     if (same_window && options.convergence_px > 0 && summary.last_change_px < options.convergence_px) {

@@ -216,20 +216,45 @@ void smooth_predictor(GridField& predictor, cv::Mat& scratch) {
     const cv::Mat source = *values;
     if (scratch.data == source.data) scratch.release();
     scratch.create(source.rows, source.cols, CV_64F);
-    for_rows(source.rows, [&](int row) {
-      for (int col = 0; col < source.cols; ++col) {
-        double sum = 0, weight = 0;
-        for (int dr = -1; dr <= 1; ++dr) {
-          for (int dc = -1; dc <= 1; ++dc) {
-            const int r = row + dr, c = col + dc;
-            if (r < 0 || c < 0 || r >= source.rows || c >= source.cols) continue;
-            const double w = (dr == 0 ? 2 : 1) * (dc == 0 ? 2 : 1);
-            sum += w * source.at<double>(r, c);
-            weight += w;
-          }
+    const auto at_edge = [&](int row, int col) {
+      double sum = 0, weight = 0;
+      for (int dr = -1; dr <= 1; ++dr) {
+        for (int dc = -1; dc <= 1; ++dc) {
+          const int r = row + dr, c = col + dc;
+          if (r < 0 || c < 0 || r >= source.rows || c >= source.cols) continue;
+          const double w = (dr == 0 ? 2 : 1) * (dc == 0 ? 2 : 1);
+          sum += w * source.at<double>(r, c);
+          weight += w;
         }
-        scratch.at<double>(row, col) = sum / weight;
       }
+      return sum / weight;
+    };
+    for_rows(source.rows, [&](int row) {
+      double* out = scratch.ptr<double>(row);
+      const bool inside = row > 0 && row + 1 < source.rows;
+      if (!inside || source.cols < 3) {
+        for (int col = 0; col < source.cols; ++col) out[col] = at_edge(row, col);
+        return;
+      }
+      // Inside the grid every tap is there: the same sums in the same
+      // order, without the tests, and the weights add up to 16.
+      const double *above = source.ptr<double>(row - 1), *here = source.ptr<double>(row),
+                   *below = source.ptr<double>(row + 1);
+      out[0] = at_edge(row, 0);
+      for (int c = 1; c + 1 < source.cols; ++c) {
+        double sum = 0;
+        sum += above[c - 1];
+        sum += 2 * above[c];
+        sum += above[c + 1];
+        sum += 2 * here[c - 1];
+        sum += 4 * here[c];
+        sum += 2 * here[c + 1];
+        sum += below[c - 1];
+        sum += 2 * below[c];
+        sum += below[c + 1];
+        out[c] = sum / 16;
+      }
+      out[source.cols - 1] = at_edge(row, source.cols - 1);
     });
     cv::swap(*values, scratch);
   }
