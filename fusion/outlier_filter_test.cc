@@ -163,5 +163,38 @@ TEST(OutlierFilter, SmoothingKeepsALinearFieldAndRemovesACheckerboard) {
   EXPECT_NEAR(field.v_px.at<double>(3, 2), 0.0, 1e-12);
 }
 
+// Every node, edge or not, is the (1 2 1)² weighted mean of the nodes of its
+// 3×3 neighbourhood inside the grid, summed in row order: the same value to
+// the bit as this plain loop, on grids too thin to have an inside as well.
+TEST(OutlierFilter, SmoothingIsTheWeightedMeanOfTheNeighboursInsideTheGrid) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> value(-3, 3);
+  for (const cv::Size size : {cv::Size(1, 1), cv::Size(5, 1), cv::Size(1, 4), cv::Size(2, 2), cv::Size(7, 2),
+                              cv::Size(3, 3), cv::Size(11, 7)}) {
+    GridField field{{0, 0, 1, size.height, size.width}, cv::Mat(size, CV_64F), cv::Mat(size, CV_64F)};
+    for (cv::Mat* m : {&field.u_px, &field.v_px}) {
+      for (int i = 0; i < size.area(); ++i) m->at<double>(i) = value(rng);
+    }
+    const GridField before{field.grid, field.u_px.clone(), field.v_px.clone()};
+    smooth_predictor(field);
+    for (int r = 0; r < size.height; ++r) {
+      for (int c = 0; c < size.width; ++c) {
+        double u = 0, v = 0, weight = 0;
+        for (int dr = -1; dr <= 1; ++dr) {
+          for (int dc = -1; dc <= 1; ++dc) {
+            if (r + dr < 0 || c + dc < 0 || r + dr >= size.height || c + dc >= size.width) continue;
+            const double w = (dr == 0 ? 2 : 1) * (dc == 0 ? 2 : 1);
+            u += w * before.u_px.at<double>(r + dr, c + dc);
+            v += w * before.v_px.at<double>(r + dr, c + dc);
+            weight += w;
+          }
+        }
+        ASSERT_EQ(field.u_px.at<double>(r, c), u / weight) << size << " at " << r << ", " << c;
+        ASSERT_EQ(field.v_px.at<double>(r, c), v / weight) << size << " at " << r << ", " << c;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace bosfuse::fusion
