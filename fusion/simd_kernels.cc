@@ -222,6 +222,7 @@ void WindowMeanEnergy(const float* window, std::size_t stride, int n, double* me
 }
 
 void CentreWindow(const float* window, std::size_t stride, int n, double mean, float* out) {
+  for (int y = 0; y < n; ++y) hwy::Prefetch(window + y * stride + n);  // the next node's, as in PatchBoxSums
   const hn::ScalableTag<double> dd;
   const hn::Rebind<float, decltype(dd)> df;
   const int lanes = static_cast<int>(hn::Lanes(dd));
@@ -403,6 +404,13 @@ HWY_INLINE void SlideBoxRows(const double* HWY_RESTRICT columns, const double* H
 void PatchBoxSums(const float* patch, std::size_t stride, int p, int n, double* column_scratch, double* sums,
                   double* squares) {
   const int side = p - n + 1;
+  // The next node along the row (nodes are evaluated in row order) reads
+  // the columns right of this patch: fetching them now hides the wait for
+  // memory that otherwise opens its box sums.
+  for (int y = 0; y < p; ++y) {
+    hwy::Prefetch(patch + y * stride + p);
+    hwy::Prefetch(patch + y * stride + p + n - 1);
+  }
   double* columns = column_scratch;
   double* column_squares = column_scratch + static_cast<std::size_t>(side) * p;
 #if HWY_HAVE_SCALABLE  // no arrays of vectors
