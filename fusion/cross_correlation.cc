@@ -601,6 +601,18 @@ void warp_tiles(const cv::Mat& image, const GridField& field, cv::Rect region, c
 
 // ---- end of adaptive refinement ----
 
+// The part of the images a pass reads: its region, and under adaptive
+// refinement the tiles of it the selected windows read.
+struct PassArea {
+  int window_px = -1, reach_px = -1;
+  const cv::Mat* refine = nullptr;
+  cv::Rect region;
+  std::vector<cv::Rect> tiles;
+  bool serves(int window, int reach, const cv::Mat* selection) const {
+    return window == window_px && reach == reach_px && selection == refine;
+  }
+};
+
 // Runs every pass over `field` (centres set; kOutOfRoi nodes are left alone).
 EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid, const XcorrOptions& options,
                              PassWorkspace& workspace, DisplacementField& field) {
@@ -610,6 +622,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
   GridField& predictor = workspace.predictor;
   AdaptivePasses& adaptive = workspace.adaptive;
   adaptive.selection = {};  // none until this frame's first pass selects
+  PassArea area;
   bool finish_now = false;
   for (int pass = 0; pass < static_cast<int>(windows.size()); ++pass) {
     PassInput in;
@@ -642,9 +655,16 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
         continue;
       }
     }
-    in.region = pass_region(pair, field, in.window_px, reach_px, in.refine);
-    const std::vector<cv::Rect> tiles =
-        in.refine ? tiles_read(pair, field, in, reach_px, options) : std::vector<cv::Rect>{};
+    // What a pass reads depends on its window, its reach and the selection
+    // alone (node positions, the ROI and the mask hold for the frame):
+    // passes alike in these share it.
+    if (!area.serves(in.window_px, reach_px, in.refine)) {
+      area = {in.window_px, reach_px, in.refine, pass_region(pair, field, in.window_px, reach_px, in.refine), {}};
+      in.region = area.region;
+      if (in.refine) area.tiles = tiles_read(pair, field, in, reach_px, options);
+    }
+    in.region = area.region;
+    const std::vector<cv::Rect>& tiles = area.tiles;
     // Passes before the last only feed the next pass's predictor: the
     // cheaper cubic kernel serves them as well; when they have converged, one
     // pass with the accurate kernel finishes.
