@@ -8,8 +8,10 @@
 #include <utility>
 #include <vector>
 
+#include "fusion/eight_neighbours.h"
 #include "fusion/for_rows.h"
 #include "fusion/outlier_filter.h"
+#include "fusion/simd_kernels.h"
 
 namespace bosfuse::fusion {
 namespace {
@@ -43,9 +45,27 @@ double field_noise_floor_px(const DisplacementField& field) {
   std::vector<double> per_node(2 * field.vectors.size());
   std::vector<std::uint8_t> has_residual(field.vectors.size(), 0);
   for_rows(field.rows, [&](int row) {
+    EightNeighbourBlock block;
+    auto residuals_of_block = [&] {
+      std::array<double, EightNeighbourBlock::kNodes> u, v;
+      medians_of_eight(block.u.data(), block.kNodes, block.count, u.data());
+      medians_of_eight(block.v.data(), block.kNodes, block.count, v.data());
+      for (int j = 0; j < block.count; ++j) {
+        const std::size_t i = block.index[j];
+        per_node[2 * i] = std::abs(block.centre_u[j] - u[j]);
+        per_node[2 * i + 1] = std::abs(block.centre_v[j] - v[j]);
+        has_residual[i] = 1;
+      }
+      block.count = 0;
+    };
     for (int col = 0; col < field.cols; ++col) {
       const auto& vec = field.at(row, col);
       if (!measured(vec)) continue;
+      const bool inside = row > 0 && col > 0 && row + 1 < field.rows && col + 1 < field.cols;
+      if (inside && block.add_if_all_measured(field, row, col)) {  // most nodes: many medians at once
+        if (block.full()) residuals_of_block();
+        continue;
+      }
       std::array<double, 8> u{}, v{};
       int count = 0;
       for (int dr = -1; dr <= 1; ++dr) {
@@ -64,6 +84,7 @@ double field_noise_floor_px(const DisplacementField& field) {
       per_node[2 * i + 1] = std::abs(vec.v_px - median_in_place(v.data(), count));
       has_residual[i] = 1;
     }
+    if (block.count > 0) residuals_of_block();
   });
   std::vector<double> residuals;
   residuals.reserve(per_node.size());

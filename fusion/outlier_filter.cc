@@ -7,7 +7,9 @@
 #include <limits>
 #include <stdexcept>
 
+#include "fusion/eight_neighbours.h"
 #include "fusion/for_rows.h"
+#include "fusion/simd_kernels.h"
 
 namespace bosfuse::fusion {
 namespace {
@@ -104,23 +106,39 @@ std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& opt
   // known, so all of them read the field as it came, rows in parallel, with
   // no 12 MB copy of a 16 MP frame's field.
   std::vector<std::uint8_t> is_outlier(field.vectors.size(), 0);
+  // |(ru, rv)| > threshold without hypot's care for overflow, which costs
+  // more than the rest of the test: an overflowing square is infinite and
+  // so still above the threshold.
+  const auto outlier = [&](double ru, double rv) { return ru * ru + rv * rv > options.threshold * options.threshold; };
   for_rows(field.rows, [&](int row) {
     const std::uint8_t* tested = only ? only->ptr<std::uint8_t>(row) : nullptr;
+    EightNeighbourBlock block;
+    auto test_block = [&] {
+      std::array<double, EightNeighbourBlock::kNodes> ru, rv;
+      normalised_residuals_of_eight(block.u.data(), block.kNodes, block.count, block.centre_u.data(),
+                                    options.epsilon_px, ru.data());
+      normalised_residuals_of_eight(block.v.data(), block.kNodes, block.count, block.centre_v.data(),
+                                    options.epsilon_px, rv.data());
+      for (int j = 0; j < block.count; ++j) is_outlier[block.index[j]] = outlier(ru[j], rv[j]);
+      block.count = 0;
+    };
     for (int col = 0; col < field.cols; ++col) {
       const auto& vec = field.at(row, col);
       if (!measured(vec) || (tested && !tested[col])) continue;
       const bool on_edge = row == 0 || col == 0 || row == field.rows - 1 || col == field.cols - 1;
       if (on_edge && !options.test_grid_edges) continue;
+      // The usual case, eight measured neighbours: many nodes' medians at once.
+      if (!on_edge && block.add_if_all_measured(field, row, col)) {
+        if (block.full()) test_block();
+        continue;
+      }
       const Neighbours n = neighbours_of(field, row, col, measured);
       if (n.count < options.min_neighbours) continue;
-      const double ru = normalised_residual(vec.u_px, n.u, n.count, options.epsilon_px);
-      const double rv = normalised_residual(vec.v_px, n.v, n.count, options.epsilon_px);
-      // |(ru, rv)| > threshold without hypot's care for overflow, which
-      // costs more than the rest of the test: an overflowing square is
-      // infinite and so still above the threshold.
       is_outlier[static_cast<std::size_t>(row) * field.cols + col] =
-          ru * ru + rv * rv > options.threshold * options.threshold;
+          outlier(normalised_residual(vec.u_px, n.u, n.count, options.epsilon_px),
+                  normalised_residual(vec.v_px, n.v, n.count, options.epsilon_px));
     }
+    if (block.count > 0) test_block();
   });
   std::vector<std::size_t> outliers;
   for (std::size_t i = 0; i < is_outlier.size(); ++i) {

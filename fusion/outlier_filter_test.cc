@@ -109,6 +109,62 @@ TEST(OutlierFilter, TestingOnlyMarkedNodesLeavesThemAsTheWholeFieldsTestDoes) {
   EXPECT_THROW(replace_outliers(restricted, OutlierOptions{}, &wrong_size), std::invalid_argument);
 }
 
+// The normalised median test as written down (Westerweel & Scarano 2005):
+// sorted medians of the measured neighbours, one node at a time.
+std::vector<std::uint8_t> plain_outliers(const DisplacementField& field, const OutlierOptions& options) {
+  auto median = [](std::vector<double> values) {
+    std::sort(values.begin(), values.end());
+    const std::size_t n = values.size();
+    return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+  };
+  auto residual = [&](double value, const std::vector<double>& neighbours) {
+    const double m = median(neighbours);
+    std::vector<double> deviations;
+    for (const double x : neighbours) deviations.push_back(std::abs(x - m));
+    return std::abs(value - m) / (median(deviations) + options.epsilon_px);
+  };
+  std::vector<std::uint8_t> outlier(field.vectors.size(), 0);
+  for (int r = 1; r + 1 < field.rows; ++r) {
+    for (int c = 1; c + 1 < field.cols; ++c) {
+      if (field.at(r, c).flag != VectorFlag::kOk) continue;
+      std::vector<double> u, v;
+      for (int dr = -1; dr <= 1; ++dr) {
+        for (int dc = -1; dc <= 1; ++dc) {
+          const auto& n = field.at(r + dr, c + dc);
+          if ((dr || dc) && n.flag == VectorFlag::kOk) u.push_back(n.u_px), v.push_back(n.v_px);
+        }
+      }
+      if (static_cast<int>(u.size()) < options.min_neighbours) continue;
+      outlier[static_cast<std::size_t>(r) * field.cols + c] =
+          std::hypot(residual(field.at(r, c).u_px, u), residual(field.at(r, c).v_px, v)) > options.threshold;
+    }
+  }
+  return outlier;
+}
+
+// A noisy field with spurious and unmeasured vectors: nodes with all eight
+// neighbours measured (tested many at once) and with fewer (one by one) are
+// replaced exactly where the plain test finds outliers, and nowhere else.
+TEST(OutlierFilter, FlagsWhatThePlainNormalisedMedianTestFlags) {
+  std::mt19937 random(11);
+  std::normal_distribution<double> noise(0.0, 0.05), wild(0.0, 2.0);
+  std::bernoulli_distribution spurious(0.06), missing(0.04);
+  DisplacementField field = smooth_field(37, 53);
+  for (auto& vec : field.vectors) {
+    vec.u_px += noise(random) + (spurious(random) ? wild(random) : 0.0);
+    vec.v_px += noise(random);
+    if (missing(random)) vec.flag = VectorFlag::kNoPeak;
+  }
+  const OutlierOptions options;
+  const std::vector<std::uint8_t> expected = plain_outliers(field, options);
+  DisplacementField tested = field;
+  const std::size_t replaced = replace_outliers(tested, options);
+  ASSERT_GT(replaced, 40u);
+  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
+    ASSERT_EQ(tested.vectors[i].flag == VectorFlag::kOutlierReplaced, expected[i] == 1) << "node " << i;
+  }
+}
+
 TEST(OutlierFilter, PredictorFillsGapsFromNeighbours) {
   DisplacementField field = smooth_field(5, 5);
   for (int c = 0; c < 5; ++c) field.at(2, c).flag = VectorFlag::kMasked;

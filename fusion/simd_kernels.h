@@ -126,6 +126,29 @@ void scalar_equal_window_products(const float* reference, std::size_t reference_
                                   const float* window, std::size_t stride, int n, int radius, double* products,
                                   double* mean, double* energy);
 
+// Medians of many sets of eight values at once, for the median tests of a
+// field's nodes against their eight neighbours (outlier_filter.h,
+// adaptive_refinement.h). Set j's values are values[k·stride + j], k < 8,
+// j < count (by position, so one vector load takes a position of several
+// sets). medians[j] = (a₃ + a₄)/2 of the sorted values a₀ ≤ … ≤ a₇. Exact
+// operations (min, max, one sum and a halving), so the SIMD kernel and the
+// reference agree exactly. Values must be finite.
+void medians_of_eight(const double* values, std::size_t stride, std::size_t count, double* medians);
+
+// The reference for medians_of_eight: each set sorted on its own.
+void scalar_medians_of_eight(const double* values, std::size_t stride, std::size_t count, double* medians);
+
+// The normalised median test's residual for each set of medians_of_eight's
+// layout and its centre value: with m the set's median and d the median of
+// |a_k − m|, residuals[j] = |centres[j] − m| / (d + epsilon). The same
+// exact operations and one division in both kernels: equal exactly.
+void normalised_residuals_of_eight(const double* values, std::size_t stride, std::size_t count, const double* centres,
+                                   double epsilon, double* residuals);
+
+// The reference for normalised_residuals_of_eight.
+void scalar_normalised_residuals_of_eight(const double* values, std::size_t stride, std::size_t count,
+                                          const double* centres, double epsilon, double* residuals);
+
 // A separable interpolation kernel tabulated over the sub-pixel position
 // t ∈ [0, 1]: entry e (0 ≤ e ≤ steps) holds its `taps` weights at
 // t = e / steps, the first for the tap at floor(x) + 1 − taps/2 (taps even,

@@ -288,6 +288,39 @@ void expect_normalisations_match(std::size_t count, float texture, double refere
   }
 }
 
+// Sets of eight in medians_of_eight's layout with every kind of order:
+// random values, ties, zeros of both signs; every count from none to past
+// two 512-bit vectors, inside a wider stride. Equal exactly: exact operations.
+void expect_medians_of_eight_match() {
+  std::mt19937 rng(1200);
+  std::uniform_real_distribution<double> value(-2, 2);
+  std::uniform_int_distribution<int> small(-2, 2);
+  for (std::size_t count = 0; count <= 19; ++count) {
+    SCOPED_TRACE(testing::Message() << "count=" << count << " target=" << simd_target_name());
+    const std::size_t stride = count + 3;
+    std::vector<double> values(8 * stride), centres(count);
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      values[i] = i % 3 == 0 ? double(small(rng)) : i % 7 == 0 ? -0.0 : value(rng);
+    }
+    for (auto& c : centres) c = value(rng);
+    std::vector<double> medians(count + 1, -9), expected(count + 1, -9);
+    medians_of_eight(values.data(), stride, count, medians.data());
+    scalar_medians_of_eight(values.data(), stride, count, expected.data());
+    ASSERT_EQ(medians, expected);
+    for (std::size_t j = 0; j < count; ++j) {
+      std::vector<double> set;
+      for (std::size_t k = 0; k < 8; ++k) set.push_back(values[k * stride + j]);
+      std::nth_element(set.begin(), set.begin() + 4, set.end());
+      const double upper = set[4], lower = *std::max_element(set.begin(), set.begin() + 4);
+      ASSERT_EQ(expected[j], 0.5 * (lower + upper)) << "set " << j;
+    }
+    std::vector<double> residuals(count + 1, -9), expected_residuals(count + 1, -9);
+    normalised_residuals_of_eight(values.data(), stride, count, centres.data(), 0.1, residuals.data());
+    scalar_normalised_residuals_of_eight(values.data(), stride, count, centres.data(), 0.1, expected_residuals.data());
+    ASSERT_EQ(residuals, expected_residuals);
+  }
+}
+
 void expect_all_normalisations_match() {
   unsigned seed = 900;
   for (const std::size_t count : {1, 7, 8, 9, 16, 25, 81, 83}) {
@@ -445,6 +478,7 @@ TEST_F(SimdKernels, MatchTheScalarReference) {
   expect_all_equal_window_products_match();
   expect_all_patch_box_sums_match();
   expect_all_normalisations_match();
+  expect_medians_of_eight_match();
 }
 
 TEST_F(SimdKernels, SamplingMatchesTheScalarReference) {
@@ -472,6 +506,7 @@ TEST_F(SimdKernels, MatchTheScalarReferenceOnEveryTargetOfThisCpu) {
     expect_all_equal_window_products_match();
     expect_all_patch_box_sums_match();
     expect_all_normalisations_match();
+    expect_medians_of_eight_match();
   }
 }
 
@@ -501,6 +536,7 @@ TEST_F(SimdKernels, TheEnvironmentForcesThePortableTarget) {
   expect_all_equal_window_products_match();
   expect_all_patch_box_sums_match();
   expect_all_normalisations_match();
+  expect_medians_of_eight_match();
   expect_all_samplings_match();
   expect_warp_matches_reference();
   ASSERT_EQ(unsetenv("BOSFUSE_SIMD"), 0);
