@@ -347,8 +347,9 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
   auto evaluate_range = [&](const cv::Range& range) {
     CorrelatorScratch& scratch = thread_scratch();
     for (int i = range.start; i < range.end; ++i) {
+      if (in.refine && !in.refine->data[i]) continue;  // before the vector: most nodes are not selected
       auto& vec = field.vectors[static_cast<std::size_t>(i)];
-      if (vec.flag == VectorFlag::kOutOfRoi || (in.refine && !in.refine->data[i])) continue;
+      if (vec.flag == VectorFlag::kOutOfRoi) continue;
       evaluate_node(pair, in, options, i / field.cols, i % field.cols, scratch.correlator, scratch.plane, vec);
     }
   };
@@ -368,7 +369,9 @@ struct AdaptivePasses {
   // would leave it (the nodes outside the selection are put back from
   // first_pass after the test anyway).
   cv::Mat outlier_tested;
-  DisplacementField first_pass;  // the field after the first pass, unselected nodes marked first_pass_only
+  // The field after the first pass and smoothing, at the outlier-tested
+  // nodes only (the unselected ones among them are restored from here).
+  DisplacementField first_pass;
   SmoothingBuffers smoothing;
   // Selecting every node is full refinement, without the tiles' bookkeeping.
   bool active() const { return !selection.refine.empty() && selection.selected < selection.candidates; }
@@ -500,24 +503,26 @@ void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, P
 
 // ---- Adaptive refinement (fusion/adaptive_refinement.h) ----
 
-// Into `adaptive`, whose buffers an evaluator keeps between frames.
-void select_for_refinement(const MeasuredPass& measured, const DisplacementField& field, const GridGeometry& grid,
+// Into `adaptive`, whose buffers an evaluator keeps between frames; the
+// unselected nodes of `field` marked first-pass-only and smoothed (the
+// refined nodes' predictor sees the smoothed values), and kept where a
+// refinement pass's outlier test may replace them.
+void select_for_refinement(const MeasuredPass& measured, DisplacementField& field, const GridGeometry& grid,
                            const XcorrOptions& options, AdaptivePasses& adaptive) {
   const int context = refinement_context_nodes(options.window_px_per_pass()[1], options.search_radius_px(1),
                                                static_cast<int>(std::ceil(grid.step_px)));
   adaptive.selection =
       select_refinement(measured.field, measured.grid, field, grid, options.adaptive_threshold, context);
-  copy_field(field, adaptive.first_pass);
   for_rows(field.rows, [&](int row) {
     const std::uint8_t* refined = adaptive.selection.refine.ptr<std::uint8_t>(row);
     for (int col = 0; col < field.cols; ++col) {
-      auto& vec = adaptive.first_pass.at(row, col);
+      auto& vec = field.at(row, col);
       vec.first_pass_only = !refined[col] && vec.flag != VectorFlag::kOutOfRoi;
     }
   });
-  smooth_unrefined(adaptive.first_pass, adaptive.selection.refine, options.adaptive_smoothing_nodes,
-                   adaptive.smoothing);
+  smooth_unrefined(field, adaptive.selection.refine, options.adaptive_smoothing_nodes, adaptive.smoothing);
   cv::dilate(adaptive.selection.refine, adaptive.outlier_tested, cv::Mat::ones(3, 3, CV_8U));
+  copy_field(field, adaptive.first_pass, &adaptive.outlier_tested);
   spdlog::debug("adaptive refinement: noise floor {:.4f} px, threshold {:.4f} px, {:.1f} % of the windows refined",
                 adaptive.selection.noise_floor_px, adaptive.selection.threshold_px,
                 100 * adaptive.selection.fraction());
@@ -528,13 +533,12 @@ void select_for_refinement(const MeasuredPass& measured, const DisplacementField
 // After a refinement pass only those its outlier test may have replaced
 // (`touched`, the selection's ring) differ from that: the pass evaluated
 // none of them.
-void keep_first_pass(const AdaptivePasses& adaptive, DisplacementField& field, const cv::Mat* touched = nullptr) {
+void keep_first_pass(const AdaptivePasses& adaptive, DisplacementField& field, const cv::Mat& touched) {
   for_rows(field.rows, [&](int row) {
     const std::uint8_t* refined = adaptive.selection.refine.ptr<std::uint8_t>(row);
-    const std::uint8_t* maybe_changed = touched ? touched->ptr<std::uint8_t>(row) : nullptr;
+    const std::uint8_t* maybe_changed = touched.ptr<std::uint8_t>(row);
     for (int col = 0; col < field.cols; ++col) {
-      if (!refined[col] && (!maybe_changed || maybe_changed[col]))
-        field.at(row, col) = adaptive.first_pass.at(row, col);
+      if (!refined[col] && maybe_changed[col]) field.at(row, col) = adaptive.first_pass.at(row, col);
     }
   });
 }
@@ -653,7 +657,6 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
         summary.window_px_per_pass.push_back(in.window_px);
         if (options.adaptive_refinement) {
           select_for_refinement(measured, field, grid, options, adaptive);
-          keep_first_pass(adaptive, field);  // the refined nodes' predictor sees the smoothed values
         }
         continue;
       }
@@ -704,10 +707,9 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     if (options.replace_outliers) {
       replace_outliers(field, options.outliers, changeable);
     }
-    if (changeable) keep_first_pass(adaptive, field, changeable);
+    if (changeable) keep_first_pass(adaptive, field, *changeable);
     if (pass == 0 && windows.size() > 1 && options.adaptive_refinement) {
       select_for_refinement({field, grid}, field, grid, options, adaptive);
-      keep_first_pass(adaptive, field);
     }
     summary.passes_run = pass + 1;
     summary.window_px_per_pass.push_back(in.window_px);

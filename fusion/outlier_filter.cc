@@ -123,8 +123,9 @@ std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& opt
       block.count = 0;
     };
     for (int col = 0; col < field.cols; ++col) {
+      if (tested && !tested[col]) continue;  // before the vector: under adaptive refinement most are not
       const auto& vec = field.at(row, col);
-      if (!measured(vec) || (tested && !tested[col])) continue;
+      if (!measured(vec)) continue;
       const bool on_edge = row == 0 || col == 0 || row == field.rows - 1 || col == field.cols - 1;
       if (on_edge && !options.test_grid_edges) continue;
       // The usual case, eight measured neighbours: many nodes' medians at once.
