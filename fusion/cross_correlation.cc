@@ -275,11 +275,24 @@ cv::Rect pass_region(const PreparedPair& pair, const DisplacementField& field, i
 }
 
 // A copy with new node values (cv::Mat copies share data, so this must not
-// write into the original's).
-GridField scaled(const GridField& field, double factor) {
+// write into the original's); with `only`, at the nodes it marks alone.
+GridField scaled(const GridField& field, double factor, const cv::Mat* only = nullptr) {
   GridField out{field.grid, {}, {}};
-  field.u_px.convertTo(out.u_px, CV_64F, factor);
-  field.v_px.convertTo(out.v_px, CV_64F, factor);
+  if (!only) {
+    field.u_px.convertTo(out.u_px, CV_64F, factor);
+    field.v_px.convertTo(out.v_px, CV_64F, factor);
+    return out;
+  }
+  out.u_px.create(field.u_px.size(), CV_64F);
+  out.v_px.create(field.v_px.size(), CV_64F);
+  for_rows(field.u_px.rows, [&](int row) {
+    const std::uint8_t* marked = only->ptr<std::uint8_t>(row);
+    for (int col = 0; col < field.u_px.cols; ++col) {
+      if (!marked[col]) continue;
+      out.u_px.at<double>(row, col) = factor * field.u_px.at<double>(row, col);
+      out.v_px.at<double>(row, col) = factor * field.v_px.at<double>(row, col);
+    }
+  });
   return out;
 }
 
@@ -388,6 +401,9 @@ struct PassWorkspace {
   DisplacementField previous_field;                         // the field before a pass, for its change
   GridField predictor;                                      // a refinement pass's, and its smoothing's scratch
   cv::Mat predictor_scratch;
+  // Under adaptive refinement, the nodes a pass reads its predictor at, and
+  // those grown by one node, which its smoothing reads.
+  cv::Mat predicted_nodes, predicted_nodes_around;
   AdaptivePasses adaptive;  // adaptive refinement's selection and the first pass it keeps
 };
 
@@ -606,6 +622,16 @@ void warp_tiles(const cv::Mat& image, const GridField& field, cv::Rect region, c
   });
 }
 
+// The nodes a deforming pass reads its predictor at — the selected ones
+// and those the warp's tiles lie between — into `read`, and into `around`
+// those grown by the node on each side the predictor's smoothing reads.
+void nodes_read(const std::vector<cv::Rect>& tiles, const GridGeometry& grid, const cv::Mat& selected, cv::Mat& read,
+                cv::Mat& around) {
+  selected.copyTo(read);
+  for (const cv::Rect& tile : tiles) read(nodes_under(tile, grid)).setTo(1);
+  cv::dilate(read, around, cv::Mat::ones(3, 3, CV_8U));
+}
+
 // ---- end of adaptive refinement ----
 
 // The part of the images a pass reads: its region, and under adaptive
@@ -635,14 +661,35 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     PassInput in;
     in.window_px = windows[pass];
     in.radius_px = options.search_radius_px(pass);
-    if (pass > 0) predictor_from(field, grid, predictor);
+    in.shift_whole_pixels = pass > 0 && !options.deform;
+    in.refine = adaptive.active() ? &adaptive.selection.refine : nullptr;
+    // What a pass reads depends on its window, its reach and the selection
+    // alone (node positions, the ROI and the mask hold for the frame):
+    // passes alike in these share it.
+    const auto read_area = [&](int reach_px) {
+      if (!area.serves(in.window_px, reach_px, in.refine)) {
+        area = {in.window_px, reach_px, in.refine, pass_region(pair, field, in.window_px, reach_px, in.refine), {}};
+        in.region = area.region;
+        if (in.refine) area.tiles = tiles_read(pair, field, in, reach_px, options);
+      }
+      in.region = area.region;
+    };
+    // Under adaptive refinement a deforming pass reads its predictor at the
+    // selected nodes and under the warp's tiles alone: computed there.
+    const cv::Mat* predicted = nullptr;
+    if (pass > 0 && in.refine && !in.shift_whole_pixels) {
+      read_area(in.radius_px);
+      nodes_read(area.tiles, grid, *in.refine, workspace.predicted_nodes, workspace.predicted_nodes_around);
+      predicted = &workspace.predicted_nodes;
+    }
+    if (pass > 0 && !(predicted && predictor_at(field, grid, predictor, workspace.predicted_nodes_around))) {
+      predictor_from(field, grid, predictor);
+    }
     if (pass > 0 && options.deform && options.smooth_predictor) {
-      smooth_predictor(predictor, workspace.predictor_scratch);
+      smooth_predictor(predictor, workspace.predictor_scratch, predicted);
     }
     in.predictor = pass > 0 ? &predictor : nullptr;
-    in.shift_whole_pixels = pass > 0 && !options.deform;
     const int reach_px = in.radius_px + (in.shift_whole_pixels ? max_abs_shift_px(predictor) : 0);
-    in.refine = adaptive.active() ? &adaptive.selection.refine : nullptr;
     const bool warp = pass > 0 && options.deform;
     const bool warp_reference = warp && options.symmetric_deformation;
     if (workspace.cache_reference_stats && !warp_reference) {
@@ -661,15 +708,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
         continue;
       }
     }
-    // What a pass reads depends on its window, its reach and the selection
-    // alone (node positions, the ROI and the mask hold for the frame):
-    // passes alike in these share it.
-    if (!area.serves(in.window_px, reach_px, in.refine)) {
-      area = {in.window_px, reach_px, in.refine, pass_region(pair, field, in.window_px, reach_px, in.refine), {}};
-      in.region = area.region;
-      if (in.refine) area.tiles = tiles_read(pair, field, in, reach_px, options);
-    }
-    in.region = area.region;
+    read_area(reach_px);
     const std::vector<cv::Rect>& tiles = area.tiles;
     // Passes before the last only feed the next pass's predictor: the
     // cheaper cubic kernel serves them as well; when they have converged, one
@@ -691,8 +730,8 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
         // Each image moves half-way: both are interpolated at half the offset,
         // and the interpolation errors of the two largely cancel.
         in.warped_reference = reuse(workspace.warped_reference_storage, in.region.size());
-        warp_pass(pair.measurement, scaled(predictor, 0.5), in.warped);
-        warp_pass(pair.reference, scaled(predictor, -0.5), in.warped_reference);
+        warp_pass(pair.measurement, scaled(predictor, 0.5, predicted), in.warped);
+        warp_pass(pair.reference, scaled(predictor, -0.5, predicted), in.warped_reference);
       } else {
         warp_pass(pair.measurement, predictor, in.warped);
       }

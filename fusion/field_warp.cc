@@ -148,6 +148,10 @@ void warp_rows(const cv::Mat& image, const TabulatedKernel& kernel, bool simd, c
   const auto width = static_cast<std::size_t>(region.width);
   std::vector<double> xs(width), ys(width);
   std::vector<double> u_row(static_cast<std::size_t>(g.cols)), v_row(static_cast<std::size_t>(g.cols));
+  // Only the node columns the region's pixels lie between (nodes_under):
+  // a field may hold values there alone.
+  const int first_column = columns.runs.empty() ? 0 : columns.runs.front().i0;
+  const int last_column = columns.runs.empty() ? -1 : columns.runs.back().i1;
   const auto stride = static_cast<std::size_t>(image.step1());
   const auto sample = simd ? sample_separable : scalar_sample_separable;
   for (int y = rows.start; y < rows.end; ++y) {
@@ -156,7 +160,7 @@ void warp_rows(const cv::Mat& image, const TabulatedKernel& kernel, bool simd, c
     const auto lerp_rows = [&](const cv::Mat& values, std::vector<double>& row) {
       const double* r0 = values.ptr<double>(wy.i0);
       const double* r1 = values.ptr<double>(wy.i1);
-      for (int c = 0; c < g.cols; ++c) row[c] = r0[c] + wy.t * (r1[c] - r0[c]);
+      for (int c = first_column; c <= last_column; ++c) row[c] = r0[c] + wy.t * (r1[c] - r0[c]);
     };
     lerp_rows(field.u_px, u_row);
     lerp_rows(field.v_px, v_row);
@@ -188,6 +192,14 @@ void copy_with_replicated_border(const cv::Mat& image, cv::Rect region, cv::Rang
 }
 
 }  // namespace
+
+cv::Rect nodes_under(cv::Rect region, const GridGeometry& g) {
+  const AxisWeight left = axis_weight(region.x, g.x0_px, g.step_px, g.cols);
+  const AxisWeight right = axis_weight(region.x + region.width - 1, g.x0_px, g.step_px, g.cols);
+  const AxisWeight top = axis_weight(region.y, g.y0_px, g.step_px, g.rows);
+  const AxisWeight bottom = axis_weight(region.y + region.height - 1, g.y0_px, g.step_px, g.rows);
+  return {left.i0, top.i0, right.i1 - left.i0 + 1, bottom.i1 - top.i0 + 1};
+}
 
 cv::Point2d interpolate_field(const GridField& field, double x_px, double y_px) {
   const auto& g = field.grid;

@@ -42,6 +42,10 @@ struct GridField {
 // The field interpolated at one point.
 cv::Point2d interpolate_field(const GridField& field, double x_px, double y_px);
 
+// The nodes warp_region reads over `region` (its pixels lie between them):
+// rows and columns of `grid`, inclusive. A field needs values there alone.
+cv::Rect nodes_under(cv::Rect region, const GridGeometry& grid);
+
 // The measurement resampled over `region` (in image coordinates; may extend
 // past the image): result(y, x) = image(region.y + y + V, region.x + x + U).
 // With an empty field (no nodes) it is a plain copy with replicated border.

@@ -223,12 +223,37 @@ void predictor_from(const DisplacementField& field, const GridGeometry& grid, Gr
   }
 }
 
+bool predictor_at(const DisplacementField& field, const GridGeometry& grid, GridField& predictor, const cv::Mat& only) {
+  std::atomic<bool> gap{false};
+  for_rows(field.rows, [&](int row) {
+    const std::uint8_t* marked = only.ptr<std::uint8_t>(row);
+    for (int col = 0; col < field.cols; ++col) {
+      if (marked[col] && !has_value(field.at(row, col).flag)) gap = true;
+    }
+  });
+  if (gap) return false;
+  predictor.grid = grid;
+  predictor.u_px.create(field.rows, field.cols, CV_64F);
+  predictor.v_px.create(field.rows, field.cols, CV_64F);
+  for_rows(field.rows, [&](int row) {
+    const std::uint8_t* marked = only.ptr<std::uint8_t>(row);
+    double* u = predictor.u_px.ptr<double>(row);
+    double* v = predictor.v_px.ptr<double>(row);
+    for (int col = 0; col < field.cols; ++col) {
+      if (!marked[col]) continue;
+      u[col] = field.at(row, col).u_px;
+      v[col] = field.at(row, col).v_px;
+    }
+  });
+  return true;
+}
+
 void smooth_predictor(GridField& predictor) {
   cv::Mat scratch;
   smooth_predictor(predictor, scratch);
 }
 
-void smooth_predictor(GridField& predictor, cv::Mat& scratch) {
+void smooth_predictor(GridField& predictor, cv::Mat& scratch, const cv::Mat* only) {
   for (cv::Mat* values : {&predictor.u_px, &predictor.v_px}) {
     // The smoothed values into `scratch`, which then becomes the component
     // (and the component's buffer the next scratch).
@@ -248,32 +273,38 @@ void smooth_predictor(GridField& predictor, cv::Mat& scratch) {
       }
       return sum / weight;
     };
+    // Inside the grid every tap is there: the same sums in the same order,
+    // without the tests, and the weights add up to 16.
+    const auto inside = [](const double* above, const double* here, const double* below, int c) {
+      double sum = 0;
+      sum += above[c - 1];
+      sum += 2 * above[c];
+      sum += above[c + 1];
+      sum += 2 * here[c - 1];
+      sum += 4 * here[c];
+      sum += 2 * here[c + 1];
+      sum += below[c - 1];
+      sum += 2 * below[c];
+      sum += below[c + 1];
+      return sum / 16;
+    };
     for_rows(source.rows, [&](int row) {
       double* out = scratch.ptr<double>(row);
-      const bool inside = row > 0 && row + 1 < source.rows;
-      if (!inside || source.cols < 3) {
-        for (int col = 0; col < source.cols; ++col) out[col] = at_edge(row, col);
+      const std::uint8_t* marked = only ? only->ptr<std::uint8_t>(row) : nullptr;
+      const bool inner_row = row > 0 && row + 1 < source.rows && source.cols >= 3;
+      const double *above = inner_row ? source.ptr<double>(row - 1) : nullptr, *here = source.ptr<double>(row),
+                   *below = inner_row ? source.ptr<double>(row + 1) : nullptr;
+      if (!marked && inner_row) {
+        out[0] = at_edge(row, 0);
+        for (int c = 1; c + 1 < source.cols; ++c) out[c] = inside(above, here, below, c);
+        out[source.cols - 1] = at_edge(row, source.cols - 1);
         return;
       }
-      // Inside the grid every tap is there: the same sums in the same
-      // order, without the tests, and the weights add up to 16.
-      const double *above = source.ptr<double>(row - 1), *here = source.ptr<double>(row),
-                   *below = source.ptr<double>(row + 1);
-      out[0] = at_edge(row, 0);
-      for (int c = 1; c + 1 < source.cols; ++c) {
-        double sum = 0;
-        sum += above[c - 1];
-        sum += 2 * above[c];
-        sum += above[c + 1];
-        sum += 2 * here[c - 1];
-        sum += 4 * here[c];
-        sum += 2 * here[c + 1];
-        sum += below[c - 1];
-        sum += 2 * below[c];
-        sum += below[c + 1];
-        out[c] = sum / 16;
+      for (int col = 0; col < source.cols; ++col) {
+        if (marked && !marked[col]) continue;
+        const bool inner = inner_row && col > 0 && col + 1 < source.cols;
+        out[col] = inner ? inside(above, here, below, col) : at_edge(row, col);
       }
-      out[source.cols - 1] = at_edge(row, source.cols - 1);
     });
     cv::swap(*values, scratch);
   }

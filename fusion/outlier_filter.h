@@ -55,6 +55,12 @@ GridField predictor_from(const DisplacementField& field, const GridGeometry& gri
 // no other cv::Mat may share them.
 void predictor_from(const DisplacementField& field, const GridGeometry& grid, GridField& predictor,
                     int max_sweeps = 32);
+// The predictor at the nodes `only` marks (CV_8U, the field's rows×cols)
+// when each of them has a value (measured or replaced): then no gap is
+// filled and each holds its own vector's value, as in the whole field's
+// predictor; the other nodes keep what the buffers held. False, and
+// nothing written, when one of them has none.
+bool predictor_at(const DisplacementField& field, const GridGeometry& grid, GridField& predictor, const cv::Mat& only);
 
 // Smooths a predictor with the 3×3 binomial kernel (weights 1-2-1 in x and y,
 // renormalised at the grid's edge). Iterated window deformation is unstable
@@ -62,7 +68,9 @@ void predictor_from(const DisplacementField& field, const GridGeometry& grid, Gr
 // (Schrijer & Scarano 2008) — and this kernel removes exactly that component.
 void smooth_predictor(GridField& predictor);
 // The same, working in `scratch` (reused when it has the predictor's size),
-// which afterwards holds a buffer of the predictor's old values.
-void smooth_predictor(GridField& predictor, cv::Mat& scratch);
+// which afterwards holds a buffer of the predictor's old values; with
+// `only`, at the nodes it marks alone (their 3×3 neighbours must hold the
+// predictor), the others left as `scratch` held them.
+void smooth_predictor(GridField& predictor, cv::Mat& scratch, const cv::Mat* only = nullptr);
 
 }  // namespace bosfuse::fusion

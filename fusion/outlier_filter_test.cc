@@ -199,6 +199,52 @@ TEST(OutlierFilter, AMissingNodeTakesTheMedianOfItsEightNeighbours) {
   }
 }
 
+// At the marked nodes the restricted predictor and smoothing equal the
+// whole field's, to the bit; the other nodes keep what the buffers held;
+// a gap under the mask refuses the restricted predictor.
+TEST(OutlierFilter, APredictorAtMarkedNodesIsTheWholePredictorThere) {
+  DisplacementField field = smooth_field(9, 12);
+  std::mt19937 random(3);
+  std::normal_distribution<double> noise(0.0, 0.1);
+  for (auto& vec : field.vectors) vec.u_px += noise(random);
+  field.at(0, 11).flag = VectorFlag::kNoPeak;  // a gap outside the mask
+  const GridGeometry grid{0, 0, 1, 9, 12};
+  cv::Mat marked = cv::Mat::zeros(9, 12, CV_8U);
+  marked(cv::Rect(2, 1, 6, 5)).setTo(1);
+  cv::Mat around;
+  cv::dilate(marked, around, cv::Mat::ones(3, 3, CV_8U));
+
+  GridField whole = predictor_from(field, grid);
+  constexpr double kUntouched = -777;
+  GridField part{grid, cv::Mat(9, 12, CV_64F, cv::Scalar(kUntouched)), cv::Mat(9, 12, CV_64F, cv::Scalar(kUntouched))};
+  ASSERT_TRUE(predictor_at(field, grid, part, around));
+  for (int r = 0; r < 9; ++r) {
+    for (int c = 0; c < 12; ++c) {
+      const double want = around.at<std::uint8_t>(r, c) ? whole.u_px.at<double>(r, c) : kUntouched;
+      ASSERT_EQ(part.u_px.at<double>(r, c), want) << r << ", " << c;
+    }
+  }
+  cv::Mat whole_scratch;
+  smooth_predictor(whole, whole_scratch);
+  cv::Mat scratch(9, 12, CV_64F, cv::Scalar(kUntouched));
+  smooth_predictor(part, scratch, &marked);
+  for (int r = 0; r < 9; ++r) {
+    for (int c = 0; c < 12; ++c) {
+      if (marked.at<std::uint8_t>(r, c)) {
+        ASSERT_EQ(part.u_px.at<double>(r, c), whole.u_px.at<double>(r, c)) << r << ", " << c;
+        ASSERT_EQ(part.v_px.at<double>(r, c), whole.v_px.at<double>(r, c)) << r << ", " << c;
+      } else {
+        ASSERT_EQ(part.u_px.at<double>(r, c), kUntouched) << r << ", " << c;
+      }
+    }
+  }
+  field.at(3, 4).flag = VectorFlag::kNoPeak;  // a gap under the mask: it must be filled from neighbours
+  GridField refused{grid, cv::Mat(9, 12, CV_64F, cv::Scalar(kUntouched)),
+                    cv::Mat(9, 12, CV_64F, cv::Scalar(kUntouched))};
+  EXPECT_FALSE(predictor_at(field, grid, refused, around));
+  EXPECT_EQ(cv::countNonZero(refused.u_px != kUntouched), 0) << "nothing written";
+}
+
 TEST(OutlierFilter, NothingMeasuredGivesAZeroPredictor) {
   DisplacementField field = smooth_field(3, 3);
   for (auto& v : field.vectors) v.flag = VectorFlag::kNoTexture;
