@@ -285,13 +285,9 @@ GridField scaled(const GridField& field, double factor, const cv::Mat* only = nu
   }
   out.u_px.create(field.u_px.size(), CV_64F);
   out.v_px.create(field.v_px.size(), CV_64F);
-  for_rows(field.u_px.rows, [&](int row) {
-    const std::uint8_t* marked = only->ptr<std::uint8_t>(row);
-    for (int col = 0; col < field.u_px.cols; ++col) {
-      if (!marked[col]) continue;
-      out.u_px.at<double>(row, col) = factor * field.u_px.at<double>(row, col);
-      out.v_px.at<double>(row, col) = factor * field.v_px.at<double>(row, col);
-    }
+  for_marked(*only, [&](int row, int col) {
+    out.u_px.at<double>(row, col) = factor * field.u_px.at<double>(row, col);
+    out.v_px.at<double>(row, col) = factor * field.v_px.at<double>(row, col);
   });
   return out;
 }
@@ -329,17 +325,13 @@ void copy_field(const DisplacementField& from, DisplacementField& to, const cv::
   to.rows = from.rows;
   to.cols = from.cols;
   to.vectors.resize(from.vectors.size());
+  if (only) {
+    for_marked(*only, [&](int row, int col) { to.at(row, col) = from.at(row, col); });
+    return;
+  }
   for_rows(from.rows, [&](int row) {
-    const std::size_t begin = static_cast<std::size_t>(row) * from.cols;
-    if (!only) {
-      std::copy_n(from.vectors.begin() + static_cast<std::ptrdiff_t>(begin), from.cols,
-                  to.vectors.begin() + static_cast<std::ptrdiff_t>(begin));
-      return;
-    }
-    const std::uint8_t* marked = only->ptr<std::uint8_t>(row);
-    for (int col = 0; col < from.cols; ++col) {
-      if (marked[col]) to.vectors[begin + col] = from.vectors[begin + col];
-    }
+    const auto begin = from.vectors.begin() + static_cast<std::ptrdiff_t>(row) * from.cols;
+    std::copy(begin, begin + from.cols, to.vectors.begin() + static_cast<std::ptrdiff_t>(row) * from.cols);
   });
 }
 

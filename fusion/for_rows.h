@@ -7,6 +7,8 @@
 // fewer than 64 rows (a probe's) runs on the calling thread, which costs
 // less than waking another.
 
+#include <cstdint>
+#include <opencv2/core/mat.hpp>
 #include <opencv2/core/utility.hpp>
 
 namespace bosfuse::fusion {
@@ -21,6 +23,19 @@ void for_rows(int rows, Body body) {
   } else {
     cv::parallel_for_(cv::Range(0, rows), range);
   }
+}
+
+// for_marked(mask, body) calls body(row, col) for every node that `mask`
+// (CV_8U, the grid's rows×cols) marks non-zero, rows as for_rows spreads
+// them: the per-node work adaptive refinement restricts to its selection.
+template <typename Body>
+void for_marked(const cv::Mat& mask, Body body) {
+  for_rows(mask.rows, [&](int row) {
+    const std::uint8_t* marked = mask.ptr<std::uint8_t>(row);
+    for (int col = 0; col < mask.cols; ++col) {
+      if (marked[col]) body(row, col);
+    }
+  });
 }
 
 }  // namespace bosfuse::fusion

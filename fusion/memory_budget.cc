@@ -36,9 +36,10 @@ constexpr Bytes kXcorrBytesPerNode = 2 * sizeof(DisplacementVector) + 3 * sizeof
                                      sizeof(cv::Point2d) + 2 * 2 * sizeof(double);
 
 // Adaptive refinement's, kept between frames: the first pass's field the
-// unrefined nodes keep, its smoothing's two three-channel buffers, and the
-// selection and the outlier test's masks.
-constexpr Bytes kAdaptiveBytesPerNode = sizeof(DisplacementVector) + 2 * 3 * sizeof(double) + 2;
+// unrefined nodes keep, its smoothing's two three-channel buffers, and four
+// masks (the selection, the outlier test's, and the nodes a pass reads its
+// predictor at, with their ring).
+constexpr Bytes kAdaptiveBytesPerNode = sizeof(DisplacementVector) + 2 * 3 * sizeof(double) + 4;
 
 // OpenCV's own buffers per pixel, full resolution (finest scale 0 for DIS):
 // pyramids, gradients, flow components at every scale and, for DIS fast and
@@ -259,7 +260,7 @@ PairShape PairShape::of(const cv::Mat& reference, const cv::Mat& mask) {
 //   a pass: the float copies, the mask and its integral (5 B/px), the warped
 //     regions (4 B/px of the ROI grown by the search reach, in one buffer
 //     all passes reuse; two with symmetric deformation) and 177 B per grid
-//     node (kXcorrBytesPerNode), 98 B more with adaptive refinement.
+//     node (kXcorrBytesPerNode), 100 B more with adaptive refinement.
 std::uint64_t xcorr_bytes_needed(const PairShape& pair, const XcorrOptions& options) {
   const cv::Rect roi = effective_roi(options.roi, pair.size);
   const Bytes n = pixels(pair.size);

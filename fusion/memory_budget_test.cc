@@ -164,7 +164,7 @@ TEST(MemoryBudget, EstimateFollowsTheSettings) {
   EXPECT_EQ(base, 96 * kMB + 4ull * 4010 * 3010 + 186626ull * 177 + (8ull << 20));
   XcorrOptions adaptive = defaults;
   adaptive.adaptive_refinement = true;
-  EXPECT_EQ(xcorr_bytes_needed(pair, adaptive), base + 186626ull * 98)
+  EXPECT_EQ(xcorr_bytes_needed(pair, adaptive), base + 186626ull * 100)
       << "the first pass kept for the unrefined nodes, its smoothing and the masks";
   XcorrOptions fine = defaults;
   fine.step_px = 4;

@@ -225,25 +225,16 @@ void predictor_from(const DisplacementField& field, const GridGeometry& grid, Gr
 
 bool predictor_at(const DisplacementField& field, const GridGeometry& grid, GridField& predictor, const cv::Mat& only) {
   std::atomic<bool> gap{false};
-  for_rows(field.rows, [&](int row) {
-    const std::uint8_t* marked = only.ptr<std::uint8_t>(row);
-    for (int col = 0; col < field.cols; ++col) {
-      if (marked[col] && !has_value(field.at(row, col).flag)) gap = true;
-    }
+  for_marked(only, [&](int row, int col) {
+    if (!has_value(field.at(row, col).flag)) gap.store(true, std::memory_order_relaxed);
   });
   if (gap) return false;
   predictor.grid = grid;
   predictor.u_px.create(field.rows, field.cols, CV_64F);
   predictor.v_px.create(field.rows, field.cols, CV_64F);
-  for_rows(field.rows, [&](int row) {
-    const std::uint8_t* marked = only.ptr<std::uint8_t>(row);
-    double* u = predictor.u_px.ptr<double>(row);
-    double* v = predictor.v_px.ptr<double>(row);
-    for (int col = 0; col < field.cols; ++col) {
-      if (!marked[col]) continue;
-      u[col] = field.at(row, col).u_px;
-      v[col] = field.at(row, col).v_px;
-    }
+  for_marked(only, [&](int row, int col) {
+    predictor.u_px.at<double>(row, col) = field.at(row, col).u_px;
+    predictor.v_px.at<double>(row, col) = field.at(row, col).v_px;
   });
   return true;
 }
