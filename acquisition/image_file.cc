@@ -5,6 +5,7 @@
 #include <png.h>
 #include <tiffio.h>
 
+#include <algorithm>
 #include <cctype>
 #include <climits>
 #include <csetjmp>
@@ -162,8 +163,12 @@ bool is_format_read(std::span<const std::uint8_t> bytes) {
 }
 
 // PNM: width and height are the first two numbers after the magic, with
-// whitespace and '#' comments between them.
+// whitespace and '#' comments between them. Every digit counts, as OpenCV
+// reads them: cutting a number short let "P6 0000000000" + "27565 27568"
+// pass as 0x27565 px while OpenCV decoded 27565x27568 (2.3 GB; found by
+// fuzzing). A number past any limit saturates instead of overflowing.
 std::optional<DeclaredSize> pnm_header_size(std::span<const std::uint8_t> bytes) {
+  constexpr std::int64_t kPastAnyLimit = 1'000'000'000'000'000;
   std::size_t at = 2;
   std::int64_t numbers[2] = {0, 0};
   for (std::int64_t& number : numbers) {
@@ -173,8 +178,8 @@ std::optional<DeclaredSize> pnm_header_size(std::span<const std::uint8_t> bytes)
       while (at < bytes.size() && bytes[at] != '\n' && bytes[at] != '\r') ++at;
     }
     const std::size_t first = at;
-    while (at < bytes.size() && std::isdigit(static_cast<unsigned char>(bytes[at])) && at - first < 10) {
-      number = number * 10 + (bytes[at++] - '0');
+    while (at < bytes.size() && std::isdigit(static_cast<unsigned char>(bytes[at]))) {
+      number = std::min(number * 10 + (bytes[at++] - '0'), kPastAnyLimit);
     }
     if (at == first) return std::nullopt;
   }

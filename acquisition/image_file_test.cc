@@ -123,6 +123,25 @@ TEST(ImageFile, AHugePnmIsRefusedByItsHeader) {
   EXPECT_THROW(decode_image(pgm, "bomb.pgm"), ImageTooLarge);
 }
 
+// Found by fuzzing: leading zeros made the header's numbers longer than the
+// ten digits once read, so "0000000000" was taken for the width and the real
+// width for the height; OpenCV then allocated 2.3 GB for 27565x27568 px.
+TEST(ImageFile, EveryDigitOfAPnmSizeCounts) {
+  const std::string header = "P6 0000000000" "27565 27568 255\n";
+  std::vector<std::uint8_t> ppm(header.begin(), header.end());
+  ppm.resize(ppm.size() + 64, 0);
+  const auto size = declared_image_size(ppm);
+  ASSERT_TRUE(size);
+  EXPECT_EQ(size->width_px, 27565);
+  EXPECT_EQ(size->height_px, 27568);
+  EXPECT_THROW(decode_image(ppm, "zeros.ppm"), ImageTooLarge);
+
+  const std::string endless = "P5 " + std::string(40, '9') + " 1 255\n";
+  const auto saturated = declared_image_size(std::vector<std::uint8_t>(endless.begin(), endless.end()));
+  ASSERT_TRUE(saturated);
+  EXPECT_GT(saturated->width_px, ImageLimits{}.max_side_px) << "a 40-digit width stays over every limit";
+}
+
 TEST(ImageFile, MissingOrUndecodableFilesAreEmpty) {
   testing::TempDir dir;
   EXPECT_TRUE(read_image_file(dir / "none.png").empty());
