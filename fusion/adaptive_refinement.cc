@@ -94,7 +94,7 @@ double field_noise_floor_px(const DisplacementField& field) {
     residuals.push_back(per_node[2 * i + 1]);
   }
   if (residuals.size() < 16) return -1;  // 8 vectors, two components each
-  const double mad = median_in_place(residuals.data(), static_cast<int>(residuals.size()));
+  const double mad = median_of_non_negative(residuals);
   return std::isfinite(mad) ? 1.4826 * mad : -1;
 }
 

@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <vector>
 
 #include "fusion/eight_neighbours.h"
 #include "fusion/for_rows.h"
@@ -88,6 +91,28 @@ double median_in_place(double* begin, int n) {
   if (n % 2 == 1) return upper;
   const double lower = *std::max_element(begin, begin + n / 2);
   return 0.5 * (lower + upper);
+}
+
+double median_of_non_negative(std::span<const double> values) {
+  const std::size_t n = values.size();
+  if (n == 0) return std::numeric_limits<double>::quiet_NaN();
+  const auto bucket_of = [](double v) { return static_cast<std::size_t>(std::bit_cast<std::uint64_t>(v) >> 48); };
+  std::vector<std::uint32_t> histogram(std::size_t{1} << 16, 0);
+  for (const double v : values) ++histogram[bucket_of(v)];
+  std::vector<double> in_bucket;
+  const auto value_of_rank = [&](std::size_t rank) {  // 0 the least
+    std::size_t below = 0, bucket = 0;
+    for (; below + histogram[bucket] <= rank; ++bucket) below += histogram[bucket];
+    in_bucket.clear();
+    for (const double v : values) {
+      if (bucket_of(v) == bucket) in_bucket.push_back(v);
+    }
+    const auto nth = in_bucket.begin() + static_cast<std::ptrdiff_t>(rank - below);
+    std::nth_element(in_bucket.begin(), nth, in_bucket.end());
+    return *nth;
+  };
+  const double upper = value_of_rank(n / 2);
+  return n % 2 == 1 ? upper : 0.5 * (value_of_rank(n / 2 - 1) + upper);
 }
 
 std::string OutlierOptions::Validate() const {

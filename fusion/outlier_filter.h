@@ -12,6 +12,7 @@
 // masked, no texture) a value from its neighbours — only for use as the
 // predictor of the next pass, so deformation near a gap is not dragged to 0.
 
+#include <span>
 #include <string>
 
 #include "fusion/displacement_field.h"
@@ -36,6 +37,14 @@ struct OutlierOptions {
 // count), reordering them; NaN for none. Eight values, a node's neighbours,
 // by a sorting network, fewer by insertion, more by nth_element.
 double median_in_place(double* values, int count);
+
+// The median of values that are none of them negative (NaN for none),
+// equal to median_in_place's, for many values: a noise floor's 125,000
+// residuals, where nth_element took 1.2 ms of a 16 MP frame's 100 under
+// adaptive refinement. Such values' bit patterns, read as unsigned integers,
+// order as the values do: a histogram of their top 16 bits finds the bucket
+// holding each middle rank, and only that bucket's values are ordered.
+double median_of_non_negative(std::span<const double> values);
 
 // Tests vectors flagged kOk; returns how many were replaced. With `only`
 // (CV_8U, the field's rows×cols) just the nodes marked non-zero there are

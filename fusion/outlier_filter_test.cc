@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <stdexcept>
@@ -42,6 +43,27 @@ TEST(OutlierFilter, TheMedianIsTheSortedMiddleForEveryCount) {
     }
   }
   EXPECT_TRUE(std::isnan(median_in_place(nullptr, 0)));
+}
+
+// Against median_in_place on residual-like values: spread over decades (many
+// buckets), all in one narrow range (one bucket), ties, zeros, infinities.
+TEST(OutlierFilter, TheMedianOfNonNegativeValuesIsTheMedianOfThem) {
+  std::mt19937 rng(37);
+  std::lognormal_distribution<double> spread(-4, 2);
+  std::uniform_int_distribution<int> level(0, 6);
+  for (const int count : {1, 2, 3, 4, 17, 1000, 1001, 125'000}) {
+    for (int kind = 0; kind < 4; ++kind) {
+      std::vector<double> values(static_cast<std::size_t>(count));
+      for (double& v : values) {
+        v = kind == 0 ? spread(rng) : kind == 1 ? 1.0 + 1e-9 * level(rng) : kind == 2 ? 0.5 * level(rng) : 0.0;
+      }
+      if (kind == 3 && count > 2) values[1] = std::numeric_limits<double>::infinity();
+      std::vector<double> copy = values;
+      const double expected = median_in_place(copy.data(), count);
+      ASSERT_EQ(median_of_non_negative(values), expected) << count << " values, kind " << kind;
+    }
+  }
+  EXPECT_TRUE(std::isnan(median_of_non_negative({})));
 }
 
 TEST(OutlierFilter, ReplacesASpuriousVectorWithItsNeighboursMedian) {
