@@ -24,6 +24,7 @@
 
 #include "fusion/displacement_evaluator.h"
 #include "fusion/field_csv.h"
+#include "fusion/adaptive_refinement.h"
 #include "fusion/outlier_filter.h"
 #include "sim/evaluation_study.h"
 
@@ -298,6 +299,38 @@ void BM_OutlierTest16MP(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_OutlierTest16MP)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+// Adaptive refinement's per-frame selection work on a 16 MP field (615×407
+// nodes, noise 0.05 px): /0 the noise floor of a coarse first pass (every
+// other node, 308×204), /1 smoothing the unrefined nodes with a quarter of
+// the field refined (a band across it, as around a plume).
+void BM_AdaptiveSelection16MP(benchmark::State& state) {
+  std::mt19937 random(9);
+  std::normal_distribution<double> shift_px(0.0, 0.05);
+  auto noisy = [&](double x_px, double y_px) {
+    return fusion::DisplacementVector{x_px, y_px, shift_px(random), shift_px(random), 3, fusion::VectorFlag::kOk};
+  };
+  const auto field = field_16mp(noisy);
+  if (state.range(0) == 0) {
+    fusion::DisplacementField coarse;
+    coarse.rows = 204;
+    coarse.cols = 308;
+    for (int i = 0; i < coarse.rows * coarse.cols; ++i) coarse.vectors.push_back(noisy(0, 0));
+    for (auto _ : state) benchmark::DoNotOptimize(fusion::field_noise_floor_px(coarse));
+    return;
+  }
+  cv::Mat refine = cv::Mat::zeros(field.rows, field.cols, CV_8U);
+  refine.rowRange(field.rows * 3 / 8, field.rows * 5 / 8).setTo(1);
+  fusion::SmoothingBuffers buffers;
+  fusion::DisplacementField smoothed = field;
+  for (auto _ : state) {
+    state.PauseTiming();
+    smoothed.vectors = field.vectors;
+    state.ResumeTiming();
+    fusion::smooth_unrefined(smoothed, refine, 2, buffers);
+  }
+}
+BENCHMARK(BM_AdaptiveSelection16MP)->ArgName("stage")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Probe mode: 10 thermocouple positions on the 16 MP pair, per pair.
 void BM_Probe10(benchmark::State& state) {

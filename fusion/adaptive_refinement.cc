@@ -37,6 +37,97 @@ double node_gradient(const DisplacementField& field, int row, int col, int dr, i
   return 0;
 }
 
+// smooth_unrefined over the rows [first, last) of the grid: a Gaussian over
+// (w, w·u, w·v) per node, w = 1 for the nodes averaged, filtered along each
+// row and then across rows, zero beyond the grid (with the weights filtered
+// alike, the edge is normalised like the rest). The band keeps only the last
+// 2·half + 1 rows filtered along the row, in a ring that stays in cache;
+// OpenCV's sepFilter2D needed the whole grid weighted and filtered (2 × 6 MB
+// for a 16 MP frame) and has no SIMD path in double, and took 2.5 ms of a
+// frame. The rows within `half` of a neighbouring band are read by it
+// unsmoothed: their results wait in the band's storage until every band is
+// done.
+class SmoothingBand {
+ public:
+  SmoothingBand(DisplacementField& field, const cv::Mat& refine, const double* weights, int half,
+                SmoothingBuffers::Band& storage)
+      : field_(field), refine_(refine), weights_(weights), half_(half), taps_(2 * half + 1),
+        width_(3 * static_cast<std::size_t>(field.cols)), storage_(storage), inputs_(static_cast<std::size_t>(taps_)) {}
+
+  void run(int first, int last) {
+    // One padded row, the ring, the row filtered across, the deferred rows.
+    const std::size_t rows_kept = static_cast<std::size_t>(taps_) + 1 + 2 * static_cast<std::size_t>(half_);
+    storage_.values.assign(padded_width() + rows_kept * width_, 0.0);
+    storage_.deferred_rows.clear();
+    double* out = ring(0) + taps_ * width_;
+    for (int row = first - half_; row < first + half_; ++row) filter_along(row);
+    for (int row = first; row < last; ++row) {
+      filter_along(row + half_);
+      for (int k = 0; k < taps_; ++k) inputs_[k] = ring(row - half_ + k);
+      weighted_sum(inputs_.data(), taps_, weights_, width_, out);
+      const bool read_by_neighbour = (row < first + half_ && first > 0) || (row >= last - half_ && last < field_.rows);
+      if (read_by_neighbour) {
+        std::copy(out, out + width_, deferred(storage_.deferred_rows.size()));
+        storage_.deferred_rows.push_back(row);
+      } else {
+        write_back(row, out);
+      }
+    }
+  }
+
+  void write_back_deferred() {
+    for (std::size_t i = 0; i < storage_.deferred_rows.size(); ++i) write_back(storage_.deferred_rows[i], deferred(i));
+  }
+
+ private:
+  std::size_t padded_width() const { return width_ + 6 * static_cast<std::size_t>(half_); }
+  double* ring(int row) {
+    const int slot = ((row % taps_) + taps_) % taps_;
+    return storage_.values.data() + padded_width() + static_cast<std::size_t>(slot) * width_;
+  }
+  double* deferred(std::size_t i) { return ring(0) + (taps_ + 1 + i) * width_; }
+
+  // Grid row `row` weighted and filtered along the row into its ring slot.
+  void filter_along(int row) {
+    double* into = ring(row);
+    if (row < 0 || row >= field_.rows) {
+      std::fill(into, into + width_, 0.0);
+      return;
+    }
+    double* padded = storage_.values.data();
+    double* values = padded + 3 * half_;  // after 3·half zeros, and as many after the row
+    const std::uint8_t* refined = refine_.ptr<std::uint8_t>(row);
+    for (int col = 0; col < field_.cols; ++col) {
+      const auto& vec = field_.at(row, col);
+      const bool averaged = !refined[col] && measured(vec);
+      values[3 * col] = averaged ? 1.0 : 0.0;
+      values[3 * col + 1] = averaged ? vec.u_px : 0.0;
+      values[3 * col + 2] = averaged ? vec.v_px : 0.0;
+    }
+    for (int k = 0; k < taps_; ++k) inputs_[k] = padded + 3 * k;
+    weighted_sum(inputs_.data(), taps_, weights_, width_, into);
+  }
+
+  void write_back(int row, const double* smoothed) {
+    const std::uint8_t* refined = refine_.ptr<std::uint8_t>(row);
+    for (int col = 0; col < field_.cols; ++col) {
+      auto& vec = field_.at(row, col);
+      if (refined[col] || !measured(vec)) continue;
+      const double w = smoothed[3 * col];  // ≥ the node's own weight, > 0
+      vec.u_px = smoothed[3 * col + 1] / w;
+      vec.v_px = smoothed[3 * col + 2] / w;
+    }
+  }
+
+  DisplacementField& field_;
+  const cv::Mat& refine_;
+  const double* weights_;
+  int half_, taps_;
+  std::size_t width_;
+  SmoothingBuffers::Band& storage_;
+  std::vector<const double*> inputs_;
+};
+
 }  // namespace
 
 double field_noise_floor_px(const DisplacementField& field) {
@@ -195,43 +286,20 @@ void smooth_unrefined(DisplacementField& field, const cv::Mat& refine, double si
     throw std::invalid_argument("adaptive refinement: the selection does not match the field");
   }
   if (sigma_nodes == 0 || field.vectors.empty()) return;
-  // Per node (w, w·u, w·v), w = 1 for the nodes averaged: one filter over
-  // the three channels filters each as it would alone.
-  cv::Mat& weighted = buffers.weighted;
-  cv::Mat& smoothed = buffers.smoothed;
-  weighted.create(field.rows, field.cols, CV_64FC3);
-  smoothed.create(field.rows, field.cols, CV_64FC3);
-  for_rows(field.rows, [&](int row) {
-    auto* out = weighted.ptr<cv::Vec3d>(row);
-    for (int col = 0; col < field.cols; ++col) {
-      const auto& vec = field.at(row, col);
-      const double w = !refine.at<std::uint8_t>(row, col) && measured(vec) ? 1.0 : 0.0;
-      out[col] = {w, w * vec.u_px, w * vec.v_px};
-    }
-  });
   const int half = static_cast<int>(std::ceil(3 * sigma_nodes));
   const cv::Mat kernel = cv::getGaussianKernel(2 * half + 1, sigma_nodes, CV_64F);
-  // In bands of rows on both cores: a band's filter reads the rows around it
-  // from the whole grid (a view's neighbourhood is image, not border), so the
-  // bands equal one filter over the grid. Zero outside the grid: with the
-  // weights filtered alike, edges are normalised like the rest.
+  const int bands = field.rows < 64 ? 1 : std::max(1, cv::getNumThreads());
+  buffers.bands.resize(static_cast<std::size_t>(bands));
+  std::vector<SmoothingBand> smoothing;
+  for (auto& band : buffers.bands) smoothing.emplace_back(field, refine, kernel.ptr<double>(), half, band);
+  const auto first_row = [&](int band) { return static_cast<int>(static_cast<std::int64_t>(field.rows) * band / bands); };
   cv::parallel_for_(
-      cv::Range(0, field.rows),
-      [&](const cv::Range& rows) {
-        cv::sepFilter2D(weighted.rowRange(rows.start, rows.end), smoothed.rowRange(rows.start, rows.end), CV_64F,
-                        kernel, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
+      cv::Range(0, bands),
+      [&](const cv::Range& range) {
+        for (int band = range.start; band < range.end; ++band) smoothing[band].run(first_row(band), first_row(band + 1));
       },
-      cv::getNumThreads());
-  for_rows(field.rows, [&](int row) {
-    const auto* in = smoothed.ptr<cv::Vec3d>(row);
-    for (int col = 0; col < field.cols; ++col) {
-      auto& vec = field.at(row, col);
-      if (refine.at<std::uint8_t>(row, col) || !measured(vec)) continue;
-      const double w = in[col][0];  // ≥ the node's own weight, > 0
-      vec.u_px = in[col][1] / w;
-      vec.v_px = in[col][2] / w;
-    }
-  });
+      bands);
+  for (auto& band : smoothing) band.write_back_deferred();
 }
 
 int refinement_context_nodes(int window_px, int search_radius_px, int step_px) {

@@ -44,6 +44,7 @@
 
 #include <opencv2/core.hpp>
 #include <string>
+#include <vector>
 
 #include "fusion/displacement_field.h"
 #include "fusion/field_warp.h"
@@ -83,10 +84,14 @@ RefinementSelection select_refinement(const DisplacementField& first_pass, const
 // are left alone. sigma_nodes 0 leaves everything.
 void smooth_unrefined(DisplacementField& field, const cv::Mat& refine, double sigma_nodes);
 
-// What smooth_unrefined works in: kept by a caller that smooths every frame,
-// they are not page-faulted anew each time (2 × 6 MB for a 16 MP field).
+// What smooth_unrefined works in, per band of rows (one band per core):
+// kept by a caller that smooths every frame, not allocated anew each time.
 struct SmoothingBuffers {
-  cv::Mat weighted, smoothed;
+  struct Band {
+    std::vector<double> values;
+    std::vector<int> deferred_rows;
+  };
+  std::vector<Band> bands;
 };
 void smooth_unrefined(DisplacementField& field, const cv::Mat& refine, double sigma_nodes, SmoothingBuffers& buffers);
 

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <functional>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
 #include "fusion/evaluation.h"
@@ -189,6 +191,52 @@ TEST(AdaptiveRefinement, SmoothingAveragesTheUnrefinedNoiseAway) {
   for (const auto& v : field.vectors) sum_sq += v.u_px * v.u_px + v.v_px * v.v_px;
   // A Gaussian of σ = 2 nodes averages about 4πσ² = 50 nodes: the noise drops ~7×.
   EXPECT_LT(std::sqrt(sum_sq / (2.0 * field.size())), 0.03 / 4);
+}
+
+// Against the definition, node by node, on a grid tall enough to be smoothed
+// in bands (one per thread; rows near a band's edge are read by its
+// neighbour unsmoothed), with refined and unmeasured nodes scattered in it.
+TEST(AdaptiveRefinement, SmoothingIsTheGaussianMeanOfTheAveragedNodesInEveryBandLayout) {
+  const auto grid = grid_of(150, 71);
+  auto noisy = field_on(grid, bump(300, 500, 200, 0.5), 0.05);
+  cv::Mat refine(grid.rows, grid.cols, CV_8U);
+  cv::RNG rng(5);
+  rng.fill(refine, cv::RNG::UNIFORM, 0, 4);
+  refine = refine == 0;  // about a quarter refined
+  for (int i = 0; i < 300; ++i) noisy.vectors[rng.uniform(0, int(noisy.size()))].flag = VectorFlag::kNoPeak;
+  const double sigma = 2;
+  const int half = 6;
+  const cv::Mat g = cv::getGaussianKernel(2 * half + 1, sigma, CV_64F);
+  auto averaged = [&](int r, int c) { return !refine.at<std::uint8_t>(r, c) && noisy.at(r, c).flag == VectorFlag::kOk; };
+  const int threads = cv::getNumThreads();
+  for (const int bands : {1, 2, 3, 7}) {
+    cv::setNumThreads(bands);
+    auto field = noisy;
+    SmoothingBuffers buffers;
+    smooth_unrefined(field, refine, sigma, buffers);
+    for (int r = 0; r < grid.rows; ++r) {
+      for (int c = 0; c < grid.cols; ++c) {
+        if (!averaged(r, c)) {
+          ASSERT_EQ(field.at(r, c).u_px, noisy.at(r, c).u_px) << r << "," << c;
+          continue;
+        }
+        double w = 0, u = 0, v = 0;
+        for (int dr = -half; dr <= half; ++dr) {
+          for (int dc = -half; dc <= half; ++dc) {
+            const int rr = r + dr, cc = c + dc;
+            if (rr < 0 || cc < 0 || rr >= grid.rows || cc >= grid.cols || !averaged(rr, cc)) continue;
+            const double weight = g.at<double>(dr + half) * g.at<double>(dc + half);
+            w += weight;
+            u += weight * noisy.at(rr, cc).u_px;
+            v += weight * noisy.at(rr, cc).v_px;
+          }
+        }
+        ASSERT_NEAR(field.at(r, c).u_px, u / w, 1e-12) << r << "," << c << ", " << bands << " bands";
+        ASSERT_NEAR(field.at(r, c).v_px, v / w, 1e-12) << r << "," << c << ", " << bands << " bands";
+      }
+    }
+  }
+  cv::setNumThreads(threads);
 }
 
 TEST(AdaptiveRefinement, SmoothingLeavesRefinedNodesAndTakesNothingFromThem) {

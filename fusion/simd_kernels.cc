@@ -489,6 +489,41 @@ void MediansOfEight(const double* values, std::size_t stride, std::size_t count,
   scalar_medians_of_eight(values + j, stride, count - j, medians + j);
 }
 
+// Four vectors of outputs at a time: four independent chains of products
+// hide the latency of each one's sum.
+void WeightedSum(const double* const* inputs, int taps, const double* weights, std::size_t count, double* out) {
+  const hn::ScalableTag<double> d;
+  const std::size_t lanes = hn::Lanes(d);
+  std::size_t j = 0;
+  for (; j + 4 * lanes <= count; j += 4 * lanes) {
+    auto w = hn::Set(d, weights[0]);
+    auto a0 = hn::Mul(w, hn::LoadU(d, inputs[0] + j)), a1 = hn::Mul(w, hn::LoadU(d, inputs[0] + j + lanes));
+    auto a2 = hn::Mul(w, hn::LoadU(d, inputs[0] + j + 2 * lanes)), a3 = hn::Mul(w, hn::LoadU(d, inputs[0] + j + 3 * lanes));
+    for (int k = 1; k < taps; ++k) {
+      w = hn::Set(d, weights[k]);
+      const double* in = inputs[k] + j;
+      a0 = hn::MulAdd(w, hn::LoadU(d, in), a0);
+      a1 = hn::MulAdd(w, hn::LoadU(d, in + lanes), a1);
+      a2 = hn::MulAdd(w, hn::LoadU(d, in + 2 * lanes), a2);
+      a3 = hn::MulAdd(w, hn::LoadU(d, in + 3 * lanes), a3);
+    }
+    hn::StoreU(a0, d, out + j);
+    hn::StoreU(a1, d, out + j + lanes);
+    hn::StoreU(a2, d, out + j + 2 * lanes);
+    hn::StoreU(a3, d, out + j + 3 * lanes);
+  }
+  for (; j + lanes <= count; j += lanes) {
+    auto sum = hn::Mul(hn::Set(d, weights[0]), hn::LoadU(d, inputs[0] + j));
+    for (int k = 1; k < taps; ++k) sum = hn::MulAdd(hn::Set(d, weights[k]), hn::LoadU(d, inputs[k] + j), sum);
+    hn::StoreU(sum, d, out + j);
+  }
+  for (; j < count; ++j) {
+    double sum = weights[0] * inputs[0][j];
+    for (int k = 1; k < taps; ++k) sum += weights[k] * inputs[k][j];
+    out[j] = sum;
+  }
+}
+
 void NormalisedResidualsOfEight(const double* values, std::size_t stride, std::size_t count, const double* centres,
                                 double epsilon, double* residuals) {
   const hn::ScalableTag<double> d;
@@ -832,6 +867,7 @@ HWY_EXPORT(PatchBoxSums);
 HWY_EXPORT(NormaliseByEnergies);
 HWY_EXPORT(MediansOfEight);
 HWY_EXPORT(NormalisedResidualsOfEight);
+HWY_EXPORT(WeightedSum);
 
 namespace {
 
@@ -1015,6 +1051,19 @@ void normalised_residuals_of_eight(const double* values, std::size_t stride, std
                                    double epsilon, double* residuals) {
   apply_environment_once();
   HWY_DYNAMIC_DISPATCH(NormalisedResidualsOfEight)(values, stride, count, centres, epsilon, residuals);
+}
+
+void weighted_sum(const double* const* inputs, int taps, const double* weights, std::size_t count, double* out) {
+  apply_environment_once();
+  HWY_DYNAMIC_DISPATCH(WeightedSum)(inputs, taps, weights, count, out);
+}
+
+void scalar_weighted_sum(const double* const* inputs, int taps, const double* weights, std::size_t count, double* out) {
+  for (std::size_t j = 0; j < count; ++j) {
+    double sum = weights[0] * inputs[0][j];
+    for (int k = 1; k < taps; ++k) sum += weights[k] * inputs[k][j];
+    out[j] = sum;
+  }
 }
 
 void scalar_normalised_residuals_of_eight(const double* values, std::size_t stride, std::size_t count,

@@ -149,6 +149,16 @@ void normalised_residuals_of_eight(const double* values, std::size_t stride, std
 void scalar_normalised_residuals_of_eight(const double* values, std::size_t stride, std::size_t count,
                                           const double* centres, double epsilon, double* residuals);
 
+// out[j] = Σ_{k < taps} weights[k] · inputs[k][j] for j < count, summed in
+// k order: one direction of a separable filter in double, along a row
+// (inputs[k] = the row advanced by k elements) or across rows (inputs[k] =
+// row k). The SIMD kernel differs from the reference by double rounding only
+// (targets with FMA round each product and its sum once). Any taps ≥ 1.
+void weighted_sum(const double* const* inputs, int taps, const double* weights, std::size_t count, double* out);
+
+// The reference for weighted_sum: plain loops.
+void scalar_weighted_sum(const double* const* inputs, int taps, const double* weights, std::size_t count, double* out);
+
 // A separable interpolation kernel tabulated over the sub-pixel position
 // t ∈ [0, 1]: entry e (0 ≤ e ≤ steps) holds its `taps` weights at
 // t = e / steps, the first for the tap at floor(x) + 1 − taps/2 (taps even,

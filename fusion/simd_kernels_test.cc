@@ -321,6 +321,40 @@ void expect_medians_of_eight_match() {
   }
 }
 
+// Rows of a separable filter, along a row (inputs overlapping, one element
+// apart) and across rows: every count up to four vectors of lanes and past
+// them, 1 to 13 taps. Σ|w·x| bounds the rounding of each sum.
+void expect_weighted_sums_match() {
+  std::mt19937 rng(1300);
+  std::uniform_real_distribution<double> value(-3, 3);
+  for (const int taps : {1, 2, 5, 13}) {
+    for (std::size_t count = 0; count <= 37; ++count) {
+      SCOPED_TRACE(testing::Message() << "taps=" << taps << " count=" << count << " target=" << simd_target_name());
+      std::vector<double> weights(static_cast<std::size_t>(taps)), row(count + taps), out(count + 1, -9),
+          expected(count + 1, -9);
+      for (double& w : weights) w = value(rng);
+      for (double& x : row) x = value(rng);
+      std::vector<const double*> along(static_cast<std::size_t>(taps)), across(static_cast<std::size_t>(taps));
+      std::vector<std::vector<double>> rows(static_cast<std::size_t>(taps), std::vector<double>(count));
+      for (int k = 0; k < taps; ++k) {
+        along[k] = row.data() + k;
+        for (double& x : rows[k]) x = value(rng);
+        across[k] = rows[k].data();
+      }
+      for (const auto& inputs : {along, across}) {
+        weighted_sum(inputs.data(), taps, weights.data(), count, out.data());
+        scalar_weighted_sum(inputs.data(), taps, weights.data(), count, expected.data());
+        for (std::size_t j = 0; j < count; ++j) {
+          double magnitude = 0;
+          for (int k = 0; k < taps; ++k) magnitude += std::abs(weights[k] * inputs[k][j]);
+          ASSERT_NEAR(out[j], expected[j], 1e-15 * taps * magnitude) << "output " << j;
+        }
+        ASSERT_EQ(out[count], -9) << "nothing written past count";
+      }
+    }
+  }
+}
+
 void expect_all_normalisations_match() {
   unsigned seed = 900;
   for (const std::size_t count : {1, 7, 8, 9, 16, 25, 81, 83}) {
@@ -479,6 +513,7 @@ TEST_F(SimdKernels, MatchTheScalarReference) {
   expect_all_patch_box_sums_match();
   expect_all_normalisations_match();
   expect_medians_of_eight_match();
+  expect_weighted_sums_match();
 }
 
 TEST_F(SimdKernels, SamplingMatchesTheScalarReference) {
@@ -507,6 +542,7 @@ TEST_F(SimdKernels, MatchTheScalarReferenceOnEveryTargetOfThisCpu) {
     expect_all_patch_box_sums_match();
     expect_all_normalisations_match();
     expect_medians_of_eight_match();
+    expect_weighted_sums_match();
   }
 }
 
@@ -537,6 +573,7 @@ TEST_F(SimdKernels, TheEnvironmentForcesThePortableTarget) {
   expect_all_patch_box_sums_match();
   expect_all_normalisations_match();
   expect_medians_of_eight_match();
+  expect_weighted_sums_match();
   expect_all_samplings_match();
   expect_warp_matches_reference();
   ASSERT_EQ(unsetenv("BOSFUSE_SIMD"), 0);
