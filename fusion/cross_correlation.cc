@@ -305,16 +305,19 @@ int max_abs_shift_px(const GridField& field) {
 // have changed).
 double max_change_px(const DisplacementField& before, const DisplacementField& after, const cv::Mat* only = nullptr) {
   std::vector<double> row_change(static_cast<std::size_t>(after.rows), 0.0);
-  for_rows(after.rows, [&](int row) {
+  const auto change_in = [&](int row, int first, int last) {
     double& change = row_change[static_cast<std::size_t>(row)];
-    const std::uint8_t* marked = only ? only->ptr<std::uint8_t>(row) : nullptr;
-    for (int col = 0; col < after.cols; ++col) {
-      if (marked && !marked[col]) continue;
+    for (int col = first; col < last; ++col) {
       const auto &b = before.at(row, col), &a = after.at(row, col);
       if (!a.valid() || !b.valid()) continue;
       change = std::max({change, std::abs(a.u_px - b.u_px), std::abs(a.v_px - b.v_px)});
     }
-  });
+  };
+  if (only) {
+    for_marked_runs(*only, change_in);
+  } else {
+    for_rows(after.rows, [&](int row) { change_in(row, 0, after.cols); });
+  }
   return row_change.empty() ? 0.0 : *std::max_element(row_change.begin(), row_change.end());
 }
 
@@ -326,7 +329,9 @@ void copy_field(const DisplacementField& from, DisplacementField& to, const cv::
   to.cols = from.cols;
   to.vectors.resize(from.vectors.size());
   if (only) {
-    for_marked(*only, [&](int row, int col) { to.at(row, col) = from.at(row, col); });
+    for_marked_runs(*only, [&](int row, int first, int last) {
+      std::copy(&from.at(row, first), &from.at(row, first) + (last - first), &to.at(row, first));
+    });
     return;
   }
   for_rows(from.rows, [&](int row) {
@@ -542,12 +547,8 @@ void select_for_refinement(const MeasuredPass& measured, DisplacementField& fiel
 // (`touched`, the selection's ring) differ from that: the pass evaluated
 // none of them.
 void keep_first_pass(const AdaptivePasses& adaptive, DisplacementField& field, const cv::Mat& touched) {
-  for_rows(field.rows, [&](int row) {
-    const std::uint8_t* refined = adaptive.selection.refine.ptr<std::uint8_t>(row);
-    const std::uint8_t* maybe_changed = touched.ptr<std::uint8_t>(row);
-    for (int col = 0; col < field.cols; ++col) {
-      if (!refined[col] && maybe_changed[col]) field.at(row, col) = adaptive.first_pass.at(row, col);
-    }
+  for_marked(touched, [&](int row, int col) {
+    if (!adaptive.selection.refine.at<std::uint8_t>(row, col)) field.at(row, col) = adaptive.first_pass.at(row, col);
   });
 }
 

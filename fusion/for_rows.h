@@ -25,16 +25,32 @@ void for_rows(int rows, Body body) {
   }
 }
 
-// for_marked(mask, body) calls body(row, col) for every node that `mask`
-// (CV_8U, the grid's rows×cols) marks non-zero, rows as for_rows spreads
-// them: the per-node work adaptive refinement restricts to its selection.
+// for_marked_runs(mask, body) calls body(row, first, last) for every run
+// of nodes [first, last) of a row that `mask` (CV_8U, the grid's rows×cols)
+// marks non-zero, rows as for_rows spreads them: the work adaptive
+// refinement restricts to its selection, which lies in runs (a plume, the
+// tiles of a warp), so a run's loop can copy or vectorise.
 template <typename Body>
-void for_marked(const cv::Mat& mask, Body body) {
+void for_marked_runs(const cv::Mat& mask, Body body) {
   for_rows(mask.rows, [&](int row) {
     const std::uint8_t* marked = mask.ptr<std::uint8_t>(row);
-    for (int col = 0; col < mask.cols; ++col) {
-      if (marked[col]) body(row, col);
+    for (int col = 0; col < mask.cols;) {
+      if (!marked[col]) {
+        ++col;
+        continue;
+      }
+      const int first = col;
+      while (col < mask.cols && marked[col]) ++col;
+      body(row, first, col);
     }
+  });
+}
+
+// for_marked(mask, body) calls body(row, col) for every node that `mask` marks.
+template <typename Body>
+void for_marked(const cv::Mat& mask, Body body) {
+  for_marked_runs(mask, [&](int row, int first, int last) {
+    for (int col = first; col < last; ++col) body(row, col);
   });
 }
 

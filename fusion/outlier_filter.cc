@@ -249,19 +249,17 @@ void predictor_from(const DisplacementField& field, const GridGeometry& grid, Gr
 }
 
 bool predictor_at(const DisplacementField& field, const GridGeometry& grid, GridField& predictor, const cv::Mat& only) {
-  std::atomic<bool> gap{false};
-  for_marked(only, [&](int row, int col) {
-    if (!has_value(field.at(row, col).flag)) gap.store(true, std::memory_order_relaxed);
-  });
-  if (gap) return false;
   predictor.grid = grid;
   predictor.u_px.create(field.rows, field.cols, CV_64F);
   predictor.v_px.create(field.rows, field.cols, CV_64F);
+  std::atomic<bool> gap{false};
   for_marked(only, [&](int row, int col) {
-    predictor.u_px.at<double>(row, col) = field.at(row, col).u_px;
-    predictor.v_px.at<double>(row, col) = field.at(row, col).v_px;
+    const auto& vec = field.at(row, col);
+    if (!has_value(vec.flag)) gap.store(true, std::memory_order_relaxed);
+    predictor.u_px.at<double>(row, col) = vec.u_px;
+    predictor.v_px.at<double>(row, col) = vec.v_px;
   });
-  return true;
+  return !gap;
 }
 
 void smooth_predictor(GridField& predictor) {
@@ -304,24 +302,26 @@ void smooth_predictor(GridField& predictor, cv::Mat& scratch, const cv::Mat* onl
       sum += below[c + 1];
       return sum / 16;
     };
-    for_rows(source.rows, [&](int row) {
+    // Nodes [first, last) of a row; their inner part in one loop the
+    // compiler vectorises.
+    const auto smooth_run = [&](int row, int first, int last) {
       double* out = scratch.ptr<double>(row);
-      const std::uint8_t* marked = only ? only->ptr<std::uint8_t>(row) : nullptr;
-      const bool inner_row = row > 0 && row + 1 < source.rows && source.cols >= 3;
-      const double *above = inner_row ? source.ptr<double>(row - 1) : nullptr, *here = source.ptr<double>(row),
-                   *below = inner_row ? source.ptr<double>(row + 1) : nullptr;
-      if (!marked && inner_row) {
-        out[0] = at_edge(row, 0);
-        for (int c = 1; c + 1 < source.cols; ++c) out[c] = inside(above, here, below, c);
-        out[source.cols - 1] = at_edge(row, source.cols - 1);
+      if (row == 0 || row + 1 == source.rows || source.cols < 3) {
+        for (int col = first; col < last; ++col) out[col] = at_edge(row, col);
         return;
       }
-      for (int col = 0; col < source.cols; ++col) {
-        if (marked && !marked[col]) continue;
-        const bool inner = inner_row && col > 0 && col + 1 < source.cols;
-        out[col] = inner ? inside(above, here, below, col) : at_edge(row, col);
-      }
-    });
+      const double *above = source.ptr<double>(row - 1), *here = source.ptr<double>(row),
+                   *below = source.ptr<double>(row + 1);
+      if (first == 0) out[0] = at_edge(row, 0);
+      const int inner_end = std::min(last, source.cols - 1);
+      for (int c = std::max(first, 1); c < inner_end; ++c) out[c] = inside(above, here, below, c);
+      if (last == source.cols) out[source.cols - 1] = at_edge(row, source.cols - 1);
+    };
+    if (only) {
+      for_marked_runs(*only, smooth_run);
+    } else {
+      for_rows(source.rows, [&](int row) { smooth_run(row, 0, source.cols); });
+    }
     cv::swap(*values, scratch);
   }
 }

@@ -67,8 +67,9 @@ void predictor_from(const DisplacementField& field, const GridGeometry& grid, Gr
 // The predictor at the nodes `only` marks (CV_8U, the field's rows×cols)
 // when each of them has a value (measured or replaced): then no gap is
 // filled and each holds its own vector's value, as in the whole field's
-// predictor; the other nodes keep what the buffers held. False, and
-// nothing written, when one of them has none.
+// predictor; the other nodes keep what the buffers held. False when one of
+// them has none: then the marked nodes hold nothing of use, and the caller
+// takes predictor_from (one pass over them, not a test and then a copy).
 bool predictor_at(const DisplacementField& field, const GridGeometry& grid, GridField& predictor, const cv::Mat& only);
 
 // Smooths a predictor with the 3×3 binomial kernel (weights 1-2-1 in x and y,
