@@ -392,6 +392,14 @@ const std::vector<cv::Point2d>& window_means(int scene, const fusion::Displaceme
   return means;
 }
 
+// CPU seconds of all threads: on a loaded machine a steadier measure of the work than the wall time.
+double process_cpu_s() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
 void BM_AdaptiveRefinement(benchmark::State& state) {
   const int scene = int(state.range(0));
   const auto& pair = adaptive_scene(scene);
@@ -399,13 +407,6 @@ void BM_AdaptiveRefinement(benchmark::State& state) {
   e.xcorr.adaptive_refinement = state.range(1) != 0;
   if (state.range(1) == 2) e.xcorr.adaptive_threshold = 1e9;      // refines (almost) nothing: the fixed cost
   if (state.range(1) == 3) e.xcorr.adaptive_smoothing_nodes = 0;  // the unrefined first pass as it is
-  // CPU seconds of all threads: on a loaded machine a steadier measure of the work than the wall time.
-  auto process_cpu_s = [] {
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-           1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-  };
   // frames:0 one-shot; frames:N a run's frames after the first, N of them
   // in a row through one evaluator, the mean per frame (a single frame
   // after the first still pays for caches and predictors the first left
@@ -449,6 +450,66 @@ void BM_AdaptiveRefinement(benchmark::State& state) {
 BENCHMARK(BM_AdaptiveRefinement)
     ->ArgNames({"scene", "adaptive", "frames"})
     ->ArgsProduct({{0, 1, 2}, {0, 1, 2, 3}, {0, 1, 20}})
+    ->UseManualTime()
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
+
+// Adaptive refinement's speed-up on a scene, measured in pairs of frames:
+// one evaluator with full refinement and one with adaptive refinement take
+// a frame each in turn (which goes first alternates), after a first frame
+// each. This machine's speed drifts by tens of percent within a minute, so
+// two separate runs' means (BM_AdaptiveRefinement) see different machines;
+// the two frames of a pair see nearly the same one. The reported time is
+// adaptive refinement's median frame; counters: full refinement's median
+// frame, and the medians of the pairs' ratios of wall time and of CPU time
+// (all threads).
+void BM_AdaptiveSpeedup(benchmark::State& state) {
+  const auto& pair = adaptive_scene(int(state.range(0)));
+  const int pairs = int(state.range(1));
+  auto full_options = full_frame_options(), adaptive_options = full_frame_options();
+  adaptive_options.xcorr.adaptive_refinement = true;
+  fusion::DisplacementEvaluator full(pair.reference, full_options), adaptive(pair.reference, adaptive_options);
+  struct Cost {
+    double wall_s, cpu_s;
+  };
+  auto frame = [&](fusion::DisplacementEvaluator& evaluator) {
+    const auto start = std::chrono::steady_clock::now();
+    const double cpu_start_s = process_cpu_s();
+    benchmark::DoNotOptimize(evaluator.evaluate(pair.measurement));
+    return Cost{std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                process_cpu_s() - cpu_start_s};
+  };
+  frame(full);
+  frame(adaptive);
+  auto median = [](std::vector<double> values) {
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    return values[values.size() / 2];
+  };
+  for (auto _ : state) {
+    std::vector<double> full_s, adaptive_s, wall_ratio, cpu_ratio;
+    for (int i = 0; i < pairs; ++i) {
+      Cost f{}, a{};
+      if (i % 2 == 0) {
+        f = frame(full);
+        a = frame(adaptive);
+      } else {
+        a = frame(adaptive);
+        f = frame(full);
+      }
+      full_s.push_back(f.wall_s);
+      adaptive_s.push_back(a.wall_s);
+      wall_ratio.push_back(f.wall_s / a.wall_s);
+      cpu_ratio.push_back(f.cpu_s / a.cpu_s);
+    }
+    state.SetIterationTime(median(adaptive_s));
+    state.counters["full_ms"] = 1e3 * median(full_s);
+    state.counters["speedup"] = median(wall_ratio);
+    state.counters["speedup_cpu"] = median(cpu_ratio);
+  }
+}
+BENCHMARK(BM_AdaptiveSpeedup)
+    ->ArgNames({"scene", "pairs"})
+    ->Args({0, 21})
     ->UseManualTime()
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
