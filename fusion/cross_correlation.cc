@@ -241,37 +241,38 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
   vec.flag = VectorFlag::kOk;
 }
 
-// Bounding box of every window of the pass (only those `refine` marks, when
-// given), grown by the search radius.
-cv::Rect pass_region(const PreparedPair& pair, const DisplacementField& field, int n, int r,
-                     const cv::Mat* refine = nullptr) {
-  struct Box {
-    int x_min, y_min, x_max, y_max;
-  };
-  const cv::Rect& roi = pair.roi;
-  const Box empty{roi.x + roi.width, roi.y + roi.height, roi.x, roi.y};
-  // Each row's box on all cores (a 16 MP field has 250,000 nodes, a serial
-  // loop over them idles the other core), then their union.
-  std::vector<Box> rows(static_cast<std::size_t>(field.rows), empty);
-  for_rows(field.rows, [&](int row) {
-    Box& box = rows[static_cast<std::size_t>(row)];
-    for (int col = 0; col < field.cols; ++col) {
-      const std::size_t i = static_cast<std::size_t>(row) * field.cols + col;
-      if (refine && !refine->data[i]) continue;  // before the vector: most nodes are not selected
-      const auto& vec = field.vectors[i];
-      if (vec.flag == VectorFlag::kOutOfRoi) continue;
-      const cv::Point o = window_origin(vec.x_px, vec.y_px, n, roi);
-      box = {std::min(box.x_min, o.x), std::min(box.y_min, o.y), std::max(box.x_max, o.x + n),
-             std::max(box.y_max, o.y + n)};
-    }
-  });
-  Box all = empty;
-  for (const Box& box : rows) {
-    all = {std::min(all.x_min, box.x_min), std::min(all.y_min, box.y_min), std::max(all.x_max, box.x_max),
-           std::max(all.y_max, box.y_max)};
+// The bounding box of windows; "none" starts inverted across the ROI.
+struct WindowBox {
+  int x_min, y_min, x_max, y_max;
+  static WindowBox none(cv::Rect roi) { return {roi.x + roi.width, roi.y + roi.height, roi.x, roi.y}; }
+  void merge(const WindowBox& o) {
+    *this = {std::min(x_min, o.x_min), std::min(y_min, o.y_min), std::max(x_max, o.x_max), std::max(y_max, o.y_max)};
   }
+  void add(cv::Rect window) { merge({window.x, window.y, window.x + window.width, window.y + window.height}); }
+};
+
+// The union of the rows' boxes, grown by `r`.
+cv::Rect grown_union(const std::vector<WindowBox>& rows, WindowBox all, int r) {
+  for (const WindowBox& box : rows) all.merge(box);
   if (all.x_max <= all.x_min || all.y_max <= all.y_min) return {0, 0, 1, 1};
   return {all.x_min - r, all.y_min - r, all.x_max - all.x_min + 2 * r, all.y_max - all.y_min + 2 * r};
+}
+
+// Bounding box of every window of the pass, grown by the search radius.
+cv::Rect pass_region(const PreparedPair& pair, const DisplacementField& field, int n, int r) {
+  const cv::Rect& roi = pair.roi;
+  const WindowBox empty = WindowBox::none(roi);
+  // Each row's box on all cores (a 16 MP field has 250,000 nodes, a serial
+  // loop over them idles the other core), then their union.
+  std::vector<WindowBox> rows(static_cast<std::size_t>(field.rows), empty);
+  for_rows(field.rows, [&](int row) {
+    for (int col = 0; col < field.cols; ++col) {
+      const auto& vec = field.at(row, col);
+      if (vec.flag == VectorFlag::kOutOfRoi) continue;
+      rows[static_cast<std::size_t>(row)].add({window_origin(vec.x_px, vec.y_px, n, roi), cv::Size(n, n)});
+    }
+  });
+  return grown_union(rows, empty, r);
 }
 
 // A copy with new node values (cv::Mat copies share data, so this must not
@@ -552,32 +553,42 @@ void keep_first_pass(const AdaptivePasses& adaptive, DisplacementField& field, c
   });
 }
 
-// The parts of in.region the selected windows read (window and search,
-// `reach_px` around it; masked windows read nothing), as runs of 32 px tiles
-// along each row of tiles: a warp over the whole bounding box would cost as
-// much as the windows saved (and 64 px tiles warp 10 % more than these
-// around a plume).
-std::vector<cv::Rect> tiles_read(const PreparedPair& pair, const DisplacementField& field, const PassInput& in,
-                                 int reach_px, const XcorrOptions& options) {
+// What a pass under adaptive refinement reads, in one visit of the selected
+// nodes: its region (pass_region's box of their windows) and the parts of
+// it the windows read (window and search, `reach_px` around it; masked
+// windows read nothing), as runs of 32 px tiles along each row of tiles. A
+// warp over the whole region would cost as much as the windows saved (and
+// 64 px tiles warp 10 % more than these around a plume). Tiles are counted
+// from the ROI's corner less the reach, known before the region is.
+struct SelectedArea {
+  cv::Rect region;
+  std::vector<cv::Rect> tiles;
+};
+
+SelectedArea selected_area(const PreparedPair& pair, const DisplacementField& field, const cv::Mat& refine,
+                           int window_px, int reach_px, const XcorrOptions& options) {
   constexpr int kTilePx = 32;
-  const cv::Rect& region = in.region;
-  cv::Mat used = cv::Mat::zeros((region.height + kTilePx - 1) / kTilePx, (region.width + kTilePx - 1) / kTilePx, CV_8U);
+  const cv::Rect& roi = pair.roi;
+  const cv::Point origin = roi.tl() - cv::Point(reach_px, reach_px);
+  cv::Mat used = cv::Mat::zeros((roi.height + 2 * reach_px + kTilePx - 1) / kTilePx,
+                                (roi.width + 2 * reach_px + kTilePx - 1) / kTilePx, CV_8U);
+  const WindowBox empty = WindowBox::none(roi);
+  std::vector<WindowBox> rows(static_cast<std::size_t>(field.rows), empty);
   // Node rows on both cores; neighbouring rows mark the same tiles, with the
   // same value, through atomic stores.
-  for_rows(field.rows, [&](int row) {
-    int marked_to = -1;  // the row's windows lie left to right: tiles up to here are marked
-    for (int col = 0; col < field.cols; ++col) {
-      const std::size_t i = static_cast<std::size_t>(row) * field.cols + col;
-      if (!in.refine->data[i]) continue;
-      const auto& vec = field.vectors[i];
+  for_marked_runs(refine, [&](int row, int first, int last) {
+    int marked_to = -1;  // the run's windows lie left to right: tiles up to here are marked
+    for (int col = first; col < last; ++col) {
+      const auto& vec = field.at(row, col);
       if (vec.flag == VectorFlag::kOutOfRoi) continue;
-      const cv::Rect window(window_origin(vec.x_px, vec.y_px, in.window_px, pair.roi),
-                            cv::Size(in.window_px, in.window_px));
+      const cv::Rect window(window_origin(vec.x_px, vec.y_px, window_px, roi), cv::Size(window_px, window_px));
+      rows[static_cast<std::size_t>(row)].add(window);
       if (window_masked(pair, window, options.max_masked_fraction, vec.x_px, vec.y_px)) continue;
-      const cv::Rect read = (window + cv::Point(-reach_px, -reach_px) + cv::Size(2 * reach_px, 2 * reach_px)) & region;
-      if (read.empty()) continue;
-      const int tx0 = (read.x - region.x) / kTilePx, tx1 = (read.x + read.width - 1 - region.x) / kTilePx;
-      const int ty0 = (read.y - region.y) / kTilePx, ty1 = (read.y + read.height - 1 - region.y) / kTilePx;
+      // Inside the ROI grown by the reach, as the window lies inside the ROI.
+      const int tx0 = (window.x - reach_px - origin.x) / kTilePx;
+      const int tx1 = (window.x + window_px + reach_px - 1 - origin.x) / kTilePx;
+      const int ty0 = (window.y - reach_px - origin.y) / kTilePx;
+      const int ty1 = (window.y + window_px + reach_px - 1 - origin.y) / kTilePx;
       for (int ty = ty0; ty <= ty1; ++ty) {
         for (int tx = std::max(tx0, marked_to + 1); tx <= tx1; ++tx)
           std::atomic_ref(used.at<std::uint8_t>(ty, tx)).store(1, std::memory_order_relaxed);
@@ -585,7 +596,7 @@ std::vector<cv::Rect> tiles_read(const PreparedPair& pair, const DisplacementFie
       marked_to = std::max(marked_to, tx1);
     }
   });
-  std::vector<cv::Rect> tiles;
+  SelectedArea area{grown_union(rows, empty, reach_px), {}};
   for (int ty = 0; ty < used.rows; ++ty) {
     for (int tx = 0; tx < used.cols;) {
       if (!used.at<std::uint8_t>(ty, tx)) {
@@ -594,11 +605,11 @@ std::vector<cv::Rect> tiles_read(const PreparedPair& pair, const DisplacementFie
       }
       const int start = tx;
       while (tx < used.cols && used.at<std::uint8_t>(ty, tx)) ++tx;
-      tiles.push_back(cv::Rect(region.x + start * kTilePx, region.y + ty * kTilePx, (tx - start) * kTilePx, kTilePx) &
-                      region);
+      const cv::Rect run(origin.x + start * kTilePx, origin.y + ty * kTilePx, (tx - start) * kTilePx, kTilePx);
+      area.tiles.push_back(run & area.region);
     }
   }
-  return tiles;
+  return area;
 }
 
 // warp_region over `region` into `out`, computed only on `tiles`: each
@@ -661,9 +672,12 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     // passes alike in these share it.
     const auto read_area = [&](int reach_px) {
       if (!area.serves(in.window_px, reach_px, in.refine)) {
-        area = {in.window_px, reach_px, in.refine, pass_region(pair, field, in.window_px, reach_px, in.refine), {}};
-        in.region = area.region;
-        if (in.refine) area.tiles = tiles_read(pair, field, in, reach_px, options);
+        if (in.refine) {
+          SelectedArea selected = selected_area(pair, field, *in.refine, in.window_px, reach_px, options);
+          area = {in.window_px, reach_px, in.refine, selected.region, std::move(selected.tiles)};
+        } else {
+          area = {in.window_px, reach_px, in.refine, pass_region(pair, field, in.window_px, reach_px), {}};
+        }
       }
       in.region = area.region;
     };
