@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <opencv2/core/utility.hpp>
 #include <utility>
 
 #include "fusion/evaluation.h"
@@ -36,10 +37,10 @@ constexpr Bytes kXcorrBytesPerNode = 2 * sizeof(DisplacementVector) + 3 * sizeof
                                      sizeof(cv::Point2d) + 2 * 2 * sizeof(double);
 
 // Adaptive refinement's, kept between frames: the first pass's field the
-// unrefined nodes keep, its smoothing's two three-channel buffers, and four
-// masks (the selection, the outlier test's, and the nodes a pass reads its
-// predictor at, with their ring).
-constexpr Bytes kAdaptiveBytesPerNode = sizeof(DisplacementVector) + 2 * 3 * sizeof(double) + 4;
+// unrefined nodes keep and four masks (the selection, the outlier test's,
+// and the nodes a pass reads its predictor at, with their ring). Its
+// smoothing keeps a few rows per thread instead (adaptive_smoothing_bytes).
+constexpr Bytes kAdaptiveBytesPerNode = sizeof(DisplacementVector) + 4;
 
 // OpenCV's own buffers per pixel, full resolution (finest scale 0 for DIS):
 // pyramids, gradients, flow components at every scale and, for DIS fast and
@@ -67,6 +68,17 @@ Bytes grey_copy_bytes(cv::Size size, int type) { return CV_MAT_CN(type) > 1 ? pi
 Bytes nodes(cv::Rect roi, int window_px, int step_px) {
   const GridGeometry grid = evaluation_grid(roi, window_px, step_px);
   return Bytes(std::max(grid.rows, 0)) * Bytes(std::max(grid.cols, 0));
+}
+
+// smooth_unrefined's band of rows per thread (adaptive_refinement.cc): a
+// padded row, the ring of 2·half + 1 rows, the row filtered across and up to
+// 2·half rows waiting for the neighbouring band, three doubles a node.
+Bytes adaptive_smoothing_bytes(cv::Rect roi, const XcorrOptions& options) {
+  if (!options.adaptive_refinement || !(options.adaptive_smoothing_nodes > 0)) return 0;
+  const GridGeometry grid = evaluation_grid(roi, options.window_px, options.step_px);
+  const Bytes half = static_cast<Bytes>(std::ceil(3 * options.adaptive_smoothing_nodes));
+  const Bytes values_per_row = 3 * (Bytes(std::max(grid.cols, 0)) + 2 * half);
+  return Bytes(std::max(1, cv::getNumThreads())) * (4 * half + 3) * values_per_row * sizeof(double);
 }
 
 // The largest region a pass warps: the bounding box of its windows (inside
@@ -260,7 +272,8 @@ PairShape PairShape::of(const cv::Mat& reference, const cv::Mat& mask) {
 //   a pass: the float copies, the mask and its integral (5 B/px), the warped
 //     regions (4 B/px of the ROI grown by the search reach, in one buffer
 //     all passes reuse; two with symmetric deformation) and 177 B per grid
-//     node (kXcorrBytesPerNode), 100 B more with adaptive refinement.
+//     node (kXcorrBytesPerNode), 52 B more with adaptive refinement, and
+//     its smoothing's rows per thread.
 std::uint64_t xcorr_bytes_needed(const PairShape& pair, const XcorrOptions& options) {
   const cv::Rect roi = effective_roi(options.roi, pair.size);
   const Bytes n = pixels(pair.size);
@@ -274,7 +287,8 @@ std::uint64_t xcorr_bytes_needed(const PairShape& pair, const XcorrOptions& opti
   const Bytes pass = float_copies + mask_bytes +
                      Bytes(warped_images_at_once(options)) * warped_region_pixels(roi, options) * sizeof(float) +
                      nodes(roi, options.window_px, options.step_px) *
-                         (kXcorrBytesPerNode + (options.adaptive_refinement ? kAdaptiveBytesPerNode : 0));
+                         (kXcorrBytesPerNode + (options.adaptive_refinement ? kAdaptiveBytesPerNode : 0)) +
+                     adaptive_smoothing_bytes(roi, options);
   return std::max(preparing, pass) + kFixedBytes;
 }
 
