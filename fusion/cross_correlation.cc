@@ -377,12 +377,8 @@ struct AdaptivePasses {
   RefinementSelection selection;
   // Where the refinement passes' outlier test runs: the selection grown by
   // one node, so that every selected node ends as the whole field's test
-  // would leave it (the nodes outside the selection are put back from
-  // first_pass after the test anyway).
+  // would leave it (it replaces outliers in the selection alone).
   cv::Mat outlier_tested;
-  // The field after the first pass and smoothing, at the outlier-tested
-  // nodes only (the unselected ones among them are restored from here).
-  DisplacementField first_pass;
   SmoothingBuffers smoothing;
   // Selecting every node is full refinement, without the tiles' bookkeeping.
   bool active() const { return !selection.refine.empty() && selection.selected < selection.candidates; }
@@ -519,8 +515,8 @@ void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, P
 
 // Into `adaptive`, whose buffers an evaluator keeps between frames; the
 // unselected nodes of `field` marked first-pass-only and smoothed (the
-// refined nodes' predictor sees the smoothed values), and kept where a
-// refinement pass's outlier test may replace them.
+// refined nodes' predictor sees the smoothed values). No refinement pass
+// changes them.
 void select_for_refinement(const MeasuredPass& measured, DisplacementField& field, const GridGeometry& grid,
                            const XcorrOptions& options, AdaptivePasses& adaptive) {
   const int context = refinement_context_nodes(options.window_px_per_pass()[1], options.search_radius_px(1),
@@ -536,21 +532,9 @@ void select_for_refinement(const MeasuredPass& measured, DisplacementField& fiel
   });
   smooth_unrefined(field, adaptive.selection.refine, options.adaptive_smoothing_nodes, adaptive.smoothing);
   cv::dilate(adaptive.selection.refine, adaptive.outlier_tested, cv::Mat::ones(3, 3, CV_8U));
-  copy_field(field, adaptive.first_pass, &adaptive.outlier_tested);
   spdlog::debug("adaptive refinement: noise floor {:.4f} px, threshold {:.4f} px, {:.1f} % of the windows refined",
                 adaptive.selection.noise_floor_px, adaptive.selection.threshold_px,
                 100 * adaptive.selection.fraction());
-}
-
-// Unselected nodes as the first pass left them, smoothed (the outlier test
-// of a refinement pass sees them as neighbours, but does not change them).
-// After a refinement pass only those its outlier test may have replaced
-// (`touched`, the selection's ring) differ from that: the pass evaluated
-// none of them.
-void keep_first_pass(const AdaptivePasses& adaptive, DisplacementField& field, const cv::Mat& touched) {
-  for_marked(touched, [&](int row, int col) {
-    if (!adaptive.selection.refine.at<std::uint8_t>(row, col)) field.at(row, col) = adaptive.first_pass.at(row, col);
-  });
 }
 
 // What a pass under adaptive refinement reads, in one visit of the selected
@@ -743,17 +727,16 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
         warp_pass(pair.measurement, predictor, in.warped);
       }
     }
-    // Under adaptive refinement only the nodes its outlier test sees can
-    // change in a pass; the rest keep the first pass's values.
-    const cv::Mat* changeable = adaptive.active() ? &adaptive.outlier_tested : nullptr;
+    // Under adaptive refinement only the selected nodes change in a pass;
+    // the rest keep the first pass's values.
+    const cv::Mat* changeable = adaptive.active() ? &adaptive.selection.refine : nullptr;
     // Into a buffer kept between passes and frames: a fresh 12 MB copy (16 MP)
     // each pass would page-fault it anew.
     if (pass > 0) copy_field(field, workspace.previous_field, changeable);
     run_pass(pair, in, options, field);
     if (options.replace_outliers) {
-      replace_outliers(field, options.outliers, changeable);
+      replace_outliers(field, options.outliers, adaptive.active() ? &adaptive.outlier_tested : nullptr, changeable);
     }
-    if (changeable) keep_first_pass(adaptive, field, *changeable);
     if (pass == 0 && windows.size() > 1 && options.adaptive_refinement) {
       select_for_refinement({field, grid}, field, grid, options, adaptive);
     }

@@ -36,11 +36,11 @@ constexpr Bytes kFixedBytes = Bytes{8} << 20;
 constexpr Bytes kXcorrBytesPerNode = 2 * sizeof(DisplacementVector) + 3 * sizeof(double) + 1 + sizeof(std::size_t) +
                                      sizeof(cv::Point2d) + 2 * 2 * sizeof(double);
 
-// Adaptive refinement's, kept between frames: the first pass's field the
-// unrefined nodes keep and four masks (the selection, the outlier test's,
-// and the nodes a pass reads its predictor at, with their ring). Its
-// smoothing keeps a few rows per thread instead (adaptive_smoothing_bytes).
-constexpr Bytes kAdaptiveBytesPerNode = sizeof(DisplacementVector) + 4;
+// Adaptive refinement's, kept between frames: four masks (the selection,
+// the outlier test's, and the nodes a pass reads its predictor at, with
+// their ring). Its smoothing keeps a few rows per thread
+// (adaptive_smoothing_bytes).
+constexpr Bytes kAdaptiveBytesPerNode = 4;
 
 // OpenCV's own buffers per pixel, full resolution (finest scale 0 for DIS):
 // pyramids, gradients, flow components at every scale and, for DIS fast and
@@ -272,7 +272,7 @@ PairShape PairShape::of(const cv::Mat& reference, const cv::Mat& mask) {
 //   a pass: the float copies, the mask and its integral (5 B/px), the warped
 //     regions (4 B/px of the ROI grown by the search reach, in one buffer
 //     all passes reuse; two with symmetric deformation) and 177 B per grid
-//     node (kXcorrBytesPerNode), 52 B more with adaptive refinement, and
+//     node (kXcorrBytesPerNode), 4 B more with adaptive refinement, and
 //     its smoothing's rows per thread.
 std::uint64_t xcorr_bytes_needed(const PairShape& pair, const XcorrOptions& options) {
   const cv::Rect roi = effective_roi(options.roi, pair.size);

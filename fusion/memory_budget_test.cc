@@ -168,8 +168,8 @@ TEST(MemoryBudget, EstimateFollowsTheSettings) {
   // 499 nodes a row (4000 px, IW 16, step 8); the smoothing's rows: σ = 2
   // nodes, so 6 on each side, 27 rows of 3 × (499 + 12) doubles per thread.
   const std::uint64_t smoothing_rows = std::uint64_t(cv::getNumThreads()) * 27 * 3 * (499 + 12) * 8;
-  EXPECT_EQ(xcorr_bytes_needed(pair, adaptive), base + 186626ull * 52 + smoothing_rows)
-      << "the first pass kept for the unrefined nodes, the masks and the smoothing's rows";
+  EXPECT_EQ(xcorr_bytes_needed(pair, adaptive), base + 186626ull * 4 + smoothing_rows)
+      << "the masks and the smoothing's rows";
   XcorrOptions fine = defaults;
   fine.step_px = 4;
   EXPECT_GT(xcorr_bytes_needed(pair, fine), base + 80 * kMB) << "four times the nodes";

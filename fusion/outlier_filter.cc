@@ -122,10 +122,13 @@ std::string OutlierOptions::Validate() const {
   return {};
 }
 
-std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& options, const cv::Mat* only) {
-  if (only && (only->rows != field.rows || only->cols != field.cols || only->type() != CV_8U)) {
-    throw std::invalid_argument("outlier test: the nodes to test do not match the field");
-  }
+std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& options, const cv::Mat* only,
+                             const cv::Mat* replace_in) {
+  const auto fits = [&](const cv::Mat* mask) {
+    return !mask || (mask->rows == field.rows && mask->cols == field.cols && mask->type() == CV_8U);
+  };
+  if (!fits(only)) throw std::invalid_argument("outlier test: the nodes to test do not match the field");
+  if (!fits(replace_in)) throw std::invalid_argument("outlier test: the nodes to replace do not match the field");
   auto measured = [](const DisplacementVector& v) { return v.flag == VectorFlag::kOk; };
   // Nothing is written before every test and every replacement value is
   // known, so all of them read the field as it came, rows in parallel, with
@@ -170,9 +173,13 @@ std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& opt
   for (std::size_t i = 0; i < is_outlier.size(); ++i) {
     if (is_outlier[i]) outliers.push_back(i);
   }
-  std::vector<cv::Point2d> replacements(outliers.size());
-  for (std::size_t k = 0; k < outliers.size(); ++k) {
-    const std::size_t i = outliers[k];
+  std::vector<std::size_t> replaced;
+  for (const std::size_t i : outliers) {
+    if (!replace_in || replace_in->data[i]) replaced.push_back(i);
+  }
+  std::vector<cv::Point2d> replacements(replaced.size());
+  for (std::size_t k = 0; k < replaced.size(); ++k) {
+    const std::size_t i = replaced[k];
     const int row = static_cast<int>(i / field.cols), col = static_cast<int>(i % field.cols);
     // Replace from neighbours that are not outliers themselves.
     Neighbours n = neighbours_of(field, row, col, [&](const DisplacementVector& v) {
@@ -182,13 +189,13 @@ std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& opt
     if (n.count == 0) n = neighbours_of(field, row, col, measured);
     replacements[k] = {median_in_place(n.u.data(), n.count), median_in_place(n.v.data(), n.count)};
   }
-  for (std::size_t k = 0; k < outliers.size(); ++k) {
-    auto& vec = field.vectors[outliers[k]];
+  for (std::size_t k = 0; k < replaced.size(); ++k) {
+    auto& vec = field.vectors[replaced[k]];
     vec.u_px = replacements[k].x;
     vec.v_px = replacements[k].y;
     vec.flag = VectorFlag::kOutlierReplaced;
   }
-  return outliers.size();
+  return replaced.size();
 }
 
 GridField predictor_from(const DisplacementField& field, const GridGeometry& grid, int max_sweeps) {

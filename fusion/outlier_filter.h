@@ -50,8 +50,13 @@ double median_of_non_negative(std::span<const double> values);
 // (CV_8U, the field's rows×cols) just the nodes marked non-zero there are
 // tested and replaced. A test and a replacement read the node's neighbours
 // as the whole field's test does, so a node whose 3×3 neighbourhood is all
-// marked ends as the whole field's test would leave it.
-std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& options, const cv::Mat* only = nullptr);
+// marked ends as the whole field's test would leave it. With `replace_in`
+// (the same shape) only the outliers it marks are replaced; the others are
+// left as they are, but still count as outliers where a replacement is taken
+// from the neighbours (adaptive refinement tests the ring around its
+// selection for that, and keeps the ring's first-pass values).
+std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& options, const cv::Mat* only = nullptr,
+                             const cv::Mat* replace_in = nullptr);
 
 // The predictor for the next pass on `grid` (the field's own grid):
 // measured and replaced vectors as they are; every other node the median of

@@ -127,8 +127,25 @@ TEST(OutlierFilter, TestingOnlyMarkedNodesLeavesThemAsTheWholeFieldsTestDoes) {
       ASSERT_EQ(got.flag, want.flag) << r << ", " << c;
     }
   }
+  // Replacing only the marked nodes: those end as above, the ring as it came
+  // (where the test above replaced some).
+  std::size_t ring_replaced = 0;
+  for (std::size_t i = 0; i < field.vectors.size(); ++i) {
+    ring_replaced += tested.data[i] && !marked.data[i] && restricted.vectors[i].flag == VectorFlag::kOutlierReplaced;
+  }
+  ASSERT_GT(ring_replaced, 0u);
+  DisplacementField kept = field;
+  replace_outliers(kept, OutlierOptions{}, &tested, &marked);
+  for (int r = 0; r < field.rows; ++r) {
+    for (int c = 0; c < field.cols; ++c) {
+      const auto& want = marked.at<std::uint8_t>(r, c) ? whole.at(r, c) : field.at(r, c);
+      ASSERT_EQ(kept.at(r, c).u_px, want.u_px) << r << ", " << c;
+      ASSERT_EQ(kept.at(r, c).flag, want.flag) << r << ", " << c;
+    }
+  }
   const cv::Mat wrong_size = cv::Mat::ones(field.rows, field.cols + 1, CV_8U);
   EXPECT_THROW(replace_outliers(restricted, OutlierOptions{}, &wrong_size), std::invalid_argument);
+  EXPECT_THROW(replace_outliers(restricted, OutlierOptions{}, &tested, &wrong_size), std::invalid_argument);
 }
 
 // The normalised median test as written down (Westerweel & Scarano 2005):
