@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <vector>
 
 #include "tests/support/forged_image.h"
 #include "tests/support/temp_dir.h"
@@ -112,29 +115,28 @@ TEST(ImageFile, BytesOpenCvTakesForNoFormatOfOursAreNotDecoded) {
   EXPECT_TRUE(decode_image(bytes, "forged.pgm").empty());
 }
 
-TEST(ImageFile, AHugePnmIsRefusedByItsHeader) {
-  const std::string header = "P5\n# a comment 99999 99999\n40000 # another\n 30000\n65535\n";
-  std::vector<std::uint8_t> pgm(header.begin(), header.end());
-  pgm.resize(pgm.size() + 64, 0);
-  const auto size = declared_image_size(pgm);
+// A PNM of `header` and 64 bytes of pixels declares width × height and is
+// refused by the limits before decoding.
+void expect_pnm_refused(const std::string& header, std::int64_t width_px, std::int64_t height_px) {
+  SCOPED_TRACE(header);
+  std::vector<std::uint8_t> pnm(header.begin(), header.end());
+  pnm.resize(pnm.size() + 64, 0);
+  const auto size = declared_image_size(pnm);
   ASSERT_TRUE(size);
-  EXPECT_EQ(size->width_px, 40000);
-  EXPECT_EQ(size->height_px, 30000);
-  EXPECT_THROW(decode_image(pgm, "bomb.pgm"), ImageTooLarge);
+  EXPECT_EQ(size->width_px, width_px);
+  EXPECT_EQ(size->height_px, height_px);
+  EXPECT_THROW(decode_image(pnm, "bomb.pnm"), ImageTooLarge);
+}
+
+TEST(ImageFile, AHugePnmIsRefusedByItsHeader) {
+  expect_pnm_refused("P5\n# a comment 99999 99999\n40000 # another\n 30000\n65535\n", 40000, 30000);
 }
 
 // Found by fuzzing: leading zeros made the header's numbers longer than the
 // ten digits once read, so "0000000000" was taken for the width and the real
 // width for the height; OpenCV then allocated 2.3 GB for 27565x27568 px.
 TEST(ImageFile, EveryDigitOfAPnmSizeCounts) {
-  const std::string header = "P6 0000000000" "27565 27568 255\n";
-  std::vector<std::uint8_t> ppm(header.begin(), header.end());
-  ppm.resize(ppm.size() + 64, 0);
-  const auto size = declared_image_size(ppm);
-  ASSERT_TRUE(size);
-  EXPECT_EQ(size->width_px, 27565);
-  EXPECT_EQ(size->height_px, 27568);
-  EXPECT_THROW(decode_image(ppm, "zeros.ppm"), ImageTooLarge);
+  expect_pnm_refused("P6 0000000000" "27565 27568 255\n", 27565, 27568);
 
   const std::string endless = "P5 " + std::string(40, '9') + " 1 255\n";
   const auto saturated = declared_image_size(std::vector<std::uint8_t>(endless.begin(), endless.end()));

@@ -284,6 +284,14 @@ BENCHMARK(BM_DisplacementCsv16MP)->ArgName("to_chars")->Arg(0)->Arg(1)->Unit(ben
 
 // The outlier test of one pass on a 16 MP field (615×407 nodes of noisy
 // shifts, a few per cent spurious), as each pass runs it.
+// A CV_8U mask of the field's nodes marking the middle quarter of its rows:
+// a band across it, as adaptive refinement selects around a plume.
+cv::Mat middle_quarter(const fusion::DisplacementField& field) {
+  cv::Mat band = cv::Mat::zeros(field.rows, field.cols, CV_8U);
+  band.rowRange(field.rows * 3 / 8, field.rows * 5 / 8).setTo(1);
+  return band;
+}
+
 void BM_OutlierTest16MP(benchmark::State& state) {
   std::mt19937 random(5);
   std::normal_distribution<double> shift_px(0.0, 0.05);
@@ -295,8 +303,7 @@ void BM_OutlierTest16MP(benchmark::State& state) {
   });
   // /1: only a band across the middle quarter of the field, as adaptive
   // refinement tests around a plume.
-  cv::Mat band = cv::Mat::zeros(field.rows, field.cols, CV_8U);
-  band.rowRange(field.rows * 3 / 8, field.rows * 5 / 8).setTo(1);
+  const cv::Mat band = middle_quarter(field);
   const cv::Mat* only = state.range(0) == 1 ? &band : nullptr;
   fusion::DisplacementField tested = field;
   for (auto _ : state) {
@@ -333,8 +340,7 @@ void BM_AdaptiveSelection16MP(benchmark::State& state) {
     for (auto _ : state) benchmark::DoNotOptimize(fusion::field_noise_floor_px(coarse));
     return;
   }
-  cv::Mat refine = cv::Mat::zeros(field.rows, field.cols, CV_8U);
-  refine.rowRange(field.rows * 3 / 8, field.rows * 5 / 8).setTo(1);
+  const cv::Mat refine = middle_quarter(field);
   fusion::SmoothingBuffers buffers;
   fusion::DisplacementField smoothed = field;
   for (auto _ : state) {

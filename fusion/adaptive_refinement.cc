@@ -181,22 +181,11 @@ double field_noise_floor_px(const DisplacementField& field) {
         if (block.full()) residuals_of_block();
         continue;
       }
-      std::array<double, 8> u{}, v{};
-      int count = 0;
-      for (int dr = -1; dr <= 1; ++dr) {
-        for (int dc = -1; dc <= 1; ++dc) {
-          const int r = row + dr, c = col + dc;
-          if ((dr == 0 && dc == 0) || r < 0 || c < 0 || r >= field.rows || c >= field.cols) continue;
-          if (!measured(field.at(r, c))) continue;
-          u[count] = field.at(r, c).u_px;
-          v[count] = field.at(r, c).v_px;
-          ++count;
-        }
-      }
-      if (count < 3) continue;
+      Neighbours n = neighbours_of(field, row, col, measured);
+      if (n.count < 3) continue;
       const std::size_t i = static_cast<std::size_t>(row) * field.cols + col;
-      per_node[2 * i] = std::abs(vec.u_px - median_in_place(u.data(), count));
-      per_node[2 * i + 1] = std::abs(vec.v_px - median_in_place(v.data(), count));
+      per_node[2 * i] = std::abs(vec.u_px - median_in_place(n.u.data(), n.count));
+      per_node[2 * i + 1] = std::abs(vec.v_px - median_in_place(n.v.data(), n.count));
       has_residual[i] = 1;
     }
     if (block.count > 0) residuals_of_block();

@@ -398,7 +398,7 @@ struct PassWorkspace {
   // Under adaptive refinement, the nodes a pass reads its predictor at, and
   // those grown by one node, which its smoothing reads.
   cv::Mat predicted_nodes, predicted_nodes_around;
-  AdaptivePasses adaptive;  // adaptive refinement's selection and the first pass it keeps
+  AdaptivePasses adaptive;  // adaptive refinement's selection and what it works in
 };
 
 // The top-left `size` of `storage`, which grows when too small: the regions
@@ -582,16 +582,10 @@ SelectedArea selected_area(const PreparedPair& pair, const DisplacementField& fi
   });
   SelectedArea area{grown_union(rows, empty, reach_px), {}};
   for (int ty = 0; ty < used.rows; ++ty) {
-    for (int tx = 0; tx < used.cols;) {
-      if (!used.at<std::uint8_t>(ty, tx)) {
-        ++tx;
-        continue;
-      }
-      const int start = tx;
-      while (tx < used.cols && used.at<std::uint8_t>(ty, tx)) ++tx;
-      const cv::Rect run(origin.x + start * kTilePx, origin.y + ty * kTilePx, (tx - start) * kTilePx, kTilePx);
+    for_runs(used.ptr<std::uint8_t>(ty), used.cols, [&](int first, int last) {
+      const cv::Rect run(origin.x + first * kTilePx, origin.y + ty * kTilePx, (last - first) * kTilePx, kTilePx);
       area.tiles.push_back(run & area.region);
-    }
+    });
   }
   return area;
 }

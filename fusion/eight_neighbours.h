@@ -1,10 +1,10 @@
 #pragma once
-// Nodes of a displacement field whose eight neighbours are all measured,
-// gathered a block at a time for the vector median kernels
-// (simd_kernels.h: medians_of_eight, normalised_residuals_of_eight). The
-// median tests of the outlier filter and of adaptive refinement's noise
-// floor take most of their nodes this way; nodes on the grid's edge or
-// beside an unmeasured one keep the one-at-a-time path.
+// A node's neighbours in a displacement field, for the median tests of the
+// outlier filter and of adaptive refinement's noise floor: most nodes, whose
+// eight neighbours are all measured, gathered a block at a time for the
+// vector median kernels (simd_kernels.h: medians_of_eight,
+// normalised_residuals_of_eight); nodes on the grid's edge or beside an
+// unmeasured one one at a time (neighbours_of).
 
 #include <array>
 #include <cstddef>
@@ -12,6 +12,31 @@
 #include "fusion/displacement_field.h"
 
 namespace bosfuse::fusion {
+
+// The values of a node's neighbours (up to 8, row by row) that `accept`
+// takes.
+struct Neighbours {
+  std::array<double, 8> u{};
+  std::array<double, 8> v{};
+  int count = 0;
+};
+
+template <typename Accept>
+Neighbours neighbours_of(const DisplacementField& field, int row, int col, Accept accept) {
+  Neighbours n;
+  for (int dr = -1; dr <= 1; ++dr) {
+    for (int dc = -1; dc <= 1; ++dc) {
+      const int r = row + dr, c = col + dc;
+      if ((dr == 0 && dc == 0) || r < 0 || c < 0 || r >= field.rows || c >= field.cols) continue;
+      const auto& vec = field.at(r, c);
+      if (!accept(vec)) continue;
+      n.u[n.count] = vec.u_px;
+      n.v[n.count] = vec.v_px;
+      ++n.count;
+    }
+  }
+  return n;
+}
 
 // Position k of node j's neighbours at u[k·kNodes + j] (v alike).
 struct EightNeighbourBlock {

@@ -25,6 +25,22 @@ void for_rows(int rows, Body body) {
   }
 }
 
+// for_runs(marked, count, body) calls body(first, last) for every run
+// [first, last) of non-zero entries of marked[0, count), in order, on the
+// calling thread.
+template <typename Body>
+void for_runs(const std::uint8_t* marked, int count, Body body) {
+  for (int i = 0; i < count;) {
+    if (!marked[i]) {
+      ++i;
+      continue;
+    }
+    const int first = i;
+    while (i < count && marked[i]) ++i;
+    body(first, i);
+  }
+}
+
 // for_marked_runs(mask, body) calls body(row, first, last) for every run
 // of nodes [first, last) of a row that `mask` (CV_8U, the grid's rows×cols)
 // marks non-zero, rows as for_rows spreads them: the work adaptive
@@ -33,16 +49,7 @@ void for_rows(int rows, Body body) {
 template <typename Body>
 void for_marked_runs(const cv::Mat& mask, Body body) {
   for_rows(mask.rows, [&](int row) {
-    const std::uint8_t* marked = mask.ptr<std::uint8_t>(row);
-    for (int col = 0; col < mask.cols;) {
-      if (!marked[col]) {
-        ++col;
-        continue;
-      }
-      const int first = col;
-      while (col < mask.cols && marked[col]) ++col;
-      body(row, first, col);
-    }
+    for_runs(mask.ptr<std::uint8_t>(row), mask.cols, [&](int first, int last) { body(row, first, last); });
   });
 }
 

@@ -34,29 +34,6 @@ void sort_eight(double* v) {
   }
 }
 
-struct Neighbours {
-  std::array<double, 8> u{};
-  std::array<double, 8> v{};
-  int count = 0;
-};
-
-template <typename Accept>
-Neighbours neighbours_of(const DisplacementField& field, int row, int col, Accept accept) {
-  Neighbours n;
-  for (int dr = -1; dr <= 1; ++dr) {
-    for (int dc = -1; dc <= 1; ++dc) {
-      const int r = row + dr, c = col + dc;
-      if ((dr == 0 && dc == 0) || r < 0 || c < 0 || r >= field.rows || c >= field.cols) continue;
-      const auto& vec = field.at(r, c);
-      if (!accept(vec)) continue;
-      n.u[n.count] = vec.u_px;
-      n.v[n.count] = vec.v_px;
-      ++n.count;
-    }
-  }
-  return n;
-}
-
 // Normalised residual of one component against its neighbours.
 double normalised_residual(double value, std::array<double, 8> neighbours, int count, double epsilon_px) {
   const double med = median_in_place(neighbours.data(), count);
