@@ -367,26 +367,26 @@ HWY_INLINE bool ColumnTableOfVectors(int vectors, const float* HWY_RESTRICT patc
   return false;
 }
 
-// Along rows of shifts first … first+count−1 (count ≤ kRows) of the table,
-// the box: the sum of the first n column sums, then slid right one column
-// per dx. Each box is a chain of dependent additions; the rows' chains
-// advance together, so the adder has other rows' work while one waits (one
-// row at a time, the chains' latency was most of the kernel's time).
+// Along rows of shifts first … first+kRows−1 of the table, the box: the sum
+// of the first n column sums, then slid right one column per dx. Each box is
+// a chain of dependent additions; the rows' chains advance together, so the
+// adder has other rows' work while one waits (one row at a time, the chains'
+// latency was most of the kernel's time). kRows is the exact count, so the
+// running boxes stay in registers (with a count known only at run time they
+// went through the stack, a store and a reload per addition).
 template <int kRows>
 HWY_INLINE void SlideBoxRows(const double* HWY_RESTRICT columns, const double* HWY_RESTRICT column_squares, int p,
-                             int n, int side, int first, int count, double* HWY_RESTRICT sums,
-                             double* HWY_RESTRICT squares) {
+                             int n, int side, int first, double* HWY_RESTRICT sums, double* HWY_RESTRICT squares) {
   double box[kRows], box_squares[kRows];
-  const int rows = std::min(count, kRows);
-  for (int i = 0; i < rows; ++i) box[i] = box_squares[i] = 0;
+  for (int i = 0; i < kRows; ++i) box[i] = box_squares[i] = 0;
   for (int c = 0; c < n; ++c) {
-    for (int i = 0; i < rows; ++i) {
+    for (int i = 0; i < kRows; ++i) {
       box[i] += columns[(first + i) * p + c];
       box_squares[i] += column_squares[(first + i) * p + c];
     }
   }
   for (int dx = 0; dx < side; ++dx) {
-    for (int i = 0; i < rows; ++i) {
+    for (int i = 0; i < kRows; ++i) {
       if (dx > 0) {
         const double* row = columns + (first + i) * p;
         const double* row_squares = column_squares + (first + i) * p;
@@ -399,8 +399,22 @@ HWY_INLINE void SlideBoxRows(const double* HWY_RESTRICT columns, const double* H
   }
 }
 
-// The column sums' table, then the boxes along its rows, nine rows (a ±4 px
-// search's) at a time.
+// SlideBoxRows for `rows` rows, 1 … kMaxRows.
+template <int kMaxRows>
+HWY_INLINE void SlideBoxRowsOf(int rows, const double* HWY_RESTRICT columns, const double* HWY_RESTRICT column_squares,
+                               int p, int n, int side, int first, double* HWY_RESTRICT sums,
+                               double* HWY_RESTRICT squares) {
+  if (rows == kMaxRows) {
+    SlideBoxRows<kMaxRows>(columns, column_squares, p, n, side, first, sums, squares);
+  } else if constexpr (kMaxRows > 1) {
+    SlideBoxRowsOf<kMaxRows - 1>(rows, columns, column_squares, p, n, side, first, sums, squares);
+  }
+}
+
+// The column sums' table, then the boxes along its rows in chunks of at
+// most four rows, of equal size (a ±5 px search's eleven rows as 4 + 4 + 3):
+// eight chains of additions keep the adders busy and fit AVX2's registers
+// (all eleven in one chunk did not fit AVX-512's).
 void PatchBoxSums(const float* patch, std::size_t stride, int p, int n, double* column_scratch, double* sums,
                   double* squares) {
   const int side = p - n + 1;
@@ -423,9 +437,12 @@ void PatchBoxSums(const float* patch, std::size_t stride, int p, int n, double* 
   if (!ColumnTableOfVectors<6>(vectors, patch, stride, p, n, side, columns, column_squares)) {
     ColumnTable(patch, stride, p, n, side, columns, column_squares);
   }
-  constexpr int kRows = 9;
-  for (int first = 0; first < side; first += kRows) {
-    SlideBoxRows<kRows>(columns, column_squares, p, n, side, first, side - first, sums, squares);
+  constexpr int kMaxRows = 4;
+  const int chunks = (side + kMaxRows - 1) / kMaxRows;
+  for (int chunk = 0, first = 0; chunk < chunks; ++chunk) {
+    const int rows = (side - first) / (chunks - chunk);
+    SlideBoxRowsOf<kMaxRows>(rows, columns, column_squares, p, n, side, first, sums, squares);
+    first += rows;
   }
 }
 
