@@ -498,11 +498,17 @@ void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, P
   if (options.replace_outliers) replace_outliers(sparse, options.outliers);
   const GridField predictor = predictor_from(sparse, coarse.grid);
   measured = {sparse, coarse.grid};
+  // The field's nodes lie on its grid: each row's the same y, each column's the same x.
+  std::vector<double> x_px(static_cast<std::size_t>(field.cols)), y_px(static_cast<std::size_t>(field.rows));
+  if (field.vectors.empty()) return;
+  for (int col = 0; col < field.cols; ++col) x_px[static_cast<std::size_t>(col)] = field.at(0, col).x_px;
+  for (int row = 0; row < field.rows; ++row) y_px[static_cast<std::size_t>(row)] = field.at(row, 0).y_px;
+  const GridSampler sample(predictor, x_px, y_px);
   for_rows(field.rows, [&](int row) {
     for (int col = 0; col < field.cols; ++col) {
       auto& vec = field.at(row, col);
       if (vec.flag == VectorFlag::kOutOfRoi) continue;
-      const cv::Point2d p = interpolate_field(predictor, vec.x_px, vec.y_px);
+      const cv::Point2d p = sample.at(row, col);
       vec.u_px = p.x;
       vec.v_px = p.y;
       vec.peak_ratio = 0;

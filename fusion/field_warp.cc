@@ -11,29 +11,6 @@ namespace bosfuse::fusion {
 namespace {
 
 // Bilinear weights along one grid axis, clamped to the outer nodes.
-struct AxisWeight {
-  int i0 = 0;
-  int i1 = 0;
-  double t = 0;
-};
-
-AxisWeight axis_weight(double position_px, double origin_px, double step_px, int nodes) {
-  const double g = std::clamp((position_px - origin_px) / step_px, 0.0, double(nodes - 1));
-  AxisWeight w;
-  w.i0 = std::min(static_cast<int>(g), nodes - 1);
-  w.i1 = std::min(w.i0 + 1, nodes - 1);
-  w.t = g - w.i0;
-  return w;
-}
-
-double bilinear(const cv::Mat& values, const AxisWeight& wx, const AxisWeight& wy) {
-  const double* r0 = values.ptr<double>(wy.i0);
-  const double* r1 = values.ptr<double>(wy.i1);
-  const double top = r0[wx.i0] + wx.t * (r0[wx.i1] - r0[wx.i0]);
-  const double bottom = r1[wx.i0] + wx.t * (r1[wx.i1] - r1[wx.i0]);
-  return top + wy.t * (bottom - top);
-}
-
 void keys_weights(double t, double* w) {
   w[0] = ((-0.5 * t + 1.0) * t - 0.5) * t;
   w[1] = (1.5 * t - 2.5) * t * t + 1.0;
@@ -206,6 +183,15 @@ cv::Point2d interpolate_field(const GridField& field, double x_px, double y_px) 
   const AxisWeight wx = axis_weight(x_px, g.x0_px, g.step_px, g.cols);
   const AxisWeight wy = axis_weight(y_px, g.y0_px, g.step_px, g.rows);
   return {bilinear(field.u_px, wx, wy), bilinear(field.v_px, wx, wy)};
+}
+
+GridSampler::GridSampler(const GridField& field, const std::vector<double>& x_px, const std::vector<double>& y_px)
+    : field_(field) {
+  const auto& g = field.grid;
+  columns_.reserve(x_px.size());
+  for (const double x : x_px) columns_.push_back(axis_weight(x, g.x0_px, g.step_px, g.cols));
+  rows_.reserve(y_px.size());
+  for (const double y : y_px) rows_.push_back(axis_weight(y, g.y0_px, g.step_px, g.rows));
 }
 
 namespace {

@@ -11,7 +11,9 @@
 // shifts by up to 0.016 px. Coordinates outside the image are clamped to its
 // edge (replicated border), so a region may extend past the image.
 
+#include <algorithm>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "fusion/simd_kernels.h"
 
@@ -39,8 +41,52 @@ struct GridField {
   cv::Mat v_px;
 };
 
+// Where a point lies between the nodes along one axis: nodes i0 and i1,
+// at fraction t from i0 (held at the outermost node beyond it).
+struct AxisWeight {
+  int i0 = 0;
+  int i1 = 0;
+  double t = 0;
+};
+
+inline AxisWeight axis_weight(double position_px, double origin_px, double step_px, int nodes) {
+  const double g = std::clamp((position_px - origin_px) / step_px, 0.0, double(nodes - 1));
+  AxisWeight w;
+  w.i0 = std::min(static_cast<int>(g), nodes - 1);
+  w.i1 = std::min(w.i0 + 1, nodes - 1);
+  w.t = g - w.i0;
+  return w;
+}
+
+inline double bilinear(const cv::Mat& values, const AxisWeight& wx, const AxisWeight& wy) {
+  const double* r0 = values.ptr<double>(wy.i0);
+  const double* r1 = values.ptr<double>(wy.i1);
+  const double top = r0[wx.i0] + wx.t * (r0[wx.i1] - r0[wx.i0]);
+  const double bottom = r1[wx.i0] + wx.t * (r1[wx.i1] - r1[wx.i0]);
+  return top + wy.t * (bottom - top);
+}
+
 // The field interpolated at one point.
 cv::Point2d interpolate_field(const GridField& field, double x_px, double y_px);
+
+// interpolate_field at the points (x_px[col], y_px[row]) of a grid, such as
+// every node of a finer field: the same values, each column's and row's
+// weights found once rather than at every point (a division and a clamp per
+// axis cost more than the interpolation).
+class GridSampler {
+ public:
+  // `field` must outlive the sampler.
+  GridSampler(const GridField& field, const std::vector<double>& x_px, const std::vector<double>& y_px);
+  cv::Point2d at(int row, int col) const {
+    const AxisWeight& wx = columns_[static_cast<std::size_t>(col)];
+    const AxisWeight& wy = rows_[static_cast<std::size_t>(row)];
+    return {bilinear(field_.u_px, wx, wy), bilinear(field_.v_px, wx, wy)};
+  }
+
+ private:
+  const GridField& field_;
+  std::vector<AxisWeight> columns_, rows_;
+};
 
 // The nodes warp_region reads over `region` (its pixels lie between them):
 // rows and columns of `grid`, inclusive. A field needs values there alone.
