@@ -26,6 +26,7 @@
 #include "fusion/field_csv.h"
 #include "fusion/adaptive_refinement.h"
 #include "fusion/outlier_filter.h"
+#include "fusion/simd_kernels.h"
 #include "sim/evaluation_study.h"
 
 namespace bosfuse {
@@ -320,6 +321,41 @@ BENCHMARK(BM_OutlierTest16MP)
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()
     ->UseRealTime();
+
+// The first pass's two kernels per node, on one core, over the nodes of a
+// 16 MP frame as the default first pass takes them (every other node of an
+// 8 px grid, 16 px windows, ±5 px searches, along each row): /0 the search
+// patch's box sums (patch_box_sums), /1 the window's products with it
+// (accumulate_products). Random pixels; per_node (seconds) is the figure.
+void BM_FirstPassKernels16MP(benchmark::State& state) {
+  constexpr int kWidth = 4928, kHeight = 3264, kWindow = 16, kRadius = 5, kStep = 16;
+  constexpr int kPatch = kWindow + 2 * kRadius, kSide = 2 * kRadius + 1;
+  std::mt19937 random(13);
+  std::uniform_real_distribution<float> grey(0.f, 1.f);
+  std::vector<float> image(std::size_t(kWidth) * kHeight), reference(kWindow * kWindow);
+  for (auto& v : image) v = grey(random);
+  for (auto& v : reference) v = grey(random) - 0.5f;
+  std::vector<double> scratch(2 * kSide * kPatch), sums(kSide * kSide), squares(kSide * kSide);
+  const bool products = state.range(0) == 1;
+  int nodes = 0;
+  for (auto _ : state) {
+    nodes = 0;
+    for (int y = 0; y + kPatch <= kHeight; y += kStep) {
+      for (int x = 0; x + kPatch <= kWidth; x += kStep, ++nodes) {
+        const float* patch = image.data() + std::size_t(y) * kWidth + x;
+        if (products) {
+          fusion::accumulate_products(reference.data(), patch, kWidth, kWindow, kSide, sums.data());
+        } else {
+          fusion::patch_box_sums(patch, kWidth, kPatch, kWindow, scratch.data(), sums.data(), squares.data());
+        }
+        benchmark::DoNotOptimize(sums.data());
+      }
+    }
+  }
+  state.counters["per_node"] = benchmark::Counter(
+      double(nodes), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_FirstPassKernels16MP)->ArgName("products")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // Adaptive refinement's per-frame selection work on a 16 MP field (615×407
 // nodes, noise 0.05 px): /0 the noise floor of a coarse first pass (every
