@@ -498,9 +498,9 @@ void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, P
   if (options.replace_outliers) replace_outliers(sparse, options.outliers);
   const GridField predictor = predictor_from(sparse, coarse.grid);
   measured = {sparse, coarse.grid};
+  if (field.vectors.empty()) return;
   // The field's nodes lie on its grid: each row's the same y, each column's the same x.
   std::vector<double> x_px(static_cast<std::size_t>(field.cols)), y_px(static_cast<std::size_t>(field.rows));
-  if (field.vectors.empty()) return;
   for (int col = 0; col < field.cols; ++col) x_px[static_cast<std::size_t>(col)] = field.at(0, col).x_px;
   for (int row = 0; row < field.rows; ++row) y_px[static_cast<std::size_t>(row)] = field.at(row, 0).y_px;
   const GridSampler sample(predictor, x_px, y_px);

@@ -10,7 +10,6 @@
 namespace bosfuse::fusion {
 namespace {
 
-// Bilinear weights along one grid axis, clamped to the outer nodes.
 void keys_weights(double t, double* w) {
   w[0] = ((-0.5 * t + 1.0) * t - 0.5) * t;
   w[1] = (1.5 * t - 2.5) * t * t + 1.0;
