@@ -91,9 +91,10 @@ HWY_INLINE void OneShift(D d, const float* HWY_RESTRICT a, const float* HWY_REST
 // AddLanes of eight vectors of 16 floats at once, written to out[k·stride]
 // for vector k: each widened to eight doubles as AddLanes does, then the
 // eight reduced together, each addition adding lanes of two vectors (one by
-// one, a ±5 px search's reductions were about half as many instructions as
-// its multiply-adds). The lanes are paired as AddLanes pairs them (i with
-// i + 4, then i + 2, then i + 1), so the sums are the same to the bit.
+// one, a ±5 px search's reductions were about three quarters as many
+// instructions as its multiply-adds). The lanes are paired as AddLanes
+// pairs them (i with i + 4, then i + 2, then i + 1), so the sums are the
+// same to the bit.
 template <class D>
 HWY_INLINE void AddLanesOfEight(D d, const hn::Vec<D>* v, double* HWY_RESTRICT out, std::size_t stride) {
   const hn::Half<D> dh;
