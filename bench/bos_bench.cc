@@ -283,8 +283,6 @@ void BM_DisplacementCsv16MP(benchmark::State& state) {
 }
 BENCHMARK(BM_DisplacementCsv16MP)->ArgName("to_chars")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
-// The outlier test of one pass on a 16 MP field (615×407 nodes of noisy
-// shifts, a few per cent spurious), as each pass runs it.
 // A CV_8U mask of the field's nodes marking the middle quarter of its rows:
 // a band across it, as adaptive refinement selects around a plume.
 cv::Mat middle_quarter(const fusion::DisplacementField& field) {
@@ -293,6 +291,8 @@ cv::Mat middle_quarter(const fusion::DisplacementField& field) {
   return band;
 }
 
+// The outlier test of one pass on a 16 MP field (615×407 nodes of noisy
+// shifts, a few per cent spurious), as each pass runs it.
 void BM_OutlierTest16MP(benchmark::State& state) {
   std::mt19937 random(5);
   std::normal_distribution<double> shift_px(0.0, 0.05);

@@ -306,19 +306,14 @@ int max_abs_shift_px(const GridField& field) {
 // have changed).
 double max_change_px(const DisplacementField& before, const DisplacementField& after, const cv::Mat* only = nullptr) {
   std::vector<double> row_change(static_cast<std::size_t>(after.rows), 0.0);
-  const auto change_in = [&](int row, int first, int last) {
+  for_row_runs(after.rows, after.cols, only, [&](int row, int first, int last) {
     double& change = row_change[static_cast<std::size_t>(row)];
     for (int col = first; col < last; ++col) {
       const auto &b = before.at(row, col), &a = after.at(row, col);
       if (!a.valid() || !b.valid()) continue;
       change = std::max({change, std::abs(a.u_px - b.u_px), std::abs(a.v_px - b.v_px)});
     }
-  };
-  if (only) {
-    for_marked_runs(*only, change_in);
-  } else {
-    for_rows(after.rows, [&](int row) { change_in(row, 0, after.cols); });
-  }
+  });
   return row_change.empty() ? 0.0 : *std::max_element(row_change.begin(), row_change.end());
 }
 
@@ -329,15 +324,10 @@ void copy_field(const DisplacementField& from, DisplacementField& to, const cv::
   to.rows = from.rows;
   to.cols = from.cols;
   to.vectors.resize(from.vectors.size());
-  if (only) {
-    for_marked_runs(*only, [&](int row, int first, int last) {
-      std::copy(&from.at(row, first), &from.at(row, first) + (last - first), &to.at(row, first));
-    });
-    return;
-  }
-  for_rows(from.rows, [&](int row) {
-    const auto begin = from.vectors.begin() + static_cast<std::ptrdiff_t>(row) * from.cols;
-    std::copy(begin, begin + from.cols, to.vectors.begin() + static_cast<std::ptrdiff_t>(row) * from.cols);
+  for_row_runs(from.rows, from.cols, only, [&](int row, int first, int last) {
+    const std::ptrdiff_t begin = static_cast<std::ptrdiff_t>(row) * from.cols;
+    std::copy(from.vectors.begin() + begin + first, from.vectors.begin() + begin + last,
+              to.vectors.begin() + begin + first);
   });
 }
 

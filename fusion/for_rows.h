@@ -53,6 +53,18 @@ void for_marked_runs(const cv::Mat& mask, Body body) {
   });
 }
 
+// for_row_runs(rows, cols, only, body): body(row, first, last) for the runs
+// `only` marks (for_marked_runs), or for every whole row [0, cols) of a
+// rows×cols grid when `only` is null: work a mask may restrict.
+template <typename Body>
+void for_row_runs(int rows, int cols, const cv::Mat* only, Body body) {
+  if (only) {
+    for_marked_runs(*only, body);
+  } else {
+    for_rows(rows, [&](int row) { body(row, 0, cols); });
+  }
+}
+
 // for_marked(mask, body) calls body(row, col) for every node that `mask` marks.
 template <typename Body>
 void for_marked(const cv::Mat& mask, Body body) {

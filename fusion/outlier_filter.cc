@@ -301,11 +301,7 @@ void smooth_predictor(GridField& predictor, cv::Mat& scratch, const cv::Mat* onl
       for (int c = std::max(first, 1); c < inner_end; ++c) out[c] = inside(above, here, below, c);
       if (last == source.cols) out[source.cols - 1] = at_edge(row, source.cols - 1);
     };
-    if (only) {
-      for_marked_runs(*only, smooth_run);
-    } else {
-      for_rows(source.rows, [&](int row) { smooth_run(row, 0, source.cols); });
-    }
+    for_row_runs(source.rows, source.cols, only, smooth_run);
     cv::swap(*values, scratch);
   }
 }
