@@ -25,6 +25,7 @@
 #include <thread>
 
 #include "sim/modbus_server.h"
+#include "storage/run_store.h"
 #include "tests/support/browser.h"
 #include "tests/support/modbus_fixture.h"
 #include "tests/support/subprocess.h"
@@ -48,7 +49,7 @@ std::string sh_word(const std::string& text) {
 // Waits in the page until `expression` is truthy; its value as JSON, or a failure.
 nlohmann::json wait_in_page(int devtools_port, const std::string& url, const std::string& expression, int seconds) {
   const auto result = testing::run_command("/usr/bin/python3 " + kCdpWait + " " + std::to_string(devtools_port) + " " +
-                                               url + " " + std::to_string(seconds) + " " +
+                                               sh_word(url) + " " + std::to_string(seconds) + " " +
                                                sh_word(expression),
                                            seconds + 30);
   if (result.exit_code != 0) {
@@ -136,6 +137,46 @@ TEST(ViewBrowser, TheDevToolsHandshakeSendsNoOriginSoChromium150AcceptsIt) {
   const auto origin = handshake->find("Origin");
   EXPECT_TRUE(origin == handshake->end()) << "chromium 150 refuses the Origin " << origin->second;
   EXPECT_EQ(result.output.find("Rejected"), std::string::npos) << result.output;
+}
+
+// `view --token` (as off loopback): the page opened at the printed URL gets
+// the token as a cookie, with which its own requests — /chart.js, /api/run,
+// the event stream — are let in, and it shows the run.
+TEST(ViewBrowser, APageOpenedAtItsTokenedUrlShowsTheRunThroughItsCookie) {
+  ASSERT_TRUE(testing::have_chromium()) << "chromium is not installed (scripts/debian-packages.txt lists it)";
+  testing::TempDir dir;
+  {
+    auto store = storage::RunStore::create(dir / "run", {.name = "tokened", .started_ns = 1'000'000'000},
+                                           storage::RunStore::CreateMode::kNew);
+    const auto device = store.add_device({.name = "adam", .kind = "modbus-tcp"});
+    const auto channel = store.add_channel({.device_id = device, .name = "tc0", .kind = "thermocouple", .unit = "degC"});
+    std::vector<storage::Sample> samples;
+    for (int k = 0; k < 20; ++k) samples.push_back({channel, 2'000'000'000LL + k * 100'000'000LL, {}, 20.0 + k, {}, {}});
+    store.write_samples(samples);
+  }
+  const int view_port = testing::unused_loopback_port();
+  const std::string out = (dir / "out.txt").string();
+  testing::BackgroundProcess view({"/bin/sh", "-c",
+                                   "exec " + kBosfuse + " view " + (dir / "run").string() +
+                                       " --token --listen 127.0.0.1:" + std::to_string(view_port) + " > " + out});
+  std::string url;
+  ASSERT_TRUE(testing::wait_for(
+      [&] {
+        std::ifstream in(out);
+        return std::getline(in, url) && url.find("/?token=") != std::string::npos;
+      },
+      10s));
+  ASSERT_FALSE(answers("http://127.0.0.1:" + std::to_string(view_port) + "/api/run")) << "no token, no run";
+  const Browser browser(dir.path());
+  ASSERT_TRUE(browser.ready());
+  const auto shown = wait_in_page(
+      browser.devtools_port, url,
+      "(() => { if (typeof series === 'undefined') return null;"
+      " const n = [...series.values()].map(d => d.data.length);"
+      " return document.getElementById('link').textContent === 'live' &&"
+      " document.getElementById('name').textContent === 'tokened' && n.length === 1 && n[0] === 20 ? n : null; })()",
+      30);
+  ASSERT_TRUE(shown.is_array()) << shown;
 }
 
 TEST(ViewBrowser, ValuesAppearAndGrowWhileRecordingAndAStoppedModuleShowsDisconnected) {
