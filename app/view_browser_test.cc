@@ -149,9 +149,11 @@ TEST(ViewBrowser, APageOpenedAtItsTokenedUrlShowsTheRunThroughItsCookie) {
     auto store = storage::RunStore::create(dir / "run", {.name = "tokened", .started_ns = 1'000'000'000},
                                            storage::RunStore::CreateMode::kNew);
     const auto device = store.add_device({.name = "adam", .kind = "modbus-tcp"});
-    const auto channel = store.add_channel({.device_id = device, .name = "tc0", .kind = "thermocouple", .unit = "degC"});
+    const auto channel =
+        store.add_channel({.device_id = device, .name = "tc0", .kind = "thermocouple", .unit = "degC"});
     std::vector<storage::Sample> samples;
-    for (int k = 0; k < 20; ++k) samples.push_back({channel, 2'000'000'000LL + k * 100'000'000LL, {}, 20.0 + k, {}, {}});
+    for (int k = 0; k < 20; ++k)
+      samples.push_back({channel, 2'000'000'000LL + k * 100'000'000LL, {}, 20.0 + k, {}, {}});
     store.write_samples(samples);
   }
   const int view_port = testing::unused_loopback_port();

@@ -171,7 +171,8 @@ TEST_F(ViewCli, WithATokenPrintsItInTheUrlAndRefusesRequestsWithoutIt) {
   EXPECT_EQ(token.size(), 32u) << printed;
   const std::string status = "curl -s -o /dev/null --max-time 5 -w '%{http_code}' ";
   EXPECT_EQ(testing::run_command(status + url("/api/run"), 10).output, "403");
-  EXPECT_EQ(testing::run_command(status + "'" + url("/api/run?token=") + "x" + token.substr(1) + "'", 10).output, "403");
+  EXPECT_EQ(testing::run_command(status + "'" + url("/api/run?token=") + "x" + token.substr(1) + "'", 10).output,
+            "403");
   const std::string jar = (dir_ / "cookies.txt").string();
   EXPECT_EQ(testing::run_command(status + "-c " + jar + " '" + printed + "'", 10).output, "200");
   EXPECT_EQ(testing::run_command(status + "-b " + jar + " " + url("/api/run"), 10).output, "200");

@@ -199,7 +199,7 @@ struct LiveServer::Impl {
   RunWatch watch;
   LiveBos bos;
   GuardedServer server;
-  const std::string token;  // empty: none wanted
+  const std::string token;                 // empty: none wanted
   std::vector<std::string> allowed_hosts;  // lowercase, as a Host header names them; empty: any
   int port = 0;
   std::atomic<int> clients{0};
@@ -228,8 +228,9 @@ void LiveServer::Impl::admit_hosts_for(int listening_port) {
 bool LiveServer::Impl::admit(const httplib::Request& request, httplib::Response& response) const {
   const std::string host = lowercase(request.get_header_value("Host"));
   if (!allowed_hosts.empty() && std::find(allowed_hosts.begin(), allowed_hosts.end(), host) == allowed_hosts.end()) {
-    refuse(response, "this viewer answers only to its own address (localhost, 127.0.0.1, [::1] or the one it "
-                     "listens on); the Host header named another, as a page of another site would");
+    refuse(response,
+           "this viewer answers only to its own address (localhost, 127.0.0.1, [::1] or the one it "
+           "listens on); the Host header named another, as a page of another site would");
     return false;
   }
   if (token.empty()) return true;

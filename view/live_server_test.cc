@@ -265,9 +265,9 @@ TEST_F(Viewer, RefusesARequestThatNamesAnotherHostOnEveryRoute) {
   auto c = client();
   const std::string port = std::to_string(port_);
   for (const char* path : {"/", "/chart.js", "/api/run", "/frame.png", "/events", "/nothing"}) {
-    for (const std::string& host : std::vector<std::string>{"evil.example", "evil.example:" + port, "127.0.0.1.evil.example",
-                                    "localhost.evil.example:" + port, "127.0.0.1:" + std::to_string(port_ + 1),
-                                    "[::2]:" + port, ""}) {
+    for (const std::string& host : std::vector<std::string>{
+             "evil.example", "evil.example:" + port, "127.0.0.1.evil.example", "localhost.evil.example:" + port,
+             "127.0.0.1:" + std::to_string(port_ + 1), "[::2]:" + port, ""}) {
       const auto response = c.Get(path, {{"Host", host}});
       ASSERT_TRUE(response) << path << " " << host;
       EXPECT_EQ(response->status, 403) << path << " Host: " << host;
@@ -275,7 +275,7 @@ TEST_F(Viewer, RefusesARequestThatNamesAnotherHostOnEveryRoute) {
     }
   }
   for (const std::string& host : std::vector<std::string>{"localhost", "localhost:" + port, "LocalHost:" + port,
-                                                         "127.0.0.1", "127.0.0.1:" + port, "[::1]", "[::1]:" + port}) {
+                                                          "127.0.0.1", "127.0.0.1:" + port, "[::1]", "[::1]:" + port}) {
     EXPECT_EQ(status_of(c, "/api/run", {{"Host", host}}), 200) << host;
     EXPECT_EQ(status_of(c, "/events", {{"Host", host}}), 200) << host;
   }
@@ -409,7 +409,8 @@ TEST_F(Viewer, AcceptsTheAddressItListensOnAsHostAndDrawsANewTokenEachStart) {
 }
 
 TEST(ListenAddress, SaysWhichAddressesAreLoopback) {
-  for (const char* host : {"127.0.0.1", "127.0.0.2", "127.255.0.9", "::1", "::ffff:127.0.0.1", "localhost", "LOCALHOST"}) {
+  for (const char* host :
+       {"127.0.0.1", "127.0.0.2", "127.255.0.9", "::1", "::ffff:127.0.0.1", "localhost", "LOCALHOST"}) {
     EXPECT_TRUE(is_loopback_address(host)) << host;
   }
   for (const char* host : {"0.0.0.0", "::", "192.168.1.5", "10.0.0.1", "128.0.0.1", "::2", "lab-pc", ""}) {
