@@ -16,11 +16,12 @@ namespace {
 struct ViewArgs {
   std::string run;
   std::string listen = kDefaultListen;
+  bool token = false;
 };
 
 void view_run(const ViewArgs& args) {
   std::atomic<bool>& stop = stop_requested_by_signal();
-  const ServedView served(args.run, args.listen);
+  const ServedView served(args.run, args.listen, args.token);
   std::cout << served.url() << std::endl;  // flushed: a script may wait for it
   std::cerr << "serving " << args.run << " read-only; Ctrl-C stops\n";
   while (!stop) std::this_thread::sleep_for(std::chrono::milliseconds(100));
@@ -35,6 +36,9 @@ void add_view(CLI::App& root) {
   cmd->add_option("run", args->run, "Run folder")->required();
   cmd->add_option("--listen", args->listen, "HOST:PORT to serve on; loopback unless you say otherwise")
       ->capture_default_str();
+  cmd->add_flag("--token", args->token,
+                "Want the token of the printed URL on loopback too (a machine others log into); off loopback it "
+                "is always wanted");
   cmd->callback([args] { view_run(*args); });
 }
 

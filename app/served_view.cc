@@ -6,9 +6,10 @@
 
 namespace bosfuse::app {
 
-ServedView::ServedView(const std::filesystem::path& run, const std::string& listen) {
+ServedView::ServedView(const std::filesystem::path& run, const std::string& listen, bool require_token) {
   view::ViewOptions options;
   view::parse_listen_address(listen, options);
+  options.require_token = require_token;
   try {
     server_.emplace(run, options);
   } catch (const storage::StorageError& e) {
@@ -16,9 +17,10 @@ ServedView::ServedView(const std::filesystem::path& run, const std::string& list
   }
   server_->listen();
   serving_ = std::thread([this] { server_->serve(); });
-  if (options.host != "127.0.0.1" && options.host != "::1" && options.host != "localhost") {
+  if (!view::is_loopback_address(options.host)) {
     std::cerr << "warning: listening on " << options.host
-              << ", not loopback: anyone who can reach this host can read the run\n";
+              << ", not loopback: anyone who can reach this host and has the page's URL (its token) can read the "
+                 "run, unencrypted\n";
   }
 }
 

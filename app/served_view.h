@@ -3,7 +3,8 @@
 // `bosfuse view` runs it and as the recording commands start it inside the
 // logger with `--live [HOST:PORT]`: bound before the constructor returns
 // (so a port in use is said at once), a warning on stderr when it is not on
-// loopback, stopped with the object.
+// loopback (where the page wants the token its URL carries), stopped with
+// the object.
 
 #include <CLI/CLI.hpp>
 
@@ -22,12 +23,14 @@ inline constexpr const char* kDefaultListen = "127.0.0.1:8080";
 class ServedView {
  public:
   // Throws std::runtime_error with a message for the user: a folder that is
-  // no readable run, a bad address, a port in use.
-  ServedView(const std::filesystem::path& run, const std::string& listen);
+  // no readable run, a bad address, a port in use. `require_token`: the
+  // URL's token also on loopback (off loopback it is always wanted).
+  ServedView(const std::filesystem::path& run, const std::string& listen, bool require_token = false);
   ~ServedView();
   ServedView(const ServedView&) = delete;
   ServedView& operator=(const ServedView&) = delete;
 
+  // With the token when the page wants one: the only way in, so say it whole.
   std::string url() const { return server_->url(); }
 
  private:

@@ -11,13 +11,21 @@
 //   and virtual camera) with the viewer inside the logger: the live BOS
 //   temperature at each thermocouple appears and changes beside the
 //   thermocouple's curve, with the latest frame and its quality index.
+// And the DevTools handshake of cdp_wait.py as Chromium's Origin check sees
+// it, so the tests run with every chromium Debian 12 ships (150 refuses an
+// Origin it was not told to allow; 156, installed here, does not check).
 
 #include <gtest/gtest.h>
+#include <httplib.h>
 
 #include <fstream>
+#include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <thread>
 
 #include "sim/modbus_server.h"
+#include "storage/run_store.h"
 #include "tests/support/browser.h"
 #include "tests/support/modbus_fixture.h"
 #include "tests/support/subprocess.h"
@@ -41,7 +49,7 @@ std::string sh_word(const std::string& text) {
 // Waits in the page until `expression` is truthy; its value as JSON, or a failure.
 nlohmann::json wait_in_page(int devtools_port, const std::string& url, const std::string& expression, int seconds) {
   const auto result = testing::run_command("/usr/bin/python3 " + kCdpWait + " " + std::to_string(devtools_port) + " " +
-                                               url + " " + std::to_string(seconds) + " " +
+                                               sh_word(url) + " " + std::to_string(seconds) + " " +
                                                sh_word(expression),
                                            seconds + 30);
   if (result.exit_code != 0) {
@@ -53,14 +61,16 @@ nlohmann::json wait_in_page(int devtools_port, const std::string& url, const std
 
 bool answers(const std::string& url) { return testing::run_command("curl -sf -o /dev/null " + url, 5).exit_code == 0; }
 
-// Headless Chromium with its DevTools protocol on a free loopback port.
+// Headless Chromium with its DevTools protocol on a free loopback port. The
+// one Origin it allows is what websocket-client would send by default, in
+// case a cdp_wait.py that sends none were changed.
 struct Browser {
   explicit Browser(const std::filesystem::path& dir)
       : devtools_port(testing::unused_loopback_port()),
         process({"chromium", "--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
                  "--no-first-run", "--user-data-dir=" + (dir / "chromium-profile").string(),
                  "--remote-debugging-address=127.0.0.1", "--remote-debugging-port=" + std::to_string(devtools_port),
-                 "about:blank"}) {}
+                 "--remote-allow-origins=http://127.0.0.1:" + std::to_string(devtools_port), "about:blank"}) {}
   bool ready() const {
     return testing::wait_for(
         [&] { return answers("http://127.0.0.1:" + std::to_string(devtools_port) + "/json/version"); }, 30s);
@@ -75,6 +85,100 @@ std::string points_per_series(int at_least) {
          " const n = [...series.values()].map(d => d.data.filter(p => p.y !== null).length);"
          " return n.length === 2 && n.every(x => x >= " +
          std::to_string(at_least) + ") ? n : null; })()";
+}
+
+// A stand-in for Chromium's DevTools endpoint on a loopback port: it hands
+// out one target, records that target's WebSocket handshake and judges it
+// as chromium 150 does (devtools_http_handler.cc: a request with an Origin
+// header that --remote-allow-origins does not list is 403, "Rejected an
+// incoming WebSocket connection from the … origin"). It speaks no
+// WebSocket, so cdp_wait.py then stops with its error: the headers are what
+// is looked at.
+TEST(ViewBrowser, TheDevToolsHandshakeSendsNoOriginSoChromium150AcceptsIt) {
+  httplib::Server devtools;
+  const int port = devtools.bind_to_any_port("127.0.0.1");
+  ASSERT_GT(port, 0);
+  const std::string target_path = "/devtools/page/T1";
+  devtools.Put("/json/new", [&](const httplib::Request&, httplib::Response& response) {
+    const nlohmann::json target{{"id", "T1"},
+                                {"webSocketDebuggerUrl", "ws://127.0.0.1:" + std::to_string(port) + target_path}};
+    response.set_content(target.dump(), "application/json");
+  });
+  devtools.Get("/json/close/T1", [](const httplib::Request&, httplib::Response& response) {
+    response.set_content("Target is closing", "text/plain");
+  });
+  std::mutex mutex;
+  std::optional<httplib::Headers> handshake;
+  devtools.Get(target_path, [&](const httplib::Request& request, httplib::Response& response) {
+    {
+      const std::lock_guard lock(mutex);
+      handshake = request.headers;
+    }
+    if (request.has_header("Origin")) {  // none is allowed: chromium's default
+      response.status = 403;
+      response.set_content("Rejected an incoming WebSocket connection from the " +
+                               request.get_header_value("Origin") + " origin.",
+                           "text/plain");
+      return;
+    }
+    response.status = 400;  // past the check; this stand-in cannot go on
+  });
+  std::thread serving([&] { devtools.listen_after_bind(); });
+  const auto result = testing::run_command(
+      "/usr/bin/python3 " + kCdpWait + " " + std::to_string(port) + " http://127.0.0.1:1/ 1 true", 30);
+  devtools.stop();
+  serving.join();
+
+  EXPECT_EQ(result.exit_code, 2) << "the stand-in ends every handshake: " << result.output;
+  const std::lock_guard lock(mutex);
+  ASSERT_TRUE(handshake) << "cdp_wait.py never opened the target's WebSocket: " << result.output;
+  EXPECT_EQ(handshake->count("Upgrade"), 1u);
+  EXPECT_EQ(handshake->find("Upgrade")->second, "websocket");
+  const auto origin = handshake->find("Origin");
+  EXPECT_TRUE(origin == handshake->end()) << "chromium 150 refuses the Origin " << origin->second;
+  EXPECT_EQ(result.output.find("Rejected"), std::string::npos) << result.output;
+}
+
+// `view --token` (as off loopback): the page opened at the printed URL gets
+// the token as a cookie, with which its own requests — /chart.js, /api/run,
+// the event stream — are let in, and it shows the run.
+TEST(ViewBrowser, APageOpenedAtItsTokenedUrlShowsTheRunThroughItsCookie) {
+  ASSERT_TRUE(testing::have_chromium()) << "chromium is not installed (scripts/debian-packages.txt lists it)";
+  testing::TempDir dir;
+  {
+    auto store = storage::RunStore::create(dir / "run", {.name = "tokened", .started_ns = 1'000'000'000},
+                                           storage::RunStore::CreateMode::kNew);
+    const auto device = store.add_device({.name = "adam", .kind = "modbus-tcp"});
+    const auto channel =
+        store.add_channel({.device_id = device, .name = "tc0", .kind = "thermocouple", .unit = "degC"});
+    std::vector<storage::Sample> samples;
+    for (int k = 0; k < 20; ++k)
+      samples.push_back({channel, 2'000'000'000LL + k * 100'000'000LL, {}, 20.0 + k, {}, {}});
+    store.write_samples(samples);
+  }
+  const int view_port = testing::unused_loopback_port();
+  const std::string out = (dir / "out.txt").string();
+  testing::BackgroundProcess view({"/bin/sh", "-c",
+                                   "exec " + kBosfuse + " view " + (dir / "run").string() +
+                                       " --token --listen 127.0.0.1:" + std::to_string(view_port) + " > " + out});
+  std::string url;
+  ASSERT_TRUE(testing::wait_for(
+      [&] {
+        std::ifstream in(out);
+        return std::getline(in, url) && url.find("/?token=") != std::string::npos;
+      },
+      10s));
+  ASSERT_FALSE(answers("http://127.0.0.1:" + std::to_string(view_port) + "/api/run")) << "no token, no run";
+  const Browser browser(dir.path());
+  ASSERT_TRUE(browser.ready());
+  const auto shown = wait_in_page(
+      browser.devtools_port, url,
+      "(() => { if (typeof series === 'undefined') return null;"
+      " const n = [...series.values()].map(d => d.data.length);"
+      " return document.getElementById('link').textContent === 'live' &&"
+      " document.getElementById('name').textContent === 'tokened' && n.length === 1 && n[0] === 20 ? n : null; })()",
+      30);
+  ASSERT_TRUE(shown.is_array()) << shown;
 }
 
 TEST(ViewBrowser, ValuesAppearAndGrowWhileRecordingAndAStoppedModuleShowsDisconnected) {

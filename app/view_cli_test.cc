@@ -138,6 +138,48 @@ TEST_F(ViewCli, AnswersOnlyItsOwnRoutes) {
   EXPECT_EQ(testing::run_command("curl -s -o /dev/null -w '%{http_code}' " + url("/chart.js")).output, "200");
 }
 
+// The probe's request (`curl -H 'Host: evil.example' …/api/run`), as a
+// DNS-rebinding page would send it: refused.
+TEST_F(ViewCli, RefusesARequestNamingAnotherHost) {
+  const auto view = start_view();
+  const std::string status = "curl -s -o /dev/null --max-time 5 -w '%{http_code}' ";
+  for (const char* path : {"/", "/api/run", "/events", "/chart.js"}) {
+    EXPECT_EQ(testing::run_command(status + "-H 'Host: evil.example' " + url(path), 10).output, "403") << path;
+  }
+  EXPECT_EQ(testing::run_command(status + "-H 'Host: localhost:" + std::to_string(port_) + "' " + url("/api/run"), 10)
+                .output,
+            "200");
+}
+
+// `view --token` (what a listen address off loopback always gets): the
+// printed URL carries the token; without it curl is refused, with it (or
+// with the cookie the page got) served.
+TEST_F(ViewCli, WithATokenPrintsItInTheUrlAndRefusesRequestsWithoutIt) {
+  const std::string out = (dir_ / "out.txt").string();
+  testing::BackgroundProcess view({"/bin/sh", "-c",
+                                   "exec " + kBosfuse + " view " + run_dir() + " --token --listen 127.0.0.1:" +
+                                       std::to_string(port_) + " > " + out});
+  std::string printed;
+  ASSERT_TRUE(testing::wait_for(
+      [&] {
+        std::ifstream in(out);
+        return std::getline(in, printed) && printed.rfind(url("/?token="), 0) == 0;
+      },
+      10s))
+      << printed;
+  const std::string token = printed.substr(url("/?token=").size());
+  EXPECT_EQ(token.size(), 32u) << printed;
+  const std::string status = "curl -s -o /dev/null --max-time 5 -w '%{http_code}' ";
+  EXPECT_EQ(testing::run_command(status + url("/api/run"), 10).output, "403");
+  EXPECT_EQ(testing::run_command(status + "'" + url("/api/run?token=") + "x" + token.substr(1) + "'", 10).output,
+            "403");
+  const std::string jar = (dir_ / "cookies.txt").string();
+  EXPECT_EQ(testing::run_command(status + "-c " + jar + " '" + printed + "'", 10).output, "200");
+  EXPECT_EQ(testing::run_command(status + "-b " + jar + " " + url("/api/run"), 10).output, "200");
+  view.send_signal(SIGINT);
+  EXPECT_EQ(view.wait_exit(5s), 0);
+}
+
 TEST_F(ViewCli, SaysThePortIsInUse) {
   const auto view = start_view();
   const auto second = testing::run_command(kBosfuse + " view " + run_dir() + " --listen 127.0.0.1:" +

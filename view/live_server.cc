@@ -4,14 +4,22 @@
 
 #include <nlohmann/json.hpp>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/random.h>
+
+#include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
 #include <fstream>
 #include <sstream>
 #include <thread>
+#include <vector>
 
+#include "view/guarded_server.h"
 #include "view/live_bos.h"
 #include "view/live_stream.h"
 #include "view/page.h"
@@ -25,8 +33,15 @@ namespace {
 // noticed (the write fails) and its slot freed.
 constexpr auto kKeepAlivePeriod = std::chrono::seconds(5);
 // Handler threads beyond the streams: the page, chart.js and /api/run stay
-// answerable while every stream slot is taken.
-constexpr int kSpareThreads = 4;
+// answerable while every stream slot is taken and a few dozen more
+// connections dribble their requests in (each holds a thread until
+// kConnectionLimits cuts it off).
+constexpr int kSpareThreads = 28;
+// docs/VIEW.md, "Security stance": 5 s to begin a request, 5 s to send it
+// whole, 5 s for a client to acknowledge something of what it is sent.
+const ConnectionLimits kConnectionLimits{};
+// No route takes a body.
+constexpr std::size_t kMaxRequestBody = 64 * 1024;
 // Reads of a stream that fail in a row before the page is told the run cannot be read.
 constexpr int kFailuresBeforeError = 3;
 
@@ -58,7 +73,70 @@ std::string unreadable_run_message(const std::exception& e) {
          "); if this persists its database is damaged — the viewer keeps trying";
 }
 
+std::string lowercase(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
+  return text;
+}
+
+// 0.0.0.0 or ::, where the name a client uses for this host is not known in advance.
+bool is_wildcard_address(const std::string& host) {
+  in6_addr v6{};
+  in_addr v4{};
+  if (inet_pton(AF_INET, host.c_str(), &v4) == 1) return v4.s_addr == htonl(INADDR_ANY);
+  return inet_pton(AF_INET6, host.c_str(), &v6) == 1 && IN6_IS_ADDR_UNSPECIFIED(&v6);
+}
+
+// 128 bits from the kernel's random source, as hex.
+std::string random_token() {
+  unsigned char bytes[16];
+  if (getrandom(bytes, sizeof bytes, 0) != static_cast<ssize_t>(sizeof bytes)) {
+    throw ViewError(std::string("cannot draw the page's token from the kernel: ") + std::strerror(errno));
+  }
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string token;
+  for (const unsigned char b : bytes) token += {kHex[b >> 4], kHex[b & 15]};
+  return token;
+}
+
+// Compares in time independent of where they differ, so the token is not
+// guessed a character at a time by timing.
+bool same_secret(const std::string& given, const std::string& secret) {
+  if (given.size() != secret.size()) return false;
+  unsigned char difference = 0;
+  for (std::size_t i = 0; i < secret.size(); ++i) difference |= given[i] ^ secret[i];
+  return difference == 0;
+}
+
+// The value of cookie `name` in the request's Cookie headers, or empty.
+std::string cookie_value(const httplib::Request& request, const std::string& name) {
+  const auto [first, last] = request.headers.equal_range("Cookie");
+  for (auto header = first; header != last; ++header) {
+    std::istringstream pairs(header->second);
+    for (std::string pair; std::getline(pairs, pair, ';');) {
+      const auto start = pair.find_first_not_of(' ');
+      if (start != std::string::npos && pair.compare(start, name.size() + 1, name + "=") == 0) {
+        return pair.substr(start + name.size() + 1);
+      }
+    }
+  }
+  return {};
+}
+
+void refuse(httplib::Response& response, const std::string& why) {
+  response.status = 403;
+  response.set_content(why + "\n", "text/plain");
+}
+
 }  // namespace
+
+bool is_loopback_address(const std::string& host) {
+  if (lowercase(host) == "localhost") return true;
+  in_addr v4{};
+  if (inet_pton(AF_INET, host.c_str(), &v4) == 1) return (ntohl(v4.s_addr) >> 24) == 127;
+  in6_addr v6{};
+  if (inet_pton(AF_INET6, host.c_str(), &v6) != 1) return false;
+  return IN6_IS_ADDR_LOOPBACK(&v6) || (IN6_IS_ADDR_V4MAPPED(&v6) && v6.s6_addr[12] == 127);
+}
 
 void parse_listen_address(const std::string& text, ViewOptions& options) {
   const auto colon = text.rfind(':');
@@ -81,7 +159,9 @@ struct LiveServer::Impl {
         chartjs(read_chartjs(options.chartjs_path.empty() ? std::filesystem::path(BOSFUSE_CHARTJS_PATH)
                                                           : options.chartjs_path)),
         watch(run_dir, options.poll_period),
-        bos(watch) {
+        bos(watch),
+        server(kConnectionLimits),
+        token(options.require_token || !is_loopback_address(options.host) ? random_token() : "") {
     const std::size_t threads = static_cast<std::size_t>(options.max_clients + kSpareThreads);
     server.new_task_queue = [threads] { return new YieldingThreadPool(threads); };
     // httplib's default adds SO_REUSEPORT, with which a second viewer on the
@@ -91,6 +171,7 @@ struct LiveServer::Impl {
       int yes = 1;
       setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
     });
+    server.set_payload_max_length(kMaxRequestBody);
     route();
   }
 
@@ -106,6 +187,9 @@ struct LiveServer::Impl {
   };
 
   void route();
+  void admit_hosts_for(int listening_port);
+  bool admit(const httplib::Request& request, httplib::Response& response) const;
+  std::string token_cookie() const { return "bosfuse_token_" + std::to_string(port); }
   void stream_events(const httplib::Request& request, httplib::Response& response);
   std::string read_stream(StreamState& state, const RunSnapshot& snapshot);
   bool stream_step(StreamState& state, httplib::DataSink& sink);
@@ -114,14 +198,56 @@ struct LiveServer::Impl {
   std::string chartjs;
   RunWatch watch;
   LiveBos bos;
-  httplib::Server server;
+  GuardedServer server;
+  const std::string token;                 // empty: none wanted
+  std::vector<std::string> allowed_hosts;  // lowercase, as a Host header names them; empty: any
   int port = 0;
   std::atomic<int> clients{0};
   std::atomic<bool> stopping{false};
   std::atomic<bool> serving{false};
 };
 
+// The names a Host header may give: loopback's and the listening address,
+// each with and without the port. Behind a wildcard address any name may
+// reach the host, so any is let through — to the token, which it needs.
+void LiveServer::Impl::admit_hosts_for(int listening_port) {
+  std::vector<std::string> names{"localhost", "127.0.0.1", "[::1]"};
+  if (is_wildcard_address(options.host)) return;
+  const bool ipv6 = options.host.find(':') != std::string::npos;
+  names.push_back(lowercase(ipv6 ? "[" + options.host + "]" : options.host));
+  for (const std::string& name : names) {
+    allowed_hosts.push_back(name);
+    allowed_hosts.push_back(name + ":" + std::to_string(listening_port));
+  }
+}
+
+// Every request, before its route: the Host check, then the token. A
+// request that brings the token in its query gets it as a cookie, for the
+// page's own requests (/api/run, /events, …); the name holds the port, as
+// cookies do not tell ports apart and two viewers may run on one host.
+bool LiveServer::Impl::admit(const httplib::Request& request, httplib::Response& response) const {
+  const std::string host = lowercase(request.get_header_value("Host"));
+  if (!allowed_hosts.empty() && std::find(allowed_hosts.begin(), allowed_hosts.end(), host) == allowed_hosts.end()) {
+    refuse(response,
+           "this viewer answers only to its own address (localhost, 127.0.0.1, [::1] or the one it "
+           "listens on); the Host header named another, as a page of another site would");
+    return false;
+  }
+  if (token.empty()) return true;
+  if (same_secret(request.get_param_value("token"), token)) {
+    response.set_header("Set-Cookie", token_cookie() + "=" + token + "; Path=/; HttpOnly; SameSite=Strict");
+    return true;
+  }
+  if (same_secret(cookie_value(request, token_cookie()), token)) return true;
+  refuse(response, "this viewer wants the token of its URL (http://HOST:PORT/?token=..., said when it started)");
+  return false;
+}
+
 void LiveServer::Impl::route() {
+  server.set_pre_routing_handler([this](const httplib::Request& request, httplib::Response& response) {
+    return admit(request, response) ? httplib::Server::HandlerResponse::Unhandled
+                                    : httplib::Server::HandlerResponse::Handled;
+  });
   server.Get("/", [](const httplib::Request&, httplib::Response& response) {
     response.set_content(std::string(live_page_html()), "text/html; charset=utf-8");
   });
@@ -215,7 +341,9 @@ std::string LiveServer::Impl::read_stream(StreamState& state, const RunSnapshot&
 // One turn of a stream: what is new, else a wait for the watch to see
 // something (bounded, so stop() is noticed), else a keep-alive comment.
 bool LiveServer::Impl::stream_step(StreamState& state, httplib::DataSink& sink) {
-  if (stopping) return false;
+  // Also false once the client acknowledged nothing for the stall timeout:
+  // a client that stopped reading gives its slot back.
+  if (stopping || !sink.is_writable()) return false;
   const RunSnapshot snapshot = watch.snapshot();
   std::string text = read_stream(state, snapshot);
   const auto now = std::chrono::steady_clock::now();
@@ -251,13 +379,16 @@ int LiveServer::listen() {
     }
     impl_->port = options.port;
   }
+  impl_->admit_hosts_for(impl_->port);
   return impl_->port;
 }
 
 std::string LiveServer::url() const {
   const std::string& host = impl_->options.host;
   const bool ipv6 = host.find(':') != std::string::npos;
-  return "http://" + (ipv6 ? "[" + host + "]" : host) + ":" + std::to_string(impl_->port) + "/";
+  const std::string& token = impl_->token;
+  return "http://" + (ipv6 ? "[" + host + "]" : host) + ":" + std::to_string(impl_->port) + "/" +
+         (token.empty() ? "" : "?token=" + token);
 }
 
 void LiveServer::serve() {

@@ -8,17 +8,21 @@
 
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <thread>
 
 #include "storage/run_store.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
+#include "view/test_raw_connection.h"
 #include "view/test_sse.h"
 
 namespace bosfuse::view {
 namespace {
 
 using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+using testing::RawConnection;
 
 class Viewer : public ::testing::Test {
  protected:
@@ -36,12 +40,13 @@ class Viewer : public ::testing::Test {
   void start(ViewOptions options = {}) {
     options.port = 0;
     options.poll_period = 20ms;
+    host_ = options.host;
     server_ = std::make_unique<LiveServer>(dir_ / "run", options);
     port_ = server_->listen();
     serving_ = std::thread([this] { server_->serve(); });
   }
   httplib::Client client() const {
-    httplib::Client c("127.0.0.1", port_);
+    httplib::Client c(host_, port_);
     c.set_read_timeout(5, 0);
     return c;
   }
@@ -84,6 +89,7 @@ class Viewer : public ::testing::Test {
   std::int64_t channel_ = 0;
   std::unique_ptr<LiveServer> server_;
   std::thread serving_;
+  std::string host_;
   int port_ = 0;
 };
 
@@ -235,6 +241,193 @@ TEST_F(Viewer, RefusesAStreamBeyondItsClientLimitAndAForeignLastEventId) {
   const auto foreign = c.Get("/events", {{"Last-Event-ID", "../../etc/passwd"}});
   ASSERT_TRUE(foreign);
   EXPECT_EQ(foreign->status, 400);
+}
+
+// The status of GET `path` with these headers (0: no answer); the body is
+// not read, so a stream is left at once.
+int status_of(httplib::Client& c, const std::string& path, const httplib::Headers& headers) {
+  int status = 0;
+  c.Get(
+      path, headers,
+      [&](const httplib::Response& response) {
+        status = response.status;
+        return false;
+      },
+      [](const char*, std::size_t) { return false; });
+  return status;
+}
+
+// A page of another site whose name was made to resolve to 127.0.0.1 (DNS
+// rebinding) sends its own name as Host: refused, on every route, before
+// anything is read; the viewer's own names pass, with and without the port.
+TEST_F(Viewer, RefusesARequestThatNamesAnotherHostOnEveryRoute) {
+  start();
+  auto c = client();
+  const std::string port = std::to_string(port_);
+  for (const char* path : {"/", "/chart.js", "/api/run", "/frame.png", "/events", "/nothing"}) {
+    for (const std::string& host : std::vector<std::string>{
+             "evil.example", "evil.example:" + port, "127.0.0.1.evil.example", "localhost.evil.example:" + port,
+             "127.0.0.1:" + std::to_string(port_ + 1), "[::2]:" + port, ""}) {
+      const auto response = c.Get(path, {{"Host", host}});
+      ASSERT_TRUE(response) << path << " " << host;
+      EXPECT_EQ(response->status, 403) << path << " Host: " << host;
+      EXPECT_NE(response->body.find("answers only to its own address"), std::string::npos) << response->body;
+    }
+  }
+  for (const std::string& host : std::vector<std::string>{"localhost", "localhost:" + port, "LocalHost:" + port,
+                                                          "127.0.0.1", "127.0.0.1:" + port, "[::1]", "[::1]:" + port}) {
+    EXPECT_EQ(status_of(c, "/api/run", {{"Host", host}}), 200) << host;
+    EXPECT_EQ(status_of(c, "/events", {{"Host", host}}), 200) << host;
+  }
+  RawConnection no_host("127.0.0.1", port_);  // HTTP/1.0 may leave Host out; this viewer wants it
+  ASSERT_TRUE(no_host.send_text("GET /api/run HTTP/1.0\r\n\r\n"));
+  ASSERT_TRUE(bosfuse::testing::wait_for([&] { return no_host.closed_by_server(); }, 5s));
+  EXPECT_EQ(no_host.received().rfind("HTTP/1.1 403", 0), 0u) << no_host.received();
+}
+
+// Slowloris: 20 connections each send a request line, then a header byte a
+// second (for at most 12 s). The page answers at once meanwhile, and each
+// is cut off within the request timeout (5 s, docs/VIEW.md) plus a margin;
+// so is a connection that sends nothing (the idle timeout, 5 s).
+TEST_F(Viewer, ConnectionsThatTrickleTheirRequestsAreCutOffAndThePageStaysReachable) {
+  start();
+  std::vector<std::unique_ptr<RawConnection>> slow;
+  for (int i = 0; i < 20; ++i) {
+    slow.push_back(std::make_unique<RawConnection>("127.0.0.1", port_));
+    ASSERT_TRUE(slow.back()->connected());
+    ASSERT_TRUE(slow.back()->send_text("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: "));
+  }
+  RawConnection silent("127.0.0.1", port_);
+  const auto opened = Clock::now();
+  std::vector<Clock::duration> cut_after(slow.size() + 1, Clock::duration::max());
+  std::thread trickling([&] {
+    for (int second = 0; second < 12; ++second) {  // bounded: 12 rounds of a byte each
+      std::this_thread::sleep_for(1s);
+      for (std::size_t i = 0; i < slow.size(); ++i) {
+        if (cut_after[i] != Clock::duration::max()) continue;
+        if (slow[i]->closed_by_server() || !slow[i]->send_text("x")) cut_after[i] = Clock::now() - opened;
+      }
+      if (cut_after.back() == Clock::duration::max() && silent.closed_by_server()) {
+        cut_after.back() = Clock::now() - opened;
+      }
+      if (std::none_of(cut_after.begin(), cut_after.end(), [](auto d) { return d == Clock::duration::max(); })) break;
+    }
+  });
+  std::this_thread::sleep_for(1500ms);  // every slow connection holds a thread now
+  auto c = client();
+  const auto asked = Clock::now();
+  const auto page = c.Get("/");
+  const auto run = c.Get("/api/run");
+  const auto answered_in = Clock::now() - asked;
+  trickling.join();
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  ASSERT_TRUE(run);
+  EXPECT_EQ(run->status, 200);
+  EXPECT_LT(answered_in, 2s) << "the page waited for the slow connections";
+  for (std::size_t i = 0; i < cut_after.size(); ++i) {
+    EXPECT_LT(cut_after[i], 8s) << "connection " << i << " was not cut off within 5 s + 3 s";
+  }
+}
+
+// 16 clients open /events and never read, while the run is written: their
+// small receive buffers fill, and 5 s (docs/VIEW.md) after they stopped
+// acknowledging, the viewer drops them; a new stream is then served.
+TEST_F(Viewer, StreamsWhoseClientsStopReadingAreDroppedAndTheirSlotsServeANewClient) {
+  start();
+  std::atomic<bool> done{false};
+  std::thread recording([&] {
+    for (int i = 0; !done && i < 3000; ++i) {  // bounded: at most about 30 s
+      write_samples(i * 10, 10, 10);
+      std::this_thread::sleep_for(10ms);
+    }
+  });
+  std::vector<std::unique_ptr<RawConnection>> idle_readers;
+  for (int i = 0; i < 16; ++i) {
+    idle_readers.push_back(std::make_unique<RawConnection>("127.0.0.1", port_, 4096));
+    ASSERT_TRUE(idle_readers.back()->connected());
+    ASSERT_TRUE(idle_readers.back()->send_text("GET /events HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"));
+  }
+  for (auto& reader : idle_readers) {
+    ASSERT_TRUE(bosfuse::testing::wait_for([&] { return reader->peek_starts_with("HTTP/1.1 200"); }, 5s));
+  }
+  auto c = client();
+  ASSERT_EQ(status_of(c, "/events", {}), 503) << "the 16 streams should take every slot";
+  const auto full = Clock::now();
+  const bool served = bosfuse::testing::wait_for([&] { return status_of(c, "/events", {}) == 200; }, 12s);
+  const auto waited = Clock::now() - full;
+  done = true;
+  recording.join();
+  EXPECT_TRUE(served) << "no slot was given back within 12 s";
+  EXPECT_LT(waited, 5s + 3s) << "a slot came back only after "
+                             << std::chrono::duration_cast<std::chrono::milliseconds>(waited).count() << " ms";
+}
+
+// The token of a viewer off loopback (asked for here on 127.0.0.1, so the
+// test binds nothing else): in the URL, then a cookie the page's requests
+// carry; any request without it, on any route, is 403.
+TEST_F(Viewer, WantsTheTokenOfItsUrlOnEveryRouteAndHandsItToThePageAsACookie) {
+  start({.require_token = true});
+  const std::string url = server_->url();
+  std::smatch match;
+  ASSERT_TRUE(std::regex_match(url, match, std::regex(R"(http://127\.0\.0\.1:\d+/\?token=([0-9a-f]{32}))"))) << url;
+  const std::string token = match[1];
+  const std::string cookie = "bosfuse_token_" + std::to_string(port_);
+  auto c = client();
+  for (const char* path : {"/", "/chart.js", "/api/run", "/frame.png", "/events", "/nothing"}) {
+    EXPECT_EQ(status_of(c, path, {}), 403) << path;
+    EXPECT_EQ(status_of(c, std::string(path) + "?token=" + std::string(32, '0'), {}), 403) << path;
+    EXPECT_EQ(status_of(c, path, {{"Cookie", cookie + "=" + token.substr(1) + "0"}}), 403) << path;
+    EXPECT_EQ(status_of(c, path, {{"Cookie", "bosfuse_token_1=" + token}}), 403) << path;
+  }
+  const auto page = c.Get("/?token=" + token);
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  EXPECT_EQ(page->get_header_value("Set-Cookie"), cookie + "=" + token + "; Path=/; HttpOnly; SameSite=Strict");
+  EXPECT_EQ(status_of(c, "/api/run", {{"Cookie", cookie + "=" + token}}), 200);
+  EXPECT_EQ(status_of(c, "/chart.js", {{"Cookie", "theme=dark; " + cookie + "=" + token}}), 200);
+  EXPECT_EQ(status_of(c, "/events", {{"Cookie", cookie + "=" + token}}), 200);
+  EXPECT_EQ(status_of(c, "/api/run", {{"Cookie", cookie + "=" + token}, {"Host", "evil.example"}}), 403)
+      << "the token does not lift the Host check";
+}
+
+// Off loopback the Host may also name the address listened on; 127.0.0.2 is
+// loopback too on Linux, so the test reaches no network.
+TEST_F(Viewer, AcceptsTheAddressItListensOnAsHostAndDrawsANewTokenEachStart) {
+  start({.host = "127.0.0.2", .require_token = true});
+  const std::string url = server_->url();
+  const std::string token = url.substr(url.find("token=") + 6);
+  auto c = client();
+  const std::string port = std::to_string(port_);
+  EXPECT_EQ(status_of(c, "/api/run?token=" + token, {{"Host", "127.0.0.2:" + port}}), 200);
+  EXPECT_EQ(status_of(c, "/api/run?token=" + token, {{"Host", "127.0.0.2"}}), 200);
+  EXPECT_EQ(status_of(c, "/api/run?token=" + token, {{"Host", "127.0.0.3:" + port}}), 403);
+  LiveServer other(dir_ / "run", {.host = "127.0.0.2", .port = 0, .require_token = true});
+  other.listen();
+  const std::string other_url = other.url();
+  EXPECT_NE(other_url.substr(other_url.find("token=") + 6), token);
+}
+
+TEST(ListenAddress, SaysWhichAddressesAreLoopback) {
+  for (const char* host :
+       {"127.0.0.1", "127.0.0.2", "127.255.0.9", "::1", "::ffff:127.0.0.1", "localhost", "LOCALHOST"}) {
+    EXPECT_TRUE(is_loopback_address(host)) << host;
+  }
+  for (const char* host : {"0.0.0.0", "::", "192.168.1.5", "10.0.0.1", "128.0.0.1", "::2", "lab-pc", ""}) {
+    EXPECT_FALSE(is_loopback_address(host)) << host;
+  }
+}
+
+// Constructed, never bound: off loopback the URL carries a token.
+TEST(ViewerSetup, WantsATokenWheneverItListensOffLoopback) {
+  bosfuse::testing::TempDir dir;
+  storage::RunStore::create(dir / "run", {.name = "x"}, storage::RunStore::CreateMode::kNew);
+  for (const char* host : {"0.0.0.0", "192.168.1.5", "::"}) {
+    const LiveServer server(dir / "run", {.host = host});
+    EXPECT_NE(server.url().find("/?token="), std::string::npos) << host;
+  }
+  const LiveServer local(dir / "run", {});
+  EXPECT_EQ(local.url().find("token"), std::string::npos);
 }
 
 TEST(ViewerSetup, SaysWhenTheFolderHoldsNoRun) {

@@ -7,6 +7,11 @@ exits 0 when it became truthy, 1 when the time ran out, 2 on an error.
 The tab is closed at the end: a browser keeps at most six connections to
 one server, and a tab left open keeps its event stream's.
 
+The WebSocket handshake sends no Origin header: Chromium refuses (403) one
+whose Origin is not allowed by --remote-allow-origins, as Debian 12's
+chromium 150 does for websocket-client's default; without the header every
+version accepts it (app/view_browser_test.cc checks what is sent).
+
     cdp_wait.py PORT URL SECONDS EXPR
 """
 import json
@@ -28,7 +33,7 @@ def main():
 
 
 def wait(target, seconds, expression):
-    ws = websocket.create_connection(target["webSocketDebuggerUrl"], timeout=10)
+    ws = websocket.create_connection(target["webSocketDebuggerUrl"], timeout=10, suppress_origin=True)
     deadline = time.monotonic() + seconds
     value, message_id = None, 0
     while time.monotonic() < deadline:  # bounded by SECONDS
