@@ -290,6 +290,20 @@ TEST_F(FitCli, AShiftedRecordGivesTheSameK) {
   }
 }
 
+// Issue 28: a row with a cell too many was read as if its cells were under
+// the header's names.
+TEST_F(FitCli, ARowWithMoreOrFewerCellsThanTheHeaderIsRefusedNamingTheLine) {
+  write("extra.csv", "t_s,T\n0,50\n1,49,7\n2,48\n");
+  const auto extra = bosfuse("fit " + path("extra.csv"));
+  EXPECT_NE(extra.exit_code, 0);
+  EXPECT_NE(extra.output.find("line 3: 3 cells, but the header has 2"), std::string::npos) << extra.output;
+
+  write("short.csv", "t_s,T,other\n0,50,1\n1,49\n2,48,1\n");
+  const auto short_row = bosfuse("fit " + path("short.csv") + " --temperature-column T");
+  EXPECT_NE(short_row.exit_code, 0);
+  EXPECT_NE(short_row.output.find("line 3: 2 cells, but the header has 3"), std::string::npos) << short_row.output;
+}
+
 TEST_F(FitCli, HasHelp) {
   const auto help = bosfuse("fit --help");
   EXPECT_EQ(help.exit_code, 0);
