@@ -284,8 +284,9 @@ TEST_F(FitCli, AShiftedRecordGivesTheSameK) {
     EXPECT_EQ(j.at("t0_at_origin").get<bool>(), !far) << shift_s;
     if (!far) continue;
     EXPECT_EQ(j.at("t0_reference_s").get<double>(), shift_s);
-    EXPECT_NE(result.output.find("T0 is at t₀ = " + std::to_string(static_cast<long>(shift_s)) + " s, the first sample"),
-              std::string::npos)
+    EXPECT_NE(
+        result.output.find("T0 is at t₀ = " + std::to_string(static_cast<long>(shift_s)) + " s, the first sample"),
+        std::string::npos)
         << result.output;
   }
 }

@@ -716,9 +716,10 @@ std::string NewtonFit::brief_report() const {
                      format("%.3g%%", 100.0 * summary.confidence) + "\n";
   if (!t0_at_origin()) {
     text = "T(t) = T_amb + (T0 − T_amb)·exp(−k·(t − t₀)), t from the origin; intervals at " +
-           format("%.3g%%\n  T0 is at t₀ = %.15g s, the first sample: the origin lies %.3g time constants from the "
-                  "data, too far for T0 there\n",
-                  100.0 * summary.confidence, t0_reference_s, std::abs(t0_reference_s) / tau_s.value);
+           format(
+               "%.3g%%\n  T0 is at t₀ = %.15g s, the first sample: the origin lies %.3g time constants from the "
+               "data, too far for T0 there\n",
+               100.0 * summary.confidence, t0_reference_s, std::abs(t0_reference_s) / tau_s.value);
   }
   text += line("k    ", "1/s", k_per_s);
   text += line("τ    ", "s", tau_s);

@@ -100,8 +100,8 @@ void expect_same_t0(const NewtonFit& base, const NewtonFit& shifted, double shif
 
 void expect_same_curve(const NewtonFit& base, const NewtonFit& shifted, double shift_s, const std::string& what) {
   for (double t_s : {0.0, 150.0, 598.0, 1200.0}) {
-    expect_close(shifted.temperature_at(t_s + shift_s), base.temperature_at(t_s), what + " curve at " +
-                                                                                      std::to_string(t_s));
+    expect_close(shifted.temperature_at(t_s + shift_s), base.temperature_at(t_s),
+                 what + " curve at " + std::to_string(t_s));
     // The band's half-width is a difference-free sum of squares: as precise as the curve relative to the curve.
     EXPECT_LE(std::abs(shifted.temperature_half_width_at(t_s + shift_s) - base.temperature_half_width_at(t_s)),
               kRelative * base.temperature_at(t_s))
@@ -244,6 +244,42 @@ TEST(NewtonFitOrigin, NoMessageNamesASolverInternal) {
   EXPECT_FALSE(fits[6].second.ok());
   EXPECT_EQ(fits[6].second.summary.status, FitStatus::kNotConverged) << fits[6].second.summary.message;
   EXPECT_TRUE(one_failed_in_the_solver);
+}
+
+// Beyond the one curve: records spanning 30, 3, 0.3 and 0.03 τ, falling and
+// rising, with and without a robust loss, give the same status (a fit or the
+// same refusal) and the same numbers wherever their times lie.
+TEST(NewtonFitOrigin, LongShortRisingAndRobustFitsAreShiftFreeToo) {
+  int fitted = 0;
+  for (double k_per_s : {0.05, 0.005, 0.0005, 0.00005}) {
+    for (const RobustLoss& loss : {RobustLoss::none(), RobustLoss::huber(0.1)}) {
+      const CoolingCurve curve{30.0, k_per_s < 0.001 ? 15.0 : 75.0, k_per_s};
+      std::mt19937_64 random(7);
+      std::normal_distribution<double> noise(0.0, 0.05);
+      CoolingRecord record = jittered_cooling(0.0, 27);
+      for (std::size_t i = 0; i < record.time_s.size(); ++i) {
+        record.temperature_c[i] = curve.at(record.time_s[i]) + noise(random);
+      }
+      NewtonFitOptions options;
+      options.origin_s = 0.0;
+      options.loss = loss;
+      const NewtonFit base = fit_newton(record.time_s, record.temperature_c, options);
+      fitted += base.ok();
+      for (double shift_s : {-1e6, -1e4, -300.0, 1e4, 1e6, 1e8}) {
+        const auto moved = transformed(record, 1.0, shift_s);
+        const NewtonFit fit = fit_newton(moved.time_s, moved.temperature_c, options);
+        const std::string what = "k " + std::to_string(k_per_s) +
+                                 (loss.kind == RobustLoss::Kind::kNone ? "" : ", Huber") + ", shift " +
+                                 std::to_string(shift_s) + " s:";
+        ASSERT_EQ(fit.summary.status, base.summary.status) << what << " " << fit.summary.message;
+        EXPECT_EQ(fit.summary.message, base.summary.message) << what;
+        if (!base.ok()) continue;
+        expect_same_rate(base, fit, 1.0, what);
+        expect_same_t0(base, fit, shift_s, what);
+      }
+    }
+  }
+  EXPECT_GE(fitted, 6) << "the 30, 3 and 0.3 τ records fit";
 }
 
 }  // namespace
