@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -250,6 +251,58 @@ TEST_F(FitCli, AFailedFitWithJsonDashStillGivesTheJsonAndTheErrorOnStderr) {
   EXPECT_EQ(result.exit_code, 1);
   EXPECT_FALSE(nlohmann::json::parse(result.out).at("ok").get<bool>());
   EXPECT_NE(result.err.find("no fit"), std::string::npos) << result.err;
+}
+
+// Issue 28: the same clean curve (k = 0.005 1/s over 3 τ) with its times
+// shifted — a file whose t = 0 lies elsewhere, an appended run's second
+// session — failed with a Ceres parameter-block address at −300 s, was
+// called flat at −1e4 s and rank-deficient at +1e4 s. Now it gives the same
+// k, and says where T0 is when the origin lies too far for T0 there.
+TEST_F(FitCli, AShiftedRecordGivesTheSameK) {
+  const testing::CoolingCurve curve{22.0, 80.0, 0.005};
+  const auto r = testing::sample_cooling(curve, 300, 2.0, 0.0, 1);
+  const auto shifted_csv = [&](double shift_s) {
+    std::string text = "t_s,T\n";
+    for (std::size_t i = 0; i < r.time_s.size(); ++i) {
+      text += std::to_string(r.time_s[i] + shift_s) + "," + std::to_string(r.temperature_c[i]) + "\n";
+    }
+    return text;
+  };
+  write("base.csv", shifted_csv(0.0));
+  ASSERT_EQ(bosfuse("fit " + path("base.csv") + " --json " + path("base.json")).exit_code, 0);
+  const double k = read_json("base.json").at("parameters").at("k_per_s").at("value");
+  for (double shift_s : {-300.0, -1e4, 1e4, 1e6}) {
+    const std::string name = "shift" + std::to_string(static_cast<long>(shift_s));
+    write(name + ".csv", shifted_csv(shift_s));
+    const auto result = bosfuse("fit " + path(name + ".csv") + " --json " + path(name + ".json"));
+    ASSERT_EQ(result.exit_code, 0) << shift_s << ": " << result.output;
+    EXPECT_EQ(result.output.find("ParameterBlock"), std::string::npos) << result.output;
+    const auto j = read_json(name + ".json");
+    EXPECT_NEAR(j.at("parameters").at("k_per_s").at("value").get<double>(), k, 1e-9 * k) << shift_s;
+    EXPECT_EQ(j.at("origin_s").get<double>(), 0.0) << "the file's own t = 0";
+    const bool far = std::abs(curve.k_per_s * shift_s) > std::log(1e6);
+    EXPECT_EQ(j.at("t0_at_origin").get<bool>(), !far) << shift_s;
+    if (!far) continue;
+    EXPECT_EQ(j.at("t0_reference_s").get<double>(), shift_s);
+    EXPECT_NE(
+        result.output.find("T0 is at t₀ = " + std::to_string(static_cast<long>(shift_s)) + " s, the first sample"),
+        std::string::npos)
+        << result.output;
+  }
+}
+
+// Issue 28: a row with a cell too many was read as if its cells were under
+// the header's names.
+TEST_F(FitCli, ARowWithMoreOrFewerCellsThanTheHeaderIsRefusedNamingTheLine) {
+  write("extra.csv", "t_s,T\n0,50\n1,49,7\n2,48\n");
+  const auto extra = bosfuse("fit " + path("extra.csv"));
+  EXPECT_NE(extra.exit_code, 0);
+  EXPECT_NE(extra.output.find("line 3: 3 cells, but the header has 2"), std::string::npos) << extra.output;
+
+  write("short.csv", "t_s,T,other\n0,50,1\n1,49\n2,48,1\n");
+  const auto short_row = bosfuse("fit " + path("short.csv") + " --temperature-column T");
+  EXPECT_NE(short_row.exit_code, 0);
+  EXPECT_NE(short_row.output.find("line 3: 2 cells, but the header has 3"), std::string::npos) << short_row.output;
 }
 
 TEST_F(FitCli, HasHelp) {

@@ -110,6 +110,8 @@ ordered_json number_or_null(double value) { return std::isfinite(value) ? ordere
 NewtonFit fit_from_json(const json& j) {
   NewtonFit fit;
   fit.origin_s = number_or_nan(j, "origin_s");
+  // Absent from a fit stored before T0 could be given anywhere but at the origin.
+  if (const double t = number_or_nan(j, "t0_reference_s"); std::isfinite(t)) fit.t0_reference_s = t;
   const json& p = j.at("parameters");
   fit.k_per_s = estimate_from_json(p.value("k_per_s", json()));
   fit.tau_s = estimate_from_json(p.value("tau_s", json()));
@@ -167,8 +169,12 @@ ordered_json to_json(const NewtonFit& fit) {
   const auto& s = fit.summary;
   const bool ok = fit.ok();
   ordered_json j;
-  j["model"] = "T(t) = T_amb + (T0 - T_amb) * exp(-k * t), t in s from the origin";
+  j["model"] =
+      "T(t) = T_amb + (T0 - T_amb) * exp(-k * (t - t0_reference_s)), t in s from the origin, T0 at t0_reference_s";
   j["origin_s"] = number_or_null(fit.origin_s);
+  // Where T0 (and the covariance's delta_c) is: 0, the origin, unless the origin lies too far from the data.
+  j["t0_reference_s"] = number_or_null(fit.t0_reference_s);
+  j["t0_at_origin"] = fit.t0_at_origin();
   j["ok"] = ok;
   j["status"] = to_string(s.status);
   if (!ok) j["error"] = s.message;

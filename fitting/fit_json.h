@@ -17,7 +17,8 @@ namespace bosfuse::fitting {
 nlohmann::ordered_json number_or_null(double value);
 
 nlohmann::ordered_json to_json(const Estimate& estimate, double confidence);
-// model, origin_s, ok, status, error (when failed), parameters, uncertainty,
+// model, origin_s, t0_reference_s and t0_at_origin (where T0 is given), ok,
+// status, error (when failed), parameters, uncertainty,
 // diagnostics (with t_critical when ok), covariance (when ok: "parameters"
 // ["log_tau", "delta_c", "ambient_c"] and the 3 × 3 "matrix"), warnings.
 nlohmann::ordered_json to_json(const NewtonFit& fit);
@@ -28,8 +29,9 @@ nlohmann::ordered_json to_json(const Agreement& agreement);
 // to the writers, so a key cannot drift between the two: whatever to_json
 // writes comes back (tested); a null or missing number comes back NaN; the
 // residuals of a fit are not stored and stay empty. A fit stored without a
-// covariance (written before it was) comes back with none, and without
-// t_critical gets it from its dof and confidence. Throw
+// covariance (written before it was) comes back with none, without
+// t_critical gets it from its dof and confidence, and without
+// t0_reference_s has T0 at its origin (where it always was then). Throw
 // nlohmann::json::exception on a document that is not of this layout.
 NewtonFit fit_from_json(const nlohmann::json& j);
 Agreement agreement_from_json(const nlohmann::json& j);

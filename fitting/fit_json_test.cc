@@ -86,6 +86,40 @@ TEST(FitJson, AnOlderFitWithoutACovarianceStillReads) {
   EXPECT_DOUBLE_EQ(read.k_per_s.value, written.k_per_s.value);
 }
 
+// A fit whose origin lies too far from its data states T0 at the first
+// sample; that comes back, and with it the same curve and band.
+TEST(FitJson, WhereT0IsStatedComesBackWithTheSameCurveAndBand) {
+  const auto r = testing::sample_cooling(testing::CoolingCurve{}, 300, 1.0, 0.05, 9, 5000.0);
+  NewtonFitOptions options;
+  options.origin_s = 0.0;
+  const NewtonFit written = fit_newton(r.time_s, r.temperature_c, options);
+  ASSERT_TRUE(written.ok() && !written.t0_at_origin()) << written.brief_report();
+  const auto j = to_json(written);
+  EXPECT_EQ(j["t0_reference_s"], 5000.0);
+  EXPECT_EQ(j["t0_at_origin"], false);
+  const NewtonFit read = fit_from_json(nlohmann::json::parse(j.dump()));
+  EXPECT_EQ(read.t0_reference_s, written.t0_reference_s);
+  for (double t_s : {5000.0, 5100.0, 5299.0}) {
+    EXPECT_DOUBLE_EQ(read.temperature_at(t_s), written.temperature_at(t_s)) << t_s;
+    EXPECT_DOUBLE_EQ(read.temperature_half_width_at(t_s), written.temperature_half_width_at(t_s)) << t_s;
+  }
+  const auto at_origin = to_json(a_fit(9));
+  EXPECT_EQ(at_origin["t0_reference_s"], 0.0);
+  EXPECT_EQ(at_origin["t0_at_origin"], true);
+}
+
+// Fits stored before T0 could be stated elsewhere have it at their origin.
+TEST(FitJson, AnOlderFitWithoutAT0ReferenceHasT0AtItsOrigin) {
+  const NewtonFit written = a_fit(10, 30.0);
+  auto j = nlohmann::json::parse(to_json(written).dump());
+  j.erase("t0_reference_s");
+  j.erase("t0_at_origin");
+  const NewtonFit read = fit_from_json(j);
+  EXPECT_TRUE(read.t0_at_origin());
+  EXPECT_DOUBLE_EQ(read.temperature_at(30.0), written.t0_c.value);
+  EXPECT_DOUBLE_EQ(read.temperature_half_width_at(130.0), written.temperature_half_width_at(130.0));
+}
+
 TEST(FitJson, AFixedAmbientsCovarianceKeepsItsZeroRow) {
   const auto r = testing::sample_cooling(testing::CoolingCurve{}, 300, 1.0, 0.05, 8, 0.0);
   NewtonFitOptions options;

@@ -309,12 +309,44 @@ NewtonFit failed(NewtonFit fit, FitStatus status, std::string message) {
   fit.summary.status = status;
   fit.summary.message = std::move(message);
   fit.covariance.reset();
+  fit.t0_reference_s = 0.0;
   for (Estimate* e : {&fit.k_per_s, &fit.tau_s, &fit.t0_c, &fit.ambient_c}) *e = {kNaN, kNaN, kNaN, kNaN, false};
   return fit;
 }
 
 NewtonFit failed(NewtonFit fit, Failure failure) {
   return failed(std::move(fit), failure.first, std::move(failure.second));
+}
+
+// The parameters and their covariance with ΔT where T0 is reported: moved
+// from the first sample (where the fit works) to the origin, which lies
+// first_sample_s before it, as ΔT(0) = ΔT(first)·e^(k·first_sample_s), the
+// covariance carried by that map's Jacobian, so the curve and its band stay
+// the same; left at the first sample when the origin lies too far for T0
+// there (kMaxT0Extrapolation).
+struct ReportedParameters {
+  Parameters parameters;
+  ParameterCovariance covariance;
+  double t0_reference_s = 0.0;
+};
+
+ReportedParameters at_reported_t0(const Parameters& p, const ParameterCovariance& c, double first_sample_s) {
+  const double exponent = std::exp(-p.log_tau) * first_sample_s;  // ln(ΔT(origin) / ΔT(first sample))
+  if (!(std::abs(exponent) <= std::log(kMaxT0Extrapolation))) return {p, c, first_sample_s};
+  ReportedParameters r{p, {}, 0.0};
+  const double factor = std::exp(exponent);
+  r.parameters.delta_c = p.delta_c * factor;
+  // ∂ΔT(0)/∂log τ = −k·first_sample_s·ΔT(0) (k = e^(−log τ)), ∂ΔT(0)/∂ΔT(first) = the factor.
+  const double jacobian[3][3] = {{1, 0, 0}, {-exponent * r.parameters.delta_c, factor, 0}, {0, 0, 1}};
+  for (std::size_t i = 0; i < 3; ++i) {
+    for (std::size_t j = 0; j < 3; ++j) {
+      double sum = 0;
+      for (std::size_t a = 0; a < 3; ++a)
+        for (std::size_t b = 0; b < 3; ++b) sum += jacobian[i][a] * c[a][b] * jacobian[j][b];
+      r.covariance[i][j] = sum;
+    }
+  }
+  return r;
 }
 
 Estimate symmetric(double value, double std_error, double critical) {
@@ -445,6 +477,16 @@ double sum_of_squares(const std::vector<double>& r) {
   return sum;
 }
 
+// Why Ceres stopped, in the fit's own words: its message names internals
+// (parameter-block addresses) that mean nothing to the user.
+std::string solver_failure(const ceres::Solver::Summary& solver, int max_iterations) {
+  const int steps = static_cast<int>(solver.iterations.size());
+  if (solver.termination_type == ceres::NO_CONVERGENCE) {
+    return format("it reached its limit of %d iterations", max_iterations);
+  }
+  return format("the model could not be evaluated (a non-finite residual or derivative) after %d iterations", steps);
+}
+
 // The solved problem: kept alive because the covariance is computed on it.
 struct Solution {
   Parameters parameters;
@@ -473,9 +515,9 @@ std::optional<Failure> solve(const CleanSeries& s, const NewtonFitOptions& optio
         return Failure{FitStatus::kUnidentifiable, *straight};
       }
       return Failure{FitStatus::kNotConverged,
-                     format("the solver did not converge in %d iterations (%s); fix the ambient (--ambient "
-                            "fixed:VALUE) or use a robust loss if there are outliers",
-                            options.max_iterations, solver.message.c_str())};
+                     format("the solver did not converge: %s; fix the ambient (--ambient fixed:VALUE) or use a "
+                            "robust loss if there are outliers",
+                            solver_failure(solver, options.max_iterations).c_str())};
     }
     solution.residuals_c = residuals(s, solution.parameters);
     sigma_w_c = std::max(std::sqrt(sum_of_squares(solution.residuals_c) / summary.dof), sigma_floor_c);
@@ -501,7 +543,8 @@ Failure flat_record(double delta_c, double noise_c, const char* noise_name) {
                                       delta_c, noise_name, noise_c)};
 }
 
-std::optional<Failure> set_uncertainties(NewtonFit& fit, Solution& solution, const NewtonFitOptions& options) {
+std::optional<Failure> set_uncertainties(NewtonFit& fit, Solution& solution, const NewtonFitOptions& options,
+                                         double first_sample_s) {
   auto& summary = fit.summary;
   const Parameters& p = solution.parameters;
   const bool fixed = options.ambient.mode == AmbientModel::Mode::kFixed;
@@ -524,12 +567,41 @@ std::optional<Failure> set_uncertainties(NewtonFit& fit, Solution& solution, con
     for (double& v : row) v *= variance_factor;
   summary.t_critical = summary.absolute_sigma ? normal_critical(options.confidence)
                                               : student_t_critical(summary.dof, options.confidence);
-  set_estimates(fit, p, *covariance, fixed, summary.t_critical);
-  fit.covariance = *covariance;
-  summary.record_time_constants = fit.duration_s / fit.tau_s.value;
+  // The amplitude is judged where the data are, not at an origin that may lie far from them.
   const double delta_se = std::sqrt((*covariance)[1][1]);
   if (std::abs(p.delta_c) < summary.t_critical * delta_se) return flat_record(p.delta_c, delta_se, "±");
+  const ReportedParameters reported = at_reported_t0(p, *covariance, first_sample_s);
+  set_estimates(fit, reported.parameters, reported.covariance, fixed, summary.t_critical);
+  fit.covariance = reported.covariance;
+  fit.t0_reference_s = reported.t0_reference_s;
+  summary.record_time_constants = fit.duration_s / fit.tau_s.value;
   return std::nullopt;
+}
+
+// The fit proper, on a series whose times count from its first sample, so
+// that nothing in it (start values, solver, covariance, checks) depends on
+// where the origin lies; `first_sample_s` places the first sample relative
+// to the origin the fit reports at, `origin_s`.
+NewtonFit fit_from_first_sample(const CleanSeries& data, double origin_s, double first_sample_s,
+                                const NewtonFitOptions& options) {
+  NewtonFit fit;
+  fit.origin_s = origin_s;
+  fit.duration_s = data.duration_s();
+  describe_input(fit.summary, data, options);
+  if (auto failure = check_input(fit.summary, data, options)) return failed(fit, std::move(*failure));
+
+  Solution solution;
+  if (auto failure = solve(data, options, solution, fit.summary)) return failed(fit, std::move(*failure));
+  set_residual_statistics(fit, solution.residuals_c, options);
+  if (auto failure = set_uncertainties(fit, solution, options, first_sample_s)) {
+    return failed(fit, std::move(*failure));
+  }
+  if (auto failure = check_identifiable(fit, data, options)) return failed(fit, std::move(*failure));
+
+  fit.residuals_c = std::move(solution.residuals_c);
+  add_warnings(fit, options, solution.parameters);
+  fit.summary.status = FitStatus::kOk;
+  return fit;
 }
 
 }  // namespace
@@ -580,37 +652,28 @@ NewtonFit fit_newton(std::span<const double> time_s, std::span<const double> tem
   if (auto reason = options.invalid_reason(); !reason.empty()) {
     return failed(fit, FitStatus::kInvalidOptions, reason);
   }
-  return fit_newton(clean_series(time_s, temperature_c, options.origin_s), options);
+  const CleanSeries data = clean_series(time_s, temperature_c);  // from the first sample, rounded once
+  const double origin_s = options.origin_s.value_or(data.origin_s);
+  return fit_from_first_sample(data, origin_s, data.origin_s - origin_s, options);
 }
 
 NewtonFit fit_newton(const CleanSeries& s, const NewtonFitOptions& options) {
-  NewtonFit fit;
-  fit.origin_s = s.origin_s;
-  fit.duration_s = s.duration_s();
-  describe_input(fit.summary, s, options);
-  if (auto failure = check_input(fit.summary, s, options)) return failed(fit, std::move(*failure));
-
-  Solution solution;
-  if (auto failure = solve(s, options, solution, fit.summary)) return failed(fit, std::move(*failure));
-  set_residual_statistics(fit, solution.residuals_c, options);
-  if (auto failure = set_uncertainties(fit, solution, options)) return failed(fit, std::move(*failure));
-  if (auto failure = check_identifiable(fit, s, options)) return failed(fit, std::move(*failure));
-
-  fit.residuals_c = std::move(solution.residuals_c);
-  add_warnings(fit, options, solution.parameters);
-  fit.summary.status = FitStatus::kOk;
-  return fit;
+  if (s.size() == 0) return fit_from_first_sample(s, s.origin_s, 0.0, options);
+  CleanSeries data = s;
+  const double first_sample_s = s.time_s.front();
+  for (double& t : data.time_s) t -= first_sample_s;
+  return fit_from_first_sample(data, s.origin_s, first_sample_s, options);
 }
 
 double NewtonFit::temperature_at(double time_s) const {
   if (!ok()) return kNaN;
   const double delta = t0_c.value - ambient_c.value;
-  return ambient_c.value + delta * std::exp(-k_per_s.value * (time_s - origin_s));
+  return ambient_c.value + delta * std::exp(-k_per_s.value * ((time_s - origin_s) - t0_reference_s));
 }
 
 double NewtonFit::temperature_half_width_at(double time_s) const {
   if (!ok() || !covariance) return kNaN;
-  const double t = time_s - origin_s;
+  const double t = (time_s - origin_s) - t0_reference_s;
   const double decay = std::exp(-k_per_s.value * t);
   const double delta = t0_c.value - ambient_c.value;
   // ∂T/∂log τ = ΔT·e^(−kt)·kt, ∂T/∂ΔT = e^(−kt), ∂T/∂T_amb = 1.
@@ -651,6 +714,13 @@ std::string NewtonFit::brief_report() const {
   };
   std::string text = "T(t) = T_amb + (T0 − T_amb)·exp(−k·t), t from the origin; intervals at " +
                      format("%.3g%%", 100.0 * summary.confidence) + "\n";
+  if (!t0_at_origin()) {
+    text = "T(t) = T_amb + (T0 − T_amb)·exp(−k·(t − t₀)), t from the origin; intervals at " +
+           format(
+               "%.3g%%\n  T0 is at t₀ = %.15g s, the first sample: the origin lies %.3g time constants from the "
+               "data, too far for T0 there\n",
+               100.0 * summary.confidence, t0_reference_s, std::abs(t0_reference_s) / tau_s.value);
+  }
   text += line("k    ", "1/s", k_per_s);
   text += line("τ    ", "s", tau_s);
   text += line("T0   ", "°C", t0_c);

@@ -1,17 +1,24 @@
 #pragma once
 // Newton's law of cooling fitted to one temperature series:
 //
-//     T(t) = T_amb + (T0 − T_amb) · exp(−k · t),   τ = 1 / k,
+//     T(t) = T_amb + (T0 − T_amb) · exp(−k · (t − t₀)),   τ = 1 / k,
 //
-// with t in seconds from a chosen origin (by default the first sample). Use
+// with t in seconds from a chosen origin (by default the first sample) and
+// T0 the temperature at t₀ = 0, the origin, unless it lies too far from the
+// data (NewtonFit::t0_reference_s). Use
 // fit_newton() for a thermocouple channel or a BOS probe series; the result
 // carries k, τ, T0 and T_amb with standard errors and confidence intervals,
 // and a NewtonFitSummary that says whether the numbers can be trusted and,
 // when they cannot, why and what to change.
 //
-// Internally the parameters are log τ, ΔT = T0 − T_amb and T_amb: log τ keeps
-// the time constant positive and makes its scale irrelevant to the solver,
-// and ΔT decouples the amplitude from the ambient level. A record rising
+// Internally the parameters are log τ, ΔT = T0 − T_amb and T_amb, with t
+// counted from the first sample whatever the origin, so the fit does not
+// depend on where t = 0 lies: log τ keeps the time constant positive and
+// makes its scale irrelevant to the solver, and ΔT decouples the amplitude
+// from the ambient level. T0 is then reported at the origin, unless the
+// origin lies so far from the data that T0 there would overflow or lose its
+// digits: then T0 is the temperature at the first sample, and
+// NewtonFit::t0_reference_s says so. A record rising
 // towards a warmer ambient is the same law with ΔT < 0 and is fitted as
 // such. Ambient can be free, fixed, or tied to a measured value by a
 // Gaussian prior. Uncertainties come from ceres::Covariance; by default they
@@ -121,14 +128,26 @@ struct NewtonFitSummary {
   std::string brief_report() const;
 };
 
-// Covariance of the solver's parameters in the order (log τ, ΔT = T0 − T_amb
-// in °C, T_amb in °C), in the convention of the fit's uncertainties (scaled by
-// s² unless summary.absolute_sigma). With a fixed ambient the T_amb row and
-// column are zero.
+// Covariance of the parameters in the order (log τ, ΔT = T0 − T_amb in °C,
+// T_amb in °C) — ΔT at the time T0 is given, NewtonFit::t0_reference_s — in
+// the convention of the fit's uncertainties (scaled by s² unless
+// summary.absolute_sigma). With a fixed ambient the T_amb row and column are
+// zero.
 using ParameterCovariance = std::array<std::array<double, 3>, 3>;
+
+// T0 is given at the origin while the curve's amplitude T0 − T_amb there is
+// within this factor of its amplitude at the first sample (|k · first
+// sample's t| ≤ ln 1e6 ≈ 13.8): further out, T0 would be a number far beyond
+// anything measured whose difference from T_amb rounding eats (the origin
+// long after the data), or that overflows (long before).
+inline constexpr double kMaxT0Extrapolation = 1e6;
 
 struct NewtonFit {
   double origin_s = 0.0;  // absolute time of t = 0, in the caller's time base
+  // The time T0 is given at, in s from the origin: 0 (T0 is the temperature
+  // at the origin) unless the origin lies too far from the data
+  // (kMaxT0Extrapolation); then the first sample's time.
+  double t0_reference_s = 0.0;
   double duration_s = 0.0;
   Estimate k_per_s;
   Estimate tau_s;
@@ -143,6 +162,7 @@ struct NewtonFit {
   std::optional<ParameterCovariance> covariance;
 
   bool ok() const { return summary.ok(); }
+  bool t0_at_origin() const { return t0_reference_s == 0.0; }
   // The fitted curve at an absolute time (same time base as the input).
   double temperature_at(double time_s) const;
   // Half-width of the confidence interval (at summary.confidence) of the

@@ -119,12 +119,12 @@ void write_series_csv(const ReportInput& input, const fs::path& path) {
 void write_fits_csv(const ReportInput& input, const fs::path& path) {
   auto out = open_for_writing(path);
   out << "series,kind,ok,status,confidence,points,k_per_s,k_low,k_high,tau_s,tau_low,tau_high,T0_c,T0_low,T0_high,"
-         "T_amb_c,T_amb_low,T_amb_high,ambient_fixed,residual_rms_c,residual_std_c,reduced_chi_square,"
+         "T0_t_s,T_amb_c,T_amb_low,T_amb_high,ambient_fixed,residual_rms_c,residual_std_c,reduced_chi_square,"
          "lag1_autocorrelation,record_time_constants,message\n";
   for (const auto& s : input.series) {
     out << field(s.name) << ',' << to_string(s.kind) << ',';
     if (!s.fit) {
-      out << "false,not fitted,,,,,,,,,,,,,,,,,,,,,\n";
+      out << "false,not fitted,,,,,,,,,,,,,,,,,,,,,,\n";
       continue;
     }
     const auto& f = *s.fit;
@@ -134,6 +134,8 @@ void write_fits_csv(const ReportInput& input, const fs::path& path) {
         << m.points_used;
     for (const auto* e : {&f.k_per_s, &f.tau_s, &f.t0_c, &f.ambient_c}) {
       out << ',' << num(e->value) << ',' << num(e->low) << ',' << num(e->high);
+      // The time T0 is the temperature at: the origin, or the first sample when the origin lies too far from the data.
+      if (e == &f.t0_c) out << ',' << num(ok ? f.origin_s + f.t0_reference_s : NAN);
     }
     out << ',' << (f.ambient_c.fixed ? "true" : "false") << ',' << num(ok ? m.residual_rms_c : NAN) << ','
         << num(ok ? m.residual_std_c : NAN) << ',' << num(m.reduced_chi_square.value_or(NAN)) << ','

@@ -14,6 +14,7 @@
 
 #include "report/export.h"
 #include "report/html.h"
+#include "report/summary.h"
 #include "report/test_data.h"
 #include "tests/support/temp_dir.h"
 
@@ -205,6 +206,44 @@ TEST(ReportCsv, AFormulaLikeNameIsInertAndNumbersStayNumbers) {
   const auto fits = lines_of(read_text(dir / "fits.csv"));
   ASSERT_EQ(fits.size(), 2u);
   EXPECT_EQ(fits[1].rfind("\"'=cmd|' /C calc'!A0\",thermocouple,false,", 0), 0u) << fits[1];
+}
+
+// A series far from the run's origin (a later session of an appended run)
+// has T0 at its first sample, not an extrapolation e^(k·Δt) times its
+// amplitude: the summary says so and fits.csv gives the time T0 is at.
+TEST(ReportFits, AT0AtTheFirstSampleIsNotedAndItsTimeIsInFitsCsv) {
+  testing::TempDir dir;
+  ReportInput input;
+  CurveSeries late = testdata::cooling_series("late", 0.01, 80, 22, 200, 2.0, 0.1, 3);
+  for (double& t : late.time_s) t += 7200.0;  // two hours, 72 τ, into the run
+  input.series.push_back(late);
+  input.series.push_back(testdata::cooling_series("early", 0.01, 80, 22, 200, 2.0, 0.1, 4));
+  fit_missing(input, {});
+  ASSERT_TRUE(input.series[0].fit && input.series[0].fit->ok());
+  ASSERT_FALSE(input.series[0].fit->t0_at_origin());
+  EXPECT_NEAR(input.series[0].fit->t0_c.value, 80.0, 0.5);
+  const auto summary = summarize(input);
+  const auto& notes = summary.series[0].notes;
+  EXPECT_TRUE(std::any_of(notes.begin(), notes.end(), [](const std::string& n) {
+    return n.rfind("T0 is at t = 7200 s, the series' first sample", 0) == 0;
+  })) << ::testing::PrintToString(notes);
+  for (const auto& n : summary.series[1].notes) EXPECT_EQ(n.find("T0 is at"), std::string::npos) << n;
+
+  write_fits_csv(input, dir / "fits.csv");
+  const auto rows = lines_of(read_text(dir / "fits.csv"));
+  ASSERT_EQ(rows.size(), 3u);
+  const auto cells = [](const std::string& row) {
+    std::vector<std::string> out;
+    std::stringstream in(row);
+    for (std::string cell; std::getline(in, cell, ',');) out.push_back(cell);
+    return out;
+  };
+  const auto header = cells(rows[0]);
+  const auto column = std::find(header.begin(), header.end(), "T0_t_s") - header.begin();
+  ASSERT_LT(static_cast<std::size_t>(column), header.size());
+  EXPECT_EQ(header[column - 1], "T0_high");
+  EXPECT_EQ(std::stod(cells(rows[1])[column]), 7200.0);
+  EXPECT_EQ(std::stod(cells(rows[2])[column]), 0.0);
 }
 
 TEST_F(Report, ProbesAgreementAndTemperatureMapsAppearWhenProvided) {

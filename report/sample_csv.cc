@@ -196,6 +196,13 @@ CsvSeries read_csv_series(std::istream& in, const std::string& time_column, cons
     ++line_number;
     if (line.empty() || line == "\r") continue;
     const auto cells = split_csv_line(line);
+    // A row with a cell too many or too few has lost or gained a separator
+    // (a comma in an unquoted name, a row cut short): its cells may not be
+    // under the header they seem to be, so no value of it can be trusted.
+    if (cells.size() != header.size()) {
+      throw std::runtime_error("line " + std::to_string(line_number) + ": " + std::to_string(cells.size()) +
+                               " cells, but the header has " + std::to_string(header.size()));
+    }
     const std::string time_text = columns.time < cells.size() ? cells[columns.time] : "";
     const std::string value_text = columns.temperature < cells.size() ? cells[columns.temperature] : "";
     if (time_text.empty() || value_text.empty()) {

@@ -10,7 +10,8 @@
 // read_csv_series: a time and a temperature column of this file, or of any
 // CSV with a header row (spreadsheets, other loggers): times in seconds or
 // ISO-8601 UTC, quoted cells, a byte order mark and empty cells handled;
-// anything else is an error naming the line.
+// anything else (a row with more or fewer cells than the header included)
+// is an error naming the line.
 
 #include <cstdint>
 #include <istream>

@@ -72,7 +72,14 @@ std::vector<std::string> series_notes(const CurveSeries& s) {
                     "not °C",
                     s.unit, s.unit));
   }
-  if (fit_ok(s) && s.fit->origin_s != 0.0) {
+  if (fit_ok(s) && !s.fit->t0_at_origin()) {
+    const auto& f = *s.fit;
+    notes.push_back(
+        fmt::format("T0 is at t = {} s, the series' first sample: the fit's origin (t = {} s) lies {} time "
+                    "constants from the data, too far for T0 there",
+                    display_number(f.origin_s + f.t0_reference_s, "{:.6g}"), display_number(f.origin_s, "{:.4g}"),
+                    display_number(std::abs(f.t0_reference_s) / f.tau_s.value, "{:.3g}")));
+  } else if (fit_ok(s) && s.fit->origin_s != 0.0) {
     notes.push_back(fmt::format("T0 is at t = {} s, the fit's origin", display_number(s.fit->origin_s, "{:.4g}")));
   }
   if (s.excluded_samples > 0) {
