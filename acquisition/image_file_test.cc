@@ -308,6 +308,27 @@ TEST(ImageFile, ATruncatedImageIsRefusedNamingTheFile) {
   EXPECT_EQ(jpeg_data_problem(jpeg), "");
 }
 
+// Not cut short but damaged: an end-of-image marker in the middle of the
+// data, where OpenCV decodes the rest as grey. libjpeg says the data is
+// corrupt, and the image is refused.
+TEST(ImageFile, AJpegWhoseDataIsDamagedIsRefused) {
+  std::vector<std::uint8_t> jpeg = testing::encoded(testing::textured_frame(11, CV_8U, {320, 240}), ".jpg");
+  const std::size_t middle = jpeg.size() / 2;
+  jpeg[middle] = 0xFF;
+  jpeg[middle + 1] = 0xD9;
+  EXPECT_FALSE(cv::imdecode(jpeg, cv::IMREAD_UNCHANGED).empty()) << "what OpenCV makes of it";
+  try {
+    decode_image(jpeg, "damaged.jpg");
+    FAIL() << "decoded";
+  } catch (const ImageUnreadable& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("damaged.jpg: the JPEG's image data is incomplete or damaged (libjpeg: Corrupt "
+                                          "JPEG data",
+                                          0),
+              0u)
+        << e.what();
+  }
+}
+
 // A TIFF's directory can come before its pixels: cut short, its header
 // still reads, and its strips run past the end of the file.
 TEST(ImageFile, ATiffWhoseStripsRunPastItsEndIsTruncated) {

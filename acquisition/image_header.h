@@ -64,9 +64,11 @@ struct ImageHeader {
 // tag arrays); a header that needs more is unreadable.
 ImageHeader read_image_header(ByteSource& source, ImageFormat format, std::uint64_t budget_bytes);
 
-// libjpeg reading all of a JPEG's image data (scaled to 1/8 while decoding,
-// so at a fraction of a full decode's cost). Empty when it found the data
-// complete and sound; otherwise the first warning or error libjpeg gave
+// libjpeg reading all of a JPEG's image data (scaled to 1/8 while decoding;
+// the entropy decoding it cannot skip is still about half a full decode's
+// cost: 183 ms against 381 ms for a 12 MP colour JPEG of 7 MB, measured
+// while another build ran). Empty when it found the data complete and
+// sound; otherwise the first warning or error libjpeg gave
 // while reading the image data ("Premature end of JPEG file", "Corrupt JPEG
 // data: premature end of data segment"). Warnings about metadata in the
 // header do not count.
