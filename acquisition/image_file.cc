@@ -35,11 +35,16 @@ std::int64_t limit_from_environment(const char* variable, std::int64_t fallback,
 // colour one, well inside twice this.
 double deepest_pixel_bytes(ImageFormat format) {
   switch (format) {
-    case ImageFormat::kPng: return 8;
-    case ImageFormat::kJpeg: return 4;
-    case ImageFormat::kTiff: return 32;
-    case ImageFormat::kBmp: return 4;
-    case ImageFormat::kPnm: return 18;
+    case ImageFormat::kPng:
+      return 8;
+    case ImageFormat::kJpeg:
+      return 4;
+    case ImageFormat::kTiff:
+      return 32;
+    case ImageFormat::kBmp:
+      return 4;
+    case ImageFormat::kPnm:
+      return 18;
   }
   return 32;
 }
@@ -52,10 +57,10 @@ void check_declared_size(DeclaredSize size, const std::string& name, const Image
   const double pixels = static_cast<double>(size.width_px) * static_cast<double>(size.height_px);
   if (size.width_px > limits.max_side_px || size.height_px > limits.max_side_px ||
       pixels > static_cast<double>(limits.max_pixels)) {
-    throw ImageTooLarge(fmt::format(
-        "{}: the image declares {}x{} px ({:.1f} megapixels), over the limit of {} px a side and {:.1f} "
-        "megapixels (BOSFUSE_MAX_IMAGE_SIDE_PX, BOSFUSE_MAX_IMAGE_PIXELS); not decoded",
-        name, size.width_px, size.height_px, pixels * 1e-6, limits.max_side_px, limits.max_pixels * 1e-6));
+    throw ImageTooLarge(
+        fmt::format("{}: the image declares {}x{} px ({:.1f} megapixels), over the limit of {} px a side and {:.1f} "
+                    "megapixels (BOSFUSE_MAX_IMAGE_SIDE_PX, BOSFUSE_MAX_IMAGE_PIXELS); not decoded",
+                    name, size.width_px, size.height_px, pixels * 1e-6, limits.max_side_px, limits.max_pixels * 1e-6));
   }
 }
 
@@ -68,8 +73,8 @@ void check_file_size_for(ImageFormat format, DeclaredSize size, std::uint64_t fi
   throw ImageTooLarge(fmt::format(
       "{}: the file is {} bytes ({}), more than a {}x{} px {} can need (at most {} bytes: twice {} bytes a pixel, "
       "plus {} of metadata, BOSFUSE_MAX_IMAGE_METADATA_MB); not read",
-      name, file_bytes, megabytes(static_cast<double>(file_bytes)), size.width_px, size.height_px,
-      format_name(format), most, deepest_pixel_bytes(format), megabytes(static_cast<double>(limits.max_metadata_bytes))));
+      name, file_bytes, megabytes(static_cast<double>(file_bytes)), size.width_px, size.height_px, format_name(format),
+      most, deepest_pixel_bytes(format), megabytes(static_cast<double>(limits.max_metadata_bytes))));
 }
 
 struct CheckedHeader {
@@ -102,8 +107,7 @@ std::string out_of_memory(const std::string& name, const CheckedHeader& header) 
                      header.size.height_px, format_name(header.format));
 }
 
-cv::Mat decode_with_opencv(std::span<const std::uint8_t> bytes, const std::string& name,
-                           const CheckedHeader& header) {
+cv::Mat decode_with_opencv(std::span<const std::uint8_t> bytes, const std::string& name, const CheckedHeader& header) {
   const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8U, const_cast<std::uint8_t*>(bytes.data()));
   cv::Mat image;
   try {
@@ -112,16 +116,17 @@ cv::Mat decode_with_opencv(std::span<const std::uint8_t> bytes, const std::strin
     throw ImageUnreadable(out_of_memory(name, header));
   } catch (const cv::Exception& e) {
     if (e.code == cv::Error::StsNoMem) throw ImageUnreadable(out_of_memory(name, header));
-    throw ImageUnreadable(fmt::format("{}: OpenCV cannot decode this {}: {}", name, format_name(header.format),
-                                      e.what()));
+    throw ImageUnreadable(
+        fmt::format("{}: OpenCV cannot decode this {}: {}", name, format_name(header.format), e.what()));
   }
   // OpenCV's decoders give up on a PNG, TIFF, BMP or PNM whose data ends
   // early or is damaged with an empty image (and a complaint on standard
   // error that names no file).
   if (image.empty()) {
-    throw ImageUnreadable(fmt::format("{}: the {}'s image data is incomplete or damaged (truncated?); its {}x{} px "
-                                      "could not be decoded",
-                                      name, format_name(header.format), header.size.width_px, header.size.height_px));
+    throw ImageUnreadable(
+        fmt::format("{}: the {}'s image data is incomplete or damaged (truncated?); its {}x{} px "
+                    "could not be decoded",
+                    name, format_name(header.format), header.size.width_px, header.size.height_px));
   }
   return image;
 }
@@ -248,13 +253,13 @@ cv::Mat checked_decode(std::span<const std::uint8_t> bytes, const std::string& n
   const auto header = check_before_reading(source, name, limits);
   if (!header) return {};
   if (bytes.size() > static_cast<std::size_t>(INT_MAX)) {
-    throw ImageTooLarge(fmt::format("{}: the file is {} bytes, more than OpenCV decodes from memory (2 GiB)", name,
-                                    bytes.size()));
+    throw ImageTooLarge(
+        fmt::format("{}: the file is {} bytes, more than OpenCV decodes from memory (2 GiB)", name, bytes.size()));
   }
   if (header->format == ImageFormat::kJpeg) {
     if (const std::string problem = jpeg_data_problem(bytes); !problem.empty()) {
-      throw ImageUnreadable(fmt::format("{}: the JPEG's image data is incomplete or damaged (libjpeg: {})", name,
-                                        problem));
+      throw ImageUnreadable(
+          fmt::format("{}: the JPEG's image data is incomplete or damaged (libjpeg: {})", name, problem));
     }
   }
   return decode_with_opencv(bytes, name, *header);
@@ -272,10 +277,10 @@ std::vector<std::uint8_t> checked_read(const std::filesystem::path& path, const 
   if (::fstat(file.fd(), &status) != 0 || !S_ISREG(status.st_mode)) return {};
   const auto size = static_cast<std::uint64_t>(status.st_size);
   if (size > static_cast<std::uint64_t>(limits.max_file_bytes())) {
-    throw ImageTooLarge(fmt::format(
-        "{}: the file is {} bytes ({}), more than any image within the limits can need ({} bytes; "
-        "BOSFUSE_MAX_IMAGE_PIXELS, BOSFUSE_MAX_IMAGE_METADATA_MB); not read",
-        name, size, megabytes(static_cast<double>(size)), limits.max_file_bytes()));
+    throw ImageTooLarge(
+        fmt::format("{}: the file is {} bytes ({}), more than any image within the limits can need ({} bytes; "
+                    "BOSFUSE_MAX_IMAGE_PIXELS, BOSFUSE_MAX_IMAGE_METADATA_MB); not read",
+                    name, size, megabytes(static_cast<double>(size)), limits.max_file_bytes()));
   }
   FileBytes source(file.fd(), size);
   if (!check_before_reading(source, name, limits)) return {};

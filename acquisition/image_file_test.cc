@@ -259,9 +259,14 @@ TEST(ImageFile, AHeaderLongerThanTheMetadataAllowanceIsRefused) {
   std::vector<std::uint8_t> png = testing::encoded(testing::textured_frame(7), ".png");
   // After the signature and IHDR (8 + 25 bytes): a private chunk "prVt" claiming 1.9 GB.
   const std::uint32_t length = 1'900'000'000;
-  const std::vector<std::uint8_t> chunk = {static_cast<std::uint8_t>(length >> 24), static_cast<std::uint8_t>(length >> 16),
-                                           static_cast<std::uint8_t>(length >> 8), static_cast<std::uint8_t>(length),
-                                           'p', 'r', 'V', 't'};
+  const std::vector<std::uint8_t> chunk = {static_cast<std::uint8_t>(length >> 24),
+                                           static_cast<std::uint8_t>(length >> 16),
+                                           static_cast<std::uint8_t>(length >> 8),
+                                           static_cast<std::uint8_t>(length),
+                                           'p',
+                                           'r',
+                                           'V',
+                                           't'};
   png.insert(png.begin() + 33, chunk.begin(), chunk.end());
   testing::write_padded(dir / "chunk.png", png, 1'950'000'000);
   const ImageLimits limits{100'000'000, 30'000, 1'000'000};
@@ -321,10 +326,11 @@ TEST(ImageFile, AJpegWhoseDataIsDamagedIsRefused) {
     decode_image(jpeg, "damaged.jpg");
     FAIL() << "decoded";
   } catch (const ImageUnreadable& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("damaged.jpg: the JPEG's image data is incomplete or damaged (libjpeg: Corrupt "
-                                          "JPEG data",
-                                          0),
-              0u)
+    EXPECT_EQ(
+        std::string(e.what()).rfind("damaged.jpg: the JPEG's image data is incomplete or damaged (libjpeg: Corrupt "
+                                    "JPEG data",
+                                    0),
+        0u)
         << e.what();
   }
 }
@@ -352,9 +358,7 @@ TEST(ImageFile, ATiffWhoseStripsRunPastItsEndIsTruncated) {
 // is larger than `most_bytes` as an exhausted heap does.
 class RefusingAllocator : public cv::MatAllocator {
  public:
-  explicit RefusingAllocator(std::size_t most_bytes) : most_bytes_(most_bytes) {
-    cv::Mat::setDefaultAllocator(this);
-  }
+  explicit RefusingAllocator(std::size_t most_bytes) : most_bytes_(most_bytes) { cv::Mat::setDefaultAllocator(this); }
   ~RefusingAllocator() override { cv::Mat::setDefaultAllocator(previous_); }
   cv::UMatData* allocate(int dims, const int* sizes, int type, void* data, std::size_t* step, cv::AccessFlag flags,
                          cv::UMatUsageFlags usage) const override {

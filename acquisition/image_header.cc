@@ -190,8 +190,8 @@ struct TiffState {
 tmsize_t tiff_read(thandle_t handle, void* out, tmsize_t length) {
   auto* state = static_cast<TiffState*>(handle);
   if (length <= 0) return 0;
-  const std::size_t got = state->source->read_at(state->offset, static_cast<std::uint8_t*>(out),
-                                                 static_cast<std::size_t>(length));
+  const std::size_t got =
+      state->source->read_at(state->offset, static_cast<std::uint8_t*>(out), static_cast<std::size_t>(length));
   state->offset += got;
   return static_cast<tmsize_t>(got);
 }
@@ -248,7 +248,8 @@ ImageHeader tiff_header(ByteSource& source, std::uint64_t budget) {
 // else 32-bit, little-endian; a negative height is a top-down image).
 ImageHeader bmp_header(ByteSource& source) {
   std::array<std::uint8_t, 26> bytes{};
-  if (source.read_at(0, bytes.data(), bytes.size()) != bytes.size()) return {std::nullopt, "the file ends inside its header", std::nullopt};
+  if (source.read_at(0, bytes.data(), bytes.size()) != bytes.size())
+    return {std::nullopt, "the file ends inside its header", std::nullopt};
   const auto le = [&](std::size_t at, int n) {
     std::uint32_t v = 0;
     for (int i = n - 1; i >= 0; --i) v = (v << 8) | bytes[at + static_cast<std::size_t>(i)];
@@ -257,7 +258,8 @@ ImageHeader bmp_header(ByteSource& source) {
   if (le(14, 4) == 12) return {DeclaredSize{le(18, 2), le(20, 2)}, {}, std::nullopt};
   const auto width = static_cast<std::int32_t>(le(18, 4));
   const auto height = static_cast<std::int32_t>(le(22, 4));
-  return {DeclaredSize{std::abs(static_cast<std::int64_t>(width)), std::abs(static_cast<std::int64_t>(height))}, {},
+  return {DeclaredSize{std::abs(static_cast<std::int64_t>(width)), std::abs(static_cast<std::int64_t>(height))},
+          {},
           std::nullopt};
 }
 
@@ -289,7 +291,8 @@ ImageHeader pnm_header(ByteSource& source, std::uint64_t budget) {
       while (byte_at(at) >= 0 && byte_at(at) != '\n' && byte_at(at) != '\r') ++at;
     }
     const std::uint64_t first = at;
-    while (byte_at(at) >= 0 && std::isdigit(byte_at(at))) number = std::min(number * 10 + (byte_at(at++) - '0'), kPastAnyLimit);
+    while (byte_at(at) >= 0 && std::isdigit(byte_at(at)))
+      number = std::min(number * 10 + (byte_at(at++) - '0'), kPastAnyLimit);
     if (at == first) return {std::nullopt, "its header has no width and height", std::nullopt};
   }
   return {DeclaredSize{numbers[0], numbers[1]}, {}, std::nullopt};
@@ -310,11 +313,16 @@ std::size_t MemoryBytes::read_at(std::uint64_t offset, std::uint8_t* out, std::s
 
 std::string_view format_name(ImageFormat format) {
   switch (format) {
-    case ImageFormat::kPng: return "PNG";
-    case ImageFormat::kJpeg: return "JPEG";
-    case ImageFormat::kTiff: return "TIFF";
-    case ImageFormat::kBmp: return "BMP";
-    case ImageFormat::kPnm: return "PNM";
+    case ImageFormat::kPng:
+      return "PNG";
+    case ImageFormat::kJpeg:
+      return "JPEG";
+    case ImageFormat::kTiff:
+      return "TIFF";
+    case ImageFormat::kBmp:
+      return "BMP";
+    case ImageFormat::kPnm:
+      return "PNM";
   }
   return "image";
 }
@@ -343,11 +351,21 @@ std::optional<ImageFormat> image_format(ByteSource& source) {
 ImageHeader read_image_header(ByteSource& source, ImageFormat format, std::uint64_t budget_bytes) {
   ImageHeader header;
   switch (format) {
-    case ImageFormat::kPng: header = png_header(source, budget_bytes); break;
-    case ImageFormat::kJpeg: header = jpeg_header(source, budget_bytes); break;
-    case ImageFormat::kTiff: header = tiff_header(source, budget_bytes); break;
-    case ImageFormat::kBmp: header = bmp_header(source); break;
-    case ImageFormat::kPnm: header = pnm_header(source, budget_bytes); break;
+    case ImageFormat::kPng:
+      header = png_header(source, budget_bytes);
+      break;
+    case ImageFormat::kJpeg:
+      header = jpeg_header(source, budget_bytes);
+      break;
+    case ImageFormat::kTiff:
+      header = tiff_header(source, budget_bytes);
+      break;
+    case ImageFormat::kBmp:
+      header = bmp_header(source);
+      break;
+    case ImageFormat::kPnm:
+      header = pnm_header(source, budget_bytes);
+      break;
   }
   if (!header.size && header.problem.empty()) header.problem = "its header cannot be read";
   return header;

@@ -169,7 +169,7 @@ TEST_F(EvaluateCli, APaddedImageIsRefusedBeforeItIsReadWhole) {
   ASSERT_TRUE(cv::imencode(".png", image, png));
   testing::write_padded(path("padded.png"), png, 1'900'000'000);
   for (const std::string& command : {"evaluate " + path("padded.png") + " " + path("meas.png"),
-                                    "quality " + path("padded.png") + " --reference " + path("ref.png")}) {
+                                     "quality " + path("padded.png") + " --reference " + path("ref.png")}) {
     const auto run = streams(command);
     EXPECT_EQ(run.exit_code, 1) << command << "\n" << run.err;
     EXPECT_NE(run.err.find(path("padded.png") + ": the file is 1900000000 bytes (1900.0 MB), more than a 256x256 px "
@@ -194,8 +194,7 @@ TEST_F(EvaluateCli, RunningOutOfMemoryForAnImageIsAnErrorNamingTheFile) {
   const auto run = testing::run_with_streams(
       "ulimit -v 1000000; exec " + kBosfuse + " evaluate " + path("big.png") + " " + path("meas.png"), dir_.path());
   EXPECT_EQ(run.exit_code, 1) << run.err;
-  EXPECT_NE(run.err.find(path("big.png") + ": out of memory for its 1200000000 bytes (1200.0 MB)"),
-            std::string::npos)
+  EXPECT_NE(run.err.find(path("big.png") + ": out of memory for its 1200000000 bytes (1200.0 MB)"), std::string::npos)
       << run.err;
 }
 

@@ -30,8 +30,8 @@
 
 #include "acquisition/exif_time.h"
 #include "acquisition/image_header.h"
-#include "pipeline/image_io.h"
 #include "fuzz/fuzz_support.h"
+#include "pipeline/image_io.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   // Read by OpenCV once, at the first decode; must be set before it.

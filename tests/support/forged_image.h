@@ -41,7 +41,8 @@ inline void write_padded(const std::filesystem::path& path, const std::vector<st
                          std::uint64_t size) {
   std::ofstream(path, std::ios::binary)
       .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  if (::truncate(path.c_str(), static_cast<off_t>(size)) != 0) throw std::runtime_error("cannot extend " + path.string());
+  if (::truncate(path.c_str(), static_cast<off_t>(size)) != 0)
+    throw std::runtime_error("cannot extend " + path.string());
 }
 
 // An uncompressed 8-bit grey TIFF of `image` with its directory (IFD) right
@@ -54,9 +55,9 @@ inline std::vector<std::uint8_t> tiff_with_directory_first(const cv::Mat& image)
   };
   const auto width = static_cast<std::uint32_t>(image.cols), height = static_cast<std::uint32_t>(image.rows);
   // (tag, type, value): type 3 is SHORT, 4 is LONG; one value each, in ascending tag order.
-  const std::uint32_t entries[][3] = {{256, 4, width}, {257, 4, height}, {258, 3, 8},       {259, 3, 1},
-                                      {262, 3, 1},     {273, 4, 0},      {277, 3, 1},       {278, 4, height},
-                                      {279, 4, width * height}};
+  const std::uint32_t entries[][3] = {{256, 4, width}, {257, 4, height}, {258, 3, 8},
+                                      {259, 3, 1},     {262, 3, 1},      {273, 4, 0},
+                                      {277, 3, 1},     {278, 4, height}, {279, 4, width * height}};
   const std::uint32_t count = sizeof entries / sizeof entries[0];
   const std::uint32_t data_at = 8 + 2 + count * 12 + 4;
   put(count, 2);
