@@ -99,6 +99,11 @@ bool FrameRecorder::take_one(std::chrono::milliseconds wait) {
   } catch (const EndOfFrames& e) {
     record_event("stopped", e.what());
     return false;
+  } catch (const FrameLost& e) {
+    record_event("error", e.what());
+    std::lock_guard lock(stats_mutex_);
+    ++stats_.failures;
+    return true;
   } catch (const DeviceError& e) {
     source_->close();
     connection_.failed("disconnect", e.what(), utc_now_ns());

@@ -34,12 +34,21 @@ class FrameSource {
   virtual void open() = 0;                   // throws DeviceError
   virtual void close() = 0;                  // never throws
   // The next frame, waiting at most `wait`; nullopt when none came in time.
-  // Throws DeviceError when the camera is gone, and EndOfFrames when a
-  // finite source (a video file) has no more.
+  // Throws DeviceError when the camera is gone, EndOfFrames when a finite
+  // source (a video file) has no more, and FrameLost for a frame it lost.
   virtual std::optional<CapturedFrame> next(std::chrono::milliseconds wait) = 0;
 };
 
 class EndOfFrames : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Thrown by next() for a frame the camera took but the source cannot
+// deliver (a watched folder's file refused as too large, truncated or
+// damaged; the message names it and says why). The recorder counts it as a
+// lost frame and records why; the camera stays connected and goes on.
+class FrameLost : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };

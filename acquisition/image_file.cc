@@ -1,189 +1,206 @@
 #include "acquisition/image_file.h"
 
+#include <fcntl.h>
 #include <fmt/format.h>
-#include <jpeglib.h>
-#include <png.h>
-#include <tiffio.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
-#include <cctype>
+#include <array>
+#include <cerrno>
 #include <climits>
-#include <csetjmp>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
+#include <new>
 #include <opencv2/imgcodecs.hpp>
-#include <vector>
 
 namespace bosfuse::acquisition {
 namespace {
 
-using namespace std::string_view_literals;
-
-std::int64_t limit_from_environment(const char* variable, std::int64_t fallback) {
+std::int64_t limit_from_environment(const char* variable, std::int64_t fallback, std::int64_t unit = 1) {
   const char* text = std::getenv(variable);
   if (!text || !*text) return fallback;
   char* end = nullptr;
   const long long value = std::strtoll(text, &end, 10);
-  if (*end != '\0' || value <= 0) {
+  if (*end != '\0' || value <= 0 || value > LLONG_MAX / unit) {
     throw std::invalid_argument(fmt::format("{}='{}' must be a positive whole number", variable, text));
   }
-  return value;
+  return value * unit;
 }
 
-// libpng and libjpeg report errors by longjmp; these functions keep no C++
-// object with a destructor between setjmp and the libraries' calls.
-struct PngSource {
-  const std::uint8_t* data;
-  std::size_t size, offset;
+// The deepest pixel each format can hold, in bytes, uncompressed: PNG
+// 16-bit RGBA; JPEG four 8-bit components (CMYK); TIFF four 64-bit samples;
+// BMP 32 bits; PNM three samples written out as text ("65535 "). At
+// quality 100, random noise takes a JPEG 1.6 bytes a grey pixel and 2 a
+// colour one, well inside twice this.
+double deepest_pixel_bytes(ImageFormat format) {
+  switch (format) {
+    case ImageFormat::kPng:
+      return 8;
+    case ImageFormat::kJpeg:
+      return 4;
+    case ImageFormat::kTiff:
+      return 32;
+    case ImageFormat::kBmp:
+      return 4;
+    case ImageFormat::kPnm:
+      return 18;
+  }
+  return 32;
+}
+
+std::string megabytes(double bytes) { return fmt::format("{:.1f} MB", bytes * 1e-6); }
+
+// The header's pixels against the limits (in double: two 32-bit TIFF sides
+// multiply past int64).
+void check_declared_size(DeclaredSize size, const std::string& name, const ImageLimits& limits) {
+  const double pixels = static_cast<double>(size.width_px) * static_cast<double>(size.height_px);
+  if (size.width_px > limits.max_side_px || size.height_px > limits.max_side_px ||
+      pixels > static_cast<double>(limits.max_pixels)) {
+    throw ImageTooLarge(
+        fmt::format("{}: the image declares {}x{} px ({:.1f} megapixels), over the limit of {} px a side and {:.1f} "
+                    "megapixels (BOSFUSE_MAX_IMAGE_SIDE_PX, BOSFUSE_MAX_IMAGE_PIXELS); not decoded",
+                    name, size.width_px, size.height_px, pixels * 1e-6, limits.max_side_px, limits.max_pixels * 1e-6));
+  }
+}
+
+// The file's size against what the declared pixels can need: what catches
+// a small image padded (or followed) by gigabytes.
+void check_file_size_for(ImageFormat format, DeclaredSize size, std::uint64_t file_bytes, const std::string& name,
+                         const ImageLimits& limits) {
+  const std::int64_t most = limits.max_file_bytes(format, size);
+  if (file_bytes <= static_cast<std::uint64_t>(most)) return;
+  throw ImageTooLarge(fmt::format(
+      "{}: the file is {} bytes ({}), more than a {}x{} px {} can need (at most {} bytes: twice {} bytes a pixel, "
+      "plus {} of metadata, BOSFUSE_MAX_IMAGE_METADATA_MB); not read",
+      name, file_bytes, megabytes(static_cast<double>(file_bytes)), size.width_px, size.height_px, format_name(format),
+      most, deepest_pixel_bytes(format), megabytes(static_cast<double>(limits.max_metadata_bytes))));
+}
+
+struct CheckedHeader {
+  ImageFormat format;
+  DeclaredSize size;
 };
 
-void png_read_from_memory(png_structp png, png_bytep out, png_size_t length) {
-  auto* source = static_cast<PngSource*>(png_get_io_ptr(png));
-  if (length > source->size - source->offset) png_error(png, "truncated");
-  std::memcpy(out, source->data + source->offset, length);
-  source->offset += length;
-}
-
-void png_quiet(png_structp, png_const_charp) {}
-void png_fail(png_structp png, png_const_charp) { png_longjmp(png, 1); }
-
-bool png_header_size(const std::uint8_t* data, std::size_t size, png_uint_32& width, png_uint_32& height) {
-  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, png_fail, png_quiet);
-  if (!png) return false;
-  png_infop info = png_create_info_struct(png);
-  PngSource source{data, size, 0};
-  bool ok = false;
-  if (info && setjmp(png_jmpbuf(png)) == 0) {
-    png_set_user_limits(png, 0x7fffffff, 0x7fffffff);  // ours are checked by the caller, with a message
-    png_set_read_fn(png, &source, png_read_from_memory);
-    png_read_info(png, info);
-    width = png_get_image_width(png, info);
-    height = png_get_image_height(png, info);
-    ok = true;
+// Everything that needs only the header and the file's size; nullopt when
+// the bytes are of no format bosfuse reads.
+std::optional<CheckedHeader> check_before_reading(ByteSource& source, const std::string& name,
+                                                  const ImageLimits& limits) {
+  const auto format = image_format(source);
+  if (!format) return std::nullopt;
+  const auto header_budget = static_cast<std::uint64_t>(limits.max_metadata_bytes);
+  const ImageHeader header = read_image_header(source, *format, header_budget);
+  if (!header.size) {
+    throw ImageUnreadable(fmt::format("{}: not a readable {}: {}", name, format_name(*format), header.problem));
   }
-  png_destroy_read_struct(&png, info ? &info : nullptr, nullptr);
-  return ok;
+  check_declared_size(*header.size, name, limits);
+  check_file_size_for(*format, *header.size, source.size(), name, limits);
+  if (header.data_end && *header.data_end > source.size()) {
+    throw ImageUnreadable(fmt::format("{}: truncated: the TIFF's image data runs to byte {}, the file has {} bytes",
+                                      name, *header.data_end, source.size()));
+  }
+  return CheckedHeader{*format, *header.size};
 }
 
-struct JpegError {
-  jpeg_error_mgr manager;
-  std::jmp_buf jump;
+std::string out_of_memory(const std::string& name, const CheckedHeader& header) {
+  return fmt::format("{}: out of memory decoding its {}x{} px {} image", name, header.size.width_px,
+                     header.size.height_px, format_name(header.format));
+}
+
+cv::Mat decode_with_opencv(std::span<const std::uint8_t> bytes, const std::string& name, const CheckedHeader& header) {
+  const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8U, const_cast<std::uint8_t*>(bytes.data()));
+  cv::Mat image;
+  try {
+    image = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
+  } catch (const std::bad_alloc&) {
+    throw ImageUnreadable(out_of_memory(name, header));
+  } catch (const cv::Exception& e) {
+    if (e.code == cv::Error::StsNoMem) throw ImageUnreadable(out_of_memory(name, header));
+    throw ImageUnreadable(
+        fmt::format("{}: OpenCV cannot decode this {}: {}", name, format_name(header.format), e.what()));
+  }
+  // OpenCV's decoders give up on a PNG, TIFF, BMP or PNM whose data ends
+  // early or is damaged with an empty image (and a complaint on standard
+  // error that names no file).
+  if (image.empty()) {
+    throw ImageUnreadable(
+        fmt::format("{}: the {}'s image data is incomplete or damaged (truncated?); its {}x{} px "
+                    "could not be decoded",
+                    name, format_name(header.format), header.size.width_px, header.size.height_px));
+  }
+  return image;
+}
+
+// A file descriptor, closed when it goes.
+class OpenFile {
+ public:
+  explicit OpenFile(int fd) : fd_(fd) {}
+  ~OpenFile() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  OpenFile(const OpenFile&) = delete;
+  OpenFile& operator=(const OpenFile&) = delete;
+  int fd() const { return fd_; }
+
+ private:
+  int fd_;
 };
 
-void jpeg_fail(j_common_ptr cinfo) { std::longjmp(reinterpret_cast<JpegError*>(cinfo->err)->jump, 1); }
-void jpeg_quiet(j_common_ptr, int) {}
-
-bool jpeg_header_size(const std::uint8_t* data, std::size_t size, JDIMENSION& width, JDIMENSION& height) {
-  jpeg_decompress_struct cinfo;
-  JpegError error;
-  cinfo.err = jpeg_std_error(&error.manager);
-  error.manager.error_exit = jpeg_fail;
-  error.manager.emit_message = jpeg_quiet;
-  bool ok = false;
-  if (setjmp(error.jump) == 0) {
-    jpeg_create_decompress(&cinfo);
-    jpeg_mem_src(&cinfo, data, static_cast<unsigned long>(size));
-    if (jpeg_read_header(&cinfo, TRUE) == JPEG_HEADER_OK) {
-      width = cinfo.image_width;
-      height = cinfo.image_height;
-      ok = true;
-    }
+// pread until `n` bytes or the end; -1 on an error.
+std::int64_t read_fully_at(int fd, std::uint8_t* out, std::uint64_t n, std::uint64_t offset) {
+  std::uint64_t done = 0;
+  while (done < n) {
+    const ssize_t got = ::pread(fd, out + done, n - done, static_cast<off_t>(offset + done));
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) return -1;
+    if (got == 0) break;
+    done += static_cast<std::uint64_t>(got);
   }
-  jpeg_destroy_decompress(&cinfo);
-  return ok;
+  return static_cast<std::int64_t>(done);
 }
 
-// libtiff reads through these from memory; errors go to a handler that
-// stays quiet (a TIFF we cannot read is reported by the caller).
-struct TiffSource {
-  std::span<const std::uint8_t> bytes;
-  toff_t offset = 0;
+// A file's bytes read where a header reader asks, a block at a time.
+class FileBytes : public ByteSource {
+ public:
+  FileBytes(int fd, std::uint64_t size) : fd_(fd), size_(size) {}
+  std::uint64_t size() const override { return size_; }
+  std::size_t read_at(std::uint64_t offset, std::uint8_t* out, std::size_t n) override {
+    std::size_t done = 0;
+    while (done < n && offset + done < size_) {
+      const std::uint64_t at = offset + done;
+      if (at < block_at_ || at >= block_at_ + block_size_) {
+        const std::int64_t got = read_fully_at(fd_, block_.data(), block_.size(), at);
+        if (got <= 0) break;
+        block_at_ = at;
+        block_size_ = static_cast<std::size_t>(got);
+      }
+      const std::size_t take = std::min<std::uint64_t>(n - done, block_at_ + block_size_ - at);
+      std::memcpy(out + done, block_.data() + (at - block_at_), take);
+      done += take;
+    }
+    return done;
+  }
+
+ private:
+  int fd_;
+  std::uint64_t size_;
+  std::array<std::uint8_t, 65536> block_;
+  std::uint64_t block_at_ = 0;
+  std::size_t block_size_ = 0;
 };
 
-tmsize_t tiff_read(thandle_t handle, void* out, tmsize_t length) {
-  auto* source = static_cast<TiffSource*>(handle);
-  const auto available = source->offset < source->bytes.size() ? source->bytes.size() - source->offset : 0;
-  const auto n = std::min<std::uint64_t>(static_cast<std::uint64_t>(length), available);
-  std::memcpy(out, source->bytes.data() + source->offset, n);
-  source->offset += n;
-  return static_cast<tmsize_t>(n);
-}
-tmsize_t tiff_write(thandle_t, void*, tmsize_t) { return 0; }
-toff_t tiff_seek(thandle_t handle, toff_t offset, int whence) {
-  auto* source = static_cast<TiffSource*>(handle);
-  const toff_t base = whence == SEEK_CUR ? source->offset : whence == SEEK_END ? source->bytes.size() : 0;
-  source->offset = base + offset;
-  return source->offset;
-}
-int tiff_close(thandle_t) { return 0; }
-toff_t tiff_size(thandle_t handle) { return static_cast<TiffSource*>(handle)->bytes.size(); }
-int tiff_quiet(TIFF*, void*, const char*, const char*, va_list) { return 1; }
-
-std::optional<DeclaredSize> tiff_header_size(std::span<const std::uint8_t> bytes) {
-  TiffSource source{bytes};
-  TIFFOpenOptions* options = TIFFOpenOptionsAlloc();
-  TIFFOpenOptionsSetErrorHandlerExtR(options, tiff_quiet, nullptr);
-  TIFFOpenOptionsSetWarningHandlerExtR(options, tiff_quiet, nullptr);
-  TIFF* tiff = TIFFClientOpenExt("memory", "rm", &source, tiff_read, tiff_write, tiff_seek, tiff_close, tiff_size,
-                                 nullptr, nullptr, options);
-  TIFFOpenOptionsFree(options);
-  if (!tiff) return std::nullopt;
-  std::uint32_t width = 0, height = 0;
-  const bool ok = TIFFGetField(tiff, TIFFTAG_IMAGEWIDTH, &width) && TIFFGetField(tiff, TIFFTAG_IMAGELENGTH, &height);
-  TIFFClose(tiff);
-  if (!ok) return std::nullopt;
-  return DeclaredSize{width, height};
-}
-
-bool starts_with(std::span<const std::uint8_t> bytes, std::string_view magic) {
-  return bytes.size() >= magic.size() && std::memcmp(bytes.data(), magic.data(), magic.size()) == 0;
-}
-
-// PNM as OpenCV recognises it: P1…P6 and then a space. "P5" followed by
-// anything else is no PNM to OpenCV, which then tries its later decoders.
-bool is_pnm(std::span<const std::uint8_t> bytes) {
-  return bytes.size() >= 3 && bytes[0] == 'P' && bytes[1] >= '1' && bytes[1] <= '6' &&
-         std::isspace(static_cast<unsigned char>(bytes[2]));
-}
-
-// The formats bosfuse reads: PNG, JPEG, TIFF, BMP and PNM, each recognised
-// exactly as OpenCV recognises it. OpenCV tries its decoders in turn, these
-// before GDCM (DICOM) and GDAL, whose decoders allocate before any limit
-// is consulted and abort on forged headers: a 166-byte DICOM header asked
-// for 1.7 GB, and bytes starting "P5" but with "DICM" at offset 128 reached
-// GDCM's assert (both found by fuzzing).
-bool is_format_read(std::span<const std::uint8_t> bytes) {
-  static constexpr std::string_view kSignatures[] = {
-      "\x89PNG\r\n\x1a\n"sv, "\xff\xd8\xff"sv, "II*\0"sv, "MM\0*"sv, "II+\0"sv, "MM\0+"sv, "BM"sv};
-  for (const std::string_view signature : kSignatures) {
-    if (starts_with(bytes, signature)) return true;
+std::vector<std::uint8_t> read_whole(int fd, std::uint64_t size, const std::string& name) {
+  std::vector<std::uint8_t> bytes;
+  try {
+    bytes.resize(size);
+  } catch (const std::bad_alloc&) {
+    throw ImageUnreadable(
+        fmt::format("{}: out of memory for its {} bytes ({})", name, size, megabytes(static_cast<double>(size))));
   }
-  return is_pnm(bytes);
-}
-
-// PNM: width and height are the first two numbers after the magic, with
-// whitespace and '#' comments between them. Every digit counts, as OpenCV
-// reads them: cutting a number short let "P6 0000000000" + "27565 27568"
-// pass as 0x27565 px while OpenCV decoded 27565x27568 (2.3 GB; found by
-// fuzzing). A number past any limit saturates instead of overflowing.
-std::optional<DeclaredSize> pnm_header_size(std::span<const std::uint8_t> bytes) {
-  constexpr std::int64_t kPastAnyLimit = 1'000'000'000'000'000;
-  std::size_t at = 2;
-  std::int64_t numbers[2] = {0, 0};
-  for (std::int64_t& number : numbers) {
-    for (;;) {
-      while (at < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[at]))) ++at;
-      if (at >= bytes.size() || bytes[at] != '#') break;
-      while (at < bytes.size() && bytes[at] != '\n' && bytes[at] != '\r') ++at;
-    }
-    const std::size_t first = at;
-    while (at < bytes.size() && std::isdigit(static_cast<unsigned char>(bytes[at]))) {
-      number = std::min(number * 10 + (bytes[at++] - '0'), kPastAnyLimit);
-    }
-    if (at == first) return std::nullopt;
-  }
-  return DeclaredSize{numbers[0], numbers[1]};
+  const std::int64_t got = read_fully_at(fd, bytes.data(), size, 0);
+  if (got < 0) throw ImageUnreadable(fmt::format("{}: cannot be read: {}", name, std::strerror(errno)));
+  bytes.resize(static_cast<std::size_t>(got));  // shorter when it shrank meanwhile; decode_image checks it again
+  return bytes;
 }
 
 }  // namespace
@@ -192,73 +209,98 @@ ImageLimits ImageLimits::from_environment() {
   ImageLimits limits;
   limits.max_pixels = limit_from_environment("BOSFUSE_MAX_IMAGE_PIXELS", limits.max_pixels);
   limits.max_side_px = limit_from_environment("BOSFUSE_MAX_IMAGE_SIDE_PX", limits.max_side_px);
+  limits.max_metadata_bytes =
+      limit_from_environment("BOSFUSE_MAX_IMAGE_METADATA_MB", limits.max_metadata_bytes, 1'000'000);
   return limits;
 }
 
-// BMP: the DIB header's width and height (16-bit in the old core header,
-// else 32-bit, little-endian; a negative height is a top-down image).
-std::optional<DeclaredSize> bmp_header_size(std::span<const std::uint8_t> bytes) {
-  const auto le = [&](std::size_t at, int n) {
-    std::uint32_t v = 0;
-    for (int i = n - 1; i >= 0; --i) v = (v << 8) | bytes[at + static_cast<std::size_t>(i)];
-    return v;
-  };
-  if (bytes.size() < 26) return std::nullopt;
-  if (le(14, 4) == 12) return DeclaredSize{le(18, 2), le(20, 2)};
-  const auto width = static_cast<std::int32_t>(le(18, 4));
-  const auto height = static_cast<std::int32_t>(le(22, 4));
-  return DeclaredSize{std::abs(static_cast<std::int64_t>(width)), std::abs(static_cast<std::int64_t>(height))};
+std::int64_t ImageLimits::max_file_bytes(ImageFormat format, DeclaredSize size) const {
+  const double pixels = static_cast<double>(size.width_px) * static_cast<double>(size.height_px);
+  const double most = 2 * pixels * deepest_pixel_bytes(format) + static_cast<double>(max_metadata_bytes);
+  return most >= 9e18 ? INT64_MAX : static_cast<std::int64_t>(most);
+}
+
+std::int64_t ImageLimits::max_file_bytes() const {
+  return max_file_bytes(ImageFormat::kTiff, DeclaredSize{max_pixels, 1});
 }
 
 std::optional<DeclaredSize> declared_image_size(std::span<const std::uint8_t> bytes) {
-  if (starts_with(bytes, "\x89PNG\r\n\x1a\n"sv)) {
-    png_uint_32 width = 0, height = 0;
-    if (png_header_size(bytes.data(), bytes.size(), width, height)) return DeclaredSize{width, height};
-  } else if (starts_with(bytes, "\xff\xd8\xff"sv)) {
-    JDIMENSION width = 0, height = 0;
-    if (jpeg_header_size(bytes.data(), bytes.size(), width, height)) return DeclaredSize{width, height};
-  } else if (starts_with(bytes, "II*\0"sv) || starts_with(bytes, "MM\0*"sv) || starts_with(bytes, "II+\0"sv) ||
-             starts_with(bytes, "MM\0+"sv)) {
-    return tiff_header_size(bytes);
-  } else if (starts_with(bytes, "BM"sv)) {
-    return bmp_header_size(bytes);
-  } else if (is_pnm(bytes)) {
-    return pnm_header_size(bytes);
-  }
-  return std::nullopt;
+  MemoryBytes source(bytes);
+  const auto format = image_format(source);
+  if (!format) return std::nullopt;
+  return read_image_header(source, *format, bytes.size()).size;
 }
 
-cv::Mat decode_image(std::span<const std::uint8_t> bytes, const std::string& name, const ImageLimits& limits) {
-  if (const auto size = declared_image_size(bytes)) {
-    // In double: two 32-bit sides (TIFF) multiply past int64.
-    const double pixels = static_cast<double>(size->width_px) * static_cast<double>(size->height_px);
-    if (size->width_px > limits.max_side_px || size->height_px > limits.max_side_px ||
-        pixels > static_cast<double>(limits.max_pixels)) {
-      throw ImageTooLarge(fmt::format(
-          "{}: the image declares {}x{} px ({:.1f} megapixels), over the limit of {} px a side and {:.1f} "
-          "megapixels (BOSFUSE_MAX_IMAGE_SIDE_PX, BOSFUSE_MAX_IMAGE_PIXELS); not decoded",
-          name, size->width_px, size->height_px, pixels * 1e-6, limits.max_side_px, limits.max_pixels * 1e-6));
+namespace {
+
+// Whatever else a reader throws (no memory for libpng's or libtiff's own
+// buffers, an exception from OpenCV) also names the file.
+template <typename Read>
+auto naming_the_file(const std::string& name, Read read) {
+  try {
+    return read();
+  } catch (const ImageRefused&) {
+    throw;
+  } catch (const std::bad_alloc&) {
+    throw ImageUnreadable(name + ": out of memory reading it");
+  } catch (const std::exception& e) {
+    throw ImageUnreadable(name + ": " + e.what());
+  }
+}
+
+cv::Mat checked_decode(std::span<const std::uint8_t> bytes, const std::string& name, const ImageLimits& limits) {
+  MemoryBytes source(bytes);
+  const auto header = check_before_reading(source, name, limits);
+  if (!header) return {};
+  if (bytes.size() > static_cast<std::size_t>(INT_MAX)) {
+    throw ImageTooLarge(
+        fmt::format("{}: the file is {} bytes, more than OpenCV decodes from memory (2 GiB)", name, bytes.size()));
+  }
+  if (header->format == ImageFormat::kJpeg) {
+    if (const std::string problem = jpeg_data_problem(bytes); !problem.empty()) {
+      throw ImageUnreadable(
+          fmt::format("{}: the JPEG's image data is incomplete or damaged (libjpeg: {})", name, problem));
     }
   }
-  if (!is_format_read(bytes) || bytes.size() > static_cast<std::size_t>(INT_MAX)) return {};
-  const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8U, const_cast<std::uint8_t*>(bytes.data()));
-  try {
-    return cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception&) {
-    return {};  // OpenCV's own checks refused it: no image we can decode
+  return decode_with_opencv(bytes, name, *header);
+}
+
+std::vector<std::uint8_t> checked_read(const std::filesystem::path& path, const std::string& name,
+                                       const ImageLimits& limits) {
+  // Non-blocking: a FIFO named like an image must not hang the open.
+  const OpenFile file(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK));
+  if (file.fd() < 0) {
+    if (errno == ENOENT || errno == ENOTDIR) return {};
+    throw ImageUnreadable(fmt::format("{}: cannot be opened: {}", name, std::strerror(errno)));
   }
+  struct stat status {};
+  if (::fstat(file.fd(), &status) != 0 || !S_ISREG(status.st_mode)) return {};
+  const auto size = static_cast<std::uint64_t>(status.st_size);
+  if (size > static_cast<std::uint64_t>(limits.max_file_bytes())) {
+    throw ImageTooLarge(
+        fmt::format("{}: the file is {} bytes ({}), more than any image within the limits can need ({} bytes; "
+                    "BOSFUSE_MAX_IMAGE_PIXELS, BOSFUSE_MAX_IMAGE_METADATA_MB); not read",
+                    name, size, megabytes(static_cast<double>(size)), limits.max_file_bytes()));
+  }
+  FileBytes source(file.fd(), size);
+  if (!check_before_reading(source, name, limits)) return {};
+  return read_whole(file.fd(), size, name);
+}
+
+}  // namespace
+
+cv::Mat decode_image(std::span<const std::uint8_t> bytes, const std::string& name, const ImageLimits& limits) {
+  return naming_the_file(name, [&] { return checked_decode(bytes, name, limits); });
+}
+
+std::vector<std::uint8_t> read_image_bytes(const std::filesystem::path& path, const ImageLimits& limits) {
+  const std::string name = path.string();
+  return naming_the_file(name, [&] { return checked_read(path, name, limits); });
 }
 
 cv::Mat read_image_file(const std::filesystem::path& path, const ImageLimits& limits) {
-  std::error_code error;
-  if (!std::filesystem::is_regular_file(path, error)) return {};
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) return {};
-  const auto size = in.tellg();
-  if (size <= 0) return {};
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
-  in.seekg(0);
-  if (!in.read(reinterpret_cast<char*>(bytes.data()), size)) return {};
+  const std::vector<std::uint8_t> bytes = read_image_bytes(path, limits);
+  if (bytes.empty()) return {};
   return decode_image(bytes, path.string(), limits);
 }
 

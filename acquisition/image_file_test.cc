@@ -1,9 +1,11 @@
 #include "acquisition/image_file.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <cstdint>
 #include <cstdlib>
+#include <new>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
@@ -75,16 +77,23 @@ TEST(ImageFile, TheLimitsApplyToEveryFormatWithAHeaderReader) {
 TEST(ImageFile, TheLimitsComeFromTheEnvironment) {
   ::setenv("BOSFUSE_MAX_IMAGE_PIXELS", "1000", 1);
   ::setenv("BOSFUSE_MAX_IMAGE_SIDE_PX", "50", 1);
+  ::setenv("BOSFUSE_MAX_IMAGE_METADATA_MB", "3", 1);
   const ImageLimits limits = ImageLimits::from_environment();
   ::setenv("BOSFUSE_MAX_IMAGE_PIXELS", "lots", 1);
   EXPECT_THROW(ImageLimits::from_environment(), std::invalid_argument);
+  ::setenv("BOSFUSE_MAX_IMAGE_PIXELS", "1000", 1);
+  ::setenv("BOSFUSE_MAX_IMAGE_METADATA_MB", "-1", 1);
+  EXPECT_THROW(ImageLimits::from_environment(), std::invalid_argument);
   ::unsetenv("BOSFUSE_MAX_IMAGE_PIXELS");
   ::unsetenv("BOSFUSE_MAX_IMAGE_SIDE_PX");
+  ::unsetenv("BOSFUSE_MAX_IMAGE_METADATA_MB");
   EXPECT_EQ(limits.max_pixels, 1000);
   EXPECT_EQ(limits.max_side_px, 50);
+  EXPECT_EQ(limits.max_metadata_bytes, 3'000'000);
   const ImageLimits defaults = ImageLimits::from_environment();
   EXPECT_EQ(defaults.max_pixels, 100'000'000);
   EXPECT_EQ(defaults.max_side_px, 30'000);
+  EXPECT_EQ(defaults.max_metadata_bytes, 64'000'000);
 }
 
 // Found by fuzzing: Debian's OpenCV hands a DICOM header to GDCM, which
@@ -152,6 +161,239 @@ TEST(ImageFile, MissingOrUndecodableFilesAreEmpty) {
   EXPECT_TRUE(read_image_file(dir / "junk.png").empty());
   testing::write_file(dir / "ok.png", testing::encoded(testing::textured_frame(4), ".png"));
   EXPECT_EQ(read_image_file(dir / "ok.png").size(), cv::Size(64, 48));
+}
+
+// The most this process has held in memory so far, in bytes.
+std::int64_t peak_memory_bytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<std::int64_t>(usage.ru_maxrss) * 1024;
+}
+
+constexpr std::uint64_t kPaddedBytes = 1'900'000'000;
+
+// The probe's file: a real 256x256 image padded to 1.9 GB (sparse: no disk
+// is used), once read whole (2.03 GB and 8.9 s for the PNG). Now the file's
+// size is held against what 256x256 px can need in each format, from the
+// header alone: refused with the file's name, its size and the limit, and
+// the process's memory does not grow by anything like the padding.
+TEST(ImageFile, APaddedImageIsRefusedBeforeItIsReadWhole) {
+  testing::TempDir dir;
+  const cv::Mat image = testing::textured_frame(5, CV_8U, {256, 256});
+  const std::int64_t peak_before = peak_memory_bytes();
+  for (const char* extension : {".png", ".jpg", ".tif", ".bmp", ".pgm"}) {
+    const auto path = dir / (std::string("padded") + extension);
+    testing::write_padded(path, testing::encoded(image, extension), kPaddedBytes);
+    try {
+      read_image_file(path);
+      FAIL() << extension << " was decoded";
+    } catch (const ImageTooLarge& e) {
+      const std::string message = e.what();
+      EXPECT_EQ(message.rfind(path.string() + ": the file is 1900000000 bytes (1900.0 MB), more than a 256x256 px ", 0),
+                0u)
+          << message;
+      EXPECT_NE(message.find("can need (at most "), std::string::npos) << message;
+      EXPECT_NE(message.find("BOSFUSE_MAX_IMAGE_METADATA_MB); not read"), std::string::npos) << message;
+    }
+    EXPECT_THROW(read_image_bytes(path), ImageTooLarge) << extension;
+  }
+  EXPECT_LT(peak_memory_bytes() - peak_before, 200'000'000) << "the padding was read";
+}
+
+// The limit on a file's size is what its header's pixels can need, as
+// stated: twice the deepest pixel of the format, plus the metadata
+// allowance. A file of exactly that size is decoded, one byte more is not,
+// from memory as from a file.
+TEST(ImageFile, AFileIsAllowedTwiceItsDeepestPixelsPlusTheMetadataAllowance) {
+  testing::TempDir dir;
+  const ImageLimits limits{100'000, 1000, 50'000};
+  const cv::Mat image = testing::textured_frame(6, CV_8U, {64, 48});
+  const struct {
+    const char* extension;
+    ImageFormat format;
+    int deepest_bytes;
+  } formats[] = {{".png", ImageFormat::kPng, 8},
+                 {".jpg", ImageFormat::kJpeg, 4},
+                 {".tif", ImageFormat::kTiff, 32},
+                 {".bmp", ImageFormat::kBmp, 4},
+                 {".pgm", ImageFormat::kPnm, 18}};
+  for (const auto& f : formats) {
+    SCOPED_TRACE(f.extension);
+    const std::int64_t most = limits.max_file_bytes(f.format, {64, 48});
+    EXPECT_EQ(most, 2 * 64 * 48 * f.deepest_bytes + 50'000);
+    std::vector<std::uint8_t> bytes = testing::encoded(image, f.extension);
+    bytes.resize(static_cast<std::size_t>(most), 0);
+    EXPECT_EQ(decode_image(bytes, "exact", limits).size(), image.size());
+    testing::write_padded(dir / "exact", bytes, bytes.size());
+    EXPECT_EQ(read_image_file(dir / "exact", limits).size(), image.size());
+    bytes.push_back(0);
+    EXPECT_THROW(decode_image(bytes, "over", limits), ImageTooLarge);
+    testing::write_padded(dir / "over", bytes, bytes.size());
+    EXPECT_THROW(read_image_file(dir / "over", limits), ImageTooLarge);
+  }
+  EXPECT_EQ(limits.max_file_bytes(), 2 * 100'000 * 32 + 50'000) << "the deepest format at the pixel limit";
+  EXPECT_EQ(ImageLimits{}.max_file_bytes(), 6'464'000'000);
+}
+
+// Before its header is read: a file larger than any image within the limits
+// can need is refused from its size alone, whatever it holds.
+TEST(ImageFile, AFileLargerThanAnyImageWithinTheLimitsIsRefusedFromItsSize) {
+  testing::TempDir dir;
+  testing::write_padded(dir / "huge.png", {'j', 'u', 'n', 'k'}, 7'000'000'000);
+  try {
+    read_image_file(dir / "huge.png");
+    FAIL() << "read";
+  } catch (const ImageTooLarge& e) {
+    EXPECT_EQ(std::string(e.what()),
+              (dir / "huge.png").string() +
+                  ": the file is 7000000000 bytes (7000.0 MB), more than any image within the limits can need "
+                  "(6464000000 bytes; BOSFUSE_MAX_IMAGE_PIXELS, BOSFUSE_MAX_IMAGE_METADATA_MB); not read");
+  }
+}
+
+// Metadata before the pixels is read by the format's library only up to the
+// allowance: a PNG with a 1.9 GB chunk before its image data is refused
+// without reading the chunk through.
+TEST(ImageFile, AHeaderLongerThanTheMetadataAllowanceIsRefused) {
+  testing::TempDir dir;
+  std::vector<std::uint8_t> png = testing::encoded(testing::textured_frame(7), ".png");
+  // After the signature and IHDR (8 + 25 bytes): a private chunk "prVt" claiming 1.9 GB.
+  const std::uint32_t length = 1'900'000'000;
+  const std::vector<std::uint8_t> chunk = {static_cast<std::uint8_t>(length >> 24),
+                                           static_cast<std::uint8_t>(length >> 16),
+                                           static_cast<std::uint8_t>(length >> 8),
+                                           static_cast<std::uint8_t>(length),
+                                           'p',
+                                           'r',
+                                           'V',
+                                           't'};
+  png.insert(png.begin() + 33, chunk.begin(), chunk.end());
+  testing::write_padded(dir / "chunk.png", png, 1'950'000'000);
+  const ImageLimits limits{100'000'000, 30'000, 1'000'000};
+  try {
+    read_image_file(dir / "chunk.png", limits);
+    FAIL() << "read";
+  } catch (const ImageUnreadable& e) {
+    EXPECT_EQ(std::string(e.what()), (dir / "chunk.png").string() +
+                                         ": not a readable PNG: its chunks before the image data are longer than "
+                                         "allowed")
+        << e.what();
+  }
+}
+
+// Half an image, and one missing only its last byte: refused in every
+// format, naming the file, with the format library's own word where it has
+// one. OpenCV alone decodes half a JPEG, grey where the data ran out.
+TEST(ImageFile, ATruncatedImageIsRefusedNamingTheFile) {
+  testing::TempDir dir;
+  const cv::Mat image = testing::textured_frame(8, CV_8U, {320, 240});
+  for (const char* extension : {".jpg", ".png", ".tif", ".bmp", ".pgm"}) {
+    const std::vector<std::uint8_t> whole = testing::encoded(image, extension);
+    for (const std::size_t kept : {whole.size() / 2, whole.size() - 1}) {
+      SCOPED_TRACE(std::string(extension) + " of " + std::to_string(kept) + " bytes");
+      const auto path = dir / (std::string("cut") + extension);
+      testing::write_file(path, std::vector<std::uint8_t>(whole.begin(), whole.begin() + kept));
+      try {
+        read_image_file(path);
+        FAIL() << "decoded";
+      } catch (const ImageUnreadable& e) {
+        EXPECT_EQ(std::string(e.what()).rfind(path.string() + ": ", 0), 0u) << e.what();
+        if (std::string(extension) == ".jpg") {
+          EXPECT_NE(std::string(e.what()).find("the JPEG's image data is incomplete or damaged (libjpeg: "),
+                    std::string::npos)
+              << e.what();
+        }
+      }
+    }
+  }
+  const std::vector<std::uint8_t> jpeg = testing::encoded(image, ".jpg");
+  const std::vector<std::uint8_t> half(jpeg.begin(), jpeg.begin() + jpeg.size() / 2);
+  EXPECT_FALSE(cv::imdecode(half, cv::IMREAD_UNCHANGED).empty()) << "what OpenCV makes of half a JPEG";
+  EXPECT_EQ(jpeg_data_problem(half), "Premature end of JPEG file");
+  EXPECT_EQ(jpeg_data_problem(jpeg), "");
+}
+
+// Not cut short but damaged: an end-of-image marker in the middle of the
+// data, where OpenCV decodes the rest as grey. libjpeg says the data is
+// corrupt, and the image is refused.
+TEST(ImageFile, AJpegWhoseDataIsDamagedIsRefused) {
+  std::vector<std::uint8_t> jpeg = testing::encoded(testing::textured_frame(11, CV_8U, {320, 240}), ".jpg");
+  const std::size_t middle = jpeg.size() / 2;
+  jpeg[middle] = 0xFF;
+  jpeg[middle + 1] = 0xD9;
+  EXPECT_FALSE(cv::imdecode(jpeg, cv::IMREAD_UNCHANGED).empty()) << "what OpenCV makes of it";
+  try {
+    decode_image(jpeg, "damaged.jpg");
+    FAIL() << "decoded";
+  } catch (const ImageUnreadable& e) {
+    EXPECT_EQ(
+        std::string(e.what()).rfind("damaged.jpg: the JPEG's image data is incomplete or damaged (libjpeg: Corrupt "
+                                    "JPEG data",
+                                    0),
+        0u)
+        << e.what();
+  }
+}
+
+// A TIFF's directory can come before its pixels: cut short, its header
+// still reads, and its strips run past the end of the file.
+TEST(ImageFile, ATiffWhoseStripsRunPastItsEndIsTruncated) {
+  const cv::Mat image = testing::textured_frame(9, CV_8U, {40, 30});
+  std::vector<std::uint8_t> tiff = testing::tiff_with_directory_first(image);
+  const cv::Mat whole = decode_image(tiff, "first.tif");
+  ASSERT_EQ(whole.size(), image.size());
+  EXPECT_EQ(cv::norm(whole, image, cv::NORM_INF), 0.0);
+  const std::size_t size = tiff.size();
+  tiff.resize(size - 100);
+  try {
+    decode_image(tiff, "cut.tif");
+    FAIL() << "decoded";
+  } catch (const ImageUnreadable& e) {
+    EXPECT_EQ(std::string(e.what()), "cut.tif: truncated: the TIFF's image data runs to byte " + std::to_string(size) +
+                                         ", the file has " + std::to_string(size - 100) + " bytes");
+  }
+}
+
+// OpenCV's allocator, which every decoded image comes from, refusing what
+// is larger than `most_bytes` as an exhausted heap does.
+class RefusingAllocator : public cv::MatAllocator {
+ public:
+  explicit RefusingAllocator(std::size_t most_bytes) : most_bytes_(most_bytes) { cv::Mat::setDefaultAllocator(this); }
+  ~RefusingAllocator() override { cv::Mat::setDefaultAllocator(previous_); }
+  cv::UMatData* allocate(int dims, const int* sizes, int type, void* data, std::size_t* step, cv::AccessFlag flags,
+                         cv::UMatUsageFlags usage) const override {
+    std::size_t bytes = CV_ELEM_SIZE(type);
+    for (int i = 0; i < dims; ++i) bytes *= static_cast<std::size_t>(sizes[i]);
+    if (!data && bytes > most_bytes_) throw std::bad_alloc();
+    return standard_->allocate(dims, sizes, type, data, step, flags, usage);
+  }
+  bool allocate(cv::UMatData* data, cv::AccessFlag flags, cv::UMatUsageFlags usage) const override {
+    return standard_->allocate(data, flags, usage);
+  }
+  void deallocate(cv::UMatData* data) const override { standard_->deallocate(data); }
+
+ private:
+  std::size_t most_bytes_;
+  cv::MatAllocator* standard_ = cv::Mat::getStdAllocator();
+  cv::MatAllocator* previous_ = cv::Mat::getDefaultAllocator();
+};
+
+// Under `ulimit -v` the probe met a bare std::bad_alloc. Running out of
+// memory while decoding is an error that names the file, like any other.
+TEST(ImageFile, RunningOutOfMemoryWhileDecodingIsAnErrorNamingTheFile) {
+  testing::TempDir dir;
+  for (const auto& [extension, format] : {std::pair{".png", "PNG"}, {".jpg", "JPEG"}, {".tif", "TIFF"}}) {
+    const auto path = dir / (std::string("frame") + extension);
+    testing::write_file(path, testing::encoded(testing::textured_frame(10, CV_8U, {320, 240}), extension));
+    const RefusingAllocator refusing(10'000);
+    try {
+      read_image_file(path);
+      FAIL() << extension << " decoded";
+    } catch (const ImageUnreadable& e) {
+      EXPECT_EQ(std::string(e.what()), path.string() + ": out of memory decoding its 320x240 px " + format + " image");
+    }
+  }
+  EXPECT_EQ(read_image_file(dir / "frame.png").size(), cv::Size(320, 240)) << "with memory again";
 }
 
 }  // namespace

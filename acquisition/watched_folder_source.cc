@@ -1,11 +1,9 @@
 #include "acquisition/watched_folder_source.h"
 
-#include <spdlog/spdlog.h>
+#include <fmt/format.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
-#include <fstream>
 #include <thread>
 
 #include "acquisition/exif_time.h"
@@ -24,30 +22,19 @@ std::string lower_extension(const fs::path& path) {
   return ext;
 }
 
-std::vector<std::uint8_t> read_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-bool ends_with(const std::vector<std::uint8_t>& bytes, std::span<const std::uint8_t> tail) {
-  return bytes.size() >= tail.size() && std::equal(tail.begin(), tail.end(), bytes.end() - tail.size());
-}
-
-// A format's own end marker, where it has one: decoders are lenient with a
-// truncated JPEG (they fill the rest grey), so a file missing its end is
-// still being written.
-bool has_end_marker(const fs::path& path, const std::vector<std::uint8_t>& bytes) {
-  const std::string ext = lower_extension(path);
-  static constexpr std::array<std::uint8_t, 2> kJpegEnd = {0xFF, 0xD9};
-  static constexpr std::array<std::uint8_t, 8> kPngEnd = {'I', 'E', 'N', 'D', 0xAE, 0x42, 0x60, 0x82};
-  if (ext == ".jpg" || ext == ".jpeg") return ends_with(bytes, kJpegEnd);
-  if (ext == ".png") return ends_with(bytes, kPngEnd);
-  return true;
-}
-
 std::int64_t file_time_ns(fs::file_time_type t) {
   const auto system = std::chrono::file_clock::to_sys(t);
   return std::chrono::duration_cast<std::chrono::nanoseconds>(system.time_since_epoch()).count();
+}
+
+// OpenCV's PNG decoder prints libpng's complaint (naming no file) each time
+// it meets a PNG that ends early: a PNG still being written is left alone
+// until it ends with its IEND chunk, the end every PNG has.
+bool ends_before_iend(const std::vector<std::uint8_t>& bytes) {
+  static constexpr std::uint8_t kIend[] = {'I', 'E', 'N', 'D', 0xAE, 0x42, 0x60, 0x82};
+  MemoryBytes source(bytes);
+  return image_format(source) == ImageFormat::kPng &&
+         (bytes.size() < sizeof kIend || !std::equal(std::begin(kIend), std::end(kIend), bytes.end() - sizeof kIend));
 }
 
 bool is_temporary_name(const fs::path& path) {
@@ -101,42 +88,63 @@ std::optional<CapturedFrame> WatchedFolderSource::take_ready_file() {
     const auto size = fs::file_size(path, error);
     const auto modified = fs::last_write_time(path, error);
     if (error) continue;  // renamed or removed meanwhile
-    auto [it, added] = candidates_.try_emplace(path, Candidate{size, modified, now, now});
+    auto [it, added] = candidates_.try_emplace(path, Candidate{size, modified, now, now, {}});
     Candidate& c = it->second;
-    if (!added && (c.size != size || c.modified != modified)) c = {size, modified, now, c.first_seen};
+    if (!added && (c.size != size || c.modified != modified)) c = {size, modified, now, c.first_seen, {}};
     if (size == 0 || now - c.unchanged_since < options_.settle) continue;
-    if (auto frame = try_read(path)) {
-      done_.insert(path);
-      candidates_.erase(path);
-      return frame;
+    if (c.failure.empty()) {
+      if (auto frame = try_read(path, c)) {
+        forget(path);
+        return frame;
+      }
     }
     if (now - c.first_seen > options_.give_up_after) {
-      spdlog::warn("{}: {} never became a complete image; skipped", describe(), path.filename().string());
-      done_.insert(path);
-      candidates_.erase(path);
+      const std::string failure = c.failure;
+      forget(path);
+      throw FrameLost(fmt::format("{} never became a complete image ({}); the frame is skipped",
+                                  path.filename().string(), failure));
     }
   }
   return std::nullopt;
 }
 
-std::optional<CapturedFrame> WatchedFolderSource::try_read(const fs::path& path) {
-  const std::vector<std::uint8_t> bytes = read_bytes(path);
-  std::error_code error;
-  if (bytes.size() != fs::file_size(path, error) || error || !has_end_marker(path, bytes)) return std::nullopt;
+void WatchedFolderSource::forget(const fs::path& path) {
+  done_.insert(path);
+  candidates_.erase(path);
+}
+
+std::optional<CapturedFrame> WatchedFolderSource::try_read(const fs::path& path, Candidate& candidate) {
+  std::vector<std::uint8_t> bytes;
   CapturedFrame frame;
   try {
-    frame.image = decode_image(bytes, path.filename().string());
+    bytes = read_image_bytes(path);
+    std::error_code error;
+    if (bytes.empty()) {
+      candidate.failure = "not a PNG, JPEG, TIFF, BMP or PNM image";
+      return std::nullopt;
+    }
+    if (bytes.size() != fs::file_size(path, error) || error) {
+      candidate.failure = "it changed while it was read";
+      return std::nullopt;
+    }
+    if (ends_before_iend(bytes)) {
+      candidate.failure = "the PNG does not end with its IEND chunk";
+      return std::nullopt;
+    }
+    frame.image = decode_image(bytes, path.string());
   } catch (const ImageTooLarge& e) {
-    spdlog::warn("{}: {}; skipped", describe(), e.what());
-    done_.insert(path);  // never a frame, however long it settles
+    forget(path);  // never a frame, however long it settles
+    throw FrameLost(std::string(e.what()) + "; the frame is skipped");
+  } catch (const ImageUnreadable& e) {  // perhaps still being written: tried again once it changes
+    candidate.failure = e.what();
     return std::nullopt;
   }
-  if (frame.image.empty()) return std::nullopt;
   frame.origin = path.filename().string();
   if (const auto exif = exif_capture_time(bytes)) {
     frame.device_t_ns = exif->t_ns;
     frame.t_ns = exif->t_ns + std::llround(options_.camera_clock_offset_s * 1e9);
   } else {
+    std::error_code error;
     frame.t_ns = file_time_ns(fs::last_write_time(path, error));
   }
   return frame;

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "acquisition/clock.h"
+#include "tests/support/forged_image.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/test_images.h"
 
@@ -104,6 +105,39 @@ TEST_F(WatchedFolder, ExifTimePlusOffsetElseFileTime) {
   ASSERT_TRUE(plain.has_value());
   EXPECT_FALSE(plain->device_t_ns.has_value());
   EXPECT_NEAR(static_cast<double>(plain->t_ns - before_ns), 0.0, 2e9);  // its modification time
+}
+
+// A file padded to 1.9 GB is a lost frame at once (it can never become an
+// image); half a JPEG is tried again as long as it may still be written, then
+// lost with libjpeg's reason. Either way the folder goes on to the next file.
+TEST_F(WatchedFolder, APaddedOrTruncatedFileIsALostFrameAndTheFolderGoesOn) {
+  WatchedFolderSource source({dir.path(), 100ms, 0, 1s});
+  source.open();
+  testing::write_padded(dir.path() / "a_padded.png", encoded(textured_frame(8), ".png"), 1'900'000'000);
+  const std::vector<std::uint8_t> jpeg = encoded(textured_frame(9, CV_8U, {320, 240}), ".jpg");
+  write_file(dir.path() / "b_half.jpg", std::vector<std::uint8_t>(jpeg.begin(), jpeg.begin() + jpeg.size() / 2));
+  const cv::Mat good = textured_frame(10);
+  write_file(dir.path() / "c_good.png", encoded(good, ".png"));
+
+  std::vector<std::string> lost;
+  std::vector<CapturedFrame> frames;
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while ((lost.size() < 2 || frames.empty()) && std::chrono::steady_clock::now() < deadline) {
+    try {
+      if (auto frame = source.next(200ms)) frames.push_back(std::move(*frame));
+    } catch (const FrameLost& e) {
+      lost.push_back(e.what());
+    }
+  }
+  ASSERT_EQ(lost.size(), 2u);
+  EXPECT_EQ(lost[0].rfind((dir.path() / "a_padded.png").string() + ": the file is 1900000000 bytes", 0), 0u) << lost[0];
+  EXPECT_NE(lost[0].find("; the frame is skipped"), std::string::npos) << lost[0];
+  EXPECT_EQ(lost[1].rfind("b_half.jpg never became a complete image (", 0), 0u) << lost[1];
+  EXPECT_NE(lost[1].find("libjpeg: Premature end of JPEG file"), std::string::npos) << lost[1];
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].origin, "c_good.png");
+  EXPECT_TRUE(same_pixels(frames[0].image, good));
+  EXPECT_FALSE(source.next(300ms).has_value()) << "each lost file is lost once";
 }
 
 TEST_F(WatchedFolder, MissingFolderIsADeviceError) {

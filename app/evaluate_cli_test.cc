@@ -159,6 +159,61 @@ TEST_F(EvaluateCli, AnImageDeclaringTooManyPixelsIsRefusedUnread) {
   EXPECT_NE(limited.output.find("declares 128x96 px"), std::string::npos) << limited.output;
 }
 
+// The probe's file: a real 256x256 PNG padded to 1.9 GB (68 KB on disk,
+// sparse), once read whole in 8.9 s and 2.03 GB. Refused from its header and
+// its size, naming the file; the process never holds a tenth of the padding.
+TEST_F(EvaluateCli, APaddedImageIsRefusedBeforeItIsReadWhole) {
+  cv::Mat image(256, 256, CV_8U);
+  cv::randu(image, 0, 255);
+  std::vector<std::uint8_t> png;
+  ASSERT_TRUE(cv::imencode(".png", image, png));
+  testing::write_padded(path("padded.png"), png, 1'900'000'000);
+  for (const std::string& command : {"evaluate " + path("padded.png") + " " + path("meas.png"),
+                                     "quality " + path("padded.png") + " --reference " + path("ref.png")}) {
+    const auto run = streams(command);
+    EXPECT_EQ(run.exit_code, 1) << command << "\n" << run.err;
+    EXPECT_NE(run.err.find(path("padded.png") + ": the file is 1900000000 bytes (1900.0 MB), more than a 256x256 px "
+                                                "PNG can need"),
+              std::string::npos)
+        << run.err;
+    EXPECT_GT(run.peak_memory_bytes, 0);
+    EXPECT_LT(run.peak_memory_bytes, 300'000'000) << command;
+  }
+}
+
+// Under `ulimit -v 1.5G` the probe's padded PNG ended in a bare
+// std::bad_alloc. A file within every limit (a header declaring 10000x10000
+// px may come with 1.2 GB) can still need more memory than there is:
+// the error names the file and its size.
+TEST_F(EvaluateCli, RunningOutOfMemoryForAnImageIsAnErrorNamingTheFile) {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  GTEST_SKIP() << "sanitizers reserve terabytes of address space: no ulimit -v fits them "
+                  "(ImageFile.RunningOutOfMemoryWhileDecodingIsAnErrorNamingTheFile runs under them)";
+#endif
+  testing::write_padded(path("big.png"), testing::png_declaring(10000, 10000), 1'200'000'000);
+  const auto run = testing::run_with_streams(
+      "ulimit -v 1000000; exec " + kBosfuse + " evaluate " + path("big.png") + " " + path("meas.png"), dir_.path());
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_NE(run.err.find(path("big.png") + ": out of memory for its 1200000000 bytes (1200.0 MB)"), std::string::npos)
+      << run.err;
+}
+
+// Half a JPEG: OpenCV decodes it with a warning and grey for the missing
+// half. bosfuse refuses it, naming the file, in libjpeg's own words.
+TEST_F(EvaluateCli, HalfAJpegIsRefusedNamingTheFile) {
+  std::vector<std::uint8_t> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", cv::imread(path("meas.png"), cv::IMREAD_UNCHANGED), jpeg));
+  jpeg.resize(jpeg.size() / 2);
+  std::ofstream(path("half.jpg"), std::ios::binary)
+      .write(reinterpret_cast<const char*>(jpeg.data()), static_cast<std::streamsize>(jpeg.size()));
+  const auto run = streams("evaluate " + path("ref.png") + " " + path("half.jpg"));
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_NE(run.err.find(path("half.jpg") +
+                         ": the JPEG's image data is incomplete or damaged (libjpeg: Premature end of JPEG file)"),
+            std::string::npos)
+      << run.err;
+}
+
 // A 4000×3000 pair passes the pixel limit but needs about 190 MB to
 // evaluate. Under a 450 MB address-space limit (ulimit -v) bosfuse has about
 // 95 MB left once it is loaded and has decoded both images: the field is

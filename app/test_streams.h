@@ -7,8 +7,10 @@
 
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -24,6 +26,8 @@ struct StreamsResult {
   int exit_code = -1;
   std::string out;  // standard output
   std::string err;  // standard error
+  // The most memory (resident) the command, or any process it ran, held.
+  std::int64_t peak_memory_bytes = 0;
 };
 
 // Runs `command` under coreutils' timeout, its streams into files in `scratch`.
@@ -44,14 +48,16 @@ inline StreamsResult run_with_streams(const std::string& command, const std::fil
   posix_spawn_file_actions_destroy(&actions);
   if (spawned != 0) throw std::runtime_error("cannot run: " + command);
   int status = 0;
-  waitpid(pid, &status, 0);
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);  // usage includes the descendants timeout waited for
   const auto read = [](const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     std::stringstream text;
     text << in.rdbuf();
     return text.str();
   };
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read(out_path), read(err_path)};
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read(out_path), read(err_path),
+          static_cast<std::int64_t>(usage.ru_maxrss) * 1024};
 }
 
 }  // namespace bosfuse::testing

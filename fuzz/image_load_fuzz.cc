@@ -9,7 +9,9 @@
 // images at 4 Mpixel (set in LLVMFuzzerInitialize) so a forged header cannot
 // run the fuzzer out of memory; the same cap belongs in bosfuse's loader.
 // Invariants: read_image returns a non-empty image or throws a
-// std::exception whose message names the file; it agrees with cv::imdecode
+// std::exception whose message names the file; it never returns a JPEG in
+// which libjpeg finds the image data incomplete or damaged (OpenCV alone
+// decodes half a JPEG with a warning); it agrees with cv::imdecode
 // on the same bytes (when both decode them, the same size, depth and
 // channels); exif_capture_time returns nothing or a time whose seconds
 // fit in int64 nanoseconds (never undefined behaviour on a forged date).
@@ -27,8 +29,9 @@
 #include <vector>
 
 #include "acquisition/exif_time.h"
-#include "pipeline/image_io.h"
+#include "acquisition/image_header.h"
 #include "fuzz/fuzz_support.h"
+#include "pipeline/image_io.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   // Read by OpenCV once, at the first decode; must be set before it.
@@ -59,6 +62,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // Only what bosfuse decoded is compared with OpenCV's own decoder: fed
   // anything, OpenCV would also hand DICOM and GDAL formats to decoders that
   // allocate gigabytes before its limits apply (bosfuse refuses them).
+  if (file_ok && size >= 3 && data[0] == 0xff && data[1] == 0xd8 && data[2] == 0xff) {
+    FUZZ_CHECK(bosfuse::acquisition::jpeg_data_problem(std::span(data, size)).empty());
+  }
   if (file_ok) {
     cv::Mat from_memory;
     try {

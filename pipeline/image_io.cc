@@ -10,7 +10,8 @@ namespace bosfuse::pipeline {
 
 cv::Mat read_image(const std::string& path, const std::string& role) {
   if (!std::filesystem::exists(path)) throw std::runtime_error(role + " " + path + ": no such file");
-  cv::Mat image = acquisition::read_image_file(path);  // throws when the header declares too many pixels
+  // Throws, naming the file, for an image too large, truncated or damaged.
+  cv::Mat image = acquisition::read_image_file(path);
   if (image.empty())
     throw std::runtime_error(role + " " + path + ": unreadable image (not a PNG, JPEG, TIFF, BMP or PNM image bosfuse can decode)");
   return image;

@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <cstring>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <type_traits>
@@ -19,12 +18,18 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-std::vector<std::uint8_t> read_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(fs::exists(path) ? "cannot open the file" : "no such file");
-  std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (in.bad()) throw std::runtime_error("cannot read the file");
-  return bytes;
+// The frame's bytes, read whole only once its size and header pass the
+// image limits (acquisition/image_file.h); empty for a file of no image
+// format bosfuse reads. `time` is the frame's time even when it is refused.
+std::vector<std::uint8_t> read_frame_bytes(const std::string& path, FrameTime& time) {
+  std::error_code error;
+  if (!fs::exists(path, error)) throw std::runtime_error("no such file");
+  try {
+    return acquisition::read_image_bytes(path);
+  } catch (...) {
+    time = frame_time(path, {});
+    throw;
+  }
 }
 
 int first_window_px(const fusion::EvaluatorOptions& options) {
@@ -52,7 +57,7 @@ SequenceFrameResult SequenceEvaluator::evaluate(const std::string& frame_path) {
   SequenceFrameResult result;
   result.name = frame_path;
   try {
-    const std::vector<std::uint8_t> bytes = read_bytes(frame_path);
+    const std::vector<std::uint8_t> bytes = read_frame_bytes(frame_path, result.time);
     result.time = frame_time(frame_path, bytes);
     const cv::Mat image = acquisition::decode_image(bytes, frame_path);
     if (image.empty())
