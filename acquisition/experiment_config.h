@@ -35,8 +35,8 @@ constexpr double kShortestPollPeriodS = 0.001;
 constexpr double kSmallestTimeScale = 1e-3;
 constexpr double kLargestTimeScale = 1e6;
 // camera_clock_offset_s: a camera whose clock was never set (2000-01-01) is
-// decades off; a century is the most an int64 nanosecond time stays far
-// from overflowing with.
+// decades off. A century is more than any real offset and keeps a frame's
+// time far inside what int64 nanoseconds hold (±292 years).
 constexpr double kLargestClockOffsetS = 100 * 365.25 * 86400;
 
 struct ModbusDeviceConfig {

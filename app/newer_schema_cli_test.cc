@@ -103,6 +103,12 @@ TEST_F(NewerSchemaCli, EveryCommandThatOpensTheStoreRefusesItAndChangesNothing) 
     EXPECT_NE(result.output.find(refusal), std::string::npos) << result.output;
     EXPECT_EQ(changes(before, snapshot(run_)), "") << "the refused run changed";
   }
+  // A listing names the refused run and still lists the others.
+  testrun::create_run(dir_ / "runs" / "readable", false);
+  const auto listing = testing::run_command(kBosfuse + " runs " + shell_quote(dir_ / "runs"), 20);
+  EXPECT_EQ(listing.exit_code, 1) << listing.output;
+  EXPECT_NE(listing.output.find("readable "), std::string::npos) << listing.output;
+  EXPECT_NE(listing.output.find("1 of 2 runs could not be read: newer"), std::string::npos) << listing.output;
   for (const char* written : {".csv", ".h5", "-report", "-replay"}) {
     EXPECT_FALSE(fs::exists(out + written)) << out + written << " was written from a store that was refused";
   }
