@@ -33,6 +33,7 @@ std::string DevicePoller::Options::Validate() const {
   if (period <= std::chrono::nanoseconds::zero()) return "poll period must be positive";
   if (poll_count && *poll_count < 1) return "poll count must be at least 1";
   if (skipped_event_interval <= std::chrono::nanoseconds::zero()) return "skipped-poll event interval must be positive";
+  if (recovery_polls < 1) return "recovery polls must be at least 1";
   return ConnectionKeeper::Backoff{backoff_initial, backoff_max}.Validate();
 }
 
@@ -44,8 +45,10 @@ DevicePoller::DevicePoller(std::unique_ptr<ThermocoupleSource> source, std::int6
       channels_(source_->channel_infos()),
       options_(options),
       schedule_origin_(std::chrono::steady_clock::now()),
-      connection_({options.backoff_initial, options.backoff_max},
-                  [this](const std::string& kind, const std::string& message) { record_event(kind, message); }),
+      connection_(
+          {options.backoff_initial, options.backoff_max},
+          [this](const std::string& kind, const std::string& message) { record_event(kind, message); },
+          options.recovery_polls),
       alarms_(watch_alarms(name(), channels_, channel_ids_, options_.alarms)) {
   if (const std::string problem = options_.Validate(); !problem.empty()) {
     throw std::invalid_argument("device " + name() + ": " + problem);
@@ -127,13 +130,20 @@ bool DevicePoller::poll_once() {
   for (const storage::Sample& s : samples) report_alarms(alarms_.add_sample(s.channel_id, s.t_ns, s.status, s.value));
   const auto recovery = failure ? ConnectionKeeper::Recovery::kNone : connection_.succeeded();
   if (failure) note_failure(*failure, t_ns);
-  std::lock_guard lock(stats_mutex_);
-  stats_.last_samples = std::move(samples);
-  ++(failure ? stats_.polls_failed : stats_.polls_ok);
-  if (recovery == ConnectionKeeper::Recovery::kReconnected || recovery == ConnectionKeeper::Recovery::kRecovered) {
-    ++stats_.reconnects;
+  {
+    std::lock_guard lock(stats_mutex_);
+    stats_.last_samples = std::move(samples);
+    ++(failure ? stats_.polls_failed : stats_.polls_ok);
   }
+  count_recovery(recovery);
   return !failure;
+}
+
+void DevicePoller::count_recovery(ConnectionKeeper::Recovery recovery) {
+  using Recovery = ConnectionKeeper::Recovery;
+  if (recovery != Recovery::kReconnected && recovery != Recovery::kRecovered) return;  // not after a first connect
+  std::lock_guard lock(stats_mutex_);
+  ++stats_.reconnects;
 }
 
 void DevicePoller::count_missed_ticks(SteadyTime deadline, SteadyTime next) {
@@ -163,6 +173,7 @@ bool DevicePoller::poll_count_reached() const {
 
 void DevicePoller::loop() {
   poll_until_done();
+  count_recovery(connection_.settle());
   report_skipped(true);
 }
 
@@ -194,6 +205,7 @@ void DevicePoller::poll_until_done() {
     }
     const bool ok = poll_once();
     if (poll_count_reached()) {
+      count_recovery(connection_.settle());
       record_event("stopped", "poll count reached");
       return;
     }

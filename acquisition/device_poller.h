@@ -6,7 +6,9 @@
 // RunWriter. A failed poll stores samples with the failure's status (timeout
 // when the link broke, bad-reply when the device answered nonsense); the
 // outage is recorded once and retried with exponential backoff, and its end
-// is recorded with the length of the gap. Polls skipped because one overran
+// is recorded with the length of the gap and its failed polls, once the
+// device has answered Options::recovery_polls polls in a row: a device that
+// fails every other poll is one outage, not an event pair per poll. Polls skipped because one overran
 // are recorded too ("skipped" events), gathered so that a device always too
 // slow for its period adds one event per interval, not one per poll. One
 // dead device never stalls the others: each has its own thread (a
@@ -51,6 +53,9 @@ class DevicePoller : public DeviceWorker {
     // Called on the device's thread with "<device>: <event message>" for
     // each alarm raised or cleared; never once the poller is abandoned.
     std::function<void(const std::string&)> on_alarm = {};
+    // Polls in a row that must work before an outage is declared over; a
+    // failure among them continues the outage.
+    int recovery_polls = 3;
     std::string Validate() const;
   };
 
@@ -86,6 +91,7 @@ class DevicePoller : public DeviceWorker {
   SteadyTime next_tick_after(SteadyTime now) const;
   SteadyTime next_attempt(bool poll_ok) const;
   bool poll_count_reached() const;
+  void count_recovery(ConnectionKeeper::Recovery recovery);
 
   std::unique_ptr<ThermocoupleSource> source_;
   std::vector<std::int64_t> channel_ids_;

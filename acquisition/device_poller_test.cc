@@ -34,6 +34,7 @@ class ScriptedSource : public ThermocoupleSource {
   std::atomic<int> connect_failures_left{0};
   std::atomic<int> reads_failing_from{-1};  // read index from which reads fail
   std::atomic<int> reads_failing_count{0};
+  std::atomic<int> alternating_until{0};  // reads before this index fail every other time (the odd ones)
   SampleStatus failure_status = SampleStatus::kTimeout;
   std::optional<double> failure_raw;
   bool throw_unexpected = false;  // the first failing read throws something that is no DeviceError
@@ -61,7 +62,8 @@ class ScriptedSource : public ThermocoupleSource {
     const int index = counters->reads++;
     std::this_thread::sleep_for(read_time);
     const int from = reads_failing_from.load();
-    if (from >= 0 && index >= from && index < from + reads_failing_count.load()) {
+    const bool alternate_failure = index < alternating_until.load() && index % 2 == 1;
+    if (alternate_failure || (from >= 0 && index >= from && index < from + reads_failing_count.load())) {
       if (throw_unexpected && index == from) throw std::out_of_range("a bug in a device driver");
       throw DeviceError(failure_status == SampleStatus::kBadReply ? "exception reply" : "no reply", failure_status,
                         failure_raw);
@@ -319,6 +321,63 @@ TEST(DevicePoller, AnOutageIsRecordedOnceAndRetriedWithBackoff) {
   EXPECT_EQ(samples[9].status, SampleStatus::kOk);
 }
 
+// Debounce: a device that fails every other poll is one outage (two
+// events), not a disconnect/reconnect pair per poll. It ends only after
+// recovery_polls good polls in a row, saying how many polls failed, and
+// every failed poll is still a sample with the failure's status.
+TEST(DevicePoller, ADeviceFailingEveryOtherPollIsOneOutage) {
+  Harness h;
+  auto source = std::make_unique<ScriptedSource>();
+  source->alternating_until = 20;  // reads 1, 3, ... 19 fail
+  DevicePoller::Options options{10ms, 10ms, 80ms, 26};
+  options.recovery_polls = 3;
+  const auto stats = h.run(std::move(source), options, 1500ms);
+  EXPECT_EQ(stats.polls_ok + stats.polls_failed, 26);
+  EXPECT_EQ(stats.polls_failed, 10);
+  EXPECT_EQ(stats.reconnects, 1);
+  EXPECT_EQ(h.event_kinds(), (std::vector<std::string>{"connect", "disconnect", "reconnect", "stopped"}));
+  const auto events = h.store.events();
+  const auto reconnect =
+      std::find_if(events.begin(), events.end(), [](const auto& e) { return e.kind == "reconnect"; });
+  ASSERT_NE(reconnect, events.end());
+  EXPECT_NE(reconnect->message.find("(10 failed polls)"), std::string::npos) << reconnect->message;
+  const auto samples = h.store.read_samples(h.channels[0]);
+  ASSERT_EQ(samples.size(), 26u);
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const bool failed = i < 20 && i % 2 == 1;
+    EXPECT_EQ(samples[i].status, failed ? SampleStatus::kTimeout : SampleStatus::kOk) << i;
+  }
+}
+
+// Without the debounce (recovery_polls = 1) the same device is what the
+// probe found: an event pair per failed poll.
+TEST(DevicePoller, WithoutTheDebounceEveryFailedPollIsAnOutage) {
+  Harness h;
+  auto source = std::make_unique<ScriptedSource>();
+  source->alternating_until = 20;
+  DevicePoller::Options options{10ms, 10ms, 80ms, 26};
+  options.recovery_polls = 1;
+  h.run(std::move(source), options, 1500ms);
+  const auto kinds = h.event_kinds();
+  EXPECT_EQ(std::count(kinds.begin(), kinds.end(), "disconnect"), 10);
+  EXPECT_EQ(std::count(kinds.begin(), kinds.end(), "reconnect"), 10);
+}
+
+// A device that had come out of an outage, but not for recovery_polls polls
+// yet, when the poller stops is not left looking as if it still failed.
+TEST(DevicePoller, AnOutageEndingAtTheStopIsClosedAtItsFirstGoodPoll) {
+  Harness h;
+  auto source = std::make_unique<ScriptedSource>();
+  source->reads_failing_from = 4;
+  source->reads_failing_count = 1;
+  DevicePoller::Options options{10ms, 10ms, 80ms, 6};  // reads 0-5: one good read after the failure
+  options.recovery_polls = 3;
+  const auto stats = h.run(std::move(source), options, 800ms);
+  EXPECT_EQ(stats.polls_failed, 1);
+  EXPECT_EQ(stats.reconnects, 1);
+  EXPECT_EQ(h.event_kinds(), (std::vector<std::string>{"connect", "disconnect", "reconnect", "stopped"}));
+}
+
 // A device that answers with an exception keeps its link: the samples say
 // bad-reply with the device's code, and the link is not torn down.
 TEST(DevicePoller, BadRepliesKeepTheLinkAndTheirCode) {
@@ -395,6 +454,9 @@ TEST(DevicePoller, StopsAfterItsPollCount) {
 }
 
 TEST(DevicePoller, InvalidOptionsAreRefused) {
+  DevicePoller::Options no_recovery;
+  no_recovery.recovery_polls = 0;
+  EXPECT_NE(no_recovery.Validate(), "");
   Harness h;
   storage::RunWriter writer(h.store);
   EXPECT_THROW(DevicePoller(std::make_unique<ScriptedSource>(), h.device, h.channels, writer, {0ms, 20ms, 80ms, {}}),

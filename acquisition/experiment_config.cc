@@ -1,10 +1,15 @@
 #include "acquisition/experiment_config.h"
 
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <set>
 #include <sstream>
+
+#include "acquisition/folder_name.h"
+#include "acquisition/recorded_frame_source.h"
 
 namespace bosfuse::acquisition {
 namespace {
@@ -79,7 +84,11 @@ std::optional<EmfInput> read_emf_input(const TomlReader& r) {
   }
   const auto type = parse_thermocouple_type(*type_text);
   if (!type) r.fail("emf_type", "expected a thermocouple type: B, E, J, K, N, R, S or T");
-  EmfInput input{*type, r.optional_string("cold_junction").value_or(""), r.optional_number("cold_junction_c")};
+  // Absolute zero to beyond the hottest thermocouple type (B, 1820 °C).
+  const auto fixed_c = r.has("cold_junction_c")
+                           ? std::optional(r.number_in("cold_junction_c", 0, -273.15, 2000, "a temperature in °C"))
+                           : std::nullopt;
+  EmfInput input{*type, r.optional_string("cold_junction").value_or(""), fixed_c};
   if (input.cold_junction_channel.empty() == !input.cold_junction_c) {
     r.fail("", "a millivolt channel needs exactly one of cold_junction (a channel name) and cold_junction_c");
   }
@@ -109,7 +118,7 @@ void read_validity(const TomlReader& r, Channel& c) {
 template <typename Device>
 void read_schedule(const TomlReader& r, Device& d) {
   d.poll_period = r.seconds("poll_period_s", 1.0, kShortestPollPeriodS);
-  if (r.has("poll_count")) d.poll_count = r.integer_in("poll_count", 1, 1, std::numeric_limits<int>::max());
+  d.poll_count = r.optional_integer_in("poll_count", 1, std::numeric_limits<std::int64_t>::max());
   d.timeout = std::chrono::duration_cast<std::chrono::milliseconds>(r.seconds("timeout_s", 0.5, 0.001));
 }
 
@@ -153,9 +162,10 @@ ModbusChannel profile_channel(const TomlReader& r, const ModbusProfile& profile)
     return profile_cold_junction_channel(profile.name);
   }
   if (!input->is_integer()) r.fail("input", "expected an input number or \"cold-junction\"");
+  const auto number = static_cast<int>(r.integer_in("input", 0, profile.input_count - 1));
   const std::string tc_type = r.optional_string("tc_type").value_or("K");
   try {
-    return profile_input_channel(profile.name, static_cast<int>(*input->value<std::int64_t>()), tc_type);
+    return profile_input_channel(profile.name, number, tc_type);
   } catch (const std::invalid_argument& e) {
     r.fail("input", e.what());
   }
@@ -185,9 +195,7 @@ ModbusDeviceConfig read_modbus_device(const TomlReader& r) {
   for (const TomlReader& channel : r.tables("channels")) {
     d.emf_inputs.push_back(read_emf_input(channel));
     d.channels.push_back(read_channel(channel, *profile));
-    if (!names.insert(d.channels.back().name).second) {
-      channel.fail("name", "duplicate channel name \"" + d.channels.back().name + "\"");
-    }
+    names.insert(d.channels.back().name);
   }
   if (d.channels.empty()) r.fail("", "a device needs at least one [[devices.channels]] entry");
   check_cold_junctions(r, d.emf_inputs, names);
@@ -202,11 +210,8 @@ HidChannel mcc_channel(const TomlReader& r, HidProtocol& protocol) {
     if (input->value<std::string>() == "cold-junction-" + std::to_string(cj))
       return mcc_usb_tc_channel(kMccColdJunction0 + cj);
   }
-  const auto number = input->value<std::int64_t>();
-  if (!input->is_integer() || *number < 0 || *number > 7) {
-    r.fail("input", "expected 0-7, \"cold-junction-0\" or \"cold-junction-1\"");
-  }
-  const int channel_input = static_cast<int>(*number);
+  if (!input->is_integer()) r.fail("input", "expected 0-7, \"cold-junction-0\" or \"cold-junction-1\"");
+  const auto channel_input = static_cast<int>(r.integer_in("input", 0, 7));
   HidChannel c = mcc_usb_tc_channel(channel_input);
   c.tc_type = r.optional_string("tc_type").value_or("K");
   const auto code = mcc_tc_type_code(*c.tc_type);
@@ -219,10 +224,8 @@ HidChannel generic_hid_channel(const TomlReader& r) {
   HidChannel c;
   c.request = r.bytes("request");
   if (c.request.empty()) r.fail("", "missing required key 'request' (the report to send, report id first)");
-  if (const auto id = r.optional_integer("reply_report_id")) {
-    if (*id < 0 || *id > 255) r.fail("reply_report_id", "expected 0-255");
+  if (const auto id = r.optional_integer_in("reply_report_id", 0, 255))
     c.reply_report_id = static_cast<std::uint8_t>(*id);
-  }
   c.value_offset = r.integer_in("value_offset", 0, 0, 63);
   if (const auto type = r.optional_string("type")) {
     const auto parsed = parse_hid_value_type(*type);
@@ -255,8 +258,7 @@ HidChannel read_hid_channel(const TomlReader& r, const std::string& profile, Hid
 }
 
 std::uint16_t usb_id(const TomlReader& r, std::string_view key) {
-  r.integer(key);  // a missing or mistyped id is an error, not a default
-  return static_cast<std::uint16_t>(r.integer_in(key, 0, 0, 0xFFFF));
+  return static_cast<std::uint16_t>(r.integer_in(key, 0, 0xFFFF));  // required: a missing id is no default
 }
 
 HidMatch read_hid_match(const TomlReader& r, const std::string& profile) {
@@ -293,9 +295,7 @@ HidDeviceConfig read_hid_device(const TomlReader& r) {
   for (const TomlReader& channel : r.tables("channels")) {
     d.emf_inputs.push_back(read_emf_input(channel));
     d.protocol.channels.push_back(read_hid_channel(channel, d.profile, d.protocol));
-    if (!names.insert(d.protocol.channels.back().name).second) {
-      channel.fail("name", "duplicate channel name \"" + d.protocol.channels.back().name + "\"");
-    }
+    names.insert(d.protocol.channels.back().name);
   }
   if (d.protocol.channels.empty()) r.fail("", "a device needs at least one [[devices.channels]] entry");
   check_cold_junctions(r, d.emf_inputs, names);
@@ -306,8 +306,7 @@ HidDeviceConfig read_hid_device(const TomlReader& r) {
 UsbTc32Channel read_usb_tc32_channel(const TomlReader& r) {
   UsbTc32Channel c;
   c.name = r.string("name");
-  r.integer("input");  // required: integer_in() alone would default it
-  c.input = r.integer_in("input", 0, 0, 63);
+  c.input = static_cast<int>(r.integer_in("input", 0, 63));
   c.cold_junction = r.optional_string("kind").value_or("thermocouple") == "cold-junction";
   const std::string type = r.optional_string("tc_type").value_or("K");
   if (type.size() != 1 || !tc32_type_code(type[0]))
@@ -326,13 +325,7 @@ UsbDeviceConfig read_usb_device(const TomlReader& r) {
   if (d.profile != "usb-tc-32") r.fail("profile", "unknown USB profile \"" + d.profile + "\" (usb-tc-32)");
   d.serial = r.optional_string("serial");
   read_schedule(r, d);
-  std::set<std::string> names;
-  for (const TomlReader& channel : r.tables("channels")) {
-    d.channels.push_back(read_usb_tc32_channel(channel));
-    if (!names.insert(d.channels.back().name).second) {
-      channel.fail("name", "duplicate channel name \"" + d.channels.back().name + "\"");
-    }
-  }
+  for (const TomlReader& channel : r.tables("channels")) d.channels.push_back(read_usb_tc32_channel(channel));
   if (d.channels.empty()) r.fail("", "a device needs at least one [[devices.channels]] entry");
   r.reject_unknown_keys();
   return d;
@@ -358,9 +351,8 @@ std::string read_device(const TomlReader& r, ExperimentConfig& config) {
 CameraConfig read_camera(const TomlReader& r) {
   CameraConfig c;
   c.name = r.string("name");
-  if (c.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_") !=
-      std::string::npos) {
-    r.fail("name", "a camera name names its frame folder: use letters, digits, - and _");
+  if (const std::string problem = folder_name_problem(c.name); !problem.empty()) {
+    r.fail("name", "a camera name names its frame folder (frames/<name>/): it " + problem);
   }
   c.source = r.string("source");
   if (c.source == "video") {
@@ -369,12 +361,13 @@ CameraConfig read_camera(const TomlReader& r) {
   } else if (c.source == "folder") {
     c.folder.folder = r.string("folder");
     c.folder.settle = std::chrono::duration_cast<std::chrono::milliseconds>(r.seconds("settle_s", 0.5, 0.0));
-    c.folder.camera_clock_offset_s = r.optional_number("camera_clock_offset_s").value_or(0.0);
+    c.folder.camera_clock_offset_s =
+        r.number_in("camera_clock_offset_s", 0.0, -kLargestClockOffsetS, kLargestClockOffsetS, "seconds");
   } else if (c.source == "replay") {
     c.target = r.string("run");
+    c.run_key = r.where("run");
     c.replay_camera = r.string("camera");
-    c.replay_speed = r.optional_number("speed").value_or(1.0);
-    if (!(c.replay_speed > 0) || c.replay_speed > 1e4) r.fail("speed", "expected a speed-up between 0 and 10000");
+    c.replay_speed = r.number_in("speed", 1.0, 1e-3, 1e4, "a speed-up");
   } else {
     r.fail("source",
            "expected \"video\" (a camera, video file or URL), \"folder\" (files a camera writes) or \"replay\"");
@@ -392,7 +385,41 @@ std::string recorded_unit(const std::string& unit, const std::vector<std::option
   return channel < emf_inputs.size() && emf_inputs[channel] ? "degC" : unit;
 }
 
+// The channel names of the file so far, each with where it is, so that a
+// duplicate (channel_name_key) is refused naming both places.
+class ChannelNames {
+ public:
+  void add_device(const TomlReader& device) {
+    for (const TomlReader& channel : device.tables("channels")) {
+      const std::string name = channel.string("name");
+      const auto [first, added] = first_seen_.emplace(channel_name_key(name), std::pair(name, channel.where("name")));
+      if (added) continue;
+      const auto& [other_name, other_where] = first->second;
+      channel.fail("name",
+                   "duplicate channel name \"" + name + "\"" +
+                       (other_name == name ? "" : " (the same as \"" + other_name + "\" but for case or spaces)") +
+                       ", already at " + other_where + "; channel names must be unique across all devices");
+    }
+  }
+
+ private:
+  std::map<std::string, std::pair<std::string, std::string>> first_seen_;  // comparable name: (name, where)
+};
+
 }  // namespace
+
+std::string channel_name_key(std::string_view name) {
+  std::string key;
+  for (const unsigned char c : name) {
+    if (std::isspace(c)) {
+      if (!key.empty() && key.back() != ' ') key += ' ';
+    } else {
+      key += static_cast<char>(std::tolower(c));
+    }
+  }
+  if (!key.empty() && key.back() == ' ') key.pop_back();
+  return key;
+}
 
 ExperimentConfig parse_experiment(std::string_view text, const std::string& source_name) {
   const toml::table root = parse_toml(text, source_name);
@@ -402,18 +429,18 @@ ExperimentConfig parse_experiment(std::string_view text, const std::string& sour
   if (const auto run = reader.table("run")) {
     config.run_name = run->optional_string("name").value_or("");
     config.description = run->optional_string("description").value_or("");
-    config.time_scale = run->optional_number("time_scale").value_or(1.0);
-    if (!(config.time_scale > 0) || !std::isfinite(config.time_scale)) {
-      run->fail("time_scale", "expected a positive number (experiment seconds per recorded second)");
-    }
+    config.time_scale = run->number_in("time_scale", 1.0, kSmallestTimeScale, kLargestTimeScale,
+                                       "experiment seconds per recorded second");
     config.origin_event = run->optional_string("origin");
     if (config.origin_event && config.origin_event->empty()) run->fail("origin", "expected the name of a marker event");
     run->reject_unknown_keys();
   }
   std::set<std::string> names;
+  ChannelNames channel_names;
   for (const TomlReader& device : reader.tables("devices")) {
     const std::string name = read_device(device, config);
     if (!names.insert(name).second) device.fail("name", "duplicate device name \"" + name + "\"");
+    channel_names.add_device(device);
   }
   // The optical set-up and camera alignment are for processing (bosfuse
   // process reads and checks them); the logger only keeps them in the run.
@@ -476,6 +503,17 @@ void check_hosts_resolve(const ExperimentConfig& config) {
       check_endpoint_resolves(d.endpoint);
     } catch (const std::invalid_argument& e) {
       throw ConfigError(d.host_key + ": device \"" + d.name + "\": " + e.what());
+    }
+  }
+}
+
+void check_replayed_runs(const ExperimentConfig& config) {
+  for (const CameraConfig& c : config.cameras) {
+    if (c.source != "replay") continue;
+    try {
+      load_recorded_frames(c.target, c.replay_camera, c.replay_speed);
+    } catch (const std::exception& e) {
+      throw ConfigError(c.run_key + ": camera \"" + c.name + "\": " + e.what());
     }
   }
 }

@@ -28,6 +28,17 @@ namespace bosfuse::acquisition {
 // least once a year (TomlReader::kLongestSeconds).
 constexpr double kShortestPollPeriodS = 0.001;
 
+// [run] time_scale, experiment seconds per recorded second: from a record
+// 1000 times slower than the experiment to one a million times faster. A
+// millionfold run still times its experiment in microseconds of the
+// record; beyond either end a scale is a typo, not a simulation.
+constexpr double kSmallestTimeScale = 1e-3;
+constexpr double kLargestTimeScale = 1e6;
+// camera_clock_offset_s: a camera whose clock was never set (2000-01-01) is
+// decades off. A century is more than any real offset and keeps a frame's
+// time far inside what int64 nanoseconds hold (±292 years).
+constexpr double kLargestClockOffsetS = 100 * 365.25 * 86400;
+
 struct ModbusDeviceConfig {
   std::string name;
   std::string profile;
@@ -68,6 +79,7 @@ struct CameraConfig {
   std::string source;         // "video", "folder" or "replay"
   std::string target;         // video: camera index, file or URL; replay: the recorded run's folder
   std::string replay_camera;  // replay: the camera's name in the recorded run
+  std::string run_key;        // replay: where `run` is in the file, for check_replayed_runs
   double replay_speed = 1;
   WatchedFolderOptions folder;
   FrameRecorder::Options recorder;
@@ -91,6 +103,11 @@ struct ExperimentConfig {
 };
 
 ExperimentConfig parse_experiment(std::string_view text, const std::string& source_name);
+// Channel names are unique across the whole experiment file, compared in
+// this form: letter case folded, runs of white space one space, none at
+// either end. Exports, reports and the live page name a column or curve by
+// the channel alone, and "T0", "t0" and "T0 " read as one thermocouple there.
+std::string channel_name_key(std::string_view name);
 // The run a logger records with this experiment file, started at `started_ns`.
 storage::RunInfo run_info(const ExperimentConfig& config, std::int64_t started_ns);
 ExperimentConfig load_experiment(const std::filesystem::path& path);  // throws ConfigError
@@ -115,5 +132,11 @@ std::vector<ChannelAlarmLimits> alarm_limits(const ExperimentConfig& config);
 // never be reached. Parsing itself never resolves names, so a stored run's
 // experiment file reads the same anywhere, offline too.
 void check_hosts_resolve(const ExperimentConfig& config);
+
+// Throws ConfigError, naming the camera's `run` key and line, for a replay
+// camera whose recorded run cannot be read or has no such camera. Like
+// check_hosts_resolve it is for the start of logging, so that such a
+// camera stops the start before a run is created, not an empty run after.
+void check_replayed_runs(const ExperimentConfig& config);
 
 }  // namespace bosfuse::acquisition

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <limits>
+
 namespace bosfuse::acquisition {
 namespace {
 
@@ -148,7 +151,7 @@ TEST(ExperimentConfig, CamerasAndTheirMistakes) {
 TEST(ExperimentConfig, HidMistakesNameTheKeyAndLine) {
   const std::string usb_tc = "[[devices]]\nname = \"u\"\nkind = \"hid\"\nprofile = \"mcc-usb-tc\"\n";
   EXPECT_EQ(error_of(usb_tc + "[[devices.channels]]\nname = \"t\"\ninput = 8\n"),
-            "exp.toml:7: devices[0].channels[0].input: expected 0-7, \"cold-junction-0\" or \"cold-junction-1\"");
+            "exp.toml:7: devices[0].channels[0].input: must be between 0 and 7");
   EXPECT_EQ(error_of(usb_tc + "[[devices.channels]]\nname = \"t\"\ninput = 0\ntc_type = \"C\"\n"),
             "exp.toml:8: devices[0].channels[0].tc_type: the USB-TC takes types J, K, T, E, R, S, B or N");
   const std::string generic = "[[devices]]\nname = \"g\"\nkind = \"hid\"\nprofile = \"generic-hid\"\n";
@@ -184,7 +187,7 @@ TEST(ExperimentConfig, BadValuesNameTheKeyAndLine) {
   EXPECT_EQ(error_of(device + "pol_period_s = 1\n" + channel),
             "exp.toml:5: devices[0].pol_period_s: unknown key (a typo?)");
   EXPECT_EQ(error_of(device + "[[devices.channels]]\nname = \"t\"\ninput = 9\n"),
-            "exp.toml:7: devices[0].channels[0].input: profile adam-6018 has inputs 0..7, not 9");
+            "exp.toml:7: devices[0].channels[0].input: must be between 0 and 7");
   EXPECT_EQ(error_of(device + "[[devices.channels]]\nname = \"t\"\ninput = 0\nposition_px = [1]\n"),
             "exp.toml:8: devices[0].channels[0].position_px: expected [x, y] in image pixels");
   EXPECT_EQ(error_of(device), "exp.toml:1: devices[0]: a device needs at least one [[devices.channels]] entry");
@@ -322,6 +325,146 @@ TEST(ExperimentConfig, BadAlarmLimitsNameTheKeyAndLine) {
   EXPECT_EQ(error_of("[[devices]]\nname = \"r\"\nkind = \"hid\"\nprofile = \"temper\"\n"
                      "[[devices.channels]]\nname = \"air\"\nalarm_high = 1\nalarm_low = 2\n"),
             "exp.toml:7: devices[0].channels[0].alarm_high: must be above alarm_low (2)");
+}
+
+// Every integer key, read as TOML's 64-bit integer and range-checked
+// before it is narrowed: 4294967296 (2^32) was once Modbus input 0.
+struct IntegerKey {
+  std::string document;  // with {} where the key goes
+  std::string path;      // the table holding it
+  std::string key;
+  std::int64_t low, high;
+};
+
+std::string with_key(const IntegerKey& k, const std::string& value) {
+  std::string text = k.document;
+  return text.replace(text.find("{}"), 2, k.key + " = " + value);
+}
+
+int line_of_key(const IntegerKey& k) {
+  return 1 + static_cast<int>(std::count(k.document.begin(), k.document.begin() + k.document.find("{}"), '\n'));
+}
+
+TEST(ExperimentConfig, EveryIntegerKeyIsRangeCheckedBeforeNarrowing) {
+  const std::string adam = "[[devices]]\nname = \"a\"\nprofile = \"adam-6018\"\nhost = \"localhost\"\n";
+  const std::string m7018 = "[[devices]]\nname = \"m\"\nprofile = \"icpdas-m7018\"\nserial_port = \"/dev/ttyUSB0\"\n";
+  const std::string channel = "[[devices.channels]]\nname = \"t\"\ninput = 0\n";
+  const std::string generic = "[[devices]]\nname = \"g\"\nprofile = \"generic\"\ntransport = \"tcp\"\nhost = \"h\"\n";
+  const std::string mcc = "[[devices]]\nname = \"u\"\nkind = \"hid\"\nprofile = \"mcc-usb-tc\"\n";
+  const std::string hid = "[[devices]]\nname = \"g\"\nkind = \"hid\"\nprofile = \"generic-hid\"\n";
+  const std::string hid_channel = "[[devices.channels]]\nname = \"t\"\nrequest = [1]\n";
+  const std::string tc32 = "[[devices]]\nname = \"u\"\nkind = \"usb\"\nprofile = \"usb-tc-32\"\n";
+  const std::int64_t most = std::numeric_limits<std::int64_t>::max();
+  const std::vector<IntegerKey> keys = {
+      {adam + "{}\n" + channel, "devices[0]", "unit_id", 0, 247},
+      {adam + "{}\n" + channel, "devices[0]", "port", 1, 65535},
+      {adam + "{}\n" + channel, "devices[0]", "poll_count", 1, most},
+      {m7018 + "{}\n" + channel, "devices[0]", "baud", 300, 4'000'000},
+      {m7018 + "{}\n" + channel, "devices[0]", "data_bits", 5, 8},
+      {m7018 + "{}\n" + channel, "devices[0]", "stop_bits", 1, 2},
+      {adam + "[[devices.channels]]\nname = \"t\"\n{}\n", "devices[0].channels[0]", "input", 0, 7},
+      {m7018 + "[[devices.channels]]\nname = \"t\"\n{}\n", "devices[0].channels[0]", "input", 0, 7},
+      {generic + "[[devices.channels]]\nname = \"x\"\nregister = \"input\"\n{}\n", "devices[0].channels[0]", "address",
+       0, 65535},
+      {mcc + "[[devices.channels]]\nname = \"t\"\n{}\n", "devices[0].channels[0]", "input", 0, 7},
+      {hid + "product_id = 2\n{}\n" + hid_channel, "devices[0]", "vendor_id", 0, 65535},
+      {hid + "vendor_id = 1\n{}\n" + hid_channel, "devices[0]", "product_id", 0, 65535},
+      {hid + "vendor_id = 1\nproduct_id = 2\n{}\n" + hid_channel, "devices[0]", "interface", 0, 255},
+      {hid + "vendor_id = 1\nproduct_id = 2\n" + hid_channel + "{}\n", "devices[0].channels[0]", "reply_report_id", 0,
+       255},
+      {hid + "vendor_id = 1\nproduct_id = 2\n" + hid_channel + "{}\n", "devices[0].channels[0]", "value_offset", 0, 63},
+      {tc32 + "[[devices.channels]]\nname = \"t\"\n{}\n", "devices[0].channels[0]", "input", 0, 63},
+      {"[[cameras]]\nname = \"c\"\nsource = \"video\"\ndevice = \"0\"\n{}\n", "cameras[0]", "reference_frames", 0,
+       1'000'000},
+  };
+  for (const IntegerKey& k : keys) {
+    SCOPED_TRACE(k.path + "." + k.key);
+    EXPECT_EQ(error_of(with_key(k, std::to_string(k.low))), "no error");
+    if (k.high != most) {
+      EXPECT_EQ(error_of(with_key(k, std::to_string(k.high))), "no error");
+    }
+    const std::string refusal = "exp.toml:" + std::to_string(line_of_key(k)) + ": " + k.path + "." + k.key +
+                                ": must be between " + std::to_string(k.low) + " and " + std::to_string(k.high);
+    std::vector<std::string> outside = {std::to_string(k.low - 1), "-1", "-4294967296"};
+    if (k.high != most) outside.insert(outside.end(), {std::to_string(k.high + 1), "4294967296", "4294967297"});
+    for (const std::string& value : outside) {
+      if (value == "-1" && k.low < 0) continue;
+      EXPECT_EQ(error_of(with_key(k, value)), refusal) << value;
+    }
+  }
+}
+
+// Channel names are unique across devices: an export names its columns by
+// channel, and once wrote two "T0 [degC]" columns.
+TEST(ExperimentConfig, AChannelNameOnTwoDevicesIsRefusedNamingBothPlaces) {
+  const auto device = [](const std::string& name, const std::string& channel) {
+    return "[[devices]]\nname = \"" + name + "\"\nprofile = \"adam-6018\"\nhost = \"localhost\"\n" +
+           "[[devices.channels]]\nname = \"" + channel + "\"\ninput = 0\n";
+  };
+  EXPECT_EQ(error_of(device("a", "T0") + device("b", "T0")),
+            "exp.toml:13: devices[1].channels[0].name: duplicate channel name \"T0\", already at exp.toml:6: "
+            "devices[0].channels[0].name; channel names must be unique across all devices");
+  for (const char* other : {"t0", " T0", "T0 "}) {
+    EXPECT_NE(error_of(device("a", "T0") + device("b", other))
+                  .find("(the same as \"T0\" but for case or spaces), already at exp.toml:6: devices[0].channels[0]"),
+              std::string::npos)
+        << other;
+  }
+  const std::string usb =
+      "[[devices]]\nname = \"u\"\nkind = \"usb\"\nprofile = \"usb-tc-32\"\n"
+      "[[devices.channels]]\nname = \"T0\"\ninput = 3\n";
+  EXPECT_NE(error_of(device("a", "T0") + usb).find("exp.toml:13: devices[1].channels[0].name: duplicate"),
+            std::string::npos);
+  EXPECT_EQ(error_of(device("a", "T0") + device("b", "T1")), "no error");
+  EXPECT_EQ(error_of(device("a", "T0") + device("b", "T 0")), "no error") << "a space inside a name counts";
+}
+
+// Floats with a physical meaning have a stated range: a time scale of
+// 1e308 or 1e-300 was once taken.
+TEST(ExperimentConfig, TimeScaleAndOtherPhysicalNumbersHaveAStatedRange) {
+  const auto scale = [](const std::string& value) { return error_of("[run]\ntime_scale = " + value + "\n"); };
+  for (const char* value : {"1e308", "1e-300", "0", "-1", "1000001", "0.000999"}) {
+    EXPECT_NE(scale(value).find("exp.toml:2: run.time_scale: expected experiment seconds per recorded second from "
+                                "0.001 to 1e+06, not "),
+              std::string::npos)
+        << value << ": " << scale(value);
+  }
+  for (const char* value : {"nan", "inf"}) {
+    EXPECT_EQ(scale(value).substr(0, 27), "exp.toml:2: run.time_scale:") << value;
+  }
+  for (const char* value : {"0.001", "1", "1e6"}) EXPECT_EQ(scale(value), "no error") << value;
+  EXPECT_DOUBLE_EQ(parse_experiment("[run]\ntime_scale = 1e6\n", "exp.toml").time_scale, 1e6);
+
+  const std::string folder = "[[cameras]]\nname = \"c\"\nsource = \"folder\"\nfolder = \"/x\"\n";
+  EXPECT_NE(error_of(folder + "camera_clock_offset_s = 1e300\n").find("exp.toml:5: cameras[0].camera_clock_offset_s:"),
+            std::string::npos);
+  EXPECT_EQ(error_of(folder + "camera_clock_offset_s = -8e8\n"), "no error") << "a clock 25 years off";
+  const std::string replay = "[[cameras]]\nname = \"c\"\nsource = \"replay\"\nrun = \"/r\"\ncamera = \"c\"\n";
+  EXPECT_NE(error_of(replay + "speed = 1e-300\n").find("exp.toml:6: cameras[0].speed: expected a speed-up from"),
+            std::string::npos);
+  const std::string mv =
+      "[[devices]]\nname = \"g\"\nprofile = \"generic\"\ntransport = \"tcp\"\nhost = \"h\"\n"
+      "[[devices.channels]]\nname = \"x\"\nregister = \"input\"\naddress = 0\nunit = \"mV\"\n"
+      "emf_type = \"K\"\n";
+  EXPECT_NE(error_of(mv + "cold_junction_c = 1e308\n").find("exp.toml:12: devices[0].channels[0].cold_junction_c:"),
+            std::string::npos);
+  EXPECT_NE(error_of(mv + "cold_junction_c = -300\n").find("cold_junction_c: expected a temperature"),
+            std::string::npos);
+  EXPECT_EQ(error_of(mv + "cold_junction_c = 0\n"), "no error");
+}
+
+// A camera name names its frame folder, so it is checked as one when the
+// file is read: a 300-character name once passed and then failed with the
+// system's "File name too long" after the run was created.
+TEST(ExperimentConfig, ACameraNameTooLongForAFolderIsRefusedNamingTheKey) {
+  const auto camera = [](const std::string& name) {
+    return error_of("[[cameras]]\nname = \"" + name + "\"\nsource = \"video\"\ndevice = \"0\"\n");
+  };
+  EXPECT_EQ(camera(std::string(64, 'c')), "no error");
+  EXPECT_EQ(camera(std::string(300, 'c')),
+            "exp.toml:2: cameras[0].name: a camera name names its frame folder (frames/<name>/): it is 300 bytes "
+            "long, more than the 64 a folder name may have");
+  EXPECT_NE(camera(std::string(65, 'c')).find("exp.toml:2: cameras[0].name: "), std::string::npos);
 }
 
 TEST(ExperimentConfig, MissingFileIsReported) { EXPECT_THROW(load_experiment("/nonexistent/exp.toml"), ConfigError); }

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "acquisition/clock.h"
+#include "acquisition/folder_name.h"
 #include "acquisition/frame_png.h"
 
 namespace bosfuse::acquisition {
@@ -11,14 +12,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr auto kFolderWait = std::chrono::milliseconds(200);  // how often a waiting recorder checks for stop
-
-bool valid_folder_name(const std::string& name) {
-  if (name.empty()) return false;
-  for (unsigned char c : name) {
-    if (!std::isalnum(c) && c != '-' && c != '_') return false;
-  }
-  return true;
-}
 
 std::string frame_file_name(std::int64_t index) {
   char text[32];
@@ -31,6 +24,7 @@ std::string frame_file_name(std::int64_t index) {
 std::string FrameRecorder::Options::Validate() const {
   if (interval < std::chrono::nanoseconds::zero()) return "frame interval must not be negative";
   if (reference_frames < 0) return "reference_frames must not be negative";
+  if (recovery_frames < 1) return "recovery_frames must be at least 1";
   return backoff.Validate();
 }
 
@@ -41,10 +35,13 @@ FrameRecorder::FrameRecorder(std::unique_ptr<FrameSource> source, std::string na
       run_dir_(std::move(run_dir)),
       frame_dir_(fs::path("frames") / this->name()),
       options_(std::move(options)),
-      connection_(options_.backoff,
-                  [this](const std::string& kind, const std::string& message) { record_event(kind, message); }) {
-  if (!valid_folder_name(this->name()))
-    throw std::invalid_argument("camera name '" + this->name() + "': use letters, digits, - and _");
+      connection_(
+          options_.backoff,
+          [this](const std::string& kind, const std::string& message) { record_event(kind, message); },
+          options_.recovery_frames) {
+  if (const std::string problem = folder_name_problem(this->name()); !problem.empty()) {
+    throw std::invalid_argument("camera name '" + this->name() + "' " + problem);
+  }
   if (const std::string problem = options_.Validate(); !problem.empty()) {
     throw std::invalid_argument("camera " + this->name() + ": " + problem);
   }
@@ -97,6 +94,7 @@ bool FrameRecorder::take_one(std::chrono::milliseconds wait) {
   try {
     frame = source_->next(wait);
   } catch (const EndOfFrames& e) {
+    connection_.settle();
     record_event("stopped", e.what());
     return false;
   } catch (const FrameLost& e) {
@@ -118,6 +116,11 @@ bool FrameRecorder::take_one(std::chrono::milliseconds wait) {
 }
 
 void FrameRecorder::loop() {
+  record_frames();
+  connection_.settle();  // an outage the camera had come out of ends at its first good frame
+}
+
+void FrameRecorder::record_frames() {
   const SteadyTime origin = std::chrono::steady_clock::now();
   SteadyTime deadline = origin;
   const bool scheduled = options_.interval > std::chrono::nanoseconds::zero();
@@ -132,7 +135,7 @@ void FrameRecorder::loop() {
       return;
     }
     const auto now = std::chrono::steady_clock::now();
-    if (connection_.in_outage()) {
+    if (connection_.retrying()) {
       deadline = now + connection_.backoff();
     } else {
       deadline = scheduled ? origin + ((now - origin) / options_.interval + 1) * options_.interval : now;

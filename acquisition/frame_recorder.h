@@ -29,6 +29,9 @@ class FrameRecorder : public DeviceWorker {
     int reference_frames = 1;              // the first N frames are references
     std::filesystem::path reference_flag;  // frames are references while this file exists
     ConnectionKeeper::Backoff backoff;
+    // Frames in a row that must arrive before an outage is declared over,
+    // as for a thermocouple reader (DevicePoller::Options::recovery_polls).
+    int recovery_frames = 3;
     std::string Validate() const;
   };
 
@@ -49,6 +52,7 @@ class FrameRecorder : public DeviceWorker {
 
  private:
   void loop() override;
+  void record_frames();
   void close_device() noexcept override;
   bool ensure_connected();
   bool take_one(std::chrono::milliseconds wait);  // false when the source has ended

@@ -18,11 +18,12 @@ namespace {
 using namespace std::chrono_literals;
 
 // Yields a fixed list of frames, one per call; `fail_at` makes that call throw
-// DeviceError once.
+// DeviceError once, `flapping_until` every odd call before it.
 class ScriptedCamera : public FrameSource {
  public:
   std::vector<cv::Mat> frames;
   int fail_at = -1;
+  int flapping_until = 0;
 
   std::string kind() const override { return "virtual"; }
   std::string describe() const override { return "scripted camera"; }
@@ -30,7 +31,7 @@ class ScriptedCamera : public FrameSource {
   void close() override {}
   std::optional<CapturedFrame> next(std::chrono::milliseconds wait) override {
     const int call = calls_++;
-    if (call == fail_at) throw DeviceError("cable pulled");
+    if (call == fail_at || (call < flapping_until && call % 2 == 1)) throw DeviceError("cable pulled");
     if (next_ >= frames.size()) {
       std::this_thread::sleep_for(wait);
       return std::nullopt;
@@ -136,6 +137,23 @@ TEST(FrameRecorder, FailingCameraIsRecordedAndReopened) {
   std::vector<std::string> kinds;
   for (const auto& e : h.store.events()) kinds.push_back(e.kind);
   EXPECT_EQ(kinds, (std::vector<std::string>{"connect", "disconnect", "reconnect"}));
+}
+
+// Debounce, as for a thermocouple reader: a camera failing every other
+// frame is one outage, ended once recovery_frames frames came in a row.
+TEST(FrameRecorder, ACameraFailingEveryOtherFrameIsOneOutage) {
+  Harness h;
+  auto camera = std::make_unique<ScriptedCamera>();
+  for (int i = 0; i < 8; ++i) camera->frames.push_back(testing::textured_frame(i));
+  camera->flapping_until = 12;  // calls 1, 3, ... 11 fail
+  const auto stats = h.record(std::move(camera), fast_options(), 8);
+  EXPECT_EQ(stats.frames, 8);
+  EXPECT_EQ(stats.failures, 6);
+  std::vector<std::string> kinds;
+  for (const auto& e : h.store.events()) kinds.push_back(e.kind);
+  EXPECT_EQ(kinds, (std::vector<std::string>{"connect", "disconnect", "reconnect"}));
+  EXPECT_NE(h.store.events().back().message.find("(6 failed polls)"), std::string::npos)
+      << h.store.events().back().message;
 }
 
 }  // namespace

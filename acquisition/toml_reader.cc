@@ -90,12 +90,33 @@ std::optional<bool> TomlReader::optional_bool(std::string_view key) const {
   return *n.value<bool>();
 }
 
-int TomlReader::integer_in(std::string_view key, int fallback, int low, int high) const {
-  const std::int64_t value = optional_integer(key).value_or(fallback);
-  if (value < low || value > high) {
+std::optional<std::int64_t> TomlReader::optional_integer_in(std::string_view key, std::int64_t low,
+                                                            std::int64_t high) const {
+  const std::optional<std::int64_t> value = optional_integer(key);
+  if (value && (*value < low || *value > high)) {
     fail(key, "must be between " + std::to_string(low) + " and " + std::to_string(high));
   }
-  return static_cast<int>(value);
+  return value;
+}
+
+std::int64_t TomlReader::integer_in(std::string_view key, std::int64_t low, std::int64_t high) const {
+  require(key);
+  return *optional_integer_in(key, low, high);
+}
+
+int TomlReader::integer_in(std::string_view key, int fallback, int low, int high) const {
+  return static_cast<int>(optional_integer_in(key, low, high).value_or(fallback));
+}
+
+double TomlReader::number_in(std::string_view key, double fallback, double low, double high,
+                             std::string_view meaning) const {
+  const double value = optional_number(key).value_or(fallback);
+  if (!(value >= low && value <= high)) {
+    std::ostringstream text;
+    text << "expected " << meaning << " from " << low << " to " << high << ", not " << value;
+    fail(key, text.str());
+  }
+  return value;
 }
 
 std::chrono::nanoseconds TomlReader::seconds(std::string_view key, double fallback_s, double minimum_s) const {

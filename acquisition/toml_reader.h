@@ -37,8 +37,17 @@ class TomlReader {
   double number(std::string_view key) const;  // integer or float
   std::optional<double> optional_number(std::string_view key) const;
   std::optional<bool> optional_bool(std::string_view key) const;
-  // An integer within [low, high], `fallback` when absent.
+  // An integer within [low, high]. TOML integers are 64-bit: the range is
+  // checked on that value, before anything narrows it, so 4294967296 is
+  // refused naming the key instead of being read as 0. Every integer key
+  // is read through one of these.
+  std::int64_t integer_in(std::string_view key, std::int64_t low, std::int64_t high) const;  // required
+  std::optional<std::int64_t> optional_integer_in(std::string_view key, std::int64_t low, std::int64_t high) const;
+  // The same, `fallback` when absent, for keys that fit an int.
   int integer_in(std::string_view key, int fallback, int low, int high) const;
+  // A finite number within [low, high], `fallback` when absent; `meaning`
+  // says what it is in the refusal ("experiment seconds per recorded second").
+  double number_in(std::string_view key, double fallback, double low, double high, std::string_view meaning) const;
   // A duration is kept in int64 nanoseconds (±292 years); a year of
   // seconds is more than any period or timeout a run needs.
   static constexpr double kLongestSeconds = 365.25 * 86400;

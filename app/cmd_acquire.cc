@@ -46,7 +46,10 @@ void acquire(const AcquireArgs& args) {
   refuse_standard_output(args.out, "--out", "a run is a folder (run.sqlite, frames/)");
   const auto config = acquisition::load_experiment(args.experiment);
   if (config.device_count() == 0) throw std::runtime_error(args.experiment + ": no [[devices]] to log");
+  // Everything that can refuse the start does so before the run exists, so
+  // a refused start leaves no empty interrupted run behind.
   acquisition::check_hosts_resolve(config);
+  acquisition::check_replayed_runs(config);
   acquisition::Logger::Options options;
   if (!args.duration.empty()) options.duration = parse_duration(args.duration);
   options.on_progress = [](const std::string& line) { spdlog::info("{}", line); };

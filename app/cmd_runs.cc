@@ -86,8 +86,19 @@ void print_run_list(const std::filesystem::path& dir) {
   if (runs.empty()) throw std::runtime_error("'" + dir.string() + "' holds no bosfuse run, nor any folder below it");
   std::cout << fmt::format("{:<40} {:<16} {:<12} {:<24} {:>10} {:>9} {:>7}\n", "folder", "name", "status", "started",
                            "duration", "samples", "frames");
+  // A run this bosfuse may not read (a newer schema, a damaged file) is
+  // said on stderr; the others are still listed, and the exit says so.
+  std::vector<std::string> refused;
   for (const auto& run_dir : runs) {
-    const auto store = storage::RunStore::open(run_dir);
+    std::optional<storage::RunStore> opened;
+    try {
+      opened.emplace(storage::RunStore::open(run_dir));
+    } catch (const storage::StorageError& e) {
+      std::cerr << e.what() << "\n";
+      refused.push_back(std::filesystem::relative(run_dir, dir).string());
+      continue;
+    }
+    const storage::RunStore& store = *opened;
     const storage::RunInfo run = store.run();
     std::int64_t samples = 0;
     for (const auto& channel : store.channel_summaries()) samples += channel.sample_count;
@@ -97,6 +108,11 @@ void print_run_list(const std::filesystem::path& dir) {
                              std::filesystem::relative(run_dir, dir).string(), run.name, storage::to_string(run.status),
                              acquisition::format_iso8601_utc(run.started_ns, 0), duration, samples,
                              store.frames().size());
+  }
+  if (!refused.empty()) {
+    std::string names;
+    for (const auto& name : refused) names += (names.empty() ? "" : ", ") + name;
+    throw std::runtime_error(fmt::format("{} of {} runs could not be read: {}", refused.size(), runs.size(), names));
   }
 }
 

@@ -6,16 +6,19 @@
 // message is not empty (never another exception type, a crash or a hang);
 // an accepted configuration keeps the text verbatim in source_text, has a
 // run name, a positive poll period for every device and only channels whose
-// own Validate() accepts them (Modbus and HID), and parsing its source_text
-// again gives the same devices and channels.
+// own Validate() accepts them (Modbus and HID), a time scale in its range,
+// camera names that are folder names, channel names unique across devices,
+// and parsing its source_text again gives the same devices and channels.
 
 #include <chrono>
 #include <cstdint>
 #include <exception>
+#include <set>
 #include <string>
 #include <string_view>
 
 #include "acquisition/experiment_config.h"
+#include "acquisition/folder_name.h"
 #include "fuzz/fuzz_support.h"
 
 using namespace bosfuse::acquisition;
@@ -36,6 +39,19 @@ void check_config(const ExperimentConfig& config, std::string_view text) {
   }
   for (const auto& d : config.usb_devices) {
     FUZZ_CHECK(d.poll_period.count() > 0);
+  }
+  FUZZ_CHECK(config.time_scale >= kSmallestTimeScale && config.time_scale <= kLargestTimeScale);
+  for (const auto& c : config.cameras) FUZZ_CHECK(folder_name_problem(c.name).empty());
+  std::set<std::string> channel_keys;
+  const auto unique = [&](const std::string& name) { FUZZ_CHECK(channel_keys.insert(channel_name_key(name)).second); };
+  for (const auto& d : config.modbus_devices) {
+    for (const auto& c : d.channels) unique(c.name);
+  }
+  for (const auto& d : config.hid_devices) {
+    for (const auto& c : d.protocol.channels) unique(c.name);
+  }
+  for (const auto& d : config.usb_devices) {
+    for (const auto& c : d.channels) unique(c.name);
   }
 }
 

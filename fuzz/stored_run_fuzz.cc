@@ -12,8 +12,9 @@
 // integrity_check finds the file sound, also: a sample has a value only when
 // kOk (the schema's CHECK constraint); read_samples and each replay device's per-channel samples are in time
 // order, and the experiment file a replay generates from a run it accepted
-// is one the logger accepts (given unique, non-empty device names and
-// channel names within a device, as the logger always writes them).
+// is one the logger accepts (given unique, non-empty device names, channel
+// names unique across devices and a time scale in range, as the logger
+// writes them).
 
 #include <sqlite3.h>
 
@@ -85,14 +86,19 @@ void read_through_replay(const std::filesystem::path& dir) {
   // for any run the logger wrote; only a damaged file breaks them, and then
   // the replay may refuse the run (with a message).
   std::set<std::string> device_names;
+  std::set<std::string> channel_names;  // unique across devices, as acquisition::channel_name_key compares them
   bool names_sound = true;
   for (const sim::ReplayDevice& device : recorded.devices) {
     names_sound = names_sound && !device.name.empty() && device_names.insert(device.name).second;
-    std::set<std::string> channel_names;
     for (const auto& channel : device.channels) {
-      names_sound = names_sound && !channel.name.empty() && channel_names.insert(channel.name).second;
+      names_sound = names_sound && !channel.name.empty() &&
+                    channel_names.insert(acquisition::channel_name_key(channel.name)).second;
     }
   }
+  // The replay's time scale is the recorded one times its speed (10 here).
+  const double replayed_scale = recorded.run.time_scale * 10.0;
+  names_sound = names_sound && replayed_scale >= acquisition::kSmallestTimeScale &&
+                replayed_scale <= acquisition::kLargestTimeScale;
   try {
     (void)acquisition::parse_experiment(toml, "replay.toml");
   } catch (const std::exception& e) {

@@ -344,15 +344,15 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   if (const std::string problem = options.Validate(); !problem.empty()) {
     throw std::invalid_argument("process options: " + problem);
   }
-  if (!storage::RunStore::holds_run(run_dir))
-    throw std::runtime_error("'" + run_dir.string() + "' holds no bosfuse run");
+  // Opened first: a folder without a run, or with one a newer bosfuse
+  // wrote, is refused before a lock file is made in it.
+  const auto store = storage::RunStore::open(run_dir);
   const auto lock = storage::RunLock::try_acquire(run_dir, "process.lock");
   if (!lock) {
     throw std::runtime_error("another bosfuse is processing " + run_dir.string() + " (" +
                              storage::RunLock::holder(run_dir, "process.lock") + ")");
   }
   storage::ProcessingStore results(run_dir, true);
-  const auto store = storage::RunStore::open(run_dir);
   const storage::ExperimentClock clock = storage::experiment_clock(store);
   Processing processing = start_processing(run_dir, options, results);
   const RunFrames frames = split_frames(store.frames());

@@ -218,8 +218,7 @@ std::optional<SettingsOverrides> parse_processing_table(const std::string& text,
     return value;
   };
   auto whole = [&](std::string_view key) -> std::optional<int> {
-    const auto value = r.optional_integer(key);
-    if (value && (*value < -1'000'000 || *value > 1'000'000)) r.fail(key, "out of range");
+    const auto value = r.optional_integer_in(key, -1'000'000, 1'000'000);
     return value ? std::optional<int>(static_cast<int>(*value)) : std::nullopt;
   };
   if (const auto mode = one_of("mode", {"full", "probes"})) o.probes_only = *mode == "probes";

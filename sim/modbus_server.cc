@@ -158,6 +158,7 @@ void ModbusSimServer::answer(const std::uint8_t* query, int length) {
     if (silent_) return;
     delay = reply_delay_;
     exception_code = exception_code_;
+    if (!exception_code && flapping_code_ && flapping_requests_++ % 2 == 1) exception_code = flapping_code_;
     malformed = malformed_;
   }
   const std::optional<RegisterRead> read = register_read(query, length);
@@ -309,6 +310,13 @@ void ModbusSimServer::set_exception_reply(std::optional<int> code) {
   }
   std::lock_guard lock(mutex_);
   exception_code_ = code;
+}
+
+void ModbusSimServer::set_exception_every_other(std::optional<int> code) {
+  if (code && (*code < 1 || *code >= MODBUS_EXCEPTION_MAX)) throw std::invalid_argument("not a Modbus exception code");
+  std::lock_guard lock(mutex_);
+  flapping_code_ = code;
+  flapping_requests_ = 0;
 }
 
 void ModbusSimServer::set_malformed_reply(MalformedReply kind) {

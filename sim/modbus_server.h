@@ -83,6 +83,9 @@ class ModbusSimServer {
   void set_silent(bool silent);
   // Answer every request with Modbus exception `code` (1-11); nullopt: answer.
   void set_exception_reply(std::optional<int> code);
+  // Answer every second request with exception `code` and the others
+  // correctly, as a module with a loose contact might; nullopt: stop.
+  void set_exception_every_other(std::optional<int> code);
   // TCP only (throws std::logic_error on RTU); other requests than register
   // reads are still answered correctly.
   void set_malformed_reply(MalformedReply kind);
@@ -123,6 +126,8 @@ class ModbusSimServer {
   std::chrono::milliseconds reply_delay_{0};
   bool silent_ = false;
   std::optional<int> exception_code_;
+  std::optional<int> flapping_code_;  // set_exception_every_other
+  std::int64_t flapping_requests_ = 0;
   MalformedReply malformed_ = MalformedReply::kNone;
 };
 

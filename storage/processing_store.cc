@@ -55,6 +55,7 @@ ProcessingStore::ProcessingStore(const std::filesystem::path& run_dir, bool writ
     : db_((RunStore::holds_run(run_dir) ? database_path(run_dir)
                                         : throw StorageError("'" + run_dir.string() + "' holds no bosfuse run")),
           writable ? Database::Mode::kReadWrite : Database::Mode::kReadOnly) {
+  require_known_schema(db_);
   if (writable) migrate(db_);
   version_ = schema_version(db_);
   auto stmt = db_.prepare("SELECT id FROM runs ORDER BY id LIMIT 1");

@@ -52,6 +52,13 @@ std::string first_difference(const std::string& before, const std::string& after
   }
 }
 
+// Before anything may write to the run (taking its lock, closing a run
+// whose logger died), so that a refused store is left exactly as it was.
+void refuse_newer_schema(const fs::path& run_dir) {
+  Database db(database_path(run_dir), Database::Mode::kReadOnly);
+  require_known_schema(db);
+}
+
 RunStatus stored_status(const fs::path& run_dir) {
   Database db(database_path(run_dir), Database::Mode::kReadOnly);
   auto stmt = db.prepare("SELECT status FROM runs ORDER BY id LIMIT 1");
@@ -60,7 +67,9 @@ RunStatus stored_status(const fs::path& run_dir) {
 
 }  // namespace
 
-RunStore::RunStore(fs::path dir, Database::Mode mode) : dir_(std::move(dir)), db_(database_path(dir_), mode) {}
+RunStore::RunStore(fs::path dir, Database::Mode mode) : dir_(std::move(dir)), db_(database_path(dir_), mode) {
+  require_known_schema(db_);
+}
 
 bool RunStore::holds_run(const fs::path& run_dir) {
   std::error_code ec;
@@ -76,6 +85,7 @@ RunStore RunStore::create(const fs::path& run_dir, const RunInfo& info, CreateMo
   if (existing && mode == CreateMode::kNew) {
     throw StorageError("'" + run_dir.string() + "' already holds a run; choose another folder or ask to append to it");
   }
+  if (existing) refuse_newer_schema(run_dir);
   fs::create_directories(run_dir);
   std::optional<RunLock> lock = RunLock::try_acquire(run_dir);
   if (!lock) {
@@ -142,6 +152,7 @@ void RunStore::close_interrupted() {
 
 RunStore RunStore::open(const fs::path& run_dir, bool writable) {
   if (!holds_run(run_dir)) throw StorageError("'" + run_dir.string() + "' holds no bosfuse run");
+  refuse_newer_schema(run_dir);
   if (stored_status(run_dir) == RunStatus::kRunning) close_if_abandoned(run_dir);
   RunStore store(run_dir, writable ? Database::Mode::kReadWrite : Database::Mode::kReadOnly);
   if (writable) migrate(store.db_);

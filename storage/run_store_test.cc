@@ -2,7 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
+
+#include "storage/processing_store.h"
+#include "storage/record_rows.h"
+#include "storage/run_tail.h"
 #include "storage/run_writer.h"
+#include "storage/schema.h"
 #include "tests/support/temp_dir.h"
 
 namespace bosfuse::storage {
@@ -143,6 +149,39 @@ TEST(RunStore, ARunWhoseLoggerDiedIsClosedAsInterruptedByTheNextOpen) {
   EXPECT_NE(events[0].message.find("47.950 s of the planned 60.000 s are missing"), std::string::npos)
       << events[0].message;
   EXPECT_EQ(RunStore::open(dir / "run").events().size(), 1u) << "a second open recorded the interruption again";
+}
+
+// Opening for reading checks the schema version as opening for writing
+// always did: a store from a newer bosfuse is refused by every way in
+// (RunStore, ProcessingStore, RunTail), even a `running` one whose logger
+// died, which an open would otherwise close, so the refusal writes nothing.
+TEST(RunStore, EveryOpeningRefusesAStoreFromANewerBosfuse) {
+  testing::TempDir dir;
+  { RunStore::create(dir / "run", test_run(), RunStore::CreateMode::kNew); }  // left running, as if killed
+  {
+    Database db(database_path(dir / "run"), Database::Mode::kReadWrite);
+    db.execute("INSERT INTO schema_version (version, applied_ns) VALUES (" + std::to_string(kSchemaVersion + 1) +
+               ", 0)");
+  }
+  const auto expect_refused = [](const std::function<void()>& open, const char* what) {
+    try {
+      open();
+      ADD_FAILURE() << what << " read a store from a newer bosfuse";
+    } catch (const StorageError& e) {
+      EXPECT_NE(std::string(e.what()).find("newer than this bosfuse understands"), std::string::npos) << e.what();
+    }
+  };
+  expect_refused([&] { RunStore::open(dir / "run"); }, "RunStore::open");
+  expect_refused([&] { RunStore::open(dir / "run", true); }, "RunStore::open(writable)");
+  expect_refused([&] { ProcessingStore(dir / "run"); }, "ProcessingStore");
+  expect_refused([&] { ProcessingStore(dir / "run", true); }, "ProcessingStore(writable)");
+  expect_refused([&] { RunTail tail(dir / "run"); }, "RunTail");
+  expect_refused([&] { RunStore::create(dir / "run", test_run(), RunStore::CreateMode::kAppend); }, "appending");
+  Database db(database_path(dir / "run"), Database::Mode::kReadOnly);
+  auto status = db.prepare("SELECT status FROM runs");
+  ASSERT_TRUE(status.step());
+  EXPECT_EQ(status.column_text(0), "running") << "a refused store was closed as interrupted";
+  EXPECT_FALSE(db.prepare("SELECT 1 FROM events").step()) << "a refused store was written to";
 }
 
 TEST(RunStore, ARunBeingRecordedIsLeftRunning) {

@@ -1,11 +1,22 @@
 #include "storage/run_tail.h"
 
 #include "storage/record_rows.h"
+#include "storage/schema.h"
 
 namespace bosfuse::storage {
+namespace {
+
+// A store of a newer schema is refused before any statement is prepared.
+Database open_known_schema(const std::filesystem::path& run_dir) {
+  Database db(database_path(run_dir), Database::Mode::kReadOnly);
+  require_known_schema(db);
+  return db;
+}
+
+}  // namespace
 
 RunTail::RunTail(const std::filesystem::path& run_dir)
-    : db_(database_path(run_dir), Database::Mode::kReadOnly),
+    : db_(open_known_schema(run_dir)),
       head_(db_.prepare("SELECT (SELECT COALESCE(MAX(rowid), 0) FROM samples), "
                         "(SELECT COALESCE(MAX(id), 0) FROM events), (SELECT COALESCE(MAX(id), 0) FROM frames)")),
       samples_(db_.prepare("SELECT rowid, channel_id, t_ns, device_t_ns, value, raw, status FROM samples "

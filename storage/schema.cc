@@ -222,13 +222,18 @@ int schema_version(Database& db) {
   return static_cast<int>(stmt.column_int64(0));
 }
 
-int migrate(Database& db, std::span<const Migration> migrations) {
-  const int start = schema_version(db);
-  const int newest = migrations.empty() ? 0 : migrations.back().version;
-  if (start > newest) {
-    throw StorageError("run store '" + db.path() + "' has schema version " + std::to_string(start) +
-                       ", newer than this bosfuse understands (" + std::to_string(newest) + ")");
+void require_known_schema(Database& db, int newest) {
+  const int version = schema_version(db);
+  if (version > newest) {
+    throw StorageError("run store '" + db.path() + "' has schema version " + std::to_string(version) +
+                       ", newer than this bosfuse understands (" + std::to_string(newest) +
+                       "); read it with the bosfuse that wrote it");
   }
+}
+
+int migrate(Database& db, std::span<const Migration> migrations) {
+  require_known_schema(db, migrations.empty() ? 0 : migrations.back().version);
+  const int start = schema_version(db);
   for (const Migration& migration : migrations) {
     if (migration.version <= start) continue;
     Transaction transaction(db);

@@ -25,6 +25,13 @@ inline constexpr int kSchemaVersion = 4;
 // 0 for a file with no schema yet.
 int schema_version(Database& db);
 
+// Throws StorageError when `db` was written by a newer bosfuse (a schema
+// version above `newest`). Every opening of a run store, for reading as
+// much as for writing, goes through it (RunStore, ProcessingStore,
+// RunTail): a newer schema may have changed what a column means, so no
+// command reads such a store, and the refusal changes nothing in it.
+void require_known_schema(Database& db, int newest = kSchemaVersion);
+
 // Brings the database to the newest version in `migrations` (default: this
 // build's). Returns the version it started from.
 int migrate(Database& db, std::span<const Migration> migrations = schema_migrations());

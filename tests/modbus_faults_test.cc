@@ -33,7 +33,7 @@ TEST(ModbusFaults, UnreachableDeviceIsReportedRetriedAndOthersGoOn) {
   sim::ModbusSimServer alive(module_options("adam-6018", 2, loopback_tcp()));
   alive.start();
   const std::string toml =
-      tcp_device_toml("alive", alive.port(), 2, 0.05) + tcp_device_toml("dead", unused_loopback_port(), 2, 0.05);
+      tcp_device_toml("alive", alive.port(), 2, 0.05) + tcp_device_toml("dead", unused_loopback_port(), 2, 0.05, "d");
   const auto config = acquisition::parse_experiment(toml, "faults.toml");
   auto store = storage::RunStore::create(dir / "run", run_info(toml), storage::RunStore::CreateMode::kNew);
   const auto summary = log_for(store, config, 1500ms);
@@ -234,7 +234,7 @@ TEST_P(FaultyBesideHealthy, RightStatusOneEventPerOutageAndTheHealthyOneUndistur
   healthy.start();
   faulty.start();
   const std::string toml = tcp_device_toml("healthy", healthy.port(), 2, kPeriodS) +
-                           with_timeout(tcp_device_toml("faulty", faulty.port(), 2, kPeriodS), "0.2");
+                           with_timeout(tcp_device_toml("faulty", faulty.port(), 2, kPeriodS, "f"), "0.2");
   const auto config = acquisition::parse_experiment(toml, "faults.toml");
   auto store = storage::RunStore::create(dir / "run", run_info(toml), storage::RunStore::CreateMode::kNew);
   auto run = std::async(std::launch::async, [&] { return log_for(store, config, 2500ms); });
@@ -297,6 +297,46 @@ TEST(ModbusFaults, ExceptionFromTheFirstPollIsOneOutageOfBadReplies) {
   EXPECT_EQ(count(kinds, "disconnect"), 0) << summary.BriefReport();
   EXPECT_EQ(summary.devices.at(0).stats.reconnects, 0) << "the link was never lost";
   EXPECT_LE(summary.devices.at(0).stats.polls_failed, 12) << "no backoff: " << summary.BriefReport();
+}
+
+// Debounce with a real Modbus module: one failing every other request (a
+// loose contact) is one outage, a bad-reply event when it starts and one
+// recovered event, saying how many polls failed, once it has answered
+// three polls in a row; every failed poll is still a bad-reply sample.
+TEST(ModbusFaults, AModuleFailingEveryOtherPollIsOneOutage) {
+  TempDir dir;
+  sim::ModbusSimServer server(module_options("adam-6018", 2, loopback_tcp()));
+  server.start();
+  const std::string toml = tcp_device_toml("adam", server.port(), 2, kPeriodS);
+  const auto config = acquisition::parse_experiment(toml, "faults.toml");
+  auto store = storage::RunStore::create(dir / "run", run_info(toml), storage::RunStore::CreateMode::kNew);
+  auto run = std::async(std::launch::async, [&] { return log_for(store, config, 2000ms); });
+  std::this_thread::sleep_for(300ms);
+  server.set_exception_every_other(4);
+  std::this_thread::sleep_for(1000ms);
+  server.set_exception_every_other(std::nullopt);
+  const auto summary = run.get();
+
+  const auto samples = samples_by_channel(store).at("tc0");
+  int failures_after_success = 0;
+  for (std::size_t i = 1; i < samples.size(); ++i) {
+    if (samples[i].status == SampleStatus::kBadReply && samples[i - 1].status == SampleStatus::kOk) {
+      ++failures_after_success;
+    }
+  }
+  EXPECT_GE(failures_after_success, 4) << "the module did not fail every other poll\n" << summary.BriefReport();
+  EXPECT_EQ(samples.back().status, SampleStatus::kOk);
+  EXPECT_EQ(event_kinds(store, device_id(store, "adam")),
+            (std::vector<std::string>{"connect", "bad-reply", "recovered"}))
+      << summary.BriefReport();
+  const auto events = store.events();
+  const auto recovered =
+      std::find_if(events.begin(), events.end(), [](const auto& e) { return e.kind == "recovered"; });
+  ASSERT_NE(recovered, events.end());
+  EXPECT_NE(recovered->message.find(std::to_string(summary.devices.at(0).stats.polls_failed) + " failed polls"),
+            std::string::npos)
+      << recovered->message;
+  EXPECT_EQ(summary.devices.at(0).stats.reconnects, 1);
 }
 
 }  // namespace

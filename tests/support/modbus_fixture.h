@@ -53,12 +53,16 @@ inline acquisition::Logger::Summary log_for(storage::RunStore& store, const acqu
   return logger.run(stop);
 }
 
-inline std::string tcp_device_toml(const std::string& name, int port, int inputs, double period_s) {
+// Channels `<channel_prefix>0`, `<channel_prefix>1`, ...: give each device of
+// one file its own prefix, since channel names are unique across devices.
+inline std::string tcp_device_toml(const std::string& name, int port, int inputs, double period_s,
+                                   const std::string& channel_prefix = "tc") {
   std::string text = "[[devices]]\nname = \"" + name +
                      "\"\nprofile = \"adam-6018\"\nhost = \"127.0.0.1\"\nport = " + std::to_string(port) +
                      "\npoll_period_s = " + std::to_string(period_s) + "\ntimeout_s = 0.5\n";
   for (int i = 0; i < inputs; ++i) {
-    text += "[[devices.channels]]\nname = \"tc" + std::to_string(i) + "\"\ninput = " + std::to_string(i) + "\n";
+    text += "[[devices.channels]]\nname = \"" + channel_prefix + std::to_string(i) +
+            "\"\ninput = " + std::to_string(i) + "\n";
   }
   return text;
 }
