@@ -6,6 +6,8 @@
 #include <set>
 #include <sstream>
 
+#include "storage/disk_space.h"
+
 namespace bosfuse::acquisition {
 namespace {
 
@@ -392,6 +394,21 @@ std::string recorded_unit(const std::string& unit, const std::vector<std::option
   return channel < emf_inputs.size() && emf_inputs[channel] ? "degC" : unit;
 }
 
+// At most 2^40 MB, so the bytes fit in 64 bits.
+void read_min_free(const TomlReader& run, ExperimentConfig& config) {
+  constexpr std::int64_t kMostMb = std::int64_t{1} << 40;
+  if (!run.has("min_free_mb")) {
+    config.min_free_key = run.where("min_free_mb") + " (default 100)";
+    return;
+  }
+  config.min_free_mb = run.integer("min_free_mb");
+  config.min_free_key = run.where("min_free_mb");
+  if (config.min_free_mb < 0 || config.min_free_mb > kMostMb) {
+    run.fail("min_free_mb", "expected megabytes of free space from 0 (no check) to 2^40, not " +
+                                std::to_string(config.min_free_mb));
+  }
+}
+
 }  // namespace
 
 ExperimentConfig parse_experiment(std::string_view text, const std::string& source_name) {
@@ -408,8 +425,10 @@ ExperimentConfig parse_experiment(std::string_view text, const std::string& sour
     }
     config.origin_event = run->optional_string("origin");
     if (config.origin_event && config.origin_event->empty()) run->fail("origin", "expected the name of a marker event");
+    read_min_free(*run, config);
     run->reject_unknown_keys();
   }
+  if (config.min_free_key.empty()) config.min_free_key = source_name + ": run.min_free_mb (default 100)";
   std::set<std::string> names;
   for (const TomlReader& device : reader.tables("devices")) {
     const std::string name = read_device(device, config);
@@ -478,6 +497,21 @@ void check_hosts_resolve(const ExperimentConfig& config) {
       throw ConfigError(d.host_key + ": device \"" + d.name + "\": " + e.what());
     }
   }
+}
+
+void check_free_space(const ExperimentConfig& config, const std::filesystem::path& run_dir) {
+  if (config.min_free_mb == 0) return;
+  const std::uint64_t wanted = static_cast<std::uint64_t>(config.min_free_mb) << 20;
+  std::uint64_t free = 0;
+  try {
+    free = storage::free_bytes(run_dir);
+  } catch (const std::exception& e) {
+    throw ConfigError(config.min_free_key + ": " + e.what());
+  }
+  if (free >= wanted) return;
+  throw ConfigError(config.min_free_key + ": the disk of '" + run_dir.string() + "' has " + storage::bytes_text(free) +
+                    " free, less than the " + std::to_string(config.min_free_mb) +
+                    " MB asked for; free some space, log elsewhere, or lower min_free_mb (0 turns the check off)");
 }
 
 }  // namespace bosfuse::acquisition
