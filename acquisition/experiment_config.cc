@@ -10,6 +10,7 @@
 
 #include "acquisition/folder_name.h"
 #include "acquisition/recorded_frame_source.h"
+#include "storage/disk_space.h"
 
 namespace bosfuse::acquisition {
 namespace {
@@ -405,6 +406,16 @@ class ChannelNames {
  private:
   std::map<std::string, std::pair<std::string, std::string>> first_seen_;  // comparable name: (name, where)
 };
+// At most 2^40 MB, so the bytes fit in 64 bits.
+void read_min_free(const TomlReader& run, ExperimentConfig& config) {
+  constexpr std::int64_t kMostMb = std::int64_t{1} << 40;
+  if (!run.has("min_free_mb")) {
+    config.min_free_key = run.where("min_free_mb") + " (default 100)";
+    return;
+  }
+  config.min_free_mb = run.integer_in("min_free_mb", 0, kMostMb);
+  config.min_free_key = run.where("min_free_mb");
+}
 
 }  // namespace
 
@@ -433,8 +444,10 @@ ExperimentConfig parse_experiment(std::string_view text, const std::string& sour
                                        "experiment seconds per recorded second");
     config.origin_event = run->optional_string("origin");
     if (config.origin_event && config.origin_event->empty()) run->fail("origin", "expected the name of a marker event");
+    read_min_free(*run, config);
     run->reject_unknown_keys();
   }
+  if (config.min_free_key.empty()) config.min_free_key = source_name + ": run.min_free_mb (default 100)";
   std::set<std::string> names;
   ChannelNames channel_names;
   for (const TomlReader& device : reader.tables("devices")) {
@@ -516,6 +529,19 @@ void check_replayed_runs(const ExperimentConfig& config) {
       throw ConfigError(c.run_key + ": camera \"" + c.name + "\": " + e.what());
     }
   }
+void check_free_space(const ExperimentConfig& config, const std::filesystem::path& run_dir) {
+  if (config.min_free_mb == 0) return;
+  const std::uint64_t wanted = static_cast<std::uint64_t>(config.min_free_mb) << 20;
+  std::uint64_t free = 0;
+  try {
+    free = storage::free_bytes(run_dir);
+  } catch (const std::exception& e) {
+    throw ConfigError(config.min_free_key + ": " + e.what());
+  }
+  if (free >= wanted) return;
+  throw ConfigError(config.min_free_key + ": the disk of '" + run_dir.string() + "' has " + storage::bytes_text(free) +
+                    " free, less than the " + std::to_string(config.min_free_mb) +
+                    " MB asked for; free some space, log elsewhere, or lower min_free_mb (0 turns the check off)");
 }
 
 }  // namespace bosfuse::acquisition

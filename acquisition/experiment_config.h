@@ -91,6 +91,12 @@ struct ExperimentConfig {
   std::string description;
   double time_scale = 1;                    // [run] time_scale: experiment seconds per recorded second
   std::optional<std::string> origin_event;  // [run] origin: the marker event that is t = 0
+  // [run] min_free_mb: the free space (MB of 2^20 bytes) the run's disk
+  // must have for logging to start, and below which the logger warns; 0:
+  // neither. `min_free_key` says where it is set ("exp.toml:3:
+  // run.min_free_mb"), or that it is the default.
+  std::int64_t min_free_mb = 100;
+  std::string min_free_key;
   std::vector<ModbusDeviceConfig> modbus_devices;
   std::vector<HidDeviceConfig> hid_devices;
   std::vector<UsbDeviceConfig> usb_devices;
@@ -138,5 +144,12 @@ void check_hosts_resolve(const ExperimentConfig& config);
 // check_hosts_resolve it is for the start of logging, so that such a
 // camera stops the start before a run is created, not an empty run after.
 void check_replayed_runs(const ExperimentConfig& config);
+
+// Throws ConfigError, naming `[run] min_free_mb` and its line, when the file
+// system that is to hold `run_dir` (or would, for a folder not made yet)
+// has less free space than min_free_mb: a run begun on a nearly full disk
+// loses its records within minutes, and it is better refused before it
+// starts.
+void check_free_space(const ExperimentConfig& config, const std::filesystem::path& run_dir);
 
 }  // namespace bosfuse::acquisition

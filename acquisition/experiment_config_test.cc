@@ -467,6 +467,34 @@ TEST(ExperimentConfig, ACameraNameTooLongForAFolderIsRefusedNamingTheKey) {
   EXPECT_NE(camera(std::string(65, 'c')).find("exp.toml:2: cameras[0].name: "), std::string::npos);
 }
 
+
+// [run] min_free_mb: read, checked, and named with its line when the disk
+// has less room (an impossible amount here, so any disk has less).
+TEST(ExperimentConfig, TheLeastFreeSpaceIsReadAndARunDiskWithLessIsRefusedNamingTheKey) {
+  const std::string device = "[[devices]]\nname = \"a\"\nprofile = \"adam-6018\"\nhost = \"127.0.0.1\"\n"
+                             "[[devices.channels]]\nname = \"t\"\ninput = 0\n";
+  const auto config = [&](const std::string& run) { return parse_experiment(run + device, "exp.toml"); };
+  EXPECT_EQ(config("").min_free_mb, 100);
+  EXPECT_EQ(config("").min_free_key, "exp.toml: run.min_free_mb (default 100)");
+  EXPECT_EQ(config("[run]\nname = \"x\"\n").min_free_key, "exp.toml:1: run.min_free_mb (default 100)");
+  EXPECT_EQ(config("[run]\nmin_free_mb = 0\n").min_free_mb, 0);
+  EXPECT_EQ(error_of("[run]\nname = \"x\"\nmin_free_mb = -1\n" + device),
+            "exp.toml:3: run.min_free_mb: must be between 0 and 1099511627776");
+  EXPECT_EQ(error_of("[run]\nmin_free_mb = 1.5\n" + device), "exp.toml:2: run.min_free_mb: expected an integer");
+
+  const std::string run_dir = ::testing::TempDir() + "/not-made-yet";
+  EXPECT_NO_THROW(check_free_space(config("[run]\nmin_free_mb = 0\n"), run_dir)) << "0 turns the check off";
+  EXPECT_NO_THROW(check_free_space(config("[run]\nmin_free_mb = 1\n"), run_dir));
+  try {
+    check_free_space(config("[run]\nname = \"x\"\nmin_free_mb = 1099511627776\n"), run_dir);
+    ADD_FAILURE() << "no disk has 2^40 MB free";
+  } catch (const ConfigError& e) {
+    const std::string said = e.what();
+    EXPECT_EQ(said.rfind("exp.toml:3: run.min_free_mb: the disk of '" + run_dir + "' has ", 0), 0u) << said;
+    EXPECT_NE(said.find("less than the 1099511627776 MB asked for"), std::string::npos) << said;
+  }
+}
+
 TEST(ExperimentConfig, MissingFileIsReported) { EXPECT_THROW(load_experiment("/nonexistent/exp.toml"), ConfigError); }
 
 }  // namespace

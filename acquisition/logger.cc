@@ -44,10 +44,20 @@ std::string Logger::Summary::BriefReport() const {
     if (c.stats.finished) out << ", source ended";
     if (c.abandoned) out << ", its last capture was abandoned at the stop";
   }
-  if (writer.uncommitted_at_stop > 0) {
-    out << "\n  ERROR: " << writer.uncommitted_at_stop << " records could not be committed: " << writer.last_error;
-  } else if (writer.failed_commits > 0) {
-    out << "\n  " << writer.failed_commits << " commits had to be retried; last error: " << writer.last_error;
+  if (writer.outages > 0) {
+    out << "\n  the run store could not be written " << writer.outages << (writer.outages == 1 ? " time" : " times")
+        << " (" << writer.failed_commits << " commits retried); last: " << writer.last_error;
+  }
+  if (writer.lost() > 0) {
+    out << "\n  ERROR: " << writer.lost() << " records read were never stored (" << writer.samples_lost << " samples";
+    if (writer.dropped_queue_full > 0) out << "; " << writer.dropped_queue_full << " dropped while the queue was full";
+    out << ")";
+    out << ": " << writer.last_error;
+    if (writer.reserve_released) out << "; the disk reserve was spent on the run's closing events and status";
+  }
+  if (!writer.status_written) {
+    out << "\n  ERROR: the run's status could not be written (" << writer.status_error
+        << "); the next command that opens the run marks it interrupted";
   }
   return out.str();
 }
@@ -74,9 +84,11 @@ std::string Logger::latest_readings(const std::vector<std::shared_ptr<DevicePoll
 }
 
 void Logger::wait_for_end(const std::atomic<bool>& stop_requested,
-                          const std::vector<std::shared_ptr<DevicePoller>>& pollers) const {
+                          const std::vector<std::shared_ptr<DevicePoller>>& pollers, storage::RunWriter& writer) const {
   const auto start = std::chrono::steady_clock::now();
   auto next_progress = start + options_.progress_interval;
+  auto next_disk_check = start;
+  storage::DiskFillWatch disk(options_.disk);
   while (!stop_requested.load()) {
     const auto now = std::chrono::steady_clock::now();
     if (options_.duration && now - start >= *options_.duration) return;
@@ -84,7 +96,30 @@ void Logger::wait_for_end(const std::atomic<bool>& stop_requested,
       options_.on_progress(latest_readings(pollers));
       next_progress += options_.progress_interval;
     }
+    if (now >= next_disk_check) {
+      watch_disk(disk, writer);
+      next_disk_check = now + options_.disk_check_interval;
+    }
     std::this_thread::sleep_for(kStopCheckInterval);
+  }
+}
+
+// A disk filling up is said before it is full, with the time left.
+void Logger::watch_disk(storage::DiskFillWatch& watch, storage::RunWriter& writer) const {
+  std::optional<storage::DiskFillWatch::Change> change;
+  try {
+    change = watch.add(std::chrono::steady_clock::now(), storage::free_bytes(store_.dir()));
+  } catch (const std::exception& e) {
+    spdlog::debug("{}", e.what());  // a file system that cannot say its free space is watched no further
+    return;
+  }
+  if (!change) return;
+  writer.push(storage::Event{0, std::nullopt, utc_now_ns(), change->short_of_space ? "disk-low" : "disk-ok",
+                             change->message});
+  if (options_.on_disk_warning) {
+    options_.on_disk_warning(change->message);
+  } else {
+    spdlog::warn("{}: {}", store_.dir().string(), change->message);
   }
 }
 
@@ -187,7 +222,7 @@ Logger::Summary Logger::run_devices(const std::atomic<bool>& stop_requested) {
   for (const auto& poller : pollers) poller->start();
   for (const auto& recorder : recorders) recorder->start();
 
-  wait_for_end(stop_requested, pollers);
+  wait_for_end(stop_requested, pollers, writer);
 
   // Every device is asked at once, so one stuck device costs the grace
   // period once, not once per device.
@@ -204,9 +239,9 @@ Logger::Summary Logger::run_devices(const std::atomic<bool>& stop_requested) {
   }
   writer.push(storage::Event{0, std::nullopt, utc_now_ns(), "stopped",
                              stop_requested.load() ? "stop requested" : "duration reached"});
-  writer.stop();
+  // Bounded in time and never throws, whatever the store does.
+  writer.close_run(utc_now_ns());
   summary.writer = writer.stats();
-  store_.finish(summary.complete() ? storage::RunStatus::kComplete : storage::RunStatus::kInterrupted, utc_now_ns());
   summary.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   return summary;
 }

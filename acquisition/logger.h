@@ -4,9 +4,13 @@
 // everything through one RunWriter. It runs until a duration has passed or a
 // stop is requested (Ctrl-C), then stops the devices (abandoning, within a
 // second, any device call that does not return), commits everything read
-// and marks the run complete. If the store itself fails, or a record could
-// not be committed, the run is marked interrupted, with everything committed
-// before kept.
+// and marks the run complete. A store that cannot be written (full disk,
+// I/O error, a lock held by another connection) is an outage the writer
+// counts and says, never an exception (see RunWriter); if a record could not
+// be committed the run is marked interrupted, with everything committed
+// before kept, and the stop stays bounded in time. While it records, the
+// logger watches the free space of the run's disk and warns, with the time
+// left, when it runs short.
 
 #include <atomic>
 #include <chrono>
@@ -18,6 +22,7 @@
 
 #include "acquisition/device_poller.h"
 #include "acquisition/experiment_config.h"
+#include "storage/disk_space.h"
 #include "storage/run_store.h"
 #include "storage/run_writer.h"
 
@@ -38,6 +43,12 @@ class Logger {
     // or cleared ("adam: T1: high 85.2 degC above the limit 80 degC"); the
     // run has them as "alarm" and "alarm-cleared" events either way.
     std::function<void(const std::string&)> on_alarm;
+    // Called with one line when the run's disk begins, and ends, to run
+    // short of space (also a `disk-low` / `disk-ok` event); unset: a spdlog
+    // warning. Checked every disk_check_interval.
+    std::function<void(const std::string&)> on_disk_warning;
+    std::chrono::milliseconds disk_check_interval{5'000};
+    storage::DiskFillWatch::Options disk;
   };
 
   struct DeviceSummary {
@@ -58,8 +69,9 @@ class Logger {
     storage::RunWriter::Stats writer;
     double elapsed_s = 0;
     std::string BriefReport() const;
-    // Every record read was committed (what a clean stop promises).
-    bool complete() const { return writer.uncommitted_at_stop == 0; }
+    // Every record read was committed and the run closed (what a clean stop
+    // promises).
+    bool complete() const { return writer.lost() == 0 && writer.status_written; }
   };
 
   Logger(storage::RunStore& store, Options options);
@@ -88,8 +100,9 @@ class Logger {
   };
 
   Summary run_devices(const std::atomic<bool>& stop_requested);
-  void wait_for_end(const std::atomic<bool>& stop_requested,
-                    const std::vector<std::shared_ptr<DevicePoller>>& pollers) const;
+  void wait_for_end(const std::atomic<bool>& stop_requested, const std::vector<std::shared_ptr<DevicePoller>>& pollers,
+                    storage::RunWriter& writer) const;
+  void watch_disk(storage::DiskFillWatch& watch, storage::RunWriter& writer) const;
   std::vector<std::shared_ptr<DevicePoller>> make_pollers(storage::RunWriter& writer);
 
   storage::RunStore& store_;

@@ -42,6 +42,17 @@ std::string what_is_missing(const acquisition::Logger::Summary& summary) {
   return missing;
 }
 
+// The exit message of a run the store could not take whole.
+std::string what_was_lost(const storage::RunWriter::Stats& writer) {
+  std::string message;
+  if (writer.lost() > 0) {
+    message = std::to_string(writer.lost()) + " records read were not stored: " + writer.last_error;
+  }
+  if (writer.status_written) return message + "; the run is marked interrupted";
+  return message + (message.empty() ? "" : "; ") +
+         "the run's status could not be written; the next command that opens it marks it interrupted";
+}
+
 void acquire(const AcquireArgs& args) {
   refuse_standard_output(args.out, "--out", "a run is a folder (run.sqlite, frames/)");
   const auto config = acquisition::load_experiment(args.experiment);
@@ -50,7 +61,9 @@ void acquire(const AcquireArgs& args) {
   // a refused start leaves no empty interrupted run behind.
   acquisition::check_hosts_resolve(config);
   acquisition::check_replayed_runs(config);
+  acquisition::check_free_space(config, args.out);
   acquisition::Logger::Options options;
+  options.disk.min_free_bytes = static_cast<std::uint64_t>(config.min_free_mb) << 20;
   if (!args.duration.empty()) options.duration = parse_duration(args.duration);
   options.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
   options.on_alarm = [](const std::string& line) { spdlog::warn("{}", line); };
@@ -66,11 +79,7 @@ void acquire(const AcquireArgs& args) {
   const auto summary = logger.run(stop_requested_by_signal());
   std::cout << summary.BriefReport() << "\nrun store: " << (store.dir() / storage::RunStore::kDatabaseFileName).string()
             << std::endl;
-  if (!summary.complete()) {
-    throw CommandFailure(kExitIncompleteRun, std::to_string(summary.writer.uncommitted_at_stop) +
-                                                 " records read were not committed (" + summary.writer.last_error +
-                                                 "); the run is marked interrupted");
-  }
+  if (!summary.complete()) throw CommandFailure(kExitIncompleteRun, what_was_lost(summary.writer));
   if (const std::string missing = what_is_missing(summary); !missing.empty()) {
     throw CommandFailure(kExitDeviceSilent, "the run is recorded, but " + missing);
   }

@@ -1,12 +1,15 @@
 #include "storage/database.h"
 
+#include <algorithm>
+#include <cerrno>
 #include <string>
 
 namespace bosfuse::storage {
 namespace {
 
 [[noreturn]] void fail(sqlite3* db, const std::string& what) {
-  throw StorageError(what + ": " + (db ? sqlite3_errmsg(db) : "out of memory"));
+  if (!db) throw StorageError(what + ": out of memory", SQLITE_NOMEM);
+  throw StorageError(what + ": " + sqlite3_errmsg(db), sqlite3_extended_errcode(db), sqlite3_system_errno(db));
 }
 
 int open_flags(Database::Mode mode) {
@@ -23,6 +26,43 @@ int open_flags(Database::Mode mode) {
 
 }  // namespace
 
+StorageError::StorageError(const std::string& what, int sqlite_code, int system_errno)
+    : std::runtime_error(what), sqlite_code_(sqlite_code), system_errno_(system_errno) {}
+
+StorageError::Kind StorageError::kind() const {
+  switch (sqlite_code_ & 0xff) {
+    case SQLITE_FULL:
+      return Kind::kDiskFull;
+    case SQLITE_IOERR:
+      // A write that found no room can surface as an I/O error (growing the
+      // shared-memory index, say): it is a full disk all the same.
+      return system_errno_ == ENOSPC || system_errno_ == EDQUOT ? Kind::kDiskFull : Kind::kIoError;
+    case SQLITE_BUSY:
+    case SQLITE_LOCKED:
+      return Kind::kLocked;
+    default:
+      return Kind::kOther;
+  }
+}
+
+std::string StorageError::reason() const { return sqlite_code_ == 0 ? std::string() : sqlite3_errstr(sqlite_code_); }
+
+// SQLite's busy handler: short sleeps (at most 10 ms, so a lock released is
+// taken at once) until the timeout or the deadline, whichever comes first.
+int Database::wait_for_lock(void* lock_wait, int attempts) {
+  auto& wait = *static_cast<LockWait*>(lock_wait);
+  const auto now = std::chrono::steady_clock::now();
+  if (attempts == 0) wait.started = now;
+  const auto give_up_at = std::chrono::steady_clock::time_point(std::chrono::steady_clock::duration(wait.give_up_at.load()));
+  if (now - wait.started >= wait.timeout || now >= give_up_at) return 0;
+  sqlite3_sleep(std::min(attempts + 1, 10));
+  return 1;
+}
+
+void Database::give_up_lock_waits_at(std::chrono::steady_clock::time_point deadline) {
+  lock_wait_->give_up_at.store(deadline.time_since_epoch().count());
+}
+
 Database::Database(const std::string& path, Mode mode) : path_(path) {
   sqlite3* raw = nullptr;
   // Serialized mode: a connection shared by mistake between threads is slower,
@@ -31,7 +71,7 @@ Database::Database(const std::string& path, Mode mode) : path_(path) {
   db_.reset(raw);  // owned even on failure: sqlite3_open_v2 may allocate a handle
   if (rc != SQLITE_OK) fail(raw, "cannot open run store '" + path + "'");
   sqlite3_extended_result_codes(raw, 1);
-  sqlite3_busy_timeout(raw, 5000);
+  sqlite3_busy_handler(raw, &Database::wait_for_lock, lock_wait_.get());
   execute("PRAGMA foreign_keys = ON");
   if (mode != Mode::kReadOnly) {
     execute("PRAGMA journal_mode = WAL");
@@ -47,7 +87,8 @@ void Database::execute(std::string_view sql) {
   if (sqlite3_exec(db_.get(), text.c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
     std::string reason = message ? message : "unknown error";
     sqlite3_free(message);
-    throw StorageError("SQL failed (" + text.substr(0, 80) + "): " + reason);
+    throw StorageError("SQL failed (" + text.substr(0, 80) + "): " + reason, sqlite3_extended_errcode(db_.get()),
+                       sqlite3_system_errno(db_.get()));
   }
 }
 

@@ -4,10 +4,15 @@
 // statements are prepared once and rebound, and a Transaction rolls back in
 // its destructor unless committed. Use it inside storage/ only; the rest of
 // bosfuse talks to a RunStore. Errors become StorageError carrying SQLite's
-// message and the statement that failed; destructors never throw.
+// message, the statement that failed and SQLite's result code, so a caller
+// can tell a full disk or a held lock from a bug; destructors never throw.
+// Another connection's write lock is waited for up to a timeout (5 s), and a
+// wait can be cut short from another thread (a logger's bounded stop).
 
 #include <sqlite3.h>
 
+#include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -19,7 +24,28 @@ namespace bosfuse::storage {
 
 class StorageError : public std::runtime_error {
  public:
+  // What a failure says about the store, for those who must react to it.
+  enum class Kind {
+    kOther,     // a refused statement, a damaged file, a bug
+    kDiskFull,  // SQLITE_FULL, or the disk was found full (ENOSPC) on an I/O error
+    kIoError,   // SQLITE_IOERR: the file system failed a read or write
+    kLocked,    // SQLITE_BUSY / SQLITE_LOCKED: another connection held a lock past the timeout
+  };
+
   using std::runtime_error::runtime_error;
+  // `sqlite_code`: SQLite's extended result code; `system_errno`: the
+  // errno of the failed system call behind it, if any.
+  StorageError(const std::string& what, int sqlite_code, int system_errno = 0);
+
+  int sqlite_code() const { return sqlite_code_; }
+  Kind kind() const;
+  // SQLite's words for the code ("database or disk is full"), without the
+  // statement; empty when the error is not SQLite's.
+  std::string reason() const;
+
+ private:
+  int sqlite_code_ = 0;
+  int system_errno_ = 0;
 };
 
 struct SqliteCloser {
@@ -35,8 +61,11 @@ class Database {
  public:
   enum class Mode { kReadOnly, kReadWrite, kCreate };
 
-  // Opens (or creates) the file, turns on WAL, foreign keys and a busy
-  // timeout so a reader and the writer of a live run do not fail on locks.
+  static constexpr std::chrono::milliseconds kLockTimeout{5000};
+
+  // Opens (or creates) the file, turns on WAL, foreign keys and a lock
+  // timeout (kLockTimeout) so a reader and the writer of a live run do not
+  // fail on locks.
   Database(const std::string& path, Mode mode);
 
   void execute(std::string_view sql);
@@ -45,8 +74,22 @@ class Database {
   sqlite3* handle() const { return db_.get(); }
   const std::string& path() const { return path_; }
 
+  // Every wait for another connection's lock gives up at `deadline`, even
+  // within its timeout (time_point::max(): no deadline). Safe to call from
+  // any thread, also while this connection is waiting.
+  void give_up_lock_waits_at(std::chrono::steady_clock::time_point deadline);
+
  private:
+  struct LockWait {
+    std::chrono::milliseconds timeout = kLockTimeout;
+    std::atomic<std::chrono::steady_clock::rep> give_up_at{std::chrono::steady_clock::time_point::max().time_since_epoch().count()};
+    std::chrono::steady_clock::time_point started;  // of the wait under way
+  };
+  static int wait_for_lock(void* lock_wait, int attempts);
+
   std::string path_;
+  // On the heap: SQLite keeps its address, and a Database may be moved.
+  std::unique_ptr<LockWait> lock_wait_ = std::make_unique<LockWait>();
   std::unique_ptr<sqlite3, SqliteCloser> db_;
 };
 

@@ -9,6 +9,7 @@
 
 #include "storage/record_rows.h"
 #include "storage/schema.h"
+#include "storage/space_reserve.h"
 
 namespace bosfuse::storage {
 namespace {
@@ -132,7 +133,8 @@ void RunStore::close_interrupted() {
   const std::optional<std::int64_t> planned_end_ns = stmt.column_optional_int64(2);
   const std::optional<std::int64_t> last_ns = last_record_ns();
   const std::int64_t ended_ns = std::max({started_ns, alive_ns.value_or(started_ns), last_ns.value_or(started_ns)});
-  std::string message = "the logger stopped without closing the run (killed, crashed or powered off); ";
+  std::string message =
+      "the logger stopped without closing the run (killed, crashed, powered off, or unable to write to the store); ";
   message += last_ns ? "the record ends at +" + seconds_text(*last_ns - started_ns) : "nothing was recorded";
   if (alive_ns) message += ", the logger was last alive at +" + seconds_text(*alive_ns - started_ns);
   if (planned_end_ns && *planned_end_ns > ended_ns) {
@@ -171,6 +173,10 @@ void RunStore::close_if_abandoned(const fs::path& run_dir) {
     return;
   }
   if (!lock) return;  // being recorded right now
+  // A dead logger's disk reserve: its room is what lets a full disk take
+  // the run's closing account.
+  std::error_code ignored;
+  fs::remove(run_dir / SpaceReserve::kFileName, ignored);
   RunStore store(run_dir, Database::Mode::kReadWrite);
   migrate(store.db_);
   store.run_id_ = store.run().id;

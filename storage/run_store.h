@@ -13,6 +13,7 @@
 // cut): the next open marks it interrupted, ends it at the logger's last
 // sign of life, and records an "interrupted" event saying what is missing.
 
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -79,6 +80,10 @@ class RunStore {
   void set_planned_end(std::int64_t t_ns);
   // The logger's heartbeat: it was alive at `t_ns`.
   void mark_alive(std::int64_t t_ns);
+  // Waits for another connection's lock end at `deadline` (see Database);
+  // the one call that is safe from another thread, so a stop can cut short
+  // a wait the writer thread is in.
+  void give_up_lock_waits_at(std::chrono::steady_clock::time_point deadline) { db_.give_up_lock_waits_at(deadline); }
 
   std::vector<DeviceInfo> devices() const;
   std::vector<ChannelInfo> channels() const;
