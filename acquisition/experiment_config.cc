@@ -529,6 +529,8 @@ void check_replayed_runs(const ExperimentConfig& config) {
       throw ConfigError(c.run_key + ": camera \"" + c.name + "\": " + e.what());
     }
   }
+}
+
 void check_free_space(const ExperimentConfig& config, const std::filesystem::path& run_dir) {
   if (config.min_free_mb == 0) return;
   const std::uint64_t wanted = static_cast<std::uint64_t>(config.min_free_mb) << 20;
