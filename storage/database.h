@@ -33,7 +33,10 @@ class Statement;
 
 class Database {
  public:
-  enum class Mode { kReadOnly, kReadWrite, kCreate };
+  // kImmutable reads without locks and makes no -wal or -shm file: a glance
+  // that leaves the run's folder exactly as it was (storage/output_path.h),
+  // which may miss what a live writer has not checkpointed yet.
+  enum class Mode { kReadOnly, kReadWrite, kCreate, kImmutable };
 
   // Opens (or creates) the file, turns on WAL, foreign keys and a busy
   // timeout so a reader and the writer of a live run do not fail on locks.
