@@ -12,9 +12,9 @@
 #include "fusion/field_csv.h"
 #include "report/field_conventions.h"
 #include "report/hdf5_writer.h"
-#include "storage/partial_file.h"
 #include "report/xdmf_sidecar.h"
 #include "storage/experiment_clock.h"
+#include "storage/partial_file.h"
 #include "storage/processing_store.h"
 #include "storage/run_paths.h"
 

@@ -11,9 +11,9 @@
 #include "report/field_export.h"
 #include "report/field_conventions.h"
 #include "report/hdf5_writer.h"
-#include "storage/partial_file.h"
 #include "report/xdmf_sidecar.h"
 #include "storage/experiment_clock.h"
+#include "storage/partial_file.h"
 
 namespace bosfuse::report {
 namespace {
