@@ -55,6 +55,7 @@ std::string what_was_lost(const storage::RunWriter::Stats& writer) {
 
 void acquire(const AcquireArgs& args) {
   refuse_standard_output(args.out, "--out", "a run is a folder (run.sqlite, frames/)");
+  if (!args.append) check_new_run_output(args.out, "--out");  // a new run lands on no run's own files
   const auto config = acquisition::load_experiment(args.experiment);
   if (config.device_count() == 0) throw std::runtime_error(args.experiment + ": no [[devices]] to log");
   // Everything that can refuse the start does so before the run exists, so

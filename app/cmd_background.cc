@@ -22,6 +22,7 @@ struct BackgroundArgs {
 
 void background(const BackgroundArgs& args) {
   refuse_standard_output(args.out, "--out", "the pattern is a .png or .tif image whose format comes from its name");
+  check_output(args.out, "--out");
   const auto pattern = sim::generate_pattern(args.pattern);
   sim::write_pattern_image(args.out, sim::render_pattern(pattern), args.pattern.dpi);
   const double mm_per_px = 25.4 / args.pattern.dpi;

@@ -220,7 +220,9 @@ void write_truth(const std::filesystem::path& run_dir, const DemoArgs& args, con
                           {"cylinder_k_per_s", scene.initial_cooling_rate_per_s()},
                           {"plume_k_per_s", true_plume_cooling_rate(setup)},
                           {"note", "k in 1/s of experiment time, as every fit the run stores"}};
-  std::ofstream(run_dir / "demo-truth.json") << truth.dump(2) << "\n";
+  storage::PartialFileStream file(run_dir / "demo-truth.json");
+  file.stream() << truth.dump(2) << "\n";
+  file.close();
 }
 
 void run_demo(const DemoArgs& args) {
@@ -228,6 +230,7 @@ void run_demo(const DemoArgs& args) {
   // A new folder per demo, so running it again never touches an earlier run.
   const std::filesystem::path run_dir =
       std::filesystem::path(args.out) / acquisition::format_compact_utc(acquisition::utc_now_ns());
+  check_new_run_output(run_dir.string(), "--out");  // the new run lands on no run's own files
   const DemoSetup setup = demo_setup(args.experiment_s);
   ProgressDisplay display;
   const Recording recording = record_demo(args, setup, run_dir, display);

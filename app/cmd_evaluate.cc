@@ -22,6 +22,7 @@
 #include "pipeline/image_sequence.h"
 #include "pipeline/processing_settings.h"
 #include "pipeline/sequence_evaluation.h"
+#include "report/field_export.h"
 #include "report/figures.h"
 #include "report/run_input.h"
 #include "report/sequence_export.h"
@@ -116,9 +117,11 @@ fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
 
 void evaluate(const EvaluateArgs& args) {
   const auto options = evaluator_options(args);
+  check_output(args.out, "--out");
   if (!args.map.empty()) {
     refuse_standard_output(args.map, "--map", "the image format comes from the file name (.png)");
     if (!args.probes.empty()) throw std::runtime_error("--map draws a full field; it cannot be used with --probe");
+    check_figure_output(args.map, "--map");
   }
   const cv::Mat reference = read_image(args.reference, "reference");
   const cv::Mat measurement = read_image(args.measurement, "measurement");
@@ -131,7 +134,7 @@ void evaluate(const EvaluateArgs& args) {
     for (const auto& p : args.probes) points.push_back(parse_point(p, reference.size()));
     result = fusion::probe_displacement(reference, measurement, points, options, mask);
   }
-  OutputStream out(args.out);
+  OutputStream out(args.out, "--out");
   fusion::write_csv(result.field, out.stream());
   out.close();
   if (!args.map.empty()) {
@@ -262,6 +265,8 @@ void evaluate_sequence(const EvaluateArgs& args, const CLI::App& cmd) {
   if (args.out == "-") {
     throw std::runtime_error("--sequence needs --out FILE.h5: the fields go to an HDF5 file, not standard output");
   }
+  check_output(args.out, "--out");
+  check_output(report::xdmf_path_for(args.out).string(), "--out (its .xmf sidecar)");
   for (const char* pair_only : {"--probe", "--map", "--contour"}) {
     if (cmd.count(pair_only) > 0) {
       throw std::runtime_error(std::string(pair_only) + " is for an image pair, not --sequence");

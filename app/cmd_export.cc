@@ -46,7 +46,6 @@ std::optional<double> image_scale(const ExportArgs& args, const storage::RunStor
 }
 
 void export_fields(const ExportArgs& args, const storage::RunStore& store) {
-  refuse_standard_output(args.fields, "--fields", "HDF5 cannot be written to a pipe");
   report::FieldExportOptions options;
   options.px_per_mm = image_scale(args, store);
   const auto result = report::export_fields(store, args.fields, options);
@@ -79,9 +78,16 @@ void add_export(CLI::App& root) {
       ->check(CLI::PositiveNumber)
       ->excludes(csv);
   cmd->callback([args] {
+    // Both outputs are checked before the run is read: none is one of a run's own files.
+    if (!args->fields.empty()) {
+      refuse_standard_output(args->fields, "--fields", "HDF5 cannot be written to a pipe");
+      check_output(args->fields, "--fields");
+      check_output(report::xdmf_path_for(args->fields).string(), "--fields (its .xmf sidecar)");
+    }
+    check_output(args->out, "--out");
     const auto store = storage::RunStore::open(args->run);
     if (!args->fields.empty()) return export_fields(*args, store);
-    OutputStream out(args->out);
+    OutputStream out(args->out, "--out");
     report::write_samples_csv(store, out.stream());
     out.close();
   });

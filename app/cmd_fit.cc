@@ -119,6 +119,7 @@ NewtonFitOptions with_origin(NewtonFitOptions options, const CsvSeries& series) 
 void run_fit(const FitArgs& args) {
   FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres logs rank deficiency itself; the summary says it better
   const NewtonFitOptions options = fit_options(args);
+  if (!args.json.empty()) check_output(args.json, "--json");
   std::ifstream file;
   if (args.file != "-") {
     file.open(args.file);
@@ -131,7 +132,7 @@ void run_fit(const FitArgs& args) {
   print_header(text, series, args.file, fit.origin_s);
   text << fit.brief_report() << std::flush;
   if (!args.json.empty()) {
-    OutputStream out(args.json);
+    OutputStream out(args.json, "--json");
     out.stream() << fit_json(fit, series, args.file).dump(2) << "\n";
     out.close();
   }

@@ -62,11 +62,15 @@ void write_local_map(const fusion::QualityReport& report, const QualityArgs& arg
 }
 
 void quality(const QualityArgs& args) {
-  if (!args.map.empty()) refuse_standard_output(args.map, "--map", "the image format comes from the file name (.png)");
+  if (!args.map.empty()) {
+    refuse_standard_output(args.map, "--map", "the image format comes from the file name (.png)");
+    check_figure_output(args.map, "--map");
+  }
+  check_output(args.json, "--json");
   const cv::Mat image = read_image(args.image, "image");
   const cv::Mat reference = read_image(args.reference, "reference");
   std::optional<OutputStream> json;
-  if (!args.json.empty()) json.emplace(args.json);
+  if (!args.json.empty()) json.emplace(args.json, "--json");
   fusion::QualityOptions options;
   options.window_px = args.window_px;
   const auto report = fusion::assess_quality(image, reference, options);

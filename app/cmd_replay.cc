@@ -67,6 +67,7 @@ void copy_markers(const sim::RecordedRun& recorded, double speed, std::int64_t s
 
 void replay(const ReplayArgs& args) {
   refuse_standard_output(args.out, "--out", "a run is a folder (run.sqlite, frames/)");
+  check_new_run_output(args.out, "--out");  // not the recorded run itself, nor inside its own folders
   const sim::RecordedRun recorded = sim::inspect_recorded_run(args.run);
   for (const std::string& problem : recorded.problems) spdlog::warn("{}: {}", args.run, problem);
   if (recorded.devices.empty() && recorded.cameras.empty()) throw std::runtime_error(args.run + ": nothing to replay");

@@ -52,6 +52,7 @@ std::vector<double> parse_times(const std::string& text) {
 
 void make_report(const ReportArgs& args) {
   refuse_standard_output(args.out, "--out", "a report is a folder of files (report.html, figures, CSV, JSON)");
+  check_output(args.out, "--out");
   const auto store = storage::RunStore::open(args.run);
   report::RunReportOptions input_options;
   input_options.map_times_s = parse_times(args.map_times);

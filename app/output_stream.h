@@ -6,6 +6,10 @@
 // goes there, the "wrote FILE" line — moves to standard error as a
 // message (which --quiet silences). A write that fails (a full disk) is an
 // error naming the destination, not a short file and exit status 0.
+// A file is written through storage::PartialFileStream: under a temporary
+// name, renamed onto the destination by close(), so a failed command
+// leaves an older file of that name whole; and it is never one of a run's
+// own files (storage/output_path.h), refused before any work is done.
 // Outputs that cannot go to a pipe — images and HDF5, whose format comes
 // from the file name, and run folders — refuse "-" with the reason.
 //
@@ -15,15 +19,37 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include <fstream>
+#include <filesystem>
 #include <iostream>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
 
+#include "storage/output_path.h"
+#include "storage/partial_file.h"
+
 namespace bosfuse::app {
 
 inline bool names_standard_output(std::string_view path) { return path == "-"; }
+
+// Throws storage::OutputRefused when `path` is one of a run's own files or
+// folders (standard output, and an option not given, are none). Commands
+// call it for every output before they start work; the writers check again.
+inline void check_output(std::string_view path, std::string_view option) {
+  if (!path.empty() && !names_standard_output(path)) storage::check_output_path(std::string(path), option);
+}
+
+// The folder of a new run: none of a run's own, and no run already.
+inline void check_new_run_output(std::string_view path, std::string_view option) {
+  if (!path.empty() && !names_standard_output(path)) storage::check_new_run_folder(std::string(path), option);
+}
+
+// A figure named by its PNG is also drawn as the SVG beside it (report/figures.h).
+inline void check_figure_output(std::string_view png_path, std::string_view option) {
+  check_output(png_path, option);
+  check_output(std::filesystem::path(png_path).replace_extension(".svg").string(), option);
+}
 
 // Throws for "-" on an option whose output needs a real file or folder.
 inline void refuse_standard_output(std::string_view path, std::string_view option, std::string_view why) {
@@ -42,34 +68,33 @@ inline std::ostream& text_stream(bool standard_output_holds_data) {
 
 class OutputStream {
  public:
-  // Creates (or truncates) the file now, so a path that cannot be written
-  // fails before any work is done.
-  explicit OutputStream(std::string path) : path_(std::move(path)) {
+  // Creates the temporary file now, so a path that cannot be written (or
+  // that a run owns) fails before any work is done; the destination itself
+  // is replaced only by close().
+  explicit OutputStream(std::string path, std::string_view option = {}) : path_(std::move(path)) {
     if (to_standard_output()) return;
-    file_.open(path_);
-    if (!file_) throw std::runtime_error("cannot write '" + path_ + "'");
+    check_output(path_, option);
+    file_.emplace(path_);
   }
 
   bool to_standard_output() const { return names_standard_output(path_); }
-  std::ostream& stream() { return to_standard_output() ? std::cout : file_; }
+  std::ostream& stream() { return file_ ? file_->stream() : std::cout; }
 
-  // Flushes and checks every write; a file says where it went.
+  // Flushes and checks every write, then puts the file in place; a file
+  // says where it went.
   void close() {
-    std::ostream& out = stream();
-    out.flush();
-    if (!out) {
-      throw std::runtime_error(to_standard_output() ? std::string("could not write to standard output")
-                                                    : "could not write '" + path_ + "'");
+    if (!file_) {
+      std::cout.flush();
+      if (!std::cout) throw std::runtime_error("could not write to standard output");
+      return;
     }
-    if (to_standard_output()) return;
-    file_.close();
-    if (!file_) throw std::runtime_error("could not write '" + path_ + "'");
+    file_->close();
     spdlog::info("wrote {}", path_);
   }
 
  private:
   std::string path_;
-  std::ofstream file_;
+  std::optional<storage::PartialFileStream> file_;
 };
 
 }  // namespace bosfuse::app

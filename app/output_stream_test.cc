@@ -86,6 +86,38 @@ TEST(OutputStream, OptionsNeedingAFileRefuseADashWithTheReason) {
   }
 }
 
+TEST(OutputStream, ACommandThatFailsBeforeCloseLeavesTheOldFileWhole) {
+  testing::TempDir dir;
+  std::ofstream(dir / "fit.json") << "{\"k\": 0.01}\n";
+  try {
+    OutputStream out((dir / "fit.json").string());
+    out.stream() << "{\"k\": ";
+    throw std::runtime_error("the fit failed");
+  } catch (const std::runtime_error&) {
+  }
+  EXPECT_EQ(read(dir / "fit.json"), "{\"k\": 0.01}\n");
+  std::size_t files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) files += entry.exists();
+  EXPECT_EQ(files, 1u) << "no temporary left beside it";
+}
+
+TEST(OutputStream, ARunsOwnFileIsRefusedNamingTheOption) {
+  testing::TempDir dir;
+  std::filesystem::create_directories(dir / "run");
+  std::ofstream(dir / "run/run.sqlite") << "a store";
+  const std::string store = (dir / "run/run.sqlite").string();
+  try {
+    OutputStream out(store, "--json");
+    FAIL() << "opened " << store;
+  } catch (const storage::OutputRefused& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("refusing to write --json '" + store + "'", 0), 0u) << e.what();
+  }
+  EXPECT_EQ(read(dir / "run/run.sqlite"), "a store");
+  EXPECT_NO_THROW(check_output("-", "--json")) << "standard output is no run's file";
+  EXPECT_NO_THROW(check_output("", "--json")) << "an option not given";
+  EXPECT_THROW(check_figure_output((dir / "run/frames/map.png").string(), "--map"), storage::OutputRefused);
+}
+
 TEST(OutputStream, TheTextResultMovesToStandardErrorWhenTheDataTookStandardOutput) {
   EXPECT_EQ(&text_stream(false), &std::cout);
   const auto level = spdlog::get_level();

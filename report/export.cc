@@ -3,28 +3,17 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <fstream>
 #include <stdexcept>
 
 #include "fitting/fit_json.h"
 #include "report/csv_cell.h"
+#include "storage/partial_file.h"
 
 namespace bosfuse::report {
 namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::ordered_json;
-
-std::ofstream open_for_writing(const fs::path& path) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error("cannot write '" + path.string() + "'");
-  return out;
-}
-
-void check_written(std::ofstream& out, const fs::path& path) {
-  out.flush();
-  if (!out) throw std::runtime_error("writing '" + path.string() + "' failed");
-}
 
 // Round-trip precision; empty for a value that does not exist.
 std::string num(double v) { return std::isfinite(v) ? fmt::format("{}", v) : std::string(); }
@@ -102,7 +91,8 @@ ordered_json quantity_json(const SummaryQuantity& q) {
 }  // namespace
 
 void write_series_csv(const ReportInput& input, const fs::path& path) {
-  auto out = open_for_writing(path);
+  storage::PartialFileStream file(path);  // in place only once whole
+  std::ostream& out = file.stream();
   out << "series,kind,t_s,temperature_c,fit_c,residual_c,fit_half_width_c\n";
   for (const auto& s : input.series) {
     const std::string name = field(s.name), kind = to_string(s.kind);
@@ -113,11 +103,12 @@ void write_series_csv(const ReportInput& input, const fs::path& path) {
           << ',' << num(s.temperature_c[i] - model) << ',' << num(half_width) << '\n';
     }
   }
-  check_written(out, path);
+  file.close();
 }
 
 void write_fits_csv(const ReportInput& input, const fs::path& path) {
-  auto out = open_for_writing(path);
+  storage::PartialFileStream file(path);  // in place only once whole
+  std::ostream& out = file.stream();
   out << "series,kind,ok,status,confidence,points,k_per_s,k_low,k_high,tau_s,tau_low,tau_high,T0_c,T0_low,T0_high,"
          "T0_t_s,T_amb_c,T_amb_low,T_amb_high,ambient_fixed,residual_rms_c,residual_std_c,reduced_chi_square,"
          "lag1_autocorrelation,record_time_constants,message\n";
@@ -142,7 +133,7 @@ void write_fits_csv(const ReportInput& input, const fs::path& path) {
         << num(ok ? m.lag1_autocorrelation : NAN) << ',' << num(ok ? m.record_time_constants : NAN) << ','
         << field(ok ? fmt::format("{}", fmt::join(m.warnings, " ")) : m.message) << '\n';
   }
-  check_written(out, path);
+  file.close();
 }
 
 void write_map_csv(const MapField& map, std::optional<double> px_per_mm, const fs::path& path) {
@@ -150,7 +141,8 @@ void write_map_csv(const MapField& map, std::optional<double> px_per_mm, const f
   map.values.convertTo(values, CV_64F);
   cv::Mat mask;
   if (!map.mask.empty()) map.mask.convertTo(mask, CV_8U);
-  auto out = open_for_writing(path);
+  storage::PartialFileStream file(path);  // in place only once whole
+  std::ostream& out = file.stream();
   out << "x_px,y_px,x_mm,y_mm,value,masked\n";
   for (int r = 0; r < values.rows; ++r) {
     for (int c = 0; c < values.cols; ++c) {
@@ -161,15 +153,16 @@ void write_map_csv(const MapField& map, std::optional<double> px_per_mm, const f
           << (px_per_mm ? num(y / *px_per_mm) : "") << ',' << (masked ? "" : num(v)) << ',' << (masked ? 1 : 0) << '\n';
     }
   }
-  check_written(out, path);
+  file.close();
 }
 
 void write_summary_csv(const ReportSummary& summary, const fs::path& path) {
-  auto out = open_for_writing(path);
+  storage::PartialFileStream file(path);  // in place only once whole
+  std::ostream& out = file.stream();
   out << "series,kind,compared_with,quantity,value,std_error,low,high,unit,note\n";
   for (const auto& r : summary.series) summary_csv_series(out, r);
   for (const auto& p : summary.pairs) summary_csv_pair(out, p);
-  check_written(out, path);
+  file.close();
 }
 
 ordered_json fit_json(const fitting::NewtonFit& fit) {

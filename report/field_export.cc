@@ -12,9 +12,9 @@
 #include "fusion/field_csv.h"
 #include "report/field_conventions.h"
 #include "report/hdf5_writer.h"
-#include "report/partial_file.h"
 #include "report/xdmf_sidecar.h"
 #include "storage/experiment_clock.h"
+#include "storage/partial_file.h"
 #include "storage/processing_store.h"
 #include "storage/run_paths.h"
 
@@ -202,7 +202,7 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
            std::pair(frame_by_id.at(b.frame_id).t_ns, b.frame_id);
   });
 
-  PartialFile h5_file(hdf5_path), xmf_file(result.xdmf_path);
+  storage::PartialFile h5_file(hdf5_path), xmf_file(result.xdmf_path);
   std::vector<Grid> grids;
   std::map<std::string_view, std::vector<ExportedFrame>> exported;
   {

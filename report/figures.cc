@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "report/html.h"
+#include "storage/partial_file.h"
 
 namespace bosfuse::report {
 namespace {
@@ -113,17 +114,24 @@ void render_png_and_svg(const FigureFiles& files, const FigureSize& size, const 
   // PLplot's state is global: one figure at a time in this process.
   static std::mutex plplot_mutex;
   const std::lock_guard lock(plplot_mutex);
-  for (const auto& [device, path] : {std::pair{"pngcairo", files.png}, std::pair{"svgcairo", files.svg}}) {
+  // Each drawn under a temporary name and put in place once both are whole.
+  storage::PartialFile png(files.png), svg(files.svg);
+  for (const auto& [device, file] : {std::pair{"pngcairo", &png}, std::pair{"svgcairo", &svg}}) {
+    const fs::path& path = file->path();
     // PLplot ends the process when it cannot open its output: find out first.
-    if (!std::ofstream(path, std::ios::binary)) throw std::runtime_error("cannot write '" + path.string() + "'");
+    if (!std::ofstream(path, std::ios::binary)) {
+      throw std::runtime_error("cannot write '" + file->destination().string() + "'");
+    }
     {
       PlotStream stream(device, path, size);
       draw();
     }
     if (!fs::exists(path) || fs::file_size(path) == 0) {
-      throw std::runtime_error("PLplot wrote nothing to " + path.string());
+      throw std::runtime_error("PLplot wrote nothing to " + file->destination().string());
     }
   }
+  png.commit();
+  svg.commit();
 }
 
 FigureFiles files_for(const fs::path& base) {

@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <fstream>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -12,6 +11,7 @@
 #include "report/export.h"
 #include "report/html.h"
 #include "report/summary.h"
+#include "storage/partial_file.h"
 
 namespace bosfuse::report {
 namespace {
@@ -192,11 +192,9 @@ Figures draw_figures(const ReportInput& input, Output& out) {
 }
 
 void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error("cannot write '" + path.string() + "'");
-  out << text;
-  out.flush();
-  if (!out) throw std::runtime_error("writing '" + path.string() + "' failed");
+  storage::PartialFileStream file(path);
+  file.stream() << text;
+  file.close();
 }
 
 void write_data(const ReportInput& input, const ReportSummary& summary, const Figures& f, const fs::path& dir,
@@ -272,32 +270,44 @@ std::string files_section(const ReportFiles& files) {
   return h + "<li>report.json</li></ul>\n";
 }
 
+// The same files once moved from the staging folder into `dir`.
+ReportFiles moved_to(ReportFiles files, const fs::path& dir) {
+  const auto move = [&](fs::path& p) { p = dir / p.filename(); };
+  move(files.html);
+  move(files.json);
+  for (auto& p : files.csv) move(p);
+  for (auto& f : files.figures) {
+    move(f.png);
+    move(f.svg);
+  }
+  return files;
+}
+
 }  // namespace
 
 ReportFiles write_report(const ReportInput& input, const ReportOptions& options, const fs::path& out_dir) {
-  std::error_code ec;
-  fs::create_directories(out_dir, ec);
-  if (ec || !fs::is_directory(out_dir)) {
-    throw std::runtime_error("cannot create the report folder '" + out_dir.string() + "': " + ec.message());
-  }
+  // Every file is written into a staging folder and moved in at the end: a
+  // report that fails half-way leaves the folder's earlier report whole.
+  storage::PartialFolder folder(out_dir);
   const std::string title = options.title.empty()
                                 ? "Cooling report — " + (input.run_name.empty() ? std::string("run") : input.run_name)
                                 : options.title;
-  Output out{out_dir, options};
+  Output out{folder.path(), options};
   const Figures figures = draw_figures(input, out);
   const ReportSummary summary = summarize(input);
   ReportFiles files;
   files.figures = figures.all;
-  write_data(input, summary, figures, out_dir, files);
+  write_data(input, summary, figures, folder.path(), files);
 
-  files.html = out_dir / "report.html";
+  files.html = folder.path() / "report.html";
   write_text(files.html, page_head(title, input) + summary_section(input, summary) +
                              "<h2 id=\"quality\">Image "
                              "quality index</h2>\n" +
                              quality_html(input) + curves_section(input, figures, options) +
                              agreement_section(input, figures, options) + maps_sections(input, figures, options) +
                              files_section(files) + "</body>\n</html>\n");
-  return files;
+  folder.commit();
+  return moved_to(std::move(files), out_dir);
 }
 
 }  // namespace bosfuse::report

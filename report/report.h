@@ -41,8 +41,11 @@ struct ReportFiles {
   std::vector<FigureFiles> figures;
 };
 
-// Creates `out_dir` if needed and overwrites the files it writes there.
-// Throws std::runtime_error when a file cannot be written or PLplot lacks
+// Creates `out_dir` if needed and replaces the files it writes there, all
+// at the end (written into a hidden staging folder inside it first), so a
+// report that fails leaves the earlier one whole. Throws
+// storage::OutputRefused for a run's own folder (storage/output_path.h),
+// std::runtime_error when a file cannot be written or PLplot lacks
 // its cairo devices.
 ReportFiles write_report(const ReportInput& input, const ReportOptions& options, const std::filesystem::path& out_dir);
 

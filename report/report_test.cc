@@ -460,6 +460,22 @@ TEST_F(Report, TheSummaryComesFirstInTheRunsTimeBasis) {
   EXPECT_DOUBLE_EQ(std::stod(last), input.series[0].fit->temperature_half_width_at(input.series[0].time_s[0]));
 }
 
+TEST_F(Report, AReportThatFailsHalfWayLeavesTheEarlierOneWhole) {
+  const auto first = write(testdata::sample_input(true));
+  std::map<fs::path, std::string> before;
+  for (const auto& entry : fs::directory_iterator(dir_ / "out")) before[entry.path()] = read_text(entry.path());
+  ASSERT_GT(before.size(), 8u);
+  ReportInput input = testdata::sample_input(true);
+  fit_missing(input);
+  input.run_name = "second";
+  ReportOptions options;
+  options.map_size = {50, 50};  // refused by the map, after the curves are drawn
+  EXPECT_THROW(write_report(input, options, dir_ / "out"), std::invalid_argument);
+  std::map<fs::path, std::string> after;
+  for (const auto& entry : fs::directory_iterator(dir_ / "out")) after[entry.path()] = read_text(entry.path());
+  EXPECT_EQ(after, before) << "every file of the first report byte for byte, no staging folder left";
+}
+
 TEST_F(Report, UnwritableFolderIsAnError) {
   const fs::path file = dir_ / "a_file";
   std::ofstream(file) << "x";

@@ -11,9 +11,9 @@
 #include "report/field_export.h"
 #include "report/field_conventions.h"
 #include "report/hdf5_writer.h"
-#include "report/partial_file.h"
 #include "report/xdmf_sidecar.h"
 #include "storage/experiment_clock.h"
+#include "storage/partial_file.h"
 
 namespace bosfuse::report {
 namespace {
@@ -69,7 +69,7 @@ struct SequenceFieldWriter::State {
 
   SequenceExportInfo info;
   fs::path hdf5_path;
-  PartialFile h5_file, xmf_file;  // before `out`: the file is closed before an uncommitted one is removed
+  storage::PartialFile h5_file, xmf_file;  // before `out`: the file is closed before an uncommitted one is removed
   hdf5::Writer out;
   std::vector<bool> written;
   std::vector<std::optional<std::int64_t>> t_ns;

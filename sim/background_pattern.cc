@@ -11,6 +11,8 @@
 #include <random>
 #include <stdexcept>
 
+#include "storage/partial_file.h"
+
 namespace bosfuse::sim {
 namespace {
 
@@ -147,7 +149,11 @@ void write_pattern_image(const std::filesystem::path& path, const cv::Mat& image
     const int dots = static_cast<int>(std::lround(dpi));
     const std::vector<int> params{cv::IMWRITE_TIFF_RESUNIT, 2 /* inch */, cv::IMWRITE_TIFF_XDPI, dots,
                                   cv::IMWRITE_TIFF_YDPI,    dots};
-    if (!cv::imwrite(path.string(), image, params)) throw std::runtime_error(path.string() + ": cannot write TIFF");
+    storage::PartialFile file(path);  // keeps the extension OpenCV picks the format by
+    if (!cv::imwrite(file.path().string(), image, params)) {
+      throw std::runtime_error(path.string() + ": cannot write TIFF");
+    }
+    file.commit();
     return;
   }
   if (!has_extension(path, {".png"})) throw std::runtime_error(path.string() + ": use a .png or .tif(f) file name");
@@ -158,9 +164,9 @@ void write_pattern_image(const std::filesystem::path& path, const cv::Mat& image
   constexpr std::size_t kAfterIhdr = 8 + 25;
   const auto chunk = phys_chunk(dpi);
   png.insert(png.begin() + kAfterIhdr, chunk.begin(), chunk.end());
-  std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-  if (!out.flush()) throw std::runtime_error(path.string() + ": cannot write PNG");
+  storage::PartialFileStream out(path);
+  out.stream().write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+  out.close();
 }
 
 double read_png_dpi(const std::filesystem::path& path) {

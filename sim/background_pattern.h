@@ -55,7 +55,9 @@ BackgroundPattern generate_pattern(const PatternOptions& options);
 cv::Mat render_pattern(const BackgroundPattern& pattern);
 
 // PNG (with a pHYs chunk) or TIFF (X/Y resolution tags), by extension;
-// both carry `dpi`. Throws std::runtime_error on failure.
+// both carry `dpi`, written through storage::PartialFile (in place only
+// once whole; never one of a run's own files). Throws std::runtime_error
+// on failure.
 void write_pattern_image(const std::filesystem::path& path, const cv::Mat& image, double dpi);
 
 // The resolution stored in a PNG's pHYs chunk, in dots per inch; 0 if none.

@@ -20,8 +20,27 @@ int open_flags(Database::Mode mode) {
       return SQLITE_OPEN_READWRITE;
     case Database::Mode::kCreate:
       return SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
+    case Database::Mode::kImmutable:
+      return SQLITE_OPEN_READONLY | SQLITE_OPEN_URI;
   }
   return SQLITE_OPEN_READONLY;
+}
+
+// The file as an SQLite URI with immutable=1 (no locking, no -wal/-shm);
+// '?', '#' and '%' in the path are percent-encoded.
+std::string immutable_uri(const std::string& path) {
+  std::string uri = "file:";
+  for (const char c : path) {
+    if (c == '?' || c == '#' || c == '%') {
+      static constexpr char kHex[] = "0123456789ABCDEF";
+      uri += '%';
+      uri += kHex[(static_cast<unsigned char>(c) >> 4) & 0xF];
+      uri += kHex[static_cast<unsigned char>(c) & 0xF];
+    } else {
+      uri += c;
+    }
+  }
+  return uri + "?immutable=1";
 }
 
 }  // namespace
@@ -67,13 +86,14 @@ Database::Database(const std::string& path, Mode mode) : path_(path) {
   sqlite3* raw = nullptr;
   // Serialized mode: a connection shared by mistake between threads is slower,
   // never corrupted.
-  const int rc = sqlite3_open_v2(path.c_str(), &raw, open_flags(mode) | SQLITE_OPEN_FULLMUTEX, nullptr);
+  const std::string name = mode == Mode::kImmutable ? immutable_uri(path) : path;
+  const int rc = sqlite3_open_v2(name.c_str(), &raw, open_flags(mode) | SQLITE_OPEN_FULLMUTEX, nullptr);
   db_.reset(raw);  // owned even on failure: sqlite3_open_v2 may allocate a handle
   if (rc != SQLITE_OK) fail(raw, "cannot open run store '" + path + "'");
   sqlite3_extended_result_codes(raw, 1);
   sqlite3_busy_handler(raw, &Database::wait_for_lock, lock_wait_.get());
   execute("PRAGMA foreign_keys = ON");
-  if (mode != Mode::kReadOnly) {
+  if (mode == Mode::kReadWrite || mode == Mode::kCreate) {
     execute("PRAGMA journal_mode = WAL");
     // NORMAL is durable in WAL mode except for the last transactions on power
     // loss; the database itself is never corrupted.

@@ -59,7 +59,10 @@ class Statement;
 
 class Database {
  public:
-  enum class Mode { kReadOnly, kReadWrite, kCreate };
+  // kImmutable reads without locks and makes no -wal or -shm file: a glance
+  // that leaves the run's folder exactly as it was (storage/output_path.h),
+  // which may miss what a live writer has not checkpointed yet.
+  enum class Mode { kReadOnly, kReadWrite, kCreate, kImmutable };
 
   static constexpr std::chrono::milliseconds kLockTimeout{5000};
 
