@@ -10,6 +10,7 @@
 #include "storage/run_lock.h"
 #include "storage/run_paths.h"
 #include "storage/run_store.h"
+#include "storage/space_reserve.h"
 
 namespace bosfuse::storage {
 namespace fs = std::filesystem;
@@ -22,13 +23,15 @@ struct OwnName {
 
 // The run's own files beside run.sqlite: SQLite's companions (the WAL, its
 // index and a rollback journal) and the locks (RunLock; "process.lock" is
-// the one pipeline/process.cc holds while it writes results).
-constexpr std::array<OwnName, 6> kOwnFiles{{{"run.sqlite", "its run store"},
+// the one pipeline/process.cc holds while it writes results), and the
+// room a logger keeps for its last records on a full disk (SpaceReserve).
+constexpr std::array<OwnName, 7> kOwnFiles{{{"run.sqlite", "its run store"},
                                             {"run.sqlite-wal", "its run store's write-ahead log"},
                                             {"run.sqlite-shm", "its run store's shared-memory index"},
                                             {"run.sqlite-journal", "its run store's rollback journal"},
                                             {RunLock::kFileName, "its logger's lock"},
-                                            {"process.lock", "its processing's lock"}}};
+                                            {"process.lock", "its processing's lock"},
+                                            {SpaceReserve::kFileName, "its logger's reserve of disk space"}}};
 // Folders the run fills: frames the logger records, fields `process`
 // writes, masks a processing copies in.
 constexpr std::array<std::string_view, 3> kOwnFolders{"frames", "fields", "masks"};

@@ -55,7 +55,7 @@ class OutputPath : public ::testing::Test {
 
 TEST_F(OutputPath, EveryOwnFileOfARunIsRefused) {
   for (const char* name :
-       {"run.sqlite", "run.sqlite-wal", "run.sqlite-shm", "run.sqlite-journal", "run.lock", "process.lock"}) {
+       {"run.sqlite", "run.sqlite-wal", "run.sqlite-shm", "run.sqlite-journal", "run.lock", "process.lock", "run.reserve"}) {
     const auto owned = run_owned_path(run() / name);
     ASSERT_TRUE(owned) << name;
     EXPECT_EQ(owned->run_dir, fs::weakly_canonical(run())) << name;
