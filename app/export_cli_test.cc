@@ -14,6 +14,7 @@
 
 #include "app/test_streams.h"
 #include "report/test_readers.h"
+#include "tests/support/file_bytes.h"
 #include "tests/support/synthetic_run.h"
 #include "storage/processing_store.h"
 #include "tests/support/subprocess.h"
@@ -148,13 +149,6 @@ TEST_F(ExportCli, CsvAndFieldsAreAlternatives) {
   EXPECT_TRUE(fs::exists(dir_ / "s.csv"));
 }
 
-std::string read_file(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // Command-line conventions (issue 11): `-o -` is standard output, which
 // then holds the CSV and nothing else; a file named by -o/--out gets the
 // same bytes and standard output stays empty; messages are on stderr.
@@ -171,7 +165,7 @@ TEST_F(ExportCli, DashIsStandardOutputAndOutIsTheOneSpellingOfTheOutput) {
   ASSERT_EQ(to_file.exit_code, 0) << to_file.err;
   EXPECT_EQ(to_file.out, "");
   EXPECT_NE(to_file.err.find("wrote " + (dir_ / "s.csv").string()), std::string::npos) << to_file.err;
-  EXPECT_EQ(read_file(dir_ / "s.csv"), dash.out);
+  EXPECT_EQ(testing::file_bytes(dir_ / "s.csv"), dash.out);
 
   const auto old_spelling =
       streams(kBosfuse + " export " + sh_quoted(run()) + " --csv --output " + sh_quoted(dir_ / "t.csv"));

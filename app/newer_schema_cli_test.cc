@@ -12,6 +12,7 @@
 #include "storage/database.h"
 #include "storage/schema.h"
 #include "tests/support/browser.h"
+#include "tests/support/file_bytes.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/synthetic_run.h"
 #include "tests/support/temp_dir.h"
@@ -24,13 +25,6 @@ using testing::shell_quote;
 
 const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
 
-std::string read_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
-}
-
 // Every file below `dir` with its bytes. SQLite's -shm index, and an empty
 // -wal, are left out: SQLite makes both for any reader of a WAL database,
 // and neither holds a record.
@@ -39,7 +33,7 @@ std::map<std::string, std::string> snapshot(const fs::path& dir) {
   for (const auto& entry : fs::recursive_directory_iterator(dir)) {
     const std::string name = fs::relative(entry.path(), dir).string();
     const bool index = name.ends_with("-shm") || (name.ends_with("-wal") && fs::file_size(entry.path()) == 0);
-    if (entry.is_regular_file() && !index) files[name] = read_bytes(entry.path());
+    if (entry.is_regular_file() && !index) files[name] = testing::file_bytes(entry.path());
   }
   return files;
 }

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "tests/support/file_bytes.h"
 #include "tests/support/temp_dir.h"
 
 namespace bosfuse::app {
@@ -22,13 +23,6 @@ class CapturedStdout {
   std::streambuf* previous_;
 };
 
-std::string read(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 TEST(OutputStream, ADashIsStandardOutput) {
   CapturedStdout captured;
   OutputStream out("-");
@@ -45,7 +39,7 @@ TEST(OutputStream, AnyOtherNameIsAFile) {
   EXPECT_FALSE(out.to_standard_output());
   out.stream() << "data\n";
   out.close();
-  EXPECT_EQ(read(dir / "x.csv"), "data\n");
+  EXPECT_EQ(testing::file_bytes(dir / "x.csv"), "data\n");
   EXPECT_EQ(captured.text(), "") << "nothing on standard output when the data went to a file";
 }
 
@@ -95,7 +89,7 @@ TEST(OutputStream, ACommandThatFailsBeforeCloseLeavesTheOldFileWhole) {
     throw std::runtime_error("the fit failed");
   } catch (const std::runtime_error&) {
   }
-  EXPECT_EQ(read(dir / "fit.json"), "{\"k\": 0.01}\n");
+  EXPECT_EQ(testing::file_bytes(dir / "fit.json"), "{\"k\": 0.01}\n");
   std::size_t files = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir.path())) files += entry.exists();
   EXPECT_EQ(files, 1u) << "no temporary left beside it";
@@ -112,7 +106,7 @@ TEST(OutputStream, ARunsOwnFileIsRefusedNamingTheOption) {
   } catch (const storage::OutputRefused& e) {
     EXPECT_EQ(std::string(e.what()).rfind("refusing to write --json '" + store + "'", 0), 0u) << e.what();
   }
-  EXPECT_EQ(read(dir / "run/run.sqlite"), "a store");
+  EXPECT_EQ(testing::file_bytes(dir / "run/run.sqlite"), "a store");
   EXPECT_NO_THROW(check_output("-", "--json")) << "standard output is no run's file";
   EXPECT_NO_THROW(check_output("", "--json")) << "an option not given";
   EXPECT_THROW(check_figure_output((dir / "run/frames/map.png").string(), "--map"), storage::OutputRefused);

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "report/html.h"
+#include "tests/support/file_bytes.h"
 #include "tests/support/synthetic_run.h"
 #include "tests/support/browser.h"
 #include "tests/support/subprocess.h"
@@ -26,13 +27,6 @@ namespace fs = std::filesystem;
 using testing::shell_quote;
 
 const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 class ReportCli : public ::testing::Test {
  protected:
@@ -88,7 +82,7 @@ TEST_F(ReportCli, MakesAReportThatABrowserRendersCompletely) {
                            "map_displacement_t60s.png", "map_displacement_t60s.svg", "map_displacement_t60s.csv"}) {
     EXPECT_TRUE(fs::exists(out / name)) << name;
   }
-  const auto json = nlohmann::json::parse(read_text(out / "report.json"));
+  const auto json = nlohmann::json::parse(testing::file_bytes(out / "report.json"));
   ASSERT_EQ(json["series"].size(), 4u) << "two thermocouples and the BOS probes at them";
   for (int c = 0; c < 2; ++c) {
     const auto& k = json["series"][c]["fit"]["parameters"]["k_per_s"];
@@ -104,7 +98,7 @@ TEST_F(ReportCli, MakesAReportThatABrowserRendersCompletely) {
   EXPECT_NEAR(displacement_maps[0]["max"].get<double>(), truth.frame_peak_px[0], 0.2 * truth.frame_peak_px[0]);
   EXPECT_GT(displacement_maps[0]["masked_cells"].get<int>(), 10) << "the holder's region is masked";
   EXPECT_GT(json["image_quality"]["q_mod"].get<double>(), 0.9);
-  const std::string html = read_text(out / "report.html");
+  const std::string html = testing::file_bytes(out / "report.html");
   EXPECT_EQ(html.find("http://"), std::string::npos);
   EXPECT_EQ(html.find("https://"), std::string::npos);
   EXPECT_EQ(html.find("Not processed yet"), std::string::npos);
@@ -166,7 +160,7 @@ TEST_F(ReportCli, AProcessedRunGetsProbesAgreementAndTemperatureMaps) {
   const auto made = testing::run_command(
       kBosfuse + " report " + shell_quote(dir_ / "run") + " -o " + shell_quote(out) + " --map-times 10,60", 120);
   ASSERT_EQ(made.exit_code, 0) << made.output;
-  const auto json = nlohmann::json::parse(read_text(out / "report.json"));
+  const auto json = nlohmann::json::parse(testing::file_bytes(out / "report.json"));
   std::size_t probes = 0;
   for (const auto& s : json["series"]) {
     if (s["kind"] != "BOS probe") continue;
@@ -189,7 +183,7 @@ TEST_F(ReportCli, AProcessedRunGetsProbesAgreementAndTemperatureMaps) {
   }
   EXPECT_EQ(temperature_maps, 2u);
   EXPECT_EQ(displacement_maps, 2u);
-  const std::string html = read_text(out / "report.html");
+  const std::string html = testing::file_bytes(out / "report.html");
   EXPECT_EQ(html.find("Not processed yet"), std::string::npos);
   EXPECT_NE(html.find("tc0 (BOS)"), std::string::npos);
   std::size_t agreement_figures = 0, temperature_figures = 0;
@@ -207,7 +201,7 @@ TEST_F(ReportCli, RunWithoutFramesGetsAReportWithoutMapsAndANote) {
   const auto made =
       testing::run_command(kBosfuse + " report " + shell_quote(dir_ / "run") + " -o " + shell_quote(dir_ / "out"), 120);
   ASSERT_EQ(made.exit_code, 0) << made.output;
-  const std::string html = read_text(dir_ / "out" / "report.html");
+  const std::string html = testing::file_bytes(dir_ / "out" / "report.html");
   EXPECT_NE(html.find("No displacement maps: the run has no frames."), std::string::npos);
   EXPECT_FALSE(fs::exists(dir_ / "out" / "map_displacement_t10s.png"));
   EXPECT_TRUE(fs::exists(dir_ / "out" / "curve_tc0.svg"));

@@ -15,6 +15,7 @@
 
 #include "report/test_readers.h"
 #include "storage/database.h"
+#include "tests/support/file_bytes.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/synthetic_run.h"
 #include "tests/support/temp_dir.h"
@@ -26,13 +27,6 @@ namespace fs = std::filesystem;
 using report::testreaders::sh_quoted;
 
 const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
-
-std::string bytes_of(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
-}
 
 // Every file and folder under `dir`, with each file's size.
 std::set<std::string> listing(const fs::path& dir) {
@@ -48,7 +42,7 @@ class RunFilesCli : public ::testing::Test {
  protected:
   void SetUp() override {
     testrun::create_run(run(), true);
-    store_bytes_ = bytes_of(run() / "run.sqlite");
+    store_bytes_ = testing::file_bytes(run() / "run.sqlite");
     listing_ = listing(run());
   }
   fs::path run() const { return dir_ / "run"; }
@@ -68,7 +62,7 @@ class RunFilesCli : public ::testing::Test {
   }
 
   void expect_run_intact() {
-    EXPECT_EQ(bytes_of(run() / "run.sqlite"), store_bytes_) << "the store's bytes";
+    EXPECT_EQ(testing::file_bytes(run() / "run.sqlite"), store_bytes_) << "the store's bytes";
     EXPECT_EQ(listing(run()), listing_) << "nothing added, removed or resized in the run folder";
     storage::Database db((run() / "run.sqlite").string(), storage::Database::Mode::kReadOnly);
     auto check = db.prepare("PRAGMA integrity_check");
@@ -81,7 +75,7 @@ class RunFilesCli : public ::testing::Test {
     EXPECT_EQ(runs.exit_code, 0) << runs.output;
     EXPECT_NE(runs.output.find("synthetic cooling"), std::string::npos) << runs.output;
     // These readers may leave SQLite's -wal and -shm beside the store: the next command is compared with that.
-    store_bytes_ = bytes_of(run() / "run.sqlite");
+    store_bytes_ = testing::file_bytes(run() / "run.sqlite");
     listing_ = listing(run());
   }
 
@@ -144,14 +138,14 @@ TEST_F(RunFilesCli, AReplayOntoItsOwnRecordIsRefusedWithTheSourceIntact) {
 TEST_F(RunFilesCli, NewFilesBesideTheRunsOwnAreWrittenAsAsked) {
   const auto csv = bosfuse("export " + q(run()) + " --csv -o " + q(run() / "samples.csv"));
   ASSERT_EQ(csv.exit_code, 0) << csv.output;
-  EXPECT_EQ(bytes_of(run() / "samples.csv").rfind("time_utc", 0), 0u) << "the CSV's header";
+  EXPECT_EQ(testing::file_bytes(run() / "samples.csv").rfind("time_utc", 0), 0u) << "the CSV's header";
   const auto report = bosfuse("report " + q(run()) + " --out " + q(run() / "report"));
   ASSERT_EQ(report.exit_code, 0) << report.output;
   EXPECT_TRUE(fs::is_regular_file(run() / "report/report.html"));
   for (const auto& entry : fs::directory_iterator(run() / "report")) {
     EXPECT_NE(entry.path().filename().string().front(), '.') << "a staging file left: " << entry.path();
   }
-  EXPECT_EQ(bytes_of(run() / "run.sqlite"), store_bytes_) << "the store is not written by an export or a report";
+  EXPECT_EQ(testing::file_bytes(run() / "run.sqlite"), store_bytes_) << "the store is not written by an export or a report";
 }
 
 }  // namespace

@@ -10,17 +10,11 @@
 #include <vector>
 
 #include "report/test_data.h"
+#include "tests/support/file_bytes.h"
 #include "tests/support/temp_dir.h"
 
 namespace bosfuse::report {
 namespace {
-
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // A well-formedness check of XML, enough for the files cairo writes:
 // elements nest and close in order, attributes are name="value" (or with
@@ -123,7 +117,7 @@ XmlCheck check_xml(const std::string& text) {
 
 // The SVG is well-formed XML with an <svg> root whose viewBox is the figure's size.
 void expect_svg(const std::filesystem::path& path, const FigureSize& size) {
-  const auto xml = check_xml(read_text(path));
+  const auto xml = check_xml(testing::file_bytes(path));
   ASSERT_EQ(xml.error, "") << path;
   EXPECT_EQ(xml.root_name, "svg") << path;
   EXPECT_NE(xml.root_tag.find("viewBox=\"0 0 " + std::to_string(size.width_px) + " " + std::to_string(size.height_px)),

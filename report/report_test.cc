@@ -16,19 +16,13 @@
 #include "report/html.h"
 #include "report/summary.h"
 #include "report/test_data.h"
+#include "tests/support/file_bytes.h"
 #include "tests/support/temp_dir.h"
 
 namespace bosfuse::report {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 std::vector<std::string> lines_of(const std::string& text) {
   std::vector<std::string> lines;
@@ -96,7 +90,7 @@ class Report : public ::testing::Test {
 TEST_F(Report, WritesOneSelfContainedPageWithEveryFigureEmbedded) {
   const auto files = write(testdata::sample_input(true));
   EXPECT_EQ(files.html, dir_ / "out" / "report.html");
-  const std::string html = read_text(files.html);
+  const std::string html = testing::file_bytes(files.html);
   expect_self_contained(html);
   // overview + two curves + one map
   ASSERT_EQ(files.figures.size(), 4u);
@@ -110,7 +104,7 @@ TEST_F(Report, WritesOneSelfContainedPageWithEveryFigureEmbedded) {
   }
   // The embedded data is the PNG file itself.
   const auto first = html.find("data:image/png;base64,") + std::strlen("data:image/png;base64,");
-  const std::string png = read_text(files.figures[0].png);
+  const std::string png = testing::file_bytes(files.figures[0].png);
   const std::string encoded = base64_encode({reinterpret_cast<const std::uint8_t*>(png.data()), png.size()});
   EXPECT_EQ(html.compare(first, encoded.size(), encoded), 0);
   EXPECT_NE(html.find("unit &lt;run&gt; &amp; co"), std::string::npos) << "the run name is escaped";
@@ -120,21 +114,21 @@ TEST_F(Report, WritesOneSelfContainedPageWithEveryFigureEmbedded) {
 
 TEST_F(Report, RunWithoutFramesHasNoMapsButSaysWhy) {
   const auto files = write(testdata::sample_input(false));
-  const std::string html = read_text(files.html);
+  const std::string html = testing::file_bytes(files.html);
   expect_self_contained(html);
   for (const auto& f : files.figures) EXPECT_EQ(f.png.filename().string().rfind("map_", 0), std::string::npos);
   EXPECT_NE(html.find("No displacement maps: the run has no frames."), std::string::npos);
   EXPECT_NE(html.find("Not processed yet"), std::string::npos);
   EXPECT_NE(html.find("bosfuse process"), std::string::npos);
   EXPECT_NE(html.find("No image quality index"), std::string::npos);
-  const auto json = nlohmann::json::parse(read_text(files.json));
+  const auto json = nlohmann::json::parse(testing::file_bytes(files.json));
   EXPECT_TRUE(json["maps"].empty());
   EXPECT_EQ(json["image_quality"], "not computed: the run has no frames to compare") << "a reason, not null";
 }
 
 TEST_F(Report, CsvAndJsonHoldEveryChannelsDataAndTheFitsWithIntervals) {
   const auto files = write(testdata::sample_input(true));
-  const auto series = lines_of(read_text(dir_ / "out" / "series.csv"));
+  const auto series = lines_of(testing::file_bytes(dir_ / "out" / "series.csv"));
   ASSERT_FALSE(series.empty());
   EXPECT_EQ(series[0], "series,kind,t_s,temperature_c,fit_c,residual_c,fit_half_width_c");
   std::map<std::string, std::size_t> rows;
@@ -151,12 +145,12 @@ TEST_F(Report, CsvAndJsonHoldEveryChannelsDataAndTheFitsWithIntervals) {
   EXPECT_EQ(kind, "thermocouple");
   EXPECT_DOUBLE_EQ(std::stod(temp), input_.series[0].temperature_c[0]);
 
-  const auto fits = lines_of(read_text(dir_ / "out" / "fits.csv"));
+  const auto fits = lines_of(testing::file_bytes(dir_ / "out" / "fits.csv"));
   ASSERT_EQ(fits.size(), 3u);
   EXPECT_NE(fits[0].find("k_per_s,k_low,k_high"), std::string::npos);
   EXPECT_EQ(fits[1].rfind("tc0,thermocouple,true,ok,0.95,200,", 0), 0u) << fits[1];
 
-  const auto json = nlohmann::json::parse(read_text(files.json));
+  const auto json = nlohmann::json::parse(testing::file_bytes(files.json));
   ASSERT_EQ(json["series"].size(), 2u);
   for (std::size_t i = 0; i < 2; ++i) {
     const auto& s = json["series"][i];
@@ -180,7 +174,7 @@ TEST_F(Report, CsvAndJsonHoldEveryChannelsDataAndTheFitsWithIntervals) {
 
   // The map's CSV: one row per cell, masked cells flagged with no value.
   const fs::path map_csv = dir_ / "out" / "map_displacement_t10s.csv";
-  const auto map_rows = lines_of(read_text(map_csv));
+  const auto map_rows = lines_of(testing::file_bytes(map_csv));
   ASSERT_EQ(map_rows.size(), 1u + 24 * 32);
   EXPECT_EQ(map_rows[0], "x_px,y_px,x_mm,y_mm,value,masked");
   EXPECT_EQ(std::count_if(map_rows.begin(), map_rows.end(), [](const auto& l) { return l.ends_with(",,1"); }),
@@ -199,11 +193,11 @@ TEST(ReportCsv, AFormulaLikeNameIsInertAndNumbersStayNumbers) {
   input.series.push_back(s);
   write_series_csv(input, dir / "series.csv");
   write_fits_csv(input, dir / "fits.csv");
-  const auto series = lines_of(read_text(dir / "series.csv"));
+  const auto series = lines_of(testing::file_bytes(dir / "series.csv"));
   ASSERT_EQ(series.size(), 3u);
   EXPECT_EQ(series[1], "\"'=cmd|' /C calc'!A0\",thermocouple,0,-3.5,,,");
   EXPECT_EQ(series[2], "\"'=cmd|' /C calc'!A0\",thermocouple,1.5,-4,,,");
-  const auto fits = lines_of(read_text(dir / "fits.csv"));
+  const auto fits = lines_of(testing::file_bytes(dir / "fits.csv"));
   ASSERT_EQ(fits.size(), 2u);
   EXPECT_EQ(fits[1].rfind("\"'=cmd|' /C calc'!A0\",thermocouple,false,", 0), 0u) << fits[1];
 }
@@ -230,7 +224,7 @@ TEST(ReportFits, AT0AtTheFirstSampleIsNotedAndItsTimeIsInFitsCsv) {
   for (const auto& n : summary.series[1].notes) EXPECT_EQ(n.find("T0 is at"), std::string::npos) << n;
 
   write_fits_csv(input, dir / "fits.csv");
-  const auto rows = lines_of(read_text(dir / "fits.csv"));
+  const auto rows = lines_of(testing::file_bytes(dir / "fits.csv"));
   ASSERT_EQ(rows.size(), 3u);
   const auto cells = [](const std::string& row) {
     std::vector<std::string> out;
@@ -262,7 +256,7 @@ TEST_F(Report, ProbesAgreementAndTemperatureMapsAppearWhenProvided) {
   input.agreements.push_back(
       {"tc0", "tc0 probe", fitting::compare_fits(*input.series[0].fit, *input.series[2].fit, a, b)});
   const auto files = write_report(input, {}, dir_ / "out");
-  const std::string html = read_text(files.html);
+  const std::string html = testing::file_bytes(files.html);
   expect_self_contained(html);
   EXPECT_EQ(html.find("Not processed yet"), std::string::npos) << "everything was processed";
   EXPECT_NE(html.find("class=\"summary agreement\""), std::string::npos);
@@ -271,7 +265,7 @@ TEST_F(Report, ProbesAgreementAndTemperatureMapsAppearWhenProvided) {
   EXPECT_TRUE(fs::exists(dir_ / "out" / "curve_probe_tc0_probe.svg"));
   EXPECT_TRUE(fs::exists(dir_ / "out" / "agreement_tc0_tc0_probe.png")) << "Bland–Altman plot";
   EXPECT_TRUE(fs::exists(dir_ / "out" / "agreement_tc0_tc0_probe.svg"));
-  const auto json = nlohmann::json::parse(read_text(files.json));
+  const auto json = nlohmann::json::parse(testing::file_bytes(files.json));
   ASSERT_EQ(json["agreements"].size(), 1u);
   EXPECT_TRUE(json["agreements"][0]["k"].contains("z"));
   EXPECT_EQ(json["series"][2]["kind"], "BOS probe");
@@ -279,7 +273,7 @@ TEST_F(Report, ProbesAgreementAndTemperatureMapsAppearWhenProvided) {
 
 // The page without its embedded images (base64 is not text).
 std::string page_text(const fs::path& html_file) {
-  std::string text = read_text(html_file);
+  std::string text = testing::file_bytes(html_file);
   for (auto at = text.find("base64,"); at != std::string::npos; at = text.find("base64,", at + 7)) {
     text.erase(at + 7, text.find('"', at) - at - 7);
   }
@@ -382,7 +376,7 @@ TEST_F(Report, NoNumberIsNanInfOrNullAndEveryGapSaysWhy) {
   EXPECT_NE(html.find("<td>—<sup>1</sup></td>"), std::string::npos) << "a gap is a dash with its footnote";
   EXPECT_NE(html.find("<ol class=\"footnotes\">"), std::string::npos);
 
-  const std::string json_text = read_text(files.json);
+  const std::string json_text = testing::file_bytes(files.json);
   const auto json = nlohmann::json::parse(json_text);
   EXPECT_TRUE(json_gaps(json).empty()) << ::testing::PrintToString(json_gaps(json));
   EXPECT_TRUE(missing_numbers_shown(json_text).empty()) << ::testing::PrintToString(missing_numbers_shown(json_text));
@@ -408,11 +402,11 @@ TEST_F(Report, NoNumberIsNanInfOrNullAndEveryGapSaysWhy) {
   EXPECT_FALSE(json["series"][2]["fit"]["parameters"].contains("k_per_s")) << "absent, not null";
 
   for (const char* csv : {"summary.csv", "series.csv", "fits.csv"}) {
-    const std::string text = read_text(dir_ / "out" / csv);
+    const std::string text = testing::file_bytes(dir_ / "out" / csv);
     EXPECT_TRUE(missing_numbers_shown(text).empty())
         << csv << ": " << ::testing::PrintToString(missing_numbers_shown(text));
   }
-  const auto rows = lines_of(read_text(dir_ / "out" / "summary.csv"));
+  const auto rows = lines_of(testing::file_bytes(dir_ / "out" / "summary.csv"));
   EXPECT_NE(std::find_if(rows.begin(), rows.end(),
                          [](const std::string& r) {
                            return r.rfind("tc2,thermocouple,,k,,,,,1/s,the fit of tc2 failed (too few points)", 0) == 0;
@@ -438,7 +432,7 @@ TEST_F(Report, TheSummaryComesFirstInTheRunsTimeBasis) {
     }
   }
 
-  const auto json = nlohmann::json::parse(read_text(files.json));
+  const auto json = nlohmann::json::parse(testing::file_bytes(files.json));
   EXPECT_EQ(json["time_basis"], input.time_basis);
   EXPECT_EQ(json["summary"]["time_basis"], input.time_basis);
   const auto& k = json["summary"]["series"][0]["k"];
@@ -447,12 +441,12 @@ TEST_F(Report, TheSummaryComesFirstInTheRunsTimeBasis) {
   EXPECT_EQ(json["summary"]["pairs"].size(), 3u);
   EXPECT_EQ(json["summary"]["pairs"][1]["k_agree"], input.agreements[1].agreement.k->agree);
 
-  const auto rows = lines_of(read_text(dir_ / "out" / "summary.csv"));
+  const auto rows = lines_of(testing::file_bytes(dir_ / "out" / "summary.csv"));
   ASSERT_FALSE(rows.empty());
   EXPECT_EQ(rows[0], "series,kind,compared_with,quantity,value,std_error,low,high,unit,note");
   EXPECT_EQ(rows[1], "tc0,thermocouple,,points,200,,,,,");
   // series.csv: the band's half-width beside every fitted value, positive and small.
-  const auto series = lines_of(read_text(dir_ / "out" / "series.csv"));
+  const auto series = lines_of(testing::file_bytes(dir_ / "out" / "series.csv"));
   const std::string last = series[1].substr(series[1].rfind(',') + 1);
   ASSERT_FALSE(last.empty());
   EXPECT_GT(std::stod(last), 0.0);
@@ -463,7 +457,7 @@ TEST_F(Report, TheSummaryComesFirstInTheRunsTimeBasis) {
 TEST_F(Report, AReportThatFailsHalfWayLeavesTheEarlierOneWhole) {
   const auto first = write(testdata::sample_input(true));
   std::map<fs::path, std::string> before;
-  for (const auto& entry : fs::directory_iterator(dir_ / "out")) before[entry.path()] = read_text(entry.path());
+  for (const auto& entry : fs::directory_iterator(dir_ / "out")) before[entry.path()] = testing::file_bytes(entry.path());
   ASSERT_GT(before.size(), 8u);
   ReportInput input = testdata::sample_input(true);
   fit_missing(input);
@@ -472,7 +466,7 @@ TEST_F(Report, AReportThatFailsHalfWayLeavesTheEarlierOneWhole) {
   options.map_size = {50, 50};  // refused by the map, after the curves are drawn
   EXPECT_THROW(write_report(input, options, dir_ / "out"), std::invalid_argument);
   std::map<fs::path, std::string> after;
-  for (const auto& entry : fs::directory_iterator(dir_ / "out")) after[entry.path()] = read_text(entry.path());
+  for (const auto& entry : fs::directory_iterator(dir_ / "out")) after[entry.path()] = testing::file_bytes(entry.path());
   EXPECT_EQ(after, before) << "every file of the first report byte for byte, no staging folder left";
 }
 

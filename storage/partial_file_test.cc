@@ -9,6 +9,7 @@
 
 #include "storage/output_path.h"
 #include "storage/run_store.h"
+#include "tests/support/file_bytes.h"
 #include "tests/support/temp_dir.h"
 
 namespace bosfuse::storage {
@@ -21,13 +22,6 @@ RunInfo run_info(const std::string& name, std::int64_t started_ns) {
   info.name = name;
   info.started_ns = started_ns;
   return info;
-}
-
-std::string read(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 std::set<std::string> names_in(const fs::path& dir) {
@@ -50,9 +44,9 @@ TEST(PartialFileStream, CloseReplacesTheDestinationAndLeavesNothingElse) {
   std::ofstream(dir / "out.csv") << "old\n";
   PartialFileStream out(dir / "out.csv");
   out.stream() << "new\n";
-  EXPECT_EQ(read(dir / "out.csv"), "old\n") << "the destination is untouched until close()";
+  EXPECT_EQ(testing::file_bytes(dir / "out.csv"), "old\n") << "the destination is untouched until close()";
   out.close();
-  EXPECT_EQ(read(dir / "out.csv"), "new\n");
+  EXPECT_EQ(testing::file_bytes(dir / "out.csv"), "new\n");
   EXPECT_EQ(names_in(dir.path()), std::set<std::string>{"out.csv"});
 }
 
@@ -66,7 +60,7 @@ TEST(PartialFileStream, AnExceptionBeforeCloseLeavesTheOldFileByteIdenticalAndNo
     throw std::runtime_error("the export failed half-way");
   } catch (const std::runtime_error&) {
   }
-  EXPECT_EQ(read(dir / "out.csv"), old_bytes);
+  EXPECT_EQ(testing::file_bytes(dir / "out.csv"), old_bytes);
   EXPECT_EQ(names_in(dir.path()), std::set<std::string>{"out.csv"});
 }
 
@@ -81,7 +75,7 @@ TEST(PartialFile, AWriterThatOpensItsOwnFileWritesTheTemporary) {
   PartialFile file(dir / "map.png");
   std::ofstream(file.path()) << "drawn";
   file.commit();
-  EXPECT_EQ(read(dir / "map.png"), "drawn");
+  EXPECT_EQ(testing::file_bytes(dir / "map.png"), "drawn");
 }
 
 TEST(PartialFile, ASymlinkedDestinationIsWrittenThroughAndStaysALink) {
@@ -93,7 +87,7 @@ TEST(PartialFile, ASymlinkedDestinationIsWrittenThroughAndStaysALink) {
   out.stream() << "new";
   out.close();
   EXPECT_TRUE(fs::is_symlink(dir / "link.csv"));
-  EXPECT_EQ(read(dir / "real/out.csv"), "new");
+  EXPECT_EQ(testing::file_bytes(dir / "real/out.csv"), "new");
 }
 
 TEST(PartialFile, ADestinationThatIsNoRegularFileIsWrittenDirectly) {
@@ -108,12 +102,12 @@ TEST(PartialFile, ADestinationThatIsNoRegularFileIsWrittenDirectly) {
 TEST(PartialFile, ARunsOwnFileIsRefusedBeforeAnythingIsWritten) {
   testing::TempDir dir;
   RunStore::create(dir / "run", run_info("guarded", 1), RunStore::CreateMode::kNew).finish(RunStatus::kComplete, 2);
-  const std::string before = read(dir / "run/run.sqlite");
+  const std::string before = testing::file_bytes(dir / "run/run.sqlite");
   const auto entries = names_in(dir / "run");
   EXPECT_THROW(PartialFileStream(dir / "run/run.sqlite"), OutputRefused);
   EXPECT_THROW(PartialFile(dir / "run/frames/x.png"), OutputRefused);
   EXPECT_THROW(PartialFolder(dir / "run/fields"), OutputRefused);
-  EXPECT_EQ(read(dir / "run/run.sqlite"), before);
+  EXPECT_EQ(testing::file_bytes(dir / "run/run.sqlite"), before);
   EXPECT_EQ(names_in(dir / "run"), entries) << "no temporary, no folder made";
 }
 
@@ -126,12 +120,12 @@ TEST(PartialFolder, ItsFilesReplaceTheDestinationsOnlyAtTheCommit) {
     PartialFolder folder(dir / "report");
     std::ofstream(folder.path() / "report.html") << "new report";
     std::ofstream(folder.path() / "fig.png") << "png";
-    EXPECT_EQ(read(dir / "report/report.html"), "old report");
+    EXPECT_EQ(testing::file_bytes(dir / "report/report.html"), "old report");
     const auto moved = folder.commit();
     EXPECT_EQ(moved.size(), 2u);
   }
-  EXPECT_EQ(read(dir / "report/report.html"), "new report");
-  EXPECT_EQ(read(dir / "report/fig.png"), "png");
+  EXPECT_EQ(testing::file_bytes(dir / "report/report.html"), "new report");
+  EXPECT_EQ(testing::file_bytes(dir / "report/fig.png"), "png");
   EXPECT_EQ(names_in(dir / "report"), (std::set<std::string>{"fig.png", "notes.txt", "report.html"}))
       << "no staging folder left, the user's own file kept";
 }
@@ -144,7 +138,7 @@ TEST(PartialFolder, WithoutACommitTheOldFilesStayAndNothingIsLeft) {
     PartialFolder folder(dir / "report");
     std::ofstream(folder.path() / "report.html") << "half a report";
   }
-  EXPECT_EQ(read(dir / "report/report.html"), "old report");
+  EXPECT_EQ(testing::file_bytes(dir / "report/report.html"), "old report");
   EXPECT_EQ(names_in(dir / "report"), std::set<std::string>{"report.html"});
   { PartialFolder folder(dir / "new/report"); }
   EXPECT_FALSE(fs::exists(dir / "new/report")) << "a folder it made and never filled is removed";
