@@ -24,8 +24,9 @@ using std::chrono::milliseconds;
 // How often a connection waiting for its next request looks whether the server stopped.
 constexpr milliseconds kStopCheckPeriod{100};
 
+// Rounded up, so a wait does not end just before its deadline.
 milliseconds until(Clock::time_point deadline) {
-  return std::max(milliseconds(0), std::chrono::duration_cast<milliseconds>(deadline - Clock::now()));
+  return std::max(milliseconds(0), std::chrono::ceil<milliseconds>(deadline - Clock::now()));
 }
 
 // poll() on one socket; true when it is ready for `events` (for reading:
@@ -79,10 +80,14 @@ class GuardedStream final : public httplib::Stream {
     return ready && listening != INVALID_SOCKET;
   }
 
+  // A wait for request bytes that fails can only have run out of time (a
+  // closed or failed socket reads as ready): the connection ends. The
+  // deadline is checked before waiting too, so bytes that keep trickling
+  // in after it do not keep the request alive.
   bool is_readable() const override {
-    if (begin_ < end_ || wait_ready(sock_, POLLIN, until(request_deadline_))) return true;
-    out_of_time_ = Clock::now() >= request_deadline_;
-    return false;
+    if (begin_ < end_) return true;
+    out_of_time_ = Clock::now() >= request_deadline_ || !wait_ready(sock_, POLLIN, until(request_deadline_));
+    return !out_of_time_;
   }
   // The request did not arrive whole in time: httplib answers 400 and
   // would keep the connection for the next; it is closed instead.
@@ -162,6 +167,14 @@ bool ConnectionLimits::valid() const {
 
 GuardedServer::GuardedServer(ConnectionLimits limits) : limits_(limits) {
   if (!limits_.valid()) throw std::invalid_argument("connection limits: every timeout must be positive");
+}
+
+bool GuardedServer::listen_after_bind() {
+  // httplib 0.11 listens with a backlog of 5: a sixth connection opened at
+  // once waits for the client's SYN retry, a second or more, before it is
+  // accepted. A second listen() on the socket only widens the queue.
+  if (svr_sock_ != INVALID_SOCKET) ::listen(svr_sock_, SOMAXCONN);
+  return httplib::Server::listen_after_bind();
 }
 
 bool GuardedServer::process_and_close_socket(socket_t sock) {

@@ -41,6 +41,11 @@ class GuardedServer : public httplib::Server {
   // Throws std::invalid_argument for limits that are not valid().
   explicit GuardedServer(ConnectionLimits limits);
 
+  // httplib's, with a listen queue of SOMAXCONN instead of its 5, so a
+  // burst of connections (a page's, or a client holding many) is accepted
+  // at once. Hides httplib::Server's: call it on a GuardedServer.
+  bool listen_after_bind();
+
  private:
   // httplib's per-connection entry point (run on a pool thread): the
   // keep-alive loop over process_request(), with the limits above.

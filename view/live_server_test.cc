@@ -289,11 +289,12 @@ TEST_F(Viewer, RefusesARequestThatNamesAnotherHostOnEveryRoute) {
 // second (for at most 12 s). The page answers at once meanwhile, and each
 // is cut off within the request timeout (5 s, docs/VIEW.md) plus a margin;
 // so is a connection that sends nothing (the idle timeout, 5 s).
-// The margin: on a loaded machine (tests side by side, ThreadSanitizer) one
-// trickling connection in a run is at times cut after 10-11 s rather than
-// 5-6 s, a cause not yet found (docs/RELIABILITY.md, "Known and not yet
-// fixed"); every one must still be cut within the 12 s it trickles.
-constexpr auto kCutOffMargin = 7s;
+// The margin: this test looks once a second, and a loaded machine (tests
+// side by side, sanitizers) is slow to answer. The 20 connections open at
+// once, beyond httplib's own listen queue of 5 (GuardedServer widens it),
+// and a byte that trickles in after the deadline must not start another
+// request: both once made single connections last 10-12 s.
+constexpr auto kCutOffMargin = 3s;
 
 TEST_F(Viewer, ConnectionsThatTrickleTheirRequestsAreCutOffAndThePageStaysReachable) {
   start();
