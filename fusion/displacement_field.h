@@ -38,6 +38,11 @@ struct DisplacementVector {
   // Adaptive refinement left it at the first pass's value (no displacement
   // above the noise floor around it): a measurement, but a coarser one.
   bool first_pass_only = false;
+  // Standard uncertainty of u and v (px), estimated from the final pass's
+  // windows; 0 where it is not estimated (not a measurement, or an
+  // evaluator without an uncertainty estimate).
+  double sigma_u_px = 0;
+  double sigma_v_px = 0;
 
   bool valid() const { return flag == VectorFlag::kOk; }
 };
