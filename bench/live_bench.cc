@@ -5,9 +5,9 @@
 //            apart; median and 95th percentile
 //   probes   LiveProbes::evaluate on a 16-megapixel frame (4928×3264, the
 //            paper's camera, 8-bit PNG as the logger records it:
-//            acquisition/frame_png.h) with 4
-//            thermocouples: decoding, probes, band temperatures, quality
-//            index and view; median of 5
+//            acquisition/frame_png.h) with 4 thermocouples: decoding,
+//            the full field and its temperature field (as `process`),
+//            quality index and view; median of 5
 //   jitter   the logger's poll schedule (a simulated Modbus TCP module
 //            polled every 20 ms for 10 s): interval deviations without a
 //            viewer, and with a viewer and 10 clients doing what a page

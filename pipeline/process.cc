@@ -320,12 +320,6 @@ struct FrameLoop {
   }
 };
 
-std::string temperature_source(const FrameContext& ctx) {
-  return !ctx.calibration.empty()    ? "calibration"
-         : !ctx.settings.probes_only ? "physical model"
-                                     : "none (probe fits on the shift; run bosfuse calibrate)";
-}
-
 }  // namespace
 
 std::string ProcessOptions::Validate() const {

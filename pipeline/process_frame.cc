@@ -65,45 +65,29 @@ std::string boundary_text(const fusion::TemperatureFieldOptions& o) {
   return open.empty() ? "ambient air on the field's border" : "ambient air on the border except the open " + open;
 }
 
-// Everything measured at the probes of one frame, and the field rows.
+// Everything measured at the probes of one frame, and the temperature field
+// behind the full field's probes.
 struct FrameResult {
   std::vector<PointShift> shifts;
   std::vector<std::optional<double>> model_temperature_c;
-  std::vector<storage::FieldRecord> fields;
-  json summary;
+  std::optional<fusion::TemperatureFieldResult> temperature;
 };
 
-FrameResult finish_full(const FrameContext& ctx, const FrameRecord& frame, const fusion::EvaluationResult& evaluated,
-                        ProcessTimes& times) {
+FrameResult measure_full(const FrameContext& ctx, const fusion::EvaluationResult& evaluated, ProcessTimes& times) {
   FrameResult out;
-  out.summary = evaluation_json(evaluated.summary);
-  const std::string stem = fmt::format("{}/frame_{:06d}", ctx.fields_dir, frame.id);
-  timed(times.csv_s, [&] { fusion::write_csv(evaluated.field, ctx.run_dir / (stem + "_displacement.csv")); });
-  out.fields.push_back({0, frame.id, "displacement", stem + "_displacement.csv", out.summary.dump()});
-  std::optional<fusion::TemperatureFieldResult> temperature;
   if (evaluated.field.rows >= 3 && evaluated.field.cols >= 3) {
-    const auto& field_options = ctx.settings.geometry.temperature_field;
-    temperature = timed(times.temperature_field_s, [&] { return ctx.temperature_solver->recover(evaluated.field); });
-    timed(times.csv_s, [&] { fusion::write_csv(temperature->field, ctx.run_dir / (stem + "_temperature.csv")); });
-    const auto& s = temperature->summary;
-    out.fields.push_back({0, frame.id, "temperature", stem + "_temperature.csv",
-                          json{{"min_c", fitting::number_or_null(s.min_c)},
-                               {"max_c", fitting::number_or_null(s.max_c)},
-                               {"unmeasured_nodes", s.unmeasured_nodes},
-                               {"unphysical_nodes", s.unphysical_nodes},
-                               {"boundary", boundary_text(field_options)}}
-                              .dump()});
+    out.temperature = timed(times.temperature_field_s, [&] { return ctx.temperature_solver->recover(evaluated.field); });
   }
   for (const auto& p : ctx.points) {
     out.shifts.push_back(shift_at(evaluated.field, p));
-    out.model_temperature_c.push_back(temperature ? temperature->field.temperature_at(p.x, p.y) : std::nullopt);
+    out.model_temperature_c.push_back(out.temperature ? out.temperature->field.temperature_at(p.x, p.y)
+                                                      : std::nullopt);
   }
   return out;
 }
 
-FrameResult finish_probes(const fusion::EvaluationResult& evaluated) {
+FrameResult measure_probes(const fusion::EvaluationResult& evaluated) {
   FrameResult out;
-  out.summary = evaluation_json(evaluated.summary);
   for (const auto& v : evaluated.field.vectors) {
     out.shifts.push_back({v.u_px, v.v_px, v.valid()});
     out.model_temperature_c.push_back(std::nullopt);
@@ -111,24 +95,68 @@ FrameResult finish_probes(const fusion::EvaluationResult& evaluated) {
   return out;
 }
 
-}  // namespace
+FrameResult measure(const FrameContext& ctx, const fusion::EvaluationResult& evaluated, ProcessTimes& times) {
+  return ctx.settings.probes_only ? measure_probes(evaluated) : measure_full(ctx, evaluated, times);
+}
 
-FinishedFrame finish_frame(const FrameContext& ctx, const FrameRecord& frame,
-                           const fusion::EvaluationResult& evaluated) {
-  FinishedFrame out{frame, {}, {}, {}, {}};
-  const FrameResult result =
-      ctx.settings.probes_only ? finish_probes(evaluated) : finish_full(ctx, frame, evaluated, out.times);
-  out.summary = result.summary;
-  out.fields = result.fields;
+// The full field's files and their rows.
+std::vector<storage::FieldRecord> write_fields(const FrameContext& ctx, const FrameRecord& frame,
+                                               const fusion::EvaluationResult& evaluated, const FrameResult& result,
+                                               const json& summary, ProcessTimes& times) {
+  const std::string stem = fmt::format("{}/frame_{:06d}", ctx.fields_dir, frame.id);
+  std::vector<storage::FieldRecord> fields;
+  timed(times.csv_s, [&] { fusion::write_csv(evaluated.field, ctx.run_dir / (stem + "_displacement.csv")); });
+  fields.push_back({0, frame.id, "displacement", stem + "_displacement.csv", summary.dump()});
+  if (!result.temperature) return fields;
+  timed(times.csv_s, [&] { fusion::write_csv(result.temperature->field, ctx.run_dir / (stem + "_temperature.csv")); });
+  const auto& s = result.temperature->summary;
+  fields.push_back({0, frame.id, "temperature", stem + "_temperature.csv",
+                    json{{"min_c", fitting::number_or_null(s.min_c)},
+                         {"max_c", fitting::number_or_null(s.max_c)},
+                         {"unmeasured_nodes", s.unmeasured_nodes},
+                         {"unphysical_nodes", s.unphysical_nodes},
+                         {"boundary", boundary_text(ctx.settings.geometry.temperature_field)}}
+                        .dump()});
+  return fields;
+}
+
+// Each probe's sample: its shift, and its temperature by the calibration,
+// else by the physical model.
+std::vector<storage::ProbeSampleRecord> samples_of(const FrameContext& ctx, const FrameRecord& frame,
+                                                   const FrameResult& result) {
+  std::vector<storage::ProbeSampleRecord> samples;
   for (std::size_t p = 0; p < ctx.channels.size(); ++p) {
     const PointShift& s = result.shifts[p];
     const double shift = std::hypot(s.u_px, s.v_px);
     auto t_c = calibrated_temperature_c(ctx.calibration, ctx.channels[p].id, shift);
     if (!t_c) t_c = result.model_temperature_c[p];
-    out.samples.push_back(
+    samples.push_back(
         {ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift, s.valid ? t_c : std::nullopt, s.valid});
   }
+  return samples;
+}
+
+}  // namespace
+
+FinishedFrame finish_frame(const FrameContext& ctx, const FrameRecord& frame,
+                           const fusion::EvaluationResult& evaluated) {
+  FinishedFrame out{frame, evaluation_json(evaluated.summary), {}, {}, {}};
+  const FrameResult result = measure(ctx, evaluated, out.times);
+  if (!ctx.settings.probes_only) out.fields = write_fields(ctx, frame, evaluated, result, out.summary, out.times);
+  out.samples = samples_of(ctx, frame, result);
   return out;
+}
+
+std::string temperature_source(const FrameContext& ctx) {
+  return !ctx.calibration.empty()    ? "calibration"
+         : !ctx.settings.probes_only ? "physical model"
+                                     : "none (probe fits on the shift; run bosfuse calibrate)";
+}
+
+std::vector<storage::ProbeSampleRecord> probe_samples(const FrameContext& ctx, const FrameRecord& frame,
+                                                      const fusion::EvaluationResult& evaluated) {
+  ProcessTimes unused;
+  return samples_of(ctx, frame, measure(ctx, evaluated, unused));
 }
 
 namespace {
@@ -232,7 +260,8 @@ void load_frame_context(FrameContext& ctx) {
   ctx.evaluator = std::make_unique<fusion::DisplacementEvaluator>(ctx.reference, ctx.settings.evaluator, ctx.mask);
   ctx.temperature_solver =
       std::make_shared<fusion::TemperatureFieldSolver>(*ctx.geometry, ctx.settings.geometry.temperature_field);
-  if (!ctx.settings.probes_only) fs::create_directories(ctx.run_dir / ctx.fields_dir);
+  // Only a processing writes fields; the live page's context has no folder for them.
+  if (!ctx.settings.probes_only && !ctx.fields_dir.empty()) fs::create_directories(ctx.run_dir / ctx.fields_dir);
 }
 
 // What another process needs to evaluate and finish any of `frames` as this

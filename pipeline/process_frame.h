@@ -52,7 +52,7 @@ decltype(auto) timed(double& seconds, Work&& work) {
 // What every frame's evaluation needs besides the frame itself.
 struct FrameContext {
   std::filesystem::path run_dir;
-  std::string fields_dir;  // relative to the run folder
+  std::string fields_dir;  // relative to the run folder; empty: fields are not written (the live page)
   storage::FrameRecord reference_frame;
   std::vector<storage::ChannelInfo> channels;
   std::vector<cv::Point2d> points;
@@ -99,6 +99,18 @@ void load_frame_context(FrameContext& ctx);
 // frames' work with other contexts (it reads `ctx`, writes the frame's own files).
 FinishedFrame finish_frame(const FrameContext& ctx, const storage::FrameRecord& frame,
                            const fusion::EvaluationResult& evaluated);
+
+// A frame's samples at the probes exactly as finish_frame makes them, with
+// nothing written: the shift at each probe (the full field interpolated
+// there, or the probe's own window) and its temperature, by the calibration
+// or else the physical model's temperature field. The live page shows these,
+// so what it shows is what `process` will store.
+std::vector<storage::ProbeSampleRecord> probe_samples(const FrameContext& ctx, const storage::FrameRecord& frame,
+                                                      const fusion::EvaluationResult& evaluated);
+
+// What gives the probes their temperatures: "calibration", "physical model",
+// or none (probe mode without a calibration).
+std::string temperature_source(const FrameContext& ctx);
 
 // A frame from its file to its finished results, decoding and evaluation timed.
 FinishedFrame evaluate_and_finish(const FrameContext& ctx, const storage::FrameRecord& frame);
