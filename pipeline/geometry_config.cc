@@ -29,6 +29,20 @@ void read_open_edges(const TomlReader& r, fusion::TemperatureFieldOptions& field
   if (const auto problem = field.Validate(); !problem.empty()) r.fail("open_edges", problem);
 }
 
+// [geometry.uncertainty]: the set-up's standard uncertainties (temperature_budget.h).
+void read_uncertainty(const TomlReader& r, fusion::TypeBUncertainties& u) {
+  constexpr double kLargest = 1e9;
+  u.gladstone_dale_relative = r.number_in("gladstone_dale_relative", u.gladstone_dale_relative, 0, 1,
+                                          "a relative standard uncertainty");
+  u.ambient_pressure_pa = r.number_in("ambient_pressure_pa", u.ambient_pressure_pa, 0, kLargest, "Pa");
+  u.ambient_temperature_c = r.number_in("ambient_temperature_c", u.ambient_temperature_c, 0, kLargest, "°C");
+  u.z_d_relative = r.number_in("z_d_relative", u.z_d_relative, 0, 1, "a relative standard uncertainty");
+  u.magnification_relative =
+      r.number_in("magnification_relative", u.magnification_relative, 0, 1, "a relative standard uncertainty");
+  u.depth_relative = r.number_in("depth_relative", u.depth_relative, 0, 1, "a relative standard uncertainty");
+  r.reject_unknown_keys();
+}
+
 void read_geometry(const TomlReader& r, GeometryConfig& config) {
   auto& g = config.geometry;
   g.wavelength_nm = r.optional_number("wavelength_nm").value_or(g.wavelength_nm);
@@ -43,6 +57,7 @@ void read_geometry(const TomlReader& r, GeometryConfig& config) {
   g.pixel_pitch_um = r.optional_number("pixel_pitch_um").value_or(g.pixel_pitch_um);
   g.px_per_mm_flow = r.optional_number("px_per_mm_flow").value_or(g.px_per_mm_flow);
   read_open_edges(r, config.temperature_field);
+  if (const auto uncertainty = r.table("uncertainty")) read_uncertainty(*uncertainty, config.uncertainty);
   r.reject_unknown_keys();
   if (const auto problem = g.Validate(); !problem.empty()) r.fail("", problem);
 }

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "fusion/bos_geometry.h"
+#include "fusion/temperature_budget.h"
 #include "fusion/temperature_field.h"
 
 namespace bosfuse::pipeline {
@@ -17,6 +18,7 @@ namespace bosfuse::pipeline {
 struct GeometryConfig {
   fusion::BosGeometryOptions geometry;
   fusion::TemperatureFieldOptions temperature_field;  // open_edges: where the flow leaves the image
+  fusion::TypeBUncertainties uncertainty;             // [geometry.uncertainty]: the set-up's, for the budget
   bool ambient_given = false;                         // ambient_temperature_c was in the file
   double camera_offset_s = 0;                         // frame stamped t happened at host time t + offset
   std::string source;                                 // where it came from: a path, "run config" or "defaults"

@@ -30,6 +30,29 @@ ProcessingSettings defaults() {
   return s;
 }
 
+json uncertainty_json(const fusion::TypeBUncertainties& u) {
+  return {{"gladstone_dale_relative", u.gladstone_dale_relative},
+          {"ambient_pressure_pa", u.ambient_pressure_pa},
+          {"ambient_temperature_c", u.ambient_temperature_c},
+          {"z_d_relative", u.z_d_relative},
+          {"magnification_relative", u.magnification_relative},
+          {"depth_relative", u.depth_relative}};
+}
+
+// Settings stored before the budget existed have none: the defaults.
+fusion::TypeBUncertainties uncertainty_from_json(const nlohmann::json& geometry) {
+  fusion::TypeBUncertainties u;
+  if (!geometry.contains("uncertainty")) return u;
+  const nlohmann::json& j = geometry.at("uncertainty");
+  u.gladstone_dale_relative = j.at("gladstone_dale_relative").get<double>();
+  u.ambient_pressure_pa = j.at("ambient_pressure_pa").get<double>();
+  u.ambient_temperature_c = j.at("ambient_temperature_c").get<double>();
+  u.z_d_relative = j.at("z_d_relative").get<double>();
+  u.magnification_relative = j.at("magnification_relative").get<double>();
+  u.depth_relative = j.at("depth_relative").get<double>();
+  return u;
+}
+
 json geometry_json(const GeometryConfig& g) {
   const auto& o = g.geometry;
   json edges = json::array();
@@ -49,7 +72,8 @@ json geometry_json(const GeometryConfig& g) {
           {"px_per_mm_flow", o.px_per_mm_flow},
           {"open_edges", edges},
           {"camera_offset_s", g.camera_offset_s},
-          {"source", g.source}};
+          {"source", g.source},
+          {"uncertainty", uncertainty_json(g.uncertainty)}};
 }
 
 GeometryConfig geometry_from_json(const nlohmann::json& j) {
@@ -72,6 +96,7 @@ GeometryConfig geometry_from_json(const nlohmann::json& j) {
   }
   g.camera_offset_s = j.at("camera_offset_s").get<double>();
   g.source = j.at("source").get<std::string>();
+  g.uncertainty = uncertainty_from_json(j);
   return g;
 }
 
