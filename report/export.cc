@@ -149,8 +149,11 @@ void write_map_csv(const MapField& map, std::optional<double> px_per_mm, const f
       const double x = map.x0_px + c * map.step_px, y = map.y0_px + r * map.step_px;
       const double v = values.at<double>(r, c);
       const bool masked = (!mask.empty() && mask.at<std::uint8_t>(r, c) != 0) || !std::isfinite(v);
+      // A cell that holds no measurement says so twice: `nan` (not an empty cell, which a reader could take
+      // for a missing column) and masked = 1.
       out << num(x) << ',' << num(y) << ',' << (px_per_mm ? num(x / *px_per_mm) : "") << ','
-          << (px_per_mm ? num(y / *px_per_mm) : "") << ',' << (masked ? "" : num(v)) << ',' << (masked ? 1 : 0) << '\n';
+          << (px_per_mm ? num(y / *px_per_mm) : "") << ',' << (masked ? "nan" : num(v)) << ',' << (masked ? 1 : 0)
+          << '\n';
     }
   }
   file.close();

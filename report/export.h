@@ -24,7 +24,8 @@ void write_series_csv(const ReportInput& input, const std::filesystem::path& pat
 // One row per series: parameters with their interval bounds and diagnostics.
 void write_fits_csv(const ReportInput& input, const std::filesystem::path& path);
 
-// x_px,y_px,x_mm,y_mm,value,masked — one row per grid cell (mm columns empty without a scale).
+// x_px,y_px,x_mm,y_mm,value,masked — one row per grid cell (mm columns empty without a scale); a cell
+// masked or not measured (MapField::mask non-zero, or a value that is not finite) has value `nan` and masked 1.
 void write_map_csv(const MapField& map, std::optional<double> px_per_mm, const std::filesystem::path& path);
 
 // series,kind,compared_with,quantity,value,std_error,low,high,unit,note —

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <span>
 #include <string_view>
@@ -24,7 +25,8 @@ namespace {
 namespace fs = std::filesystem;
 
 // Bumped when a reader would have to change: files say which layout they follow.
-constexpr std::int64_t kLayoutVersion = 1;
+// 2: values are NaN where the node's flag (valid, measured) is 0, where 1 held the filled-in numbers.
+constexpr std::int64_t kLayoutVersion = 2;
 
 // A stored CSV column and the dataset it becomes.
 struct Quantity {
@@ -36,18 +38,20 @@ struct Quantity {
 };
 
 constexpr Quantity kDisplacementQuantities[] = {
-    {"u", "u_px", "px", "displacement along x (DESIGN.md convention); not a measurement where valid is 0", false},
-    {"v", "v_px", "px", "displacement along y (down); not a measurement where valid is 0", false},
+    {"u", "u_px", "px", "displacement along x (DESIGN.md convention); NaN where valid is 0", false},
+    {"v", "v_px", "px", "displacement along y (down); NaN where valid is 0", false},
     {"valid", "valid", "1",
      "1 where (u, v) was measured; 0 where masked, without texture or correlation peak, or an outlier replaced by "
      "its neighbours' median",
      true},
-    {"peak_ratio", "peak_ratio", "1", "first / second correlation peak height; 0 where not measured", false},
+    {"peak_ratio", "peak_ratio", "1", "first / second correlation peak height; NaN where valid is 0", false},
 };
 
 constexpr Quantity kTemperatureQuantities[] = {
     {"temperature_c", "temperature_c", "degC",
-     "temperature recovered from the displacement field; NaN where there is none", false},
+     "temperature recovered from the displacement field; NaN where measured is 0 (filled in by the solve, not a "
+     "measurement) or where there is none (n <= 1)",
+     false},
     {"measured", "measured", "1",
      "1 where the node's displacement was measured; 0 where the temperature was filled in from the surroundings", true},
 };
@@ -56,13 +60,14 @@ struct Kind {
   std::string_view name;
   std::span<const std::string_view> columns;
   std::span<const Quantity> quantities;
+  std::string_view measured_column;  // the flag column: 0 where a node holds no measurement
   std::string_view description;
 };
 
 const Kind kKinds[] = {
-    {"displacement", fusion::kDisplacementColumns, kDisplacementQuantities,
+    {"displacement", fusion::kDisplacementColumns, kDisplacementQuantities, "valid",
      "displacement fields of the measurement frames against the reference frame, one group per frame"},
-    {"temperature", fusion::kTemperatureColumns, kTemperatureQuantities,
+    {"temperature", fusion::kTemperatureColumns, kTemperatureQuantities, "measured",
      "temperature fields recovered from the displacement fields, one group per frame"},
 };
 
@@ -80,9 +85,19 @@ struct ExportedFrame {
   int rows = 0, cols = 0;
 };
 
-std::vector<double> as_doubles(const cv::Mat& values) {
-  const cv::Mat continuous = values.isContinuous() ? values : values.clone();
-  return std::vector<double>(continuous.ptr<double>(), continuous.ptr<double>() + continuous.total());
+// The values where `measured` is a non-zero number, NaN elsewhere: a value the
+// processing filled in (the solve's harmonic fill, a replaced outlier's
+// neighbour median) is not exported as if it were measured.
+std::vector<double> measured_values(const cv::Mat& values, const cv::Mat& measured) {
+  std::vector<double> out;
+  out.reserve(values.total());
+  for (int r = 0; r < values.rows; ++r) {
+    for (int c = 0; c < values.cols; ++c) {
+      const double m = measured.at<double>(r, c);
+      out.push_back(std::isfinite(m) && m != 0 ? values.at<double>(r, c) : std::numeric_limits<double>::quiet_NaN());
+    }
+  }
+  return out;
 }
 
 // A flag column: 1 where the file says non-zero, 0 where it says 0 or lacks the node.
@@ -264,7 +279,8 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
           if (q.flag) {
             out.write_2d(path, as_flags(values), field.y_px.size(), field.x_px.size());
           } else {
-            out.write_2d(path, as_doubles(values), field.y_px.size(), field.x_px.size());
+            out.write_2d(path, measured_values(values, field.column(kind.measured_column)), field.y_px.size(),
+                         field.x_px.size());
           }
           out.set_attribute(path, "units", q.units);
           out.set_attribute(path, "description", q.description);

@@ -6,7 +6,10 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <opencv2/imgcodecs.hpp>
 
+#include "fusion/field_csv.h"
+#include "pipeline/process.h"
 #include "storage/experiment_clock.h"
 #include "report/hdf5_writer.h"
 #include "report/test_readers.h"
@@ -97,8 +100,10 @@ std::string temperature_csv(int k) {
   for (int r = 0; r < kRows; ++r) {
     for (int c = 0; c < kCols; ++c) {
       const bool missing = r == 1 && c == 2;
+      const bool filled = r == 0 && c == 1;  // a temperature the solve filled in: not a measurement
       text += fmt::format("{:.1f},{:.1f},{},{}\n", 8.0 + 8 * c, 8.0 + 8 * r,
-                          missing ? std::string() : fmt::format("{:.4f}", 30 + r + 0.25 * c + k), missing ? 0 : 1);
+                          missing ? std::string() : fmt::format("{:.4f}", 30 + r + 0.25 * c + k),
+                          missing || filled ? 0 : 1);
     }
   }
   return text;
@@ -156,7 +161,7 @@ TEST_F(FieldExport, KnownFieldsRoundTripThroughTheHdf5CApi) {
   EXPECT_NE(string_attribute(f, "/", "displacement_convention").find("(x + u, y + v)"), std::string::npos);
   EXPECT_NE(string_attribute(f, "/", "time").find("experiment seconds since the first sample"), std::string::npos);
   EXPECT_EQ(number_attribute<double>(f, "/", "px_per_mm"), 30.0);
-  EXPECT_EQ(number_attribute<std::int64_t>(f, "/", "layout_version"), 1);
+  EXPECT_EQ(number_attribute<std::int64_t>(f, "/", "layout_version"), 2) << "2: NaN where not measured";
 
   const auto clock = storage::experiment_clock(storage::RunStore::open(run()));
   for (int k = 0; k < 2; ++k) {
@@ -169,7 +174,13 @@ TEST_F(FieldExport, KnownFieldsRoundTripThroughTheHdf5CApi) {
     const auto u = read_array(f, d + "/u_px");
     ASSERT_EQ(u.dims, (std::vector<hsize_t>{kRows, kCols})) << "[ny, nx]";
     EXPECT_EQ(stored_type(f, d + "/u_px"), H5T_IEEE_F64LE);
-    for (int i = 0; i < kRows * kCols; ++i) EXPECT_EQ(u.values[i], expected_u(k, i)) << "node " << i << ", exactly";
+    for (int i = 0; i < kRows * kCols; ++i) {
+      if (i == 5) continue;
+      EXPECT_EQ(u.values[i], expected_u(k, i)) << "node " << i << ", exactly";
+    }
+    for (const char* name : {"/u_px", "/v_px", "/peak_ratio"}) {
+      EXPECT_TRUE(std::isnan(read_array(f, d + name).values[5])) << name << ": not measured (valid 0) is NaN";
+    }
     EXPECT_EQ(read_array(f, d + "/v_px").values[7], std::stod(fmt::format("{:.5f}", -0.14)));
     const auto valid = read_array(f, d + "/valid", H5T_NATIVE_UINT8);
     EXPECT_EQ(stored_type(f, d + "/valid"), H5T_STD_U8LE);
@@ -187,6 +198,9 @@ TEST_F(FieldExport, KnownFieldsRoundTripThroughTheHdf5CApi) {
     EXPECT_EQ(temperature.values[2 * kCols + 1], 32.25 + k) << "row = y";
     EXPECT_TRUE(std::isnan(temperature.values[1 * kCols + 2])) << "no temperature: NaN";
     EXPECT_EQ(read_array(f, t + "/measured", H5T_NATIVE_UINT8).values[1 * kCols + 2], 0);
+    EXPECT_TRUE(std::isnan(temperature.values[0 * kCols + 1])) << "filled in by the solve: NaN";
+    EXPECT_EQ(read_array(f, t + "/measured", H5T_NATIVE_UINT8).values[0 * kCols + 1], 0) << "and flagged";
+    EXPECT_EQ(read_array(f, t + "/measured", H5T_NATIVE_UINT8).values[0 * kCols + 0], 1);
     EXPECT_EQ(string_attribute(f, t + "/temperature_c", "units"), "degC");
     EXPECT_EQ(string_attribute(f, t + "/measured", "units"), "1");
     EXPECT_EQ(number_attribute<double>(f, t, "t_s"), number_attribute<double>(f, d, "t_s"));
@@ -222,7 +236,13 @@ TEST_F(FieldExport, H5pyReadsShapesValuesUnitsAndTimes) {
     EXPECT_EQ(u.at("attrs").at("units"), "px");
     EXPECT_EQ(u.at("compression"), "gzip");
     EXPECT_EQ(u.at("compression_opts"), 4);
-    for (int i = 0; i < kRows * kCols; ++i) EXPECT_EQ(u.at("data")[i].get<double>(), expected_u(k, i));
+    for (int i = 0; i < kRows * kCols; ++i) {
+      if (i == 5) {
+        EXPECT_TRUE(u.at("data")[i].is_null()) << "NaN where valid is 0";
+      } else {
+        EXPECT_EQ(u.at("data")[i].get<double>(), expected_u(k, i));
+      }
+    }
     const json& valid = h5.at(group("displacement", k) + "/valid");
     EXPECT_EQ(valid.at("dtype"), "uint8");
     EXPECT_EQ(valid.at("data")[5], 0);
@@ -302,6 +322,53 @@ TEST_F(FieldExport, WithoutAScaleTheGridIsInPixels) {
   EXPECT_FALSE(h5.at("/").at("attrs").contains("px_per_mm"));
   const json xdmf = testreaders::xdmf_check(dir_ / "px.xmf", dir_.path());
   EXPECT_EQ(xdmf.at("collections").at("displacement")[0].at("geometry")[1].at("ref"), "px.h5:/grids/grid_000/y_px");
+}
+
+// A processed run with the heater masked: the solve fills the heater's
+// nodes (measured 0) and the export gives them as NaN, flag kept, beside
+// the measured values exactly as stored.
+TEST_F(FieldExport, AHeaterFilledInByTheSolveIsNaNAndFlaggedInTheHdf5) {
+  cv::imwrite((run() / "holder.png").string(), testrun::holder_mask(truth_));
+  pipeline::ProcessOptions process;
+  process.overrides.mask = "holder.png";
+  ASSERT_TRUE(pipeline::process_run(run(), process).complete);
+  export_to(dir_ / "fields.h5");
+  hdf5::File file(H5Fopen((dir_ / "fields.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
+  ASSERT_TRUE(file.valid());
+  const storage::ProcessingStore results(run());
+  int filled_under_holder = 0, invalid_vectors = 0;
+  for (const auto& row : results.fields()) {
+    const bool temperature = row.kind == "temperature";
+    const auto stored = temperature ? fusion::read_stored_field(run() / row.path, fusion::kTemperatureColumns)
+                                    : fusion::read_stored_field(run() / row.path, fusion::kDisplacementColumns);
+    const std::string group = fmt::format("/{}/frame_{:06d}", row.kind, row.frame_id);
+    const auto value = read_array(file.get(), group + (temperature ? "/temperature_c" : "/u_px"));
+    const auto flag = read_array(file.get(), group + (temperature ? "/measured" : "/valid"), H5T_NATIVE_UINT8);
+    const cv::Mat& stored_value = stored.column(temperature ? "temperature_c" : "u");
+    const cv::Mat& stored_flag = stored.column(temperature ? "measured" : "valid");
+    ASSERT_EQ(value.values.size(), stored_value.total());
+    for (int r = 0; r < stored.rows(); ++r) {
+      for (int c = 0; c < stored.cols(); ++c) {
+        const std::size_t i = static_cast<std::size_t>(r * stored.cols() + c);
+        const bool measured = stored_flag.at<double>(r, c) == 1;
+        EXPECT_EQ(flag.values[i], measured ? 1 : 0) << group << " node " << i;
+        if (measured) {
+          const double v = stored_value.at<double>(r, c);
+          if (std::isfinite(v)) EXPECT_EQ(value.values[i], v) << group << " node " << i;
+          continue;
+        }
+        EXPECT_TRUE(std::isnan(value.values[i])) << group << " node " << i << " is not measured but has a value";
+        const cv::Point node(static_cast<int>(stored.x_px[c]), static_cast<int>(stored.y_px[r]));
+        if (temperature) {
+          filled_under_holder += truth_.holder_px.contains(node) && std::isfinite(stored_value.at<double>(r, c));
+        } else {
+          ++invalid_vectors;
+        }
+      }
+    }
+  }
+  EXPECT_GT(filled_under_holder, 20) << "the solve filled the heater in both frames: the case this test is about";
+  EXPECT_GT(invalid_vectors, 20) << "the masked vectors";
 }
 
 TEST_F(FieldExport, ARunWithoutStoredFieldsSaysToProcessItFirst) {

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -537,41 +538,79 @@ FigureFiles write_agreement_figure(const CurveSeries& a, const CurveSeries& b, c
 
 namespace {
 
-// Masked cells take the mean of their unmasked neighbours, repeatedly, so
-// that shading and contours do not dive to 0 at a masked region's edge (the
-// masked cells are painted over afterwards).
-cv::Mat fill_masked(const cv::Mat& values, const cv::Mat& masked) {
-  cv::Mat out = values.clone(), known = (masked == 0);
-  const int max_rounds = values.rows + values.cols;  // enough to reach every cell
-  for (int round = 0; round < max_rounds && cv::countNonZero(known) < static_cast<int>(known.total()); ++round) {
-    if (cv::countNonZero(known) == 0) {
-      out.setTo(0);
-      break;
-    }
-    cv::Mat next = out.clone(), next_known = known.clone();
-    for (int r = 0; r < out.rows; ++r) {
-      for (int c = 0; c < out.cols; ++c) {
-        if (known.at<std::uint8_t>(r, c)) continue;
-        double sum = 0;
-        int n = 0;
-        for (int dr = -1; dr <= 1; ++dr) {
-          for (int dc = -1; dc <= 1; ++dc) {
-            const int rr = r + dr, cc = c + dc;
-            if (rr < 0 || cc < 0 || rr >= out.rows || cc >= out.cols || !known.at<std::uint8_t>(rr, cc)) continue;
-            sum += out.at<double>(rr, cc);
-            ++n;
-          }
-        }
-        if (n > 0) {
-          next.at<double>(r, c) = sum / n;
-          next_known.at<std::uint8_t>(r, c) = 255;
-        }
+// A rectangle of grid nodes, rows r0..r1 and columns c0..c1 inclusive, every
+// one of them measured.
+struct MeasuredBlock {
+  int r0, r1, c0, c1;
+};
+
+// The measured part of the grid as rectangles whose nodes are all measured:
+// the runs of whole cells (four measured corners) along each row of cells,
+// a run extended downwards while the next row has the same run. Colour bands
+// and contours are computed inside these only, from measured values alone,
+// so nothing is interpolated into or across a masked region and a contour
+// neither enters the mask nor dives towards it at its edge.
+std::vector<MeasuredBlock> measured_blocks(const cv::Mat& masked) {
+  std::vector<MeasuredBlock> blocks;
+  std::map<std::pair<int, int>, std::size_t> open;  // run (c0, c1) → block reaching the previous row of cells
+  auto measured = [&](int r, int c) { return masked.at<std::uint8_t>(r, c) == 0; };
+  for (int r = 0; r + 1 < masked.rows; ++r) {
+    std::map<std::pair<int, int>, std::size_t> next;
+    for (int c = 0; c + 1 < masked.cols;) {
+      auto whole = [&](int cc) {
+        return measured(r, cc) && measured(r, cc + 1) && measured(r + 1, cc) && measured(r + 1, cc + 1);
+      };
+      if (!whole(c)) {
+        ++c;
+        continue;
       }
+      int end = c;
+      while (end + 2 < masked.cols && whole(end + 1)) ++end;
+      const std::pair run{c, end + 1};  // node columns
+      if (const auto it = open.find(run); it != open.end()) {
+        blocks[it->second].r1 = r + 1;
+        next[run] = it->second;
+      } else {
+        blocks.push_back({r, r + 1, run.first, run.second});
+        next[run] = blocks.size() - 1;
+      }
+      c = end + 1;
     }
-    out = next;
-    known = next_known;
+    open = std::move(next);
   }
-  return out;
+  return blocks;
+}
+
+// A measured node beside a not-measured one (or on a thin grid) lies on the
+// edge of the bands drawn in measured_blocks(): it is drawn as its own cell in
+// its own colour, so it shows without a value being invented beside it.
+bool needs_own_cell(const cv::Mat& masked, int r, int c) {
+  if (masked.at<std::uint8_t>(r, c)) return false;
+  if (masked.rows < 2 || masked.cols < 2) return true;
+  for (int dr = -1; dr <= 1; ++dr) {
+    for (int dc = -1; dc <= 1; ++dc) {
+      const int rr = r + dr, cc = c + dc;
+      if (rr >= 0 && cc >= 0 && rr < masked.rows && cc < masked.cols && masked.at<std::uint8_t>(rr, cc)) return true;
+    }
+  }
+  return false;
+}
+
+// The legend's one entry, in the figure's bottom right corner: the hatch
+// pattern of the cells that hold no measurement.
+void draw_mask_legend() {
+  const PLINT opts[] = {PL_LEGEND_COLOR_BOX}, text_colours[] = {kInk}, box_colours[] = {kMaskHatch},
+              box_patterns[] = {3}, unused_int[] = {0};
+  const PLFLT box_scales[] = {1.2}, box_widths[] = {1.0}, unused_float[] = {0};
+  const char* texts[] = {"hatched: masked or not measured (no value)"};
+  const char* no_symbol[] = {""};
+  PLFLT width = 0, height = 0;
+  plschr(0, 0.8);
+  pllegend(&width, &height, 0, PL_POSITION_RIGHT | PL_POSITION_BOTTOM | PL_POSITION_INSIDE | PL_POSITION_SUBPAGE, 0.01,
+           0.01, 0.05, kBackground, kInk, 1, 0, 0, 1, opts, 0.5, 0.8, 1.5, 1.0, text_colours,
+           texts, box_colours, box_patterns, box_scales, box_widths, unused_int, unused_int, unused_float, unused_int,
+           unused_float, unused_int, no_symbol);
+  plschr(0, 1);
 }
 
 struct GridTransform {
@@ -626,8 +665,9 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
             ++known;
           }
         }
-        // A block is data when at least half of it is.
-        if (2 * known >= total && known > 0) {
+        // A block is drawn as data only when every cell in it was measured: a mean over measured and
+        // not-measured cells would show a value where there is none.
+        if (known == total && known > 0) {
           coarse.at<double>(R, C) = sum / known;
         } else {
           coarse_masked.at<std::uint8_t>(R, C) = 255;
@@ -651,7 +691,8 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
   if (range.high - range.low < 1e-9)
     range = {range.low - 0.5 * std::max(1e-3, std::abs(range.low) * 0.01),
              range.high + 0.5 * std::max(1e-3, std::abs(range.high) * 0.01)};
-  const cv::Mat filled = fill_masked(values, masked);
+  const std::vector<MeasuredBlock> blocks = measured_blocks(masked);
+  const bool any_masked = cv::countNonZero(masked) > 0;
 
   // Contour levels at multiples of the spacing; widened when there would be too many.
   constexpr int kMaxContours = 60;
@@ -686,7 +727,7 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
   const int nx = values.cols, ny = values.rows;
   std::vector<std::vector<PLFLT>> z(nx, std::vector<PLFLT>(ny));
   for (int c = 0; c < nx; ++c) {
-    for (int r = 0; r < ny; ++r) z[c][r] = filled.at<double>(r, c);
+    for (int r = 0; r < ny; ++r) z[c][r] = values.at<double>(r, c);  // read only inside measured blocks
   }
   std::vector<const PLFLT*> z_rows(nx);
   for (int c = 0; c < nx; ++c) z_rows[c] = z[c].data();
@@ -695,15 +736,18 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
   files.title = fmt::format("{} at t = {:.1f} s", map.quantity, map.time_s);
   files.caption = fmt::format(
       "{} ({}) at t = {:.1f} s{}. Colour: value (bar on the right); black lines: contours every {:.3g} {}{}; hatched "
-      "grey: masked or not measured ({} of {} cells); markers: thermocouple positions. Axes in {} from the image's "
+      "grey: masked or not measured ({} of {} cells), where no value is shown and no contour is drawn (bands and "
+      "contours are computed from measured cells only); markers: thermocouple positions. Axes in {} from the image's "
       "top-left pixel, y pointing down.",
       map.quantity, map.unit, map.time_s, map.source.empty() ? "" : ", " + map.source, spacing, map.unit,
       widened ? " (widened from the requested spacing to keep the map readable)" : "", cv::countNonZero(masked),
       values.total(), unit_axis);
   if (!any_data) files.caption += " Every cell is masked: nothing was measured.";
   if (block > 1) {
-    files.caption += fmt::format(" Drawn averaged over {0}×{0} cells of the {1}×{2} grid (the CSV holds every cell).",
-                                 block, map.values.cols, map.values.rows);
+    files.caption += fmt::format(
+        " Drawn averaged over {0}×{0} cells of the {1}×{2} grid, a block with any cell not measured hatched (the CSV "
+        "holds every cell).",
+        block, map.values.cols, map.values.rows);
   }
 
   render_png_and_svg(files, size, [&] {
@@ -714,19 +758,6 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
     plcol0(kMaskFill);
     const std::array<PLFLT, 4> bx{wx0, wx1, wx1, wx0}, by{wy0, wy0, wy1, wy1};
     plfill(4, bx.data(), by.data());
-    if (nx >= 2 && ny >= 2) {
-      const double gx0 = x0 * scale, gx1 = (x0 + step * (nx - 1)) * scale;
-      const double gy0 = y0 * scale, gy1 = (y0 + step * (ny - 1)) * scale;
-      plpsty(0);
-      plshades(z_rows.data(), nx, ny, nullptr, gx0, gx1, gy0, gy1, edges.data(), kBands + 1, 0, 0, 0, plfill, 1,
-               nullptr, nullptr);
-      if (!contours.empty()) {
-        plcol0(kInk);
-        plwidth(1);
-        plcont(z_rows.data(), nx, ny, 1, nx, 1, ny, contours.data(), static_cast<PLINT>(contours.size()), grid_to_world,
-               &transform);
-      }
-    }
     const double half = 0.5 * step * scale;
     auto cell = [&](int r, int c, std::array<PLFLT, 4>& x, std::array<PLFLT, 4>& y) {
       const double cx = (x0 + c * step) * scale, cy = (y0 + r * step) * scale;
@@ -734,14 +765,29 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
       y = {cy - half, cy - half, cy + half, cy + half};
     };
     std::array<PLFLT, 4> x, y;
-    if (nx < 2 || ny < 2) {  // too thin to shade: one coloured rectangle per cell
-      for (int r = 0; r < ny; ++r) {
-        for (int c = 0; c < nx; ++c) {
-          if (masked.at<std::uint8_t>(r, c)) continue;
-          cell(r, c, x, y);
-          plcol1((values.at<double>(r, c) - range.low) / (range.high - range.low));
-          plfill(4, x.data(), y.data());
-        }
+    plpsty(0);
+    for (int r = 0; r < ny; ++r) {
+      for (int c = 0; c < nx; ++c) {
+        if (!needs_own_cell(masked, r, c)) continue;
+        cell(r, c, x, y);
+        plcol1((values.at<double>(r, c) - range.low) / (range.high - range.low));
+        plfill(4, x.data(), y.data());
+      }
+    }
+    for (const auto& b : blocks) {
+      // The block's nodes as a PLplot matrix of its own ([x][y]: columns of z from c0, rows from r0).
+      std::vector<const PLFLT*> columns;
+      for (int c = b.c0; c <= b.c1; ++c) columns.push_back(z[c].data() + b.r0);
+      plshades(columns.data(), b.c1 - b.c0 + 1, b.r1 - b.r0 + 1, nullptr, (x0 + b.c0 * step) * scale,
+               (x0 + b.c1 * step) * scale, (y0 + b.r0 * step) * scale, (y0 + b.r1 * step) * scale, edges.data(),
+               kBands + 1, 0, 0, 0, plfill, 1, nullptr, nullptr);
+    }
+    if (!contours.empty()) {
+      plcol0(kInk);
+      plwidth(1);
+      for (const auto& b : blocks) {  // kx, lx, ky, ly: the block's node range, 1-based
+        plcont(z_rows.data(), nx, ny, b.c0 + 1, b.c1 + 1, b.r0 + 1, b.r1 + 1, contours.data(),
+               static_cast<PLINT>(contours.size()), grid_to_world, &transform);
       }
     }
     // Masked cells: grey, hatched.
@@ -758,6 +804,7 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
       }
     }
     plpsty(0);
+    if (any_masked) draw_mask_legend();
     // Thermocouple markers.
     plschr(0, 0.8);
     for (const auto& m : markers) {

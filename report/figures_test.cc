@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <vector>
@@ -243,6 +244,106 @@ TEST(Figures, MapFigureHasColourMaskContoursAndMarkers) {
   }
   EXPECT_GT(saturated, 5000) << "the map has no colour";
   EXPECT_GT(grey, 200) << "the masked region is not shown";
+}
+
+// The plot frame of a map figure in PNG pixels: the black box plbox draws
+// round the viewport (the colour bar's box, further right, is the second
+// pair of long vertical lines and is not taken).
+struct PlotFrame {
+  int left = -1, right = -1, top = -1, bottom = -1;
+};
+
+bool dark(const cv::Vec3b& p) { return p[0] < 80 && p[1] < 80 && p[2] < 80; }
+// A frame line, antialiased over half pixels: grey-dark, with no colour.
+bool frame_ink(const cv::Vec3b& p) {
+  return std::max({p[0], p[1], p[2]}) < 150 && std::max({p[0], p[1], p[2]}) - std::min({p[0], p[1], p[2]}) < 30;
+}
+
+PlotFrame plot_frame(const cv::Mat& png) {
+  PlotFrame f;
+  auto longest_run = [&](int n, auto&& is_dark) {
+    int best = 0, run = 0;
+    for (int i = 0; i < n; ++i) best = std::max(best, run = is_dark(i) ? run + 1 : 0);
+    return best;
+  };
+  for (int r = 0; r < png.rows; ++r) {
+    if (longest_run(png.cols, [&](int c) { return frame_ink(png.at<cv::Vec3b>(r, c)); }) > png.cols / 3) {
+      if (f.top < 0) f.top = r;
+      f.bottom = r;
+    }
+  }
+  std::vector<int> lines;
+  for (int c = 0; c < png.cols && f.top >= 0; ++c) {
+    if (longest_run(png.rows, [&](int r) { return frame_ink(png.at<cv::Vec3b>(r, c)); }) > (f.bottom - f.top) * 9 / 10) {
+      if (lines.empty() || c > lines.back() + 3) lines.push_back(c);
+    }
+  }
+  if (lines.size() >= 2) {
+    f.left = lines[0];
+    f.right = lines[1];
+  }
+  return f;
+}
+
+// Not measured: hatched, and no contour is computed from or through a
+// node that holds no measurement. The cells round the mask (whose corners
+// include a masked node) are where the old filled-in values made contours
+// run up to the hatch; here they carry none.
+TEST(Figures, AMapHatchesWhatWasNotMeasuredAndContoursNoneOfIt) {
+  testing::TempDir dir;
+  MapField map = testdata::bump_map();
+  map.mask.setTo(0);
+  const cv::Rect hole(12, 4, 9, 8);  // columns 12..20, rows 4..11 of the grid: across the bump's peak
+  map.mask(hole).setTo(255);
+  map.values(hole).setTo(std::numeric_limits<double>::quiet_NaN());
+  const FigureSize size{900, 700};
+  const auto files = write_map_figure(map, 0.01, {}, std::nullopt, size, dir / "map");
+  expect_png(files.png, size);
+  expect_svg(files.svg, size);
+  EXPECT_NE(files.caption.find("hatched grey: masked or not measured (72 of 768 cells)"), std::string::npos)
+      << files.caption;
+  EXPECT_NE(files.caption.find("no contour is drawn"), std::string::npos) << files.caption;
+
+  const cv::Mat png = cv::imread(files.png.string(), cv::IMREAD_COLOR);
+  const PlotFrame frame = plot_frame(png);
+  ASSERT_GT(frame.right - frame.left, 300) << "no plot frame found";
+  ASSERT_GT(frame.bottom - frame.top, 200);
+  // World (image px) to PNG px: the axes span -0.5 .. extent - 0.5, y down.
+  const auto px = [&](double x) {
+    return frame.left + (x + 0.5) / map.image_size_px.width * (frame.right - frame.left);
+  };
+  const auto py = [&](double y) {
+    return frame.top + (y + 0.5) / map.image_size_px.height * (frame.bottom - frame.top);
+  };
+  const auto node_x = [&](double c) { return map.x0_px + c * map.step_px; };
+  const auto node_y = [&](double r) { return map.y0_px + r * map.step_px; };
+  // The masked cells: grey and hatched.
+  int hatch = 0, fill = 0, inside = 0;
+  for (int r = static_cast<int>(py(node_y(hole.y - 0.5))) + 2; r < py(node_y(hole.y + hole.height - 0.5)) - 2; ++r) {
+    for (int c = static_cast<int>(px(node_x(hole.x - 0.5))) + 2; c < px(node_x(hole.x + hole.width - 0.5)) - 2; ++c) {
+      const auto p = png.at<cv::Vec3b>(r, c);
+      ++inside;
+      hatch += p[0] < 140 && p[0] > 80 && p[1] < 140 && p[1] > 80 && p[2] < 140 && p[2] > 80;  // the hatch (110)
+      fill += p[0] > 175 && p[0] < 205 && p[1] > 175 && p[1] < 205 && p[2] > 175 && p[2] < 205;  // the grey (190)
+    }
+  }
+  ASSERT_GT(inside, 2000);
+  EXPECT_GT(hatch, inside / 20) << "the not-measured cells are not hatched";
+  EXPECT_GT(fill, inside / 2) << "the not-measured cells are not grey";
+  EXPECT_LT(hatch + fill, inside + 1);
+  // No contour pixel (black) from the masked nodes out to the measured nodes round them.
+  int contour_inside = 0, contour_outside = 0;
+  const cv::Rect2d ring(px(node_x(hole.x - 1)) + 2, py(node_y(hole.y - 1)) + 2,
+                        px(node_x(hole.x + hole.width)) - px(node_x(hole.x - 1)) - 4,
+                        py(node_y(hole.y + hole.height)) - py(node_y(hole.y - 1)) - 4);
+  for (int r = frame.top + 3; r < frame.bottom - 3; ++r) {
+    for (int c = frame.left + 3; c < frame.right - 3; ++c) {
+      if (!dark(png.at<cv::Vec3b>(r, c))) continue;
+      (ring.contains(cv::Point2d(c, r)) ? contour_inside : contour_outside) += 1;
+    }
+  }
+  EXPECT_EQ(contour_inside, 0) << "a contour is drawn where a corner of its cell was not measured";
+  EXPECT_GT(contour_outside, 500) << "the measured part has its contours";
 }
 
 TEST(Figures, MapWithoutScaleUsesPixelsAndATooFineSpacingIsWidened) {

@@ -172,12 +172,12 @@ TEST_F(Report, CsvAndJsonHoldEveryChannelsDataAndTheFitsWithIntervals) {
   EXPECT_GT(json["maps"][0]["masked_cells"].get<int>(), 0);
   EXPECT_EQ(json["figures"].size(), files.figures.size());
 
-  // The map's CSV: one row per cell, masked cells flagged with no value.
+  // The map's CSV: one row per cell, masked cells flagged, their value `nan` (not an empty cell).
   const fs::path map_csv = dir_ / "out" / "map_displacement_t10s.csv";
   const auto map_rows = lines_of(testing::file_bytes(map_csv));
   ASSERT_EQ(map_rows.size(), 1u + 24 * 32);
   EXPECT_EQ(map_rows[0], "x_px,y_px,x_mm,y_mm,value,masked");
-  EXPECT_EQ(std::count_if(map_rows.begin(), map_rows.end(), [](const auto& l) { return l.ends_with(",,1"); }),
+  EXPECT_EQ(std::count_if(map_rows.begin(), map_rows.end(), [](const auto& l) { return l.ends_with(",nan,1"); }),
             json["maps"][0]["masked_cells"].get<long>());
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -33,10 +34,12 @@ fitting::NewtonFit stored_fit(const storage::FitRecord& record, const storage::E
 }
 
 // A stored field (fusion/field_csv.h) as a map on its grid: `value` at the
-// nodes where `shown` is non-zero and finite, masked elsewhere.
-MapField map_from_stored(const fusion::StoredFieldGrid& grid, const cv::Mat& value, const cv::Mat& shown) {
+// nodes where `measured` is non-zero and finite; NaN and masked elsewhere, so
+// that no value the solve filled in (or a replaced outlier's neighbour median)
+// reaches a map's CSV, figure or contours as if it were a measurement.
+MapField map_from_stored(const fusion::StoredFieldGrid& grid, const cv::Mat& value, const cv::Mat& measured) {
   MapField map;
-  map.values = cv::Mat::zeros(grid.rows(), grid.cols(), CV_64F);
+  map.values = cv::Mat(grid.rows(), grid.cols(), CV_64F, cv::Scalar(std::numeric_limits<double>::quiet_NaN()));
   map.mask = cv::Mat(grid.rows(), grid.cols(), CV_8U, cv::Scalar(255));
   map.x0_px = grid.x_px.front();
   map.y0_px = grid.y_px.front();
@@ -44,25 +47,26 @@ MapField map_from_stored(const fusion::StoredFieldGrid& grid, const cv::Mat& val
   for (int r = 0; r < grid.rows(); ++r) {
     for (int c = 0; c < grid.cols(); ++c) {
       const double v = value.at<double>(r, c);
-      const double s = shown.at<double>(r, c);
-      const bool is_shown = grid.present.at<std::uint8_t>(r, c) && std::isfinite(v) && std::isfinite(s) && s != 0;
-      map.values.at<double>(r, c) = is_shown ? v : 0.0;
-      map.mask.at<std::uint8_t>(r, c) = is_shown ? 0 : 255;
+      const double m = measured.at<double>(r, c);
+      if (!grid.present.at<std::uint8_t>(r, c) || !std::isfinite(v) || !std::isfinite(m) || m == 0) continue;
+      map.values.at<double>(r, c) = v;
+      map.mask.at<std::uint8_t>(r, c) = 0;
     }
   }
   return map;
 }
 
+// Nodes the solve filled in (`measured` 0: masked, no texture, no peak) and
+// unphysical ones (no temperature) are not measurements.
 MapField read_temperature_csv(const fs::path& path) {
   const auto grid = fusion::read_stored_field(path, fusion::kTemperatureColumns);
-  const cv::Mat& t = grid.column("temperature_c");
-  // Unmeasured nodes that the field filled in are shown; only missing temperatures are masked.
-  MapField map = map_from_stored(grid, t, cv::Mat(t.size(), CV_64F, cv::Scalar(1)));
+  MapField map = map_from_stored(grid, grid.column("temperature_c"), grid.column("measured"));
   map.quantity = "temperature";
   map.unit = "°C";
   return map;
 }
 
+// `valid` is 1 for kOk vectors only: a replaced outlier is not shown either.
 MapField read_displacement_csv(const fs::path& path) {
   const auto grid = fusion::read_stored_field(path, fusion::kDisplacementColumns);
   cv::Mat magnitude;
@@ -238,8 +242,10 @@ MapField displacement_magnitude_map(const fusion::DisplacementField& field, cv::
   for (int r = 0; r < field.rows; ++r) {
     for (int c = 0; c < field.cols; ++c) {
       const auto& v = field.at(r, c);
-      const bool shown = v.valid() || v.flag == fusion::VectorFlag::kOutlierReplaced;
-      map.values.at<double>(r, c) = shown ? std::hypot(v.u_px, v.v_px) : 0.0;
+      // Only kOk is a measurement of its own window, as the stored field's `valid` says: a replaced outlier
+      // holds its neighbours' median (docs/REPORT.md, "Not measured").
+      const bool shown = v.valid();
+      map.values.at<double>(r, c) = shown ? std::hypot(v.u_px, v.v_px) : std::numeric_limits<double>::quiet_NaN();
       map.mask.at<std::uint8_t>(r, c) = shown ? 0 : 255;
     }
   }

@@ -26,8 +26,9 @@ struct RunReportOptions {
 ReportInput build_report_input(const storage::RunStore& store, const RunReportOptions& options = {});
 
 // The magnitude |(u, v)| of a displacement field as a map; vectors that are
-// not measurements (masked, no texture, no peak, outside the ROI) are masked
-// cells, outliers replaced by their neighbours' median are shown.
+// not measurements (flag other than kOk: masked, no texture, no peak, outside
+// the ROI, and outliers replaced by their neighbours' median) are NaN and
+// masked cells, as in the stored field's `valid` column.
 MapField displacement_magnitude_map(const fusion::DisplacementField& field, cv::Size image_size_px);
 
 }  // namespace bosfuse::report

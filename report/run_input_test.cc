@@ -2,9 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
+#include <optional>
+#include <sstream>
 #include <opencv2/imgcodecs.hpp>
 
+#include "fusion/field_csv.h"
 #include "report/report.h"
 #include "pipeline/process.h"
 #include "tests/support/synthetic_run.h"
@@ -124,6 +128,87 @@ TEST(RunInput, TheStoredMaskShowsAsMaskedCellsInTheMaps) {
   EXPECT_EQ(masked_outside, 0) << "only the holder is masked on this textured pattern";
 }
 
+// Issue 29: the solve fills the masked heater harmonically (TemperatureField
+// ::measured 0) and the report drew those values as if measured, with
+// `masked` 0 in its CSV. They are NaN and flagged in the map and its CSV.
+TEST(RunInput, AHeaterFilledInByTheSolveIsNotMeasuredInTheTemperatureMapOrItsCsv) {
+  testing::TempDir dir;
+  const testrun::Truth truth;
+  testrun::create_run(dir / "run", true, truth);
+  cv::imwrite((dir / "run/holder.png").string(), testrun::holder_mask(truth));
+  pipeline::SettingsOverrides overrides;
+  overrides.mask = "holder.png";
+  ASSERT_TRUE(process(dir / "run", overrides).complete);
+  RunReportOptions options;
+  options.map_times_s = {10};
+  const auto store = storage::RunStore::open(dir / "run");
+  const auto input = build_report_input(store, options);
+  ASSERT_EQ(input.temperature_maps.size(), 1u);
+  const MapField& map = input.temperature_maps[0];
+
+  // What the solve stored: finite temperatures it filled in under the holder.
+  const storage::ProcessingStore results(dir / "run");
+  std::optional<fusion::StoredFieldGrid> stored;
+  for (const auto& f : results.fields()) {
+    if (f.kind == "temperature" && map.source.find(f.path) != std::string::npos) {
+      stored = fusion::read_stored_field(dir / "run" / f.path, fusion::kTemperatureColumns);
+    }
+  }
+  ASSERT_TRUE(stored) << map.source;
+  ASSERT_EQ(stored->rows(), map.values.rows);
+  ASSERT_EQ(stored->cols(), map.values.cols);
+  int filled_under_holder = 0, measured_shown = 0, not_measured = 0;
+  for (int r = 0; r < map.values.rows; ++r) {
+    for (int c = 0; c < map.values.cols; ++c) {
+      const double t = stored->column("temperature_c").at<double>(r, c);
+      const bool measured = stored->column("measured").at<double>(r, c) == 1 && std::isfinite(t);
+      const cv::Point node(static_cast<int>(stored->x_px[c]), static_cast<int>(stored->y_px[r]));
+      filled_under_holder += truth.holder_px.contains(node) && !measured && std::isfinite(t);
+      if (measured) {
+        EXPECT_EQ(map.mask.at<std::uint8_t>(r, c), 0) << r << "," << c;
+        EXPECT_EQ(map.values.at<double>(r, c), t);
+        ++measured_shown;
+      } else {
+        EXPECT_NE(map.mask.at<std::uint8_t>(r, c), 0) << "filled in, shown as measured at " << r << "," << c;
+        EXPECT_TRUE(std::isnan(map.values.at<double>(r, c))) << r << "," << c;
+        ++not_measured;
+      }
+    }
+  }
+  EXPECT_GT(filled_under_holder, 10) << "the solve fills the heater: the case this test is about";
+  EXPECT_GT(measured_shown, 100);
+
+  // The report's CSV of that map says the same: `nan` and masked 1 there, and nowhere else.
+  const auto files = write_report(input, {}, dir / "report");
+  EXPECT_TRUE(std::filesystem::exists(files.html));
+  std::optional<std::filesystem::path> csv;
+  for (const auto& e : std::filesystem::directory_iterator(dir / "report")) {
+    const std::string name = e.path().filename().string();
+    if (name.starts_with("map_temperature_") && name.ends_with(".csv")) csv = e.path();
+  }
+  ASSERT_TRUE(csv) << "no map_temperature_*.csv";
+  std::ifstream in(*csv);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "x_px,y_px,x_mm,y_mm,value,masked");
+  int rows = 0, flagged = 0, flagged_under_holder = 0;
+  while (std::getline(in, line) && rows < 1'000'000) {
+    ++rows;
+    std::vector<std::string> cells;
+    std::stringstream split(line);
+    for (std::string cell; std::getline(split, cell, ',');) cells.push_back(cell);
+    ASSERT_EQ(cells.size(), 6u) << line;
+    const bool masked = cells[5] == "1";
+    EXPECT_EQ(masked, cells[4] == "nan") << line;
+    flagged += masked;
+    const cv::Point node(static_cast<int>(std::stod(cells[0])), static_cast<int>(std::stod(cells[1])));
+    flagged_under_holder += masked && truth.holder_px.contains(node);
+  }
+  EXPECT_EQ(rows, map.values.rows * map.values.cols);
+  EXPECT_EQ(flagged, not_measured);
+  EXPECT_GE(flagged_under_holder, filled_under_holder);
+}
+
 TEST(RunInput, AStoredFieldPathLeadingOutOfTheRunIsRefusedByName) {
   testing::TempDir dir;
   testrun::create_run(dir / "run", true);
@@ -160,7 +245,10 @@ TEST(RunInput, DisplacementMagnitudeMapMasksWhatWasNotMeasured) {
   const auto map = displacement_magnitude_map(field, {32, 24});
   EXPECT_DOUBLE_EQ(map.values.at<double>(0, 0), 0.5);
   EXPECT_EQ(map.mask.at<std::uint8_t>(1, 1), 255);
-  EXPECT_EQ(map.mask.at<std::uint8_t>(1, 2), 0) << "a replaced outlier is shown";
+  EXPECT_TRUE(std::isnan(map.values.at<double>(1, 1)));
+  EXPECT_EQ(map.mask.at<std::uint8_t>(1, 2), 255) << "a replaced outlier holds its neighbours' median, not a measurement";
+  EXPECT_TRUE(std::isnan(map.values.at<double>(1, 2)));
+  EXPECT_EQ(map.mask.at<std::uint8_t>(0, 2), 0);
   EXPECT_DOUBLE_EQ(map.x0_px, 8);
   EXPECT_DOUBLE_EQ(map.step_px, 8);
   EXPECT_THROW(displacement_magnitude_map(fusion::DisplacementField{}, {}), std::invalid_argument);
@@ -244,7 +332,9 @@ TEST(RunInput, StoredProbesFitsAgreementsAndFieldsAreUsed) {
   EXPECT_DOUBLE_EQ(t.step_px, 8.0);
   EXPECT_DOUBLE_EQ(t.values.at<double>(1, 0), 25.0);
   EXPECT_TRUE(t.mask.at<std::uint8_t>(0, 1)) << "no temperature: masked";
-  EXPECT_FALSE(t.mask.at<std::uint8_t>(1, 1));
+  EXPECT_TRUE(t.mask.at<std::uint8_t>(1, 1)) << "filled in by the solve (measured 0): not a measurement";
+  EXPECT_TRUE(std::isnan(t.values.at<double>(1, 1)));
+  EXPECT_FALSE(t.mask.at<std::uint8_t>(0, 0));
   ASSERT_EQ(input.displacement_maps.size(), 1u) << "the stored field, not a new evaluation";
   EXPECT_DOUBLE_EQ(input.displacement_maps[0].values.at<double>(0, 0), 0.5);
   EXPECT_TRUE(input.displacement_maps[0].mask.at<std::uint8_t>(0, 1));
