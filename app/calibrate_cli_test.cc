@@ -171,6 +171,13 @@ TEST_F(CalibrateCli, AReferenceFrameFartherFromAnyReadingThanTheToleranceIsRefus
       << refused.output;
   const auto wider = bosfuse("calibrate --reference-tolerance 3.5");
   EXPECT_EQ(wider.exit_code, 0) << wider.output;
+  for (const char* wrong : {"--reference-tolerance -1", "--min-r2 2", "--shift-noise 0", "--flow warm"}) {
+    const auto refused_option = bosfuse(std::string("calibrate ") + wrong);
+    EXPECT_NE(refused_option.exit_code, 0) << wrong;
+    EXPECT_NE(refused_option.output.find(std::string(wrong).substr(0, std::string(wrong).find(' '))), std::string::npos)
+        << wrong << ": the option is named\n"
+        << refused_option.output;
+  }
 }
 
 TEST_F(CalibrateCli, AnOffsetTheCentrelineRecordCannotFixIsNotEstimated) {

@@ -29,14 +29,22 @@ struct CalibrateArgs {
 
 void add_checks(CLI::App* cmd, CalibrateArgs& args) {
   auto& c = args.options.checks;
-  cmd->add_option("--min-points", c.min_points, "Fewest frames a thermocouple's fit needs")->capture_default_str();
-  cmd->add_option("--min-r2", c.min_r2, "Least r2 of a fit (1 - SSR/SST about the mean rise)")->capture_default_str();
-  cmd->add_option("--max-residual", c.max_residual_rms_c, "Largest residual RMS of a fit, degC")->capture_default_str();
+  cmd->add_option("--min-points", c.min_points, "Fewest frames a thermocouple's fit needs")
+      ->check(CLI::Range(std::size_t{2}, std::size_t{1000000}))
+      ->capture_default_str();
+  cmd->add_option("--min-r2", c.min_r2, "Least r2 of a fit (1 - SSR/SST about the mean rise)")
+      ->check(CLI::Range(-1e9, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--max-residual", c.max_residual_rms_c, "Largest residual RMS of a fit, degC")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_option("--min-shift-range", c.min_shift_range_sigmas,
                   "Least shift range at a thermocouple, in multiples of the shift's uncertainty")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--shift-noise", c.shift_noise_floor_px,
                   "The shift's uncertainty, px, when the probe samples carry none")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--flow", args.flow,
                   "heated: the flow is hotter than the reference's air (slope > 0); cooled: colder (slope < 0)")
@@ -45,6 +53,7 @@ void add_checks(CLI::App* cmd, CalibrateArgs& args) {
   cmd->add_option("--reference-tolerance", args.options.reference_tolerance_s,
                   "Seconds from the reference frame within which the nearest reading stands for it when the frame "
                   "lies outside the thermocouple's record (0: the larger of 2 sample periods and 0.25 s)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
 }
 
