@@ -121,12 +121,13 @@ TEST_F(ReportCli, MakesAReportThatABrowserRendersCompletely) {
   //    with the maps' colours (the page's own styles are grey and yellow only).
   // Chromium's --screenshot can capture a loaded machine's page before its
   // large images are painted (virtual time does not cover image decoding):
-  // the same file is shot up to three times and the best shot counts.
+  // the same file is shot up to three times and the best shot counts. The
+  // window is taller than the page, so that its last maps are in the shot.
   std::size_t blue = 0, red = 0;
   for (int attempt = 0; attempt < 3 && (blue <= 2000u || red <= 500u); ++attempt) {
     const fs::path shot = dir_ / fmt::format("shot{}.png", attempt);
     const auto screenshot =
-        chromium("--window-size=1100,7000 --virtual-time-budget=15000 --screenshot=" + shell_quote(shot) + " " +
+        chromium("--window-size=1100,8000 --virtual-time-budget=15000 --screenshot=" + shell_quote(shot) + " " +
                  shell_quote(fs::path("file://" + (out / "report.html").string())));
     ASSERT_EQ(screenshot.exit_code, 0) << screenshot.output.substr(0, 2000);
     const cv::Mat page = cv::imread(shot.string(), cv::IMREAD_COLOR);

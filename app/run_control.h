@@ -22,6 +22,7 @@ enum ExitStatus : int {
   kExitDeviceSilent = 4,      // the run was recorded, but a device delivered nothing or a camera lost frames
   kExitStopped = 5,           // stopped on request before it finished (process: `--resume` continues)
   kExitSomeFramesFailed = 6,  // evaluate --sequence: the file is written, but some frames could not be evaluated
+  kExitRefused = 7,           // calibrate: the result failed its checks and was not stored (--force stores it)
 };
 
 // A failure with its own exit status; main() prints the message and exits with it.

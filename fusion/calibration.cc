@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -45,6 +46,14 @@ Sums sums_of(const WeightedPoints& p) {
     s.wxx += p.w[i] * p.x[i] * p.x[i], s.wxy += p.w[i] * p.x[i] * p.y[i];
   }
   return s;
+}
+
+// 1 − SSR/SST about the unweighted mean of y.
+double r_squared(const WeightedPoints& p, double ssr) {
+  double mean = 0, sst = 0;
+  for (double y : p.y) mean += y / static_cast<double>(p.y.size());
+  for (double y : p.y) sst += (y - mean) * (y - mean);
+  return sst > 0 ? 1 - ssr / sst : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace
@@ -95,8 +104,67 @@ LinearCalibration fit_linear_calibration(std::span<const double> x, std::span<co
   c.slope_std_error = std::sqrt(s2 * (options.through_origin ? 1 / s.wxx : s.w / det));
   c.intercept_std_error = options.through_origin ? 0.0 : std::sqrt(s2 * s.wxx / det);
   c.residual_rms = std::sqrt(ssr / static_cast<double>(c.points));
+  c.r2 = r_squared(p, ssr);
   c.ok = true;
   return c;
+}
+
+std::string CalibrationChecks::Validate() const {
+  if (min_points < 2) return "min_points must be at least 2";
+  if (!(std::isfinite(min_r2) && min_r2 <= 1)) return "min_r2 must be a number up to 1";
+  if (!(max_residual_rms_c > 0)) return "max_residual_rms_c must be positive";
+  if (!(std::isfinite(min_shift_range_sigmas) && min_shift_range_sigmas >= 0)) {
+    return "min_shift_range_sigmas must be finite and non-negative";
+  }
+  if (!(std::isfinite(shift_noise_floor_px) && shift_noise_floor_px > 0))
+    return "shift_noise_floor_px must be positive";
+  if (expected_sign != 1 && expected_sign != -1) return "expected_sign must be +1 or -1";
+  return {};
+}
+
+ShiftUncertainty shift_uncertainty(std::span<const double> sigma_px, const CalibrationChecks& checks) {
+  std::vector<double> estimated;
+  for (double s : sigma_px) {
+    if (std::isfinite(s) && s > 0) estimated.push_back(s);
+  }
+  if (estimated.empty()) {
+    return {checks.shift_noise_floor_px, "the default noise floor, as the probe samples carry no sigma"};
+  }
+  const auto middle = estimated.begin() + static_cast<std::ptrdiff_t>(estimated.size() / 2);
+  std::nth_element(estimated.begin(), middle, estimated.end());
+  return {*middle, fmt::format("the probe's median sigma over {} samples", estimated.size())};
+}
+
+std::vector<std::string> calibration_problems(const LinearCalibration& fit, const ShiftUncertainty& shift,
+                                              const CalibrationChecks& checks) {
+  if (const auto problem = checks.Validate(); !problem.empty()) throw std::invalid_argument(problem);
+  if (!fit.ok) return {fit.message};
+  std::vector<std::string> problems;
+  if (fit.points < checks.min_points) {
+    problems.push_back(fmt::format("too few points: {}, at least {} needed", fit.points, checks.min_points));
+  }
+  if (!(fit.slope * checks.expected_sign > 0)) {
+    problems.push_back(fmt::format(
+        "the slope {:.4g} degC/px has the wrong sign: {} (hotter air refracts less, so |shift| grows with the "
+        "departure from the reference's air), a slope {} 0 is expected",
+        fit.slope, checks.expected_sign > 0 ? "for a heated flow" : "for a flow colder than the reference's air",
+        checks.expected_sign > 0 ? ">" : "<"));
+  }
+  if (!(fit.r2 >= checks.min_r2)) {
+    problems.push_back(fmt::format("a poor fit: r2 = {:.3g}, at least {:g} needed", fit.r2, checks.min_r2));
+  }
+  if (!(fit.residual_rms <= checks.max_residual_rms_c)) {
+    problems.push_back(fmt::format("a poor fit: residual RMS {:.3g} degC, at most {:g} degC allowed", fit.residual_rms,
+                                   checks.max_residual_rms_c));
+  }
+  const double range = fit.x_max - fit.x_min, needed = checks.min_shift_range_sigmas * shift.sigma_px;
+  if (!(range >= needed)) {
+    problems.push_back(fmt::format(
+        "BOS sees no shift where this thermocouple is: the shift ranges over {:.3g}..{:.3g} px ({:.3g} px), less "
+        "than {:g} x the shift's uncertainty {:.3g} px ({})",
+        fit.x_min, fit.x_max, range, checks.min_shift_range_sigmas, shift.sigma_px, shift.source));
+  }
+  return problems;
 }
 
 }  // namespace bosfuse::fusion

@@ -1,5 +1,6 @@
 #include "fusion/calibration.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -83,6 +84,71 @@ TEST(Calibration, NonFiniteAndDegenerateInputsAreReported) {
   const auto few = fit_linear_calibration(std::vector<double>{1.0}, std::vector<double>{2.0});
   EXPECT_FALSE(few.ok);
   EXPECT_THROW(fit_linear_calibration(zeros, std::vector<double>{1.0}), std::invalid_argument);
+}
+
+bool names(const std::vector<std::string>& problems, const std::string& text) {
+  for (const auto& p : problems) {
+    if (p.find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+TEST(CalibrationChecks, AGoodCalibrationPassesAndR2IsAboutTheMean) {
+  const Data d = line(25, 0, 0.2, 1);
+  const auto c = fit_linear_calibration(d.x, d.y);
+  EXPECT_GT(c.r2, 0.95);
+  EXPECT_TRUE(calibration_problems(c, shift_uncertainty({}, {}), {}).empty());
+}
+
+// The centreline case: the thermocouple cools by 28 degC below its
+// reading at the reference frame while BOS sees 0.02..0.08 px of noise.
+TEST(CalibrationChecks, TheCentrelineCaseFailsNamingItsSlopeResidualAndShiftRange) {
+  std::mt19937 random(2);
+  std::uniform_real_distribution<double> shift(0.02, 0.08);
+  Data d;
+  for (int i = 0; i < 23; ++i) {
+    d.x.push_back(shift(random));
+    d.y.push_back(-28 * (1 - std::exp(-0.006 * 10 * i)));
+  }
+  const auto c = fit_linear_calibration(d.x, d.y);
+  ASSERT_TRUE(c.ok) << c.message;
+  const auto problems = calibration_problems(c, shift_uncertainty({}, {}), {});
+  for (const auto& p : problems) std::printf("%s\n", p.c_str());
+  ASSERT_EQ(problems.size(), 4u) << "sign, r2, residual and shift range";
+  EXPECT_TRUE(names(problems, fmt::format("the slope {:.4g} degC/px has the wrong sign", c.slope)));
+  EXPECT_TRUE(names(problems, "a slope > 0 is expected"));
+  EXPECT_TRUE(names(problems, fmt::format("residual RMS {:.3g} degC", c.residual_rms)));
+  EXPECT_TRUE(names(problems, fmt::format("r2 = {:.3g}", c.r2)));
+  EXPECT_TRUE(names(problems, fmt::format("BOS sees no shift where this thermocouple is: the shift ranges over "
+                                          "{:.3g}..{:.3g} px",
+                                          c.x_min, c.x_max)));
+  EXPECT_TRUE(names(problems, "uncertainty 0.05 px (the default noise floor"));
+  CalibrationChecks cooled;
+  cooled.expected_sign = -1;
+  EXPECT_FALSE(names(calibration_problems(c, shift_uncertainty({}, cooled), cooled), "wrong sign"))
+      << "a flow colder than the reference's air has a negative slope";
+}
+
+TEST(CalibrationChecks, TooFewPointsAndAShiftRangeBelowTheProbesSigma) {
+  const Data d = line(25, 0, 0.01, 3, 4);  // shifts 0.05..0.11 px
+  const auto c = fit_linear_calibration(d.x, d.y);
+  ASSERT_TRUE(c.ok);
+  const std::vector<double> sigma{0.0, 0.01, 0.02, 0.015, NAN};  // 0: not estimated
+  const auto shift = shift_uncertainty(sigma, {});
+  EXPECT_DOUBLE_EQ(shift.sigma_px, 0.015);
+  EXPECT_NE(shift.source.find("median sigma over 3 samples"), std::string::npos) << shift.source;
+  auto problems = calibration_problems(c, shift, {});
+  EXPECT_TRUE(names(problems, "too few points: 4, at least 5 needed"));
+  EXPECT_FALSE(names(problems, "BOS sees no shift")) << "0.06 px spans 3 x 0.015 px";
+  CalibrationChecks strict;
+  strict.min_shift_range_sigmas = 5;
+  problems = calibration_problems(c, shift, strict);
+  EXPECT_TRUE(names(problems, "less than 5 x the shift's uncertainty 0.015 px (the probe's median sigma"));
+  strict.min_r2 = 2;
+  EXPECT_THROW(calibration_problems(c, shift, strict), std::invalid_argument);
+  LinearCalibration failed;
+  failed.message = "2 usable points, at least 3 needed";
+  EXPECT_EQ(calibration_problems(failed, shift, {}), std::vector<std::string>{failed.message});
 }
 
 }  // namespace

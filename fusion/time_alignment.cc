@@ -1,5 +1,7 @@
 #include "fusion/time_alignment.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -74,67 +76,151 @@ AlignedSeries align_to_frames(std::span<const double> series_time_s, std::span<c
 std::string OffsetSearchOptions::Validate() const {
   if (!(std::isfinite(max_offset_s) && max_offset_s >= 0)) return "max_offset_s must be finite and non-negative";
   if (!(std::isfinite(step_s) && step_s > 0)) return "step_s must be positive";
-  if (2 * max_offset_s / step_s + 1 > static_cast<double>(kMaxSearchSteps)) {
-    return "max_offset_s / step_s is too fine a search (more than 100000 steps)";
+  if (!(std::isfinite(stability_factor) && stability_factor >= 1)) return "stability_factor must be at least 1";
+  if (2 * max_offset_s * stability_factor / step_s + 1 > static_cast<double>(kMaxSearchSteps)) {
+    return "stability_factor * max_offset_s / step_s is too fine a search (more than 100000 steps)";
   }
   if (min_common_points < 3) return "min_common_points must be at least 3";
   if (!(std::isfinite(resolution_s) && resolution_s >= step_s)) return "resolution_s must be at least step_s";
+  if (!(min_common_fraction >= 0 && min_common_fraction <= 1)) return "min_common_fraction must be in 0..1";
   return {};
 }
+
+namespace {
+
+// r² at offsets s·step_s, s = −half_steps..half_steps; NaN where too few
+// frames have a thermocouple value.
+struct Profile {
+  int half_steps = 0;
+  std::vector<double> offsets, r2;
+};
+
+Profile r2_profile(std::span<const double> series_time_s, std::span<const double> series_value,
+                   std::span<const double> frame_time_s, std::span<const double> probe_value, double half_width_s,
+                   const OffsetSearchOptions& options) {
+  const auto finite_probe = static_cast<double>(
+      std::count_if(probe_value.begin(), probe_value.end(), [](double v) { return std::isfinite(v); }));
+  const auto needed = std::max(options.min_common_points,
+                               static_cast<std::size_t>(std::ceil(options.min_common_fraction * finite_probe)));
+  Profile p;
+  p.half_steps = static_cast<int>(std::floor(half_width_s / options.step_s + 1e-9));
+  for (int s = -p.half_steps; s <= p.half_steps; ++s) {
+    const double offset = s * options.step_s;
+    const auto aligned = align_to_frames(series_time_s, series_value, frame_time_s, offset);
+    std::size_t used = 0;
+    p.offsets.push_back(offset);
+    p.r2.push_back(squared_correlation(aligned.value, probe_value, needed, used));
+  }
+  return p;
+}
+
+// The index of the largest r² with |offset| ≤ half_steps·step; size() when none.
+std::size_t best_within(const Profile& p, int half_steps) {
+  std::size_t best = p.r2.size();
+  const auto first = static_cast<std::size_t>(p.half_steps - half_steps);
+  for (std::size_t i = first; i <= first + 2 * static_cast<std::size_t>(half_steps); ++i) {
+    if (std::isfinite(p.r2[i]) && (best == p.r2.size() || p.r2[i] > p.r2[best])) best = i;
+  }
+  return best;
+}
+
+// Where r², walking from `best` in `direction`, first falls below
+// `threshold`, linearly interpolated; NaN when it never does (a flat side).
+double crossing(const Profile& p, std::size_t best, int direction, double threshold) {
+  for (std::size_t i = best;;) {
+    if ((direction < 0 && i == 0) || (direction > 0 && i + 1 == p.r2.size())) return kNaN;
+    const std::size_t next = direction < 0 ? i - 1 : i + 1;
+    if (!std::isfinite(p.r2[next])) return kNaN;
+    if (p.r2[next] < threshold) {
+      const double fraction = (p.r2[i] - threshold) / (p.r2[i] - p.r2[next]);
+      return p.offsets[i] + fraction * (p.offsets[next] - p.offsets[i]);
+    }
+    i = next;
+  }
+}
+
+// Best minus the best r² at least resolution_s away on the worse side, within ±half_steps.
+double r2_contrast(const Profile& p, std::size_t best, int half_steps, double resolution_s) {
+  double left = -1, right = -1;
+  const auto first = static_cast<std::size_t>(p.half_steps - half_steps);
+  for (std::size_t i = first; i <= first + 2 * static_cast<std::size_t>(half_steps); ++i) {
+    if (!std::isfinite(p.r2[i])) continue;
+    if (p.offsets[i] <= p.offsets[best] - resolution_s) left = std::max(left, p.r2[i]);
+    if (p.offsets[i] >= p.offsets[best] + resolution_s) right = std::max(right, p.r2[i]);
+  }
+  return p.r2[best] - std::max(left, right);
+}
+
+// The profile likelihood's interval (header) at `sigmas`: where 1 − r²
+// exceeds (1 − r²_best)(1 + sigmas²/(n − 3)). Its half-width; 0 when it
+// does not close on both sides within the profile.
+double profile_half_width_s(const Profile& p, std::size_t best, std::size_t n, double sigmas) {
+  if (n <= 3) return 0;
+  const double threshold = 1 - (1 - p.r2[best]) * (1 + sigmas * sigmas / static_cast<double>(n - 3));
+  const double left = crossing(p, best, -1, threshold), right = crossing(p, best, +1, threshold);
+  if (!std::isfinite(left) || !std::isfinite(right)) return 0;
+  return 0.5 * (right - left);
+}
+
+std::string verdict(const OffsetEstimate& e, const OffsetSearchOptions& options) {
+  if (e.at_search_edge) return "the best offset is at the edge of the search: widen max_offset_s";
+  if (e.r2_contrast < options.min_r2_contrast) {
+    return "the fit hardly depends on the offset on at least one side: the record has no feature that fixes it (a "
+           "smooth exponential is the same curve at every offset); configure the offset instead";
+  }
+  if (!(e.offset_std_s > 0)) {
+    return fmt::format(
+        "the r2 profile is flat: within +-{:g} s it does not fall on both sides of {:.3g} s by 3 times its own "
+        "noise (a profile-likelihood interval that does not close); configure the offset instead",
+        e.wide_search_s, e.offset_s);
+  }
+  if (!e.stable) {
+    return fmt::format(
+        "the answer depends on the search window: +-{:g} s gives {:.3g} s, +-{:g} s gives {:.3g} s; the record has "
+        "no one feature that fixes the offset; configure it instead",
+        options.max_offset_s, e.offset_s, e.wide_search_s, e.wide_offset_s);
+  }
+  return {};
+}
+
+}  // namespace
 
 OffsetEstimate estimate_clock_offset(std::span<const double> series_time_s, std::span<const double> series_value,
                                      std::span<const double> frame_time_s, std::span<const double> probe_value,
                                      const OffsetSearchOptions& options) {
   if (const auto problem = options.Validate(); !problem.empty()) throw std::invalid_argument(problem);
   if (frame_time_s.size() != probe_value.size()) throw std::invalid_argument("frame times and probe values differ");
-  const int half_steps = static_cast<int>(std::floor(options.max_offset_s / options.step_s));
-  std::vector<double> offsets, r2s;
-  for (int s = -half_steps; s <= half_steps; ++s) {
-    const double offset = s * options.step_s;
-    const auto aligned = align_to_frames(series_time_s, series_value, frame_time_s, offset);
-    std::size_t used = 0;
-    offsets.push_back(offset);
-    r2s.push_back(squared_correlation(aligned.value, probe_value, options.min_common_points, used));
-  }
   OffsetEstimate estimate;
-  std::size_t best = r2s.size();
-  for (std::size_t i = 0; i < r2s.size(); ++i) {
-    if (std::isfinite(r2s[i]) && (best == r2s.size() || r2s[i] > r2s[best])) best = i;
-  }
-  if (best == r2s.size()) {
+  estimate.wide_search_s = options.max_offset_s * options.stability_factor;
+  const Profile p = r2_profile(series_time_s, series_value, frame_time_s, probe_value, estimate.wide_search_s, options);
+  const int inner = static_cast<int>(std::floor(options.max_offset_s / options.step_s + 1e-9));
+  const std::size_t best = best_within(p, inner), wide_best = best_within(p, p.half_steps);
+  if (best == p.r2.size()) {
     estimate.message = "no offset in the search leaves enough common, varying points";
     return estimate;
   }
-  // Identifiable only if r² falls on both sides: the best r² at least
-  // resolution_s away on the worse side must be lower by min_r2_contrast.
-  double left = -1, right = -1;
-  for (std::size_t i = 0; i < r2s.size(); ++i) {
-    if (!std::isfinite(r2s[i])) continue;
-    if (offsets[i] <= offsets[best] - options.resolution_s) left = std::max(left, r2s[i]);
-    if (offsets[i] >= offsets[best] + options.resolution_s) right = std::max(right, r2s[i]);
-  }
-  estimate.r2 = r2s[best];
-  estimate.r2_contrast = r2s[best] - std::max(left, right);
-  estimate.offset_s = offsets[best];
-  estimate.at_search_edge = best == 0 || best + 1 == r2s.size();
-  if (!estimate.at_search_edge && std::isfinite(r2s[best - 1]) && std::isfinite(r2s[best + 1])) {
-    const double a = r2s[best - 1], b = r2s[best], c = r2s[best + 1];
+  estimate.r2 = p.r2[best];
+  estimate.r2_contrast = r2_contrast(p, best, inner, options.resolution_s);
+  estimate.offset_s = p.offsets[best];
+  const int s = static_cast<int>(best) - p.half_steps;
+  estimate.at_search_edge = s == -inner || s == inner;
+  if (!estimate.at_search_edge && std::isfinite(p.r2[best - 1]) && std::isfinite(p.r2[best + 1])) {
+    const double a = p.r2[best - 1], b = p.r2[best], c = p.r2[best + 1];
     const double curvature = a - 2 * b + c;
     if (curvature < 0) estimate.offset_s += 0.5 * (a - c) / curvature * options.step_s;
   }
   const auto aligned = align_to_frames(series_time_s, series_value, frame_time_s, estimate.offset_s);
   squared_correlation(aligned.value, probe_value, options.min_common_points, estimate.common_points);
-  if (estimate.at_search_edge) {
-    estimate.message = "the best offset is at the edge of the search: widen max_offset_s";
-    return estimate;
+  // Identifiable only if the 3σ interval closes inside the wide search; σ never finer than the grid.
+  if (profile_half_width_s(p, best, estimate.common_points, 3) > 0) {
+    estimate.offset_std_s =
+        std::max(profile_half_width_s(p, best, estimate.common_points, 1), options.step_s / std::sqrt(12.0));
   }
-  if (estimate.r2_contrast < options.min_r2_contrast) {
-    estimate.message =
-        "the fit hardly depends on the offset on at least one side: the record has no feature that fixes it (a "
-        "smooth exponential is the same curve at every offset); configure the offset instead";
-    return estimate;
-  }
-  estimate.ok = true;
+  estimate.wide_offset_s = p.offsets[wide_best];
+  const double agree_s = std::max(2 * estimate.offset_std_s, options.resolution_s);
+  estimate.stable = std::abs(estimate.wide_offset_s - p.offsets[best]) <= agree_s;
+  estimate.message = verdict(estimate, options);
+  estimate.ok = estimate.message.empty();
   return estimate;
 }
 

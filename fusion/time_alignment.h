@@ -18,6 +18,23 @@
 // — the heater switched off, a draught. When r² hardly varies over the
 // search the result says so and is not ok.
 //
+// The estimate's standard uncertainty comes from the r² profile's peak
+// width, read as a profile likelihood: with the probe explained by a line
+// in the thermocouple (2 parameters) plus the offset, the residual sum is
+// SSR(δ) = SST·(1 − r²(δ)), and the 1σ interval is where it rises by
+// SSR_min / (n − 3), i.e. where 1 − r² exceeds (1 − r²_best)(1 + 1/(n − 3)).
+// The offset counts as fixed by the record only when the 3σ interval
+// (9 times that rise) closes on both sides inside the wide search below; a
+// profile that does not fall that far is flat: not ok. (r² at different
+// offsets rests on slightly different frames, those with a thermocouple
+// value; a frame dropping out moves r² by about its noise, which the 3σ
+// margin keeps from passing for a peak.) The answer must also be stable across search windows: the profile is
+// searched over ±stability_factor·max_offset_s as well, and when the best
+// offset there is another peak than the one inside ±max_offset_s, the
+// estimate is not ok and says both (the record then has competing features,
+// or none). Offsets leaving fewer than min_common_fraction of the frames
+// with a thermocouple value do not compete (a few points correlate by chance).
+//
 // All times are seconds in one time base (e.g. since the run's first frame).
 
 #include <cstddef>
@@ -45,8 +62,10 @@ struct OffsetSearchOptions {
   double max_offset_s = 5;
   double step_s = 0.05;
   std::size_t min_common_points = 5;
-  double resolution_s = 0.5;      // offsets closer than this are not told apart
-  double min_r2_contrast = 1e-4;  // needed drop of r² at resolution_s on each side
+  double resolution_s = 0.5;         // offsets closer than this are not told apart
+  double min_r2_contrast = 1e-4;     // needed drop of r² at resolution_s on each side
+  double stability_factor = 3;       // the answer must be the same over ±this·max_offset_s (1: no check)
+  double min_common_fraction = 0.5;  // of the frames, for an offset to compete
 
   std::string Validate() const;  // empty when valid
 };
@@ -55,10 +74,14 @@ struct OffsetEstimate {
   bool ok = false;
   std::string message;  // why not ok
   double offset_s = 0;
+  double offset_std_s = 0;      // standard uncertainty from the r² profile's width; 0 when not closed
   double r2 = 0;                // at the offset
   double r2_contrast = 0;       // best minus the best r² at least resolution_s away on either side
   bool at_search_edge = false;  // the best offset is the search's limit: widen it
   std::size_t common_points = 0;
+  double wide_search_s = 0;  // stability_factor·max_offset_s
+  double wide_offset_s = 0;  // the best offset over ±wide_search_s
+  bool stable = false;       // the two searches found the same peak
 };
 
 OffsetEstimate estimate_clock_offset(std::span<const double> series_time_s, std::span<const double> series_value,

@@ -2,13 +2,16 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "acquisition/clock.h"
-#include "fusion/calibration.h"
 #include "fusion/time_alignment.h"
+#include "pipeline/probe_calibration.h"
 #include "pipeline/processing_settings.h"
 #include "pipeline/run_selection.h"
+#include "storage/experiment_clock.h"
 #include "storage/processing_store.h"
 #include "storage/run_store.h"
 
@@ -18,13 +21,12 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::ordered_json;
 
-}  // namespace
-
-namespace {
+constexpr double kLeastReferenceToleranceS = 0.25;
 
 // The probe's valid samples on the fits' time axis (frame clock) and their shift.
 struct ProbeShifts {
   std::vector<double> frame_t_s, shift_px;
+  std::vector<double> sigma_px;  // the shift's σ per sample when stored; empty: not estimated
 };
 
 ProbeShifts valid_shifts(const std::vector<storage::ProbeSampleRecord>& samples,
@@ -39,54 +41,139 @@ ProbeShifts valid_shifts(const std::vector<storage::ProbeSampleRecord>& samples,
 }
 
 // The configured offset, or the estimate when asked for and identifiable.
-double camera_offset_for(const TimeSeries& tc, const ProbeShifts& probe, double configured_s, double search_s, json& record,
-                         std::string& text) {
+double camera_offset_for(const TimeSeries& tc, const ProbeShifts& probe, double configured_s, double search_s,
+                         json& record, std::string& text) {
   if (search_s <= 0) return configured_s;
   fusion::OffsetSearchOptions search;
   search.max_offset_s = search_s;
-  const auto estimate = fusion::estimate_clock_offset(tc.t_s, tc.value, probe.frame_t_s, probe.shift_px, search);
-  record["offset_estimate"] = {
-      {"ok", estimate.ok}, {"offset_s", estimate.offset_s}, {"r2", estimate.r2}, {"message", estimate.message}};
+  const auto e = fusion::estimate_clock_offset(tc.t_s, tc.value, probe.frame_t_s, probe.shift_px, search);
+  record["offset_estimate"] = {{"ok", e.ok},
+                               {"offset_s", e.offset_s},
+                               {"offset_std_s", e.offset_std_s},
+                               {"r2", e.r2},
+                               {"search_s", search_s},
+                               {"wide_search_s", e.wide_search_s},
+                               {"wide_offset_s", e.wide_offset_s},
+                               {"message", e.message}};
   text += fmt::format("{}: clock offset {}\n", record["name"].get<std::string>(),
-                      estimate.ok ? fmt::format("estimated {:.3f} s (r2 {:.4f})", estimate.offset_s, estimate.r2)
-                                  : "not estimated: " + estimate.message);
-  return estimate.ok ? estimate.offset_s : configured_s;
+                      e.ok ? fmt::format("estimated {:.3f} ± {:.2g} s (r2 {:.4f}; the same over ±{:g} s)", e.offset_s,
+                                         e.offset_std_s, e.r2, e.wide_search_s)
+                           : fmt::format("not estimated: {}; the configured {:g} s is used", e.message, configured_s));
+  return e.ok ? e.offset_s : configured_s;
 }
 
-// ΔT of the thermocouple above its reading at the reference frame against
-// the shift; fills `record` and returns whether a calibration was made.
-bool calibrate_channel(const TimeSeries& tc, const ProbeShifts& probe, double reference_t_s, double offset_s, json& record,
-                       std::string& text) {
-  const std::string name = record["name"].get<std::string>();
-  record["camera_offset_s"] = offset_s;
-  const std::vector<double> at_reference{reference_t_s};
-  const auto reference_tc = fusion::align_to_frames(tc.t_s, tc.value, at_reference, offset_s);
-  if (!reference_tc.ok(0)) {
-    record["ok"] = false;
-    record["message"] = "the thermocouple has no reading at the reference frame's time";
-    text += name + ": " + record["message"].get<std::string>() + "\n";
-    return false;
+double median_period_s(const std::vector<double>& t_s) {
+  std::vector<double> gaps;
+  for (std::size_t i = 1; i < t_s.size(); ++i) gaps.push_back(t_s[i] - t_s[i - 1]);
+  if (gaps.empty()) return 0;
+  const auto middle = gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2);
+  std::nth_element(gaps.begin(), middle, gaps.end());
+  return *middle;
+}
+
+struct ReferenceReading {
+  bool ok = false;
+  double value_c = 0;
+  std::string how;  // interpolated, or the nearest reading and how far; or why none
+};
+
+// The thermocouple at host time t_s (the reference frame's time plus the offset).
+ReferenceReading reading_at(const TimeSeries& tc, double t_s, double tolerance_s) {
+  const std::vector<double> at{t_s};
+  const auto inside = fusion::align_to_frames(tc.t_s, tc.value, at);
+  if (inside.ok(0)) return {true, inside.value[0], "interpolated between the readings around it"};
+  if (tc.t_s.empty()) return {false, 0, "the thermocouple has no readings"};
+  const double tolerance =
+      tolerance_s > 0 ? tolerance_s : std::max(2 * median_period_s(tc.t_s), kLeastReferenceToleranceS);
+  const bool before = t_s < tc.t_s.front();
+  const double gap = before ? tc.t_s.front() - t_s : t_s - tc.t_s.back();
+  if (gap > tolerance) {
+    return {false, 0,
+            fmt::format("the thermocouple has no reading within {:.3g} s of the reference frame's time (the nearest is "
+                        "{:.3g} s {})",
+                        tolerance, gap, before ? "after it" : "before it")};
   }
-  const auto aligned = fusion::align_to_frames(tc.t_s, tc.value, probe.frame_t_s, offset_s);
-  std::vector<double> rise;
-  for (double v : aligned.value) rise.push_back(v - reference_tc.value[0]);  // NaN outside: dropped by the fit
-  const auto fit = fusion::fit_linear_calibration(probe.shift_px, rise);
-  record["ok"] = fit.ok;
-  record["message"] = fit.message;
-  record["reference_temperature_c"] = reference_tc.value[0];
+  return {true, before ? tc.value.front() : tc.value.back(),
+          fmt::format("the nearest reading, {:.3g} s {} the reference frame (tolerance {:.3g} s)", gap,
+                      before ? "after" : "before", tolerance)};
+}
+
+struct ChannelResult {
+  bool fitted = false;  // a fit was made
+  std::vector<std::string> problems;
+};
+
+void record_fit(const fusion::LinearCalibration& fit, const fusion::ShiftUncertainty& shift, std::size_t outside,
+                json& record) {
   record["slope_c_per_px"] = fit.slope;
   record["slope_std_error_c_per_px"] = fit.slope_std_error;
   record["residual_rms_c"] = fit.residual_rms;
+  record["r2"] = std::isfinite(fit.r2) ? json(fit.r2) : json(nullptr);
   record["points"] = fit.points;
-  record["frames_outside_thermocouple_record"] = aligned.outside;
+  record["frames_outside_thermocouple_record"] = outside;
   record["shift_range_px"] = {fit.x_min, fit.x_max};
-  text += name + ": " + fit.brief_report() + " (per px of shift)\n";
-  return fit.ok;
+  record["shift_uncertainty_px"] = shift.sigma_px;
+  record["shift_uncertainty_source"] = shift.source;
+}
+
+// ΔT of the thermocouple above its reading at the reference frame against
+// the shift; fills `record` (ok: usable, checked or forced).
+ChannelResult calibrate_channel(const TimeSeries& tc, const ProbeShifts& probe, double reference_t_s, double offset_s,
+                                const CalibrateOptions& options, json& record, std::string& text) {
+  const std::string name = record["name"].get<std::string>();
+  record["camera_offset_s"] = offset_s;
+  const ReferenceReading reference = reading_at(tc, reference_t_s + offset_s, options.reference_tolerance_s);
+  record["reference_reading"] = reference.how;
+  ChannelResult result;
+  if (!reference.ok) {
+    record["ok"] = false;
+    record["message"] = reference.how;
+    result.problems.push_back(reference.how);
+    text += name + ": " + reference.how + "\n";
+    return result;
+  }
+  const auto aligned = fusion::align_to_frames(tc.t_s, tc.value, probe.frame_t_s, offset_s);
+  std::vector<double> rise;
+  for (double v : aligned.value) rise.push_back(v - reference.value_c);  // NaN outside: dropped by the fit
+  const auto fit = fusion::fit_linear_calibration(probe.shift_px, rise);
+  const auto shift = fusion::shift_uncertainty(probe.sigma_px, options.checks);
+  result.fitted = fit.ok;
+  result.problems = fusion::calibration_problems(fit, shift, options.checks);
+  record["ok"] = fit.ok && (result.problems.empty() || options.force);
+  record["message"] = fit.message;
+  record["reference_temperature_c"] = reference.value_c;
+  record_fit(fit, shift, aligned.outside, record);
+  record["checks_failed"] = result.problems;
+  record["forced"] = fit.ok && !result.problems.empty() && options.force;
+  text += fmt::format("{}: {} (per px of shift; reference {:.2f} degC, {})\n", name, fit.brief_report(),
+                      reference.value_c, reference.how);
+  return result;
+}
+
+json checks_json(const fusion::CalibrationChecks& c) {
+  return {{"min_points", c.min_points},
+          {"min_r2", c.min_r2},
+          {"max_residual_rms_c", c.max_residual_rms_c},
+          {"min_shift_range_sigmas", c.min_shift_range_sigmas},
+          {"shift_noise_floor_px", c.shift_noise_floor_px},
+          {"expected_sign", c.expected_sign}};
 }
 
 }  // namespace
 
-std::string calibrate_run(const fs::path& run_dir, const CalibrateOptions& options) {
+std::string CalibrateOptions::Validate() const {
+  if (const auto problem = checks.Validate(); !problem.empty()) return problem;
+  if (!(std::isfinite(reference_tolerance_s) && reference_tolerance_s >= 0)) {
+    return "reference_tolerance_s must be finite and non-negative (0: automatic)";
+  }
+  if (!(std::isfinite(estimate_offset_max_s) && estimate_offset_max_s >= 0)) {
+    return "estimate_offset_max_s must be finite and non-negative";
+  }
+  return {};
+}
+
+CalibrationOutcome calibrate_run(const fs::path& run_dir, const CalibrateOptions& options) {
+  if (const auto problem = options.Validate(); !problem.empty()) throw std::invalid_argument(problem);
   storage::ProcessingStore results(run_dir, true);
   const auto store = storage::RunStore::open(run_dir);
   const auto probes = results.probes();
@@ -99,25 +186,54 @@ std::string calibrate_run(const fs::path& run_dir, const CalibrateOptions& optio
       options.camera_offset_s.value_or(resolve_settings(run_dir, geometry).geometry.camera_offset_s);
   const double reference_t_s = clock.seconds(frames.reference.t_ns);
   json channels = json::array();
-  std::string text;
-  std::size_t calibrated = 0;
+  CalibrationOutcome outcome;
+  std::size_t fitted = 0;
   for (const auto& probe : probes) {
     if (!probe.channel_id) continue;
     json record = {{"channel_id", *probe.channel_id}, {"probe_id", probe.id}, {"name", probe.name}};
     const TimeSeries tc = channel_series(store, *probe.channel_id, clock);
     const ProbeShifts shifts = valid_shifts(results.probe_samples(probe.id), clock);
     const double offset_s =
-        camera_offset_for(tc, shifts, configured_offset_s, options.estimate_offset_max_s, record, text);
-    calibrated += calibrate_channel(tc, shifts, reference_t_s, offset_s, record, text) ? 1 : 0;
+        camera_offset_for(tc, shifts, configured_offset_s, options.estimate_offset_max_s, record, outcome.text);
+    const ChannelResult r = calibrate_channel(tc, shifts, reference_t_s, offset_s, options, record, outcome.text);
+    fitted += r.fitted ? 1 : 0;
+    for (const auto& p : r.problems) outcome.problems.push_back(probe.name + ": " + p);
     channels.push_back(record);
   }
-  if (calibrated == 0) throw std::runtime_error("no thermocouple could be calibrated:\n" + text);
+  const bool refused = fitted == 0 || (!outcome.problems.empty() && !options.force);
+  if (refused) {
+    outcome.text += fitted == 0 ? "no thermocouple could be calibrated: nothing stored\n"
+                                : "calibration refused: nothing stored (`--force` stores it anyway); the run keeps "
+                                  "its earlier conversion\n";
+    return outcome;
+  }
   const json j = {{"kind", "celsius_per_px_shift"},
                   {"model", "T = T_tc(reference frame) + slope * |shift|, least squares through the origin"},
                   {"uncertainty", "standard, scaled by the residual variance"},
+                  {"forced", !outcome.problems.empty()},
+                  {"checks", checks_json(options.checks)},
                   {"channels", channels}};
   results.add_calibration({0, acquisition::utc_now_ns(), j.dump()});
-  return text + fmt::format("stored a calibration for {} thermocouple(s); `bosfuse process` now uses it\n", calibrated);
+  outcome.stored = true;
+  outcome.text += fmt::format("stored a {}calibration for {} thermocouple(s); `bosfuse process` now uses it\n",
+                              outcome.problems.empty() ? "" : "FORCED ", fitted);
+  return outcome;
+}
+
+std::string clear_calibration(const fs::path& run_dir) {
+  storage::ProcessingStore results(run_dir, true);
+  const auto latest = results.latest_calibration();
+  if (!latest || is_cleared(*latest)) {
+    return "the run has no calibration: nothing to clear; `bosfuse process` uses the physical model\n";
+  }
+  const json j = {{"kind", kClearedCalibration},
+                  {"cleared_calibration_id", latest->id},
+                  {"cleared_created_ns", latest->created_ns}};
+  results.add_calibration({0, acquisition::utc_now_ns(), j.dump()});
+  return fmt::format(
+      "cleared the calibration stored {} (calibrations row {}, kept as history); the next `bosfuse process` uses "
+      "the physical model (full fields) or the shift (probe mode)\n",
+      storage::format_iso8601_utc(latest->created_ns, 3), latest->id);
 }
 
 }  // namespace bosfuse::pipeline

@@ -417,9 +417,11 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
   for (const auto& f : fitted.fits) report.fits_ok += f.ok ? 1 : 0;
   report.fits = fitted.fits.size();
   report.agreements = fitted.agreements.size();
+  const auto conversions = temperature_conversions(results, ctx.channels, !ctx.settings.probes_only);
   const json summary = {{"frames", report.frames},
                         {"probes", report.probes},
                         {"temperature_source", report.temperature_source},
+                        {"temperature_conversions", conversions},
                         {"time_basis", clock.basis()},
                         {"quality", quality_json(ctx, frames, last_image, clock)}};
   results.complete_processing(processing.id, fitted.fits, fitted.agreements, summary.dump(), acquisition::utc_now_ns());

@@ -223,6 +223,16 @@ void processing_record(const storage::ProcessingRecord& p, ReportInput& input) {
                                    q.at("reference_frame_id").get<std::int64_t>());
     input.quality = quality;
   }
+  // Which conversion made each BOS temperature (processings before it say one for the run).
+  if (summary.contains("temperature_conversions")) {
+    std::string text;
+    for (const auto& [probe, how] : summary.at("temperature_conversions").items()) {
+      text += fmt::format("{}{} (BOS) by {}", text.empty() ? "" : "; ", probe, how.get<std::string>());
+    }
+    if (!text.empty()) input.notes.push_back("BOS temperatures: " + text + ".");
+  } else if (summary.contains("temperature_source")) {
+    input.notes.push_back("BOS temperatures from " + summary.at("temperature_source").get<std::string>() + ".");
+  }
   const auto settings = pipeline::settings_from_json(json::parse(p.settings_json));
   input.notes.push_back(fmt::format("Processed on {} (processing {}): {}.", storage::format_iso8601_utc(p.started_ns, 0),
                                     p.id, pipeline::describe(settings)));

@@ -1,0 +1,193 @@
+// bosfuse calibrate's checks, --force, --clear, the reference frame's
+// reading and the offset estimate, on small synthetic runs made as
+// process_test_run.h makes them, with the thermocouples and the reference
+// frame placed where each case needs them.
+
+#include <fmt/format.h>
+
+#include "app/process_test_run.h"
+#include "app/run_control.h"
+#include "pipeline/probe_calibration.h"
+#include "tests/support/file_bytes.h"
+
+namespace bosfuse {
+namespace {
+
+using namespace process_testing;
+
+struct Layout {
+  std::vector<cv::Point2d> thermocouples;
+  double reference_t_s = -10;
+  double first_sample_t_s = -15;  // one sample a second from here to 40 s
+};
+
+// The centreline case: thermocouples where the hot spot's
+// displacement vanishes by symmetry, and a reference frame (no flow in its
+// image) stamped at t = 0, when they read the hot air.
+Layout centreline() { return {{{kCentreX, kCentreY}, {kCentreX + 2, kCentreY}}, 0.0, -15}; }
+
+// Where the shift is largest, as ProcessCli's run has them.
+Layout off_centre() { return {{{kCentreX + kRadius, kCentreY}, {kCentreX, kCentreY - kRadius}}, -10, -15}; }
+
+class CalibrateCli : public ProcessCli {
+ protected:
+  void SetUp() override {}
+
+  void make_calibration_run(const Layout& layout) {
+    storage::RunInfo info{0, "synthetic", at_ns(-15), std::nullopt, "", {}, 1.0, "heater off"};
+    auto store = storage::RunStore::create(run_dir(), info, storage::RunStore::CreateMode::kNew);
+    const storage::Event heater_off{0, std::nullopt, kOriginNs, "marker", "heater off"};
+    store.write_events({&heater_off, 1});
+    const auto device = store.add_device({0, "daq", "modbus-tcp", "generic", "sim"});
+    for (std::size_t c = 0; c < layout.thermocouples.size(); ++c) {
+      const auto& p = layout.thermocouples[c];
+      channels_.push_back(
+          store.add_channel({0, device, fmt::format("tc{}", c + 1), "thermocouple", "degC", "K", p.x, p.y}));
+    }
+    std::mt19937 random(11);
+    std::normal_distribution<double> noise(0, 0.05);
+    std::vector<storage::Sample> samples;
+    for (double t = layout.first_sample_t_s; t <= 40; t += 1) {
+      for (const auto channel : channels_) {
+        samples.push_back({channel, at_ns(t), std::nullopt, 20 + rise_c(t) + noise(random), std::nullopt, {}});
+      }
+    }
+    store.write_samples(samples);
+    std::filesystem::create_directories(run_dir() / "frames");
+    auto add = [&](double t_s, bool reference, int index) {
+      sim::PairOptions pair;
+      pair.pattern.width_px = 256;
+      pair.pattern.height_px = 192;
+      pair.field = hot_spot(t_s);
+      pair.noise_seed = static_cast<std::uint64_t>(100 + index);
+      const auto images = sim::render_pair(pair);
+      const std::string path = "frames/f" + std::to_string(index) + ".png";
+      cv::imwrite((run_dir() / path).string(), reference ? images.reference : images.measurement);
+      store.add_frame({0, std::nullopt, at_ns(t_s), std::nullopt, path, 256, 192, 8, reference});
+    };
+    add(layout.reference_t_s, true, 0);
+    for (int i = 0; i < 8; ++i) add(35.0 * i / 7, false, i + 1);
+    store.finish(storage::RunStatus::kComplete, at_ns(41));
+  }
+
+  nlohmann::json conversions() const {
+    const auto processing = storage::ProcessingStore(run_dir()).current_processing();
+    return nlohmann::json::parse(processing->summary_json).at("temperature_conversions");
+  }
+};
+
+TEST_F(CalibrateCli, TheCentrelineCaseIsRefusedNamingItsSlopeResidualAndShiftRange) {
+  make_calibration_run(centreline());
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  const auto refused = bosfuse("calibrate");
+  RecordProperty("calibrate_output", refused.output);
+  EXPECT_EQ(refused.exit_code, app::kExitRefused) << refused.output;
+  for (const char* text :
+       {"calibration refused, nothing stored", "tc1: the slope -", "has the wrong sign", "a slope > 0 is expected",
+        "residual RMS", "r2 = ", "tc1: BOS sees no shift where this thermocouple is: the shift ranges over",
+        "uncertainty 0.05 px (the default noise floor"}) {
+    EXPECT_NE(refused.output.find(text), std::string::npos) << text << "\n" << refused.output;
+  }
+  EXPECT_FALSE(storage::ProcessingStore(run_dir()).latest_calibration().has_value()) << "nothing stored";
+}
+
+TEST_F(CalibrateCli, ForceStoresARefusedCalibrationWithAWarningAndClearRemovesIt) {
+  make_calibration_run(centreline());
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  EXPECT_EQ(conversions().at("tc1"), "none: the shift in px");
+  const auto forced = bosfuse("calibrate --force");
+  ASSERT_EQ(forced.exit_code, 0) << forced.output;
+  EXPECT_NE(forced.output.find("[warning] stored a FORCED calibration that failed its checks"), std::string::npos)
+      << forced.output;
+  EXPECT_NE(forced.output.find("has the wrong sign"), std::string::npos) << forced.output;
+  {
+    const storage::ProcessingStore results(run_dir());
+    const auto j = nlohmann::json::parse(results.latest_calibration()->json);
+    EXPECT_TRUE(j.at("forced").get<bool>());
+    for (const auto& c : j.at("channels")) {
+      EXPECT_TRUE(c.at("forced").get<bool>()) << c;
+      EXPECT_FALSE(c.at("checks_failed").empty()) << c;
+    }
+    EXPECT_EQ(pipeline::stored_calibration(results).size(), 2u);
+  }
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  EXPECT_NE(conversions().at("tc1").get<std::string>().find("FORCED although it failed its checks"), std::string::npos)
+      << conversions();
+  const auto report = bosfuse("report -o " + (dir_.path() / "report").string());
+  ASSERT_EQ(report.exit_code, 0) << report.output;
+  const std::string html = testing::file_bytes(dir_.path() / "report" / "report.html");
+  EXPECT_NE(html.find("tc1 (BOS) by calibration stored"), std::string::npos) << "the report says the conversion";
+
+  const auto cleared = bosfuse("calibrate --clear");
+  ASSERT_EQ(cleared.exit_code, 0) << cleared.output;
+  EXPECT_NE(cleared.output.find("cleared the calibration stored"), std::string::npos) << cleared.output;
+  {
+    const storage::ProcessingStore results(run_dir());
+    EXPECT_TRUE(pipeline::stored_calibration(results).empty());
+    EXPECT_EQ(results.probes().size(), 2u) << "the results are left as they were";
+  }
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  EXPECT_EQ(conversions().at("tc1"), "none: the shift in px");
+  const storage::ProcessingStore results(run_dir());
+  for (const auto& p : results.probes()) {
+    for (const auto& s : results.probe_samples(p.id)) EXPECT_FALSE(s.temperature_c.has_value());
+  }
+  const auto again = bosfuse("calibrate --clear");
+  EXPECT_EQ(again.exit_code, 0);
+  EXPECT_NE(again.output.find("nothing to clear"), std::string::npos) << again.output;
+  EXPECT_NE(bosfuse("calibrate --clear --force").exit_code, 0) << "--clear takes no calibration options";
+}
+
+TEST_F(CalibrateCli, AReferenceFrame41msBeforeTheFirstReadingTakesTheNearestReading) {
+  Layout layout = off_centre();
+  layout.first_sample_t_s = layout.reference_t_s + 0.041;
+  make_calibration_run(layout);
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  const auto calibrate = bosfuse("calibrate");
+  ASSERT_EQ(calibrate.exit_code, 0) << calibrate.output;
+  EXPECT_NE(calibrate.output.find("the nearest reading, 0.041 s after the reference frame (tolerance 2 s)"),
+            std::string::npos)
+      << calibrate.output;
+  const auto j = nlohmann::json::parse(storage::ProcessingStore(run_dir()).latest_calibration()->json);
+  EXPECT_FALSE(j.at("forced").get<bool>());
+  for (const auto& c : j.at("channels")) {
+    EXPECT_TRUE(c.at("ok").get<bool>()) << c;
+    EXPECT_NEAR(c.at("reference_temperature_c").get<double>(), 20, 0.2);
+    EXPECT_GT(c.at("slope_c_per_px").get<double>(), 0);
+  }
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  EXPECT_NE(conversions().at("tc2").get<std::string>().find("calibration stored"), std::string::npos);
+}
+
+TEST_F(CalibrateCli, AReferenceFrameFartherFromAnyReadingThanTheToleranceIsRefused) {
+  Layout layout = off_centre();
+  layout.first_sample_t_s = layout.reference_t_s + 3;
+  make_calibration_run(layout);
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  const auto refused = bosfuse("calibrate");
+  EXPECT_EQ(refused.exit_code, app::kExitRefused) << refused.output;
+  EXPECT_NE(refused.output.find("no reading within 2 s of the reference frame's time (the nearest is 3 s after it)"),
+            std::string::npos)
+      << refused.output;
+  const auto wider = bosfuse("calibrate --reference-tolerance 3.5");
+  EXPECT_EQ(wider.exit_code, 0) << wider.output;
+  for (const char* wrong : {"--reference-tolerance -1", "--min-r2 2", "--shift-noise 0", "--flow warm"}) {
+    const auto refused_option = bosfuse(std::string("calibrate ") + wrong);
+    EXPECT_NE(refused_option.exit_code, 0) << wrong;
+    EXPECT_NE(refused_option.output.find(std::string(wrong).substr(0, std::string(wrong).find(' '))), std::string::npos)
+        << wrong << ": the option is named\n"
+        << refused_option.output;
+  }
+}
+
+TEST_F(CalibrateCli, AnOffsetTheCentrelineRecordCannotFixIsNotEstimated) {
+  make_calibration_run(centreline());
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  const auto calibrate = bosfuse("calibrate --estimate-offset 3");
+  EXPECT_EQ(calibrate.exit_code, app::kExitRefused) << calibrate.output;
+  EXPECT_NE(calibrate.output.find("tc1: clock offset not estimated"), std::string::npos) << calibrate.output;
+  EXPECT_NE(calibrate.output.find("the configured 0 s is used"), std::string::npos) << calibrate.output;
+}
+
+}  // namespace
+}  // namespace bosfuse
