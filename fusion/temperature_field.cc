@@ -357,16 +357,32 @@ std::string TemperatureFieldOptions::Validate() const {
   return {};
 }
 
-std::optional<double> TemperatureField::temperature_at(double x_px, double y_px) const {
-  const double fx = (x_px - x0_px) / step_px, fy = (y_px - y0_px) / step_px;
-  if (!(fx >= 0 && fy >= 0 && fx <= cols - 1 && fy <= rows - 1)) return std::nullopt;
-  const int c0 = std::min(static_cast<int>(fx), cols - 2), r0 = std::min(static_cast<int>(fy), rows - 2);
+namespace {
+
+// Bilinear between the nodes of a field's grid; nullopt outside it or next
+// to a non-finite node value.
+std::optional<double> bilinear(const TemperatureField& f, const std::vector<double>& values, double x_px,
+                               double y_px) {
+  const double fx = (x_px - f.x0_px) / f.step_px, fy = (y_px - f.y0_px) / f.step_px;
+  if (!(fx >= 0 && fy >= 0 && fx <= f.cols - 1 && fy <= f.rows - 1)) return std::nullopt;
+  if (values.size() != static_cast<std::size_t>(f.rows) * f.cols) return std::nullopt;
+  const int c0 = std::min(static_cast<int>(fx), f.cols - 2), r0 = std::min(static_cast<int>(fy), f.rows - 2);
   const double ax = fx - c0, ay = fy - r0;
-  const double t00 = temperature_c[index(r0, c0)], t01 = temperature_c[index(r0, c0 + 1)];
-  const double t10 = temperature_c[index(r0 + 1, c0)], t11 = temperature_c[index(r0 + 1, c0 + 1)];
+  const double t00 = values[f.index(r0, c0)], t01 = values[f.index(r0, c0 + 1)];
+  const double t10 = values[f.index(r0 + 1, c0)], t11 = values[f.index(r0 + 1, c0 + 1)];
   const double value = (1 - ay) * ((1 - ax) * t00 + ax * t01) + ay * ((1 - ax) * t10 + ax * t11);
   if (!std::isfinite(value)) return std::nullopt;
   return value;
+}
+
+}  // namespace
+
+std::optional<double> TemperatureField::temperature_at(double x_px, double y_px) const {
+  return bilinear(*this, temperature_c, x_px, y_px);
+}
+
+std::optional<double> TemperatureField::sigma_at(double x_px, double y_px) const {
+  return bilinear(*this, sigma_c, x_px, y_px);
 }
 
 std::string TemperatureFieldSummary::brief_report() const {

@@ -131,6 +131,11 @@ struct TemperatureField {
   // Bilinear between nodes; nullopt outside the grid or next to an
   // unphysical node.
   std::optional<double> temperature_at(double x_px, double y_px) const;
+  // σ of T there: the same bilinear weights applied to the nodes' σ — an
+  // upper bound of the interpolated T's σ (equal when the nodes' errors are
+  // fully correlated, as neighbours' nearly are); nullopt outside the grid
+  // or next to a node without σ.
+  std::optional<double> sigma_at(double x_px, double y_px) const;
 };
 
 struct TemperatureFieldSummary {

@@ -559,6 +559,40 @@ TEST(TemperatureFieldUncertainty, NodeSigmaCoversTheRandomError) {
   }
 }
 
+// The same honesty where σ varies from node to node (log-normal, as in
+// HalvesTheRandomErrorWhereTheNoiseVaries): 90–99 % of the interior nodes'
+// errors within ±1.96 σ, and the RMS of error/σ 0.8–1.25.
+TEST(TemperatureFieldUncertainty, NodeSigmaCoversTheRandomErrorWhereSigmaVariesByNode) {
+  const BosGeometry g(paper_like_setup());
+  NoisyField field = half_and_half(g);
+  std::mt19937_64 pick(5), random(62);
+  std::normal_distribution<double> normal;
+  for (auto& v : field.exact.vectors) v.sigma_u_px = v.sigma_v_px = 0.01 * std::exp(normal(pick));
+  TemperatureFieldOptions options;
+  options.estimate_uncertainty = true;
+  const auto truth = recover_temperature_field(field.exact, g).field;
+  std::size_t inside = 0;
+  std::vector<double> z;
+  for (int draw = 0; draw < 4; ++draw) {
+    options.uncertainty_seed = 200 + draw;
+    const auto result = recover_temperature_field(field.draw(random), g, options);
+    const auto error = random_error(result.field, truth);
+    for (int r = 1; r + 1 < truth.rows; ++r) {
+      for (int c = 1; c + 1 < truth.cols; ++c) {
+        const std::size_t i = truth.index(r, c);
+        z.push_back(error[i] / result.field.sigma_c[i]);
+        inside += std::abs(z.back()) <= 1.96 ? 1 : 0;
+      }
+    }
+  }
+  const double coverage = static_cast<double>(inside) / static_cast<double>(z.size()), z_rms = rms(z);
+  std::printf("log-normal sigma: coverage of +-1.96 sigma %.4f, RMS of error/sigma %.3f\n", coverage, z_rms);
+  EXPECT_GE(coverage, 0.90);
+  EXPECT_LE(coverage, 0.99);
+  EXPECT_GE(z_rms, 0.8);
+  EXPECT_LE(z_rms, 1.25);
+}
+
 // σ of T only where it is a measurement's: NaN at masked (filled) nodes, 0
 // on the ambient border, NaN everywhere when the option is off or the
 // field has no σ; and the summary says which.
@@ -579,6 +613,14 @@ TEST(TemperatureFieldUncertainty, SigmaIsNanWhereNotAMeasurementOrNotEstimated) 
   EXPECT_GT(t.sigma_refractive_index[t.index(20, 20)], 0.0);
   EXPECT_NE(result.summary.brief_report().find("sigma of T from 64 samples"), std::string::npos)
       << result.summary.brief_report();
+  // Between nodes: the bilinear mean of the four σ; none next to a filled node.
+  const double x = t.x0_px + 20.25 * t.step_px, y = t.y0_px + 20.5 * t.step_px;
+  const double expected = 0.5 * (0.75 * t.sigma_c[t.index(20, 20)] + 0.25 * t.sigma_c[t.index(20, 21)]) +
+                          0.5 * (0.75 * t.sigma_c[t.index(21, 20)] + 0.25 * t.sigma_c[t.index(21, 21)]);
+  ASSERT_TRUE(t.sigma_at(x, y).has_value());
+  EXPECT_NEAR(*t.sigma_at(x, y), expected, 1e-15);
+  EXPECT_FALSE(t.sigma_at(t.x0_px + 30.5 * t.step_px, t.y0_px + 31.5 * t.step_px).has_value());
+  EXPECT_FALSE(t.sigma_at(-100, 0).has_value());
 
   const auto off = recover_temperature_field(field.exact, g);
   EXPECT_FALSE(off.summary.uncertainty_estimated);
