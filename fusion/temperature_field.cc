@@ -243,7 +243,8 @@ std::vector<double> edge_weights(int rows, int cols, const std::vector<std::uint
     weights.push_back(s[i] * s[i] + s[j] * s[j]);
   });
   std::vector<double> variances;
-  if (sigmas) std::copy_if(weights.begin(), weights.end(), std::back_inserter(variances), [](double w) { return w > 0; });
+  if (sigmas)
+    std::copy_if(weights.begin(), weights.end(), std::back_inserter(variances), [](double w) { return w > 0; });
   const double median_variance = variances.empty() ? 1.0 : median_of(std::move(variances));
   for (double& w : weights) {
     if (w == kFill) {
@@ -260,8 +261,8 @@ std::vector<double> edge_weights(int rows, int cols, const std::vector<std::uint
 // measured node), each assembled as the measurement's right-hand side is.
 Eigen::VectorXd propagated_variance(const Factorisation& factorisation, const std::vector<int>& unknown, int unknowns,
                                     const DisplacementField& grid, const std::vector<std::uint8_t>& measured,
-                                    const std::vector<double>& weights, const NodeSigmas& sigmas,
-                                    double target_per_px, int samples, std::uint64_t seed) {
+                                    const std::vector<double>& weights, const NodeSigmas& sigmas, double target_per_px,
+                                    int samples, std::uint64_t seed) {
   constexpr int kBlock = 16;  // columns solved at once: dense blocks for the supernodal solve, 32 MB on 16 MP
   std::mt19937_64 random(seed);
   std::normal_distribution<double> normal;
@@ -361,8 +362,7 @@ namespace {
 
 // Bilinear between the nodes of a field's grid; nullopt outside it or next
 // to a non-finite node value.
-std::optional<double> bilinear(const TemperatureField& f, const std::vector<double>& values, double x_px,
-                               double y_px) {
+std::optional<double> bilinear(const TemperatureField& f, const std::vector<double>& values, double x_px, double y_px) {
   const double fx = (x_px - f.x0_px) / f.step_px, fy = (y_px - f.y0_px) / f.step_px;
   if (!(fx >= 0 && fy >= 0 && fx <= f.cols - 1 && fy <= f.rows - 1)) return std::nullopt;
   if (values.size() != static_cast<std::size_t>(f.rows) * f.cols) return std::nullopt;
@@ -391,9 +391,9 @@ std::string TemperatureFieldSummary::brief_report() const {
       "degC, {}, {}, {:.3f} s",
       nodes, boundary_nodes, unmeasured_nodes, unphysical_nodes, min_c, max_c,
       weighted ? fmt::format("weighted by sigma ({} nodes given the median sigma)", median_sigma_nodes) : "unweighted",
-      uncertainty_estimated ? fmt::format("sigma of T from {} samples ({:.3f} s)", uncertainty_samples,
-                                          uncertainty_seconds)
-                            : "no sigma of T",
+      uncertainty_estimated
+          ? fmt::format("sigma of T from {} samples ({:.3f} s)", uncertainty_samples, uncertainty_seconds)
+          : "no sigma of T",
       seconds);
 }
 

@@ -105,8 +105,8 @@ struct TemperatureFieldOptions {
   bool weight_by_sigma = true;
   // Estimate each node's σ of T by propagating K noise draws (see above); off: sigma_c all NaN.
   bool estimate_uncertainty = false;
-  int uncertainty_samples = 64;             // K, ≥ 8; σ's own relative error ~1/√(2K)
-  std::uint64_t uncertainty_seed = 29;      // the draws' seed: the same field gives the same σ
+  int uncertainty_samples = 64;         // K, ≥ 8; σ's own relative error ~1/√(2K)
+  std::uint64_t uncertainty_seed = 29;  // the draws' seed: the same field gives the same σ
 
   std::string Validate() const;  // empty when valid
 };
@@ -142,9 +142,9 @@ struct TemperatureFieldSummary {
   std::size_t nodes = 0;
   std::size_t boundary_nodes = 0;
   std::size_t unknowns = 0;
-  std::size_t unmeasured_nodes = 0;  // filled by the solve (masked, no texture, ...)
-  std::size_t unphysical_nodes = 0;  // n ≤ 1: temperature NaN
-  bool weighted = false;             // the edges were weighted by the displacements' σ
+  std::size_t unmeasured_nodes = 0;    // filled by the solve (masked, no texture, ...)
+  std::size_t unphysical_nodes = 0;    // n ≤ 1: temperature NaN
+  bool weighted = false;               // the edges were weighted by the displacements' σ
   std::size_t median_sigma_nodes = 0;  // measured nodes without a σ of their own, given the median's
   bool uncertainty_estimated = false;  // sigma_c holds values (option on and σ in the field)
   int uncertainty_samples = 0;         // K of the estimate

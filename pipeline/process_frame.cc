@@ -91,8 +91,6 @@ FrameResult finish_full(const FrameContext& ctx, const FrameRecord& frame, const
                                {"max_c", fitting::number_or_null(s.max_c)},
                                {"unmeasured_nodes", s.unmeasured_nodes},
                                {"unphysical_nodes", s.unphysical_nodes},
-                               {"weighted_by_sigma", s.weighted},
-                               {"sigma_c_estimated", s.uncertainty_estimated},
                                {"boundary", boundary_text(field_options)}}
                               .dump()});
   }

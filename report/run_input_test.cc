@@ -127,7 +127,8 @@ TEST(RunInput, TheStoredMaskShowsAsMaskedCellsInTheMaps) {
 TEST(RunInput, AStoredFieldPathLeadingOutOfTheRunIsRefusedByName) {
   testing::TempDir dir;
   testrun::create_run(dir / "run", true);
-  std::ofstream(dir / "outside.csv") << "x,y,temperature_c,measured,sigma_c\n8.0,8.0,30.5,1,0.01\n16.0,8.0,25.0,1,0.01\n";
+  std::ofstream(dir / "outside.csv")
+      << "x,y,temperature_c,measured,sigma_c\n8.0,8.0,30.5,1,0.01\n16.0,8.0,25.0,1,0.01\n";
   {
     const auto frames = storage::RunStore::open(dir / "run").frames();
     storage::ProcessingStore results(dir / "run", true);
