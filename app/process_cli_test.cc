@@ -109,7 +109,7 @@ TEST_F(ProcessCli, AMaskedHolderIsNotEvaluatedAndTheTemperatureFieldIsFilledTher
     std::ifstream csv(run_dir() / f.path);
     std::string header;
     std::getline(csv, header);
-    EXPECT_EQ(header, "x,y,temperature_c,measured");
+    EXPECT_EQ(header, "x,y,temperature_c,measured,sigma_c");
   }
   EXPECT_EQ(temperature_files, 8u);
   for (const auto& p : results.probes()) {

@@ -7,12 +7,17 @@
 //                                      displacements; m = 0: the same unmeasured nodes every frame (the
 //                                      factor is reused, only solved), m = 1: they change every frame
 //                                      (refactorised on the kept analysis; CHOLMOD orders by nested dissection)
+//   BM_TemperatureFieldWeighted/e      the same solver over frames whose vectors carry σ (log-normal across the
+//                                      field, new every frame, as an evaluator's are), unmeasured nodes the same:
+//                                      weighted, so refactorised every frame; e = 1: also σ of T at every node
+//                                      (64 noise draws solved in blocks of 16)
 // Run: build/bench/temperature_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 // Figures go into docs/BENCHMARKS.md.
 
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <random>
 
 #include "fusion/bos_geometry.h"
 #include "fusion/displacement_field.h"
@@ -97,8 +102,40 @@ void BM_TemperatureFieldPerFrame(benchmark::State& state) {
                  (masks_change ? ", refactorised" : ", factor reused"));
 }
 
+void BM_TemperatureFieldWeighted(benchmark::State& state) {
+  const BosGeometry g = geometry();
+  constexpr int kFrames = 6;
+  std::vector<DisplacementField> frames;
+  std::mt19937_64 random(29);
+  std::normal_distribution<double> normal;
+  for (int f = 0; f < kFrames; ++f) {
+    frames.push_back(frame_field(f, true));
+    for (std::size_t i = 0; i < frames[f].size(); ++i) {
+      DisplacementVector& v = frames[f].vectors[i];
+      v.flag = frames[0].vectors[i].flag;
+      v.sigma_u_px = 0.02 * std::exp(0.5 * normal(random));
+      v.sigma_v_px = 0.02 * std::exp(0.5 * normal(random));
+    }
+  }
+  TemperatureFieldOptions options = options_for(0);
+  options.estimate_uncertainty = state.range(0) != 0;
+  TemperatureFieldSolver solver(g, options);
+  solver.recover(frames[kFrames - 1]);  // the run's first frame, analysed outside the timing
+  int f = 0;
+  double sampling_s = 0;
+  for (auto _ : state) {
+    const auto result = solver.recover(frames[f++ % kFrames]);
+    sampling_s += result.summary.uncertainty_seconds;
+    benchmark::DoNotOptimize(result);
+  }
+  state.counters["factorisations"] = solver.factorisations();
+  state.counters["sigma_of_T_s"] = sampling_s / static_cast<double>(state.iterations());
+  state.SetLabel(options.estimate_uncertainty ? "weighted, sigma of T (K = 64)" : "weighted");
+}
+
 BENCHMARK(BM_TemperatureFieldOneShot)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_TemperatureFieldPerFrame)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_TemperatureFieldWeighted)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

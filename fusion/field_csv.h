@@ -2,7 +2,7 @@
 // A field file (docs/SCHEMA.md, table `fields`) as write_csv() writes it
 // (displacement_field.h, temperature_field.h), read back onto its grid:
 // displacement `x,y,u,v,valid,peak_ratio` or temperature
-// `x,y,temperature_c,measured`, one line per grid node. The writers and this
+// `x,y,temperature_c,measured,sigma_c`, one line per grid node. The writers and this
 // one reader share the column names below, so the layout cannot drift
 // between them; the report's maps and the HDF5 export read through it.
 //
@@ -34,7 +34,7 @@ struct StoredFieldGrid {
 };
 
 inline constexpr std::string_view kDisplacementColumns[] = {"u", "v", "valid", "peak_ratio"};
-inline constexpr std::string_view kTemperatureColumns[] = {"temperature_c", "measured"};
+inline constexpr std::string_view kTemperatureColumns[] = {"temperature_c", "measured", "sigma_c"};
 
 // The header line of a field file with these value columns ("x,y,u,v,...").
 std::string field_csv_header(std::span<const std::string_view> value_columns);

@@ -109,11 +109,14 @@ TEST(FieldCsv, ReadsTheGridInRowOrderWhateverTheLineOrder) {
 
 TEST(FieldCsv, EmptyCellsAndMissingNodesAreNaN) {
   testing::TempDir dir;
-  std::ofstream(dir / "t.csv") << "x,y,temperature_c,measured\r\n8.0,8.0,30.5,1\r\n16.0,8.0,,0\r\n8.0,16.0,25.0,1\r\n";
+  std::ofstream(dir / "t.csv") << "x,y,temperature_c,measured,sigma_c\r\n8.0,8.0,30.5,1,0.01\r\n16.0,8.0,,0,nan\r\n"
+                               << "8.0,16.0,25.0,1,0.02\r\n";
   const auto grid = read_stored_field(dir / "t.csv", kTemperatureColumns);
   ASSERT_EQ(grid.rows(), 2);
   ASSERT_EQ(grid.cols(), 2);
   EXPECT_TRUE(std::isnan(grid.column("temperature_c").at<double>(0, 1))) << "an empty cell";
+  EXPECT_TRUE(std::isnan(grid.column("sigma_c").at<double>(0, 1))) << "a nan cell";
+  EXPECT_EQ(grid.column("sigma_c").at<double>(1, 0), 0.02);
   EXPECT_EQ(grid.column("measured").at<double>(0, 1), 0.0);
   EXPECT_TRUE(std::isnan(grid.column("measured").at<double>(1, 1))) << "a node the file does not have";
   EXPECT_EQ(grid.present.at<std::uint8_t>(1, 1), 0);
@@ -126,18 +129,18 @@ TEST(FieldCsv, MistakesNameTheFileAndLine) {
   std::ofstream(path) << "x,y,u,v\n8,8,1,1\n";
   EXPECT_NE(error_of(path, kDisplacementColumns).find("bad.csv': the header is 'x,y,u,v'"), std::string::npos)
       << error_of(path, kDisplacementColumns);
-  std::ofstream(path) << "x,y,temperature_c,measured\n8,8,1,1\n16,8,1\n";
-  EXPECT_NE(error_of(path, kTemperatureColumns).find("line 3: 3 cells, expected 4"), std::string::npos)
+  std::ofstream(path) << "x,y,temperature_c,measured,sigma_c\n8,8,1,1,0\n16,8,1\n";
+  EXPECT_NE(error_of(path, kTemperatureColumns).find("line 3: 3 cells, expected 5"), std::string::npos)
       << error_of(path, kTemperatureColumns);
-  std::ofstream(path) << "x,y,temperature_c,measured\n8,8,hot,1\n";
+  std::ofstream(path) << "x,y,temperature_c,measured,sigma_c\n8,8,hot,1,0\n";
   EXPECT_NE(error_of(path, kTemperatureColumns).find("line 2: 'hot' is not a number"), std::string::npos)
       << error_of(path, kTemperatureColumns);
-  std::ofstream(path) << "x,y,temperature_c,measured\n,8,1,1\n";
+  std::ofstream(path) << "x,y,temperature_c,measured,sigma_c\n,8,1,1,0\n";
   EXPECT_NE(error_of(path, kTemperatureColumns).find("line 2: '' is not a number"), std::string::npos)
       << "a node needs a position";
-  std::ofstream(path) << "x,y,temperature_c,measured\n8,8,1,1\n8,8,2,1\n";
+  std::ofstream(path) << "x,y,temperature_c,measured,sigma_c\n8,8,1,1,0\n8,8,2,1,0\n";
   EXPECT_NE(error_of(path, kTemperatureColumns).find("appears twice"), std::string::npos);
-  std::ofstream(path) << "x,y,temperature_c,measured\n";
+  std::ofstream(path) << "x,y,temperature_c,measured,sigma_c\n";
   EXPECT_NE(error_of(path, kTemperatureColumns).find("holds no grid"), std::string::npos);
   EXPECT_NE(error_of(dir / "none.csv", kTemperatureColumns).find("cannot read"), std::string::npos);
 }

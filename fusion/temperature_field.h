@@ -29,12 +29,54 @@
 // CHOLMOD's supernodal one by default (BLAS on dense blocks of the factor),
 // Eigen's simplicial LDLᵀ as the alternative it is measured against.
 //
+// Weighted least squares (Rajendran, Zhang, Bhattacharya, Vlachos & Vlachos
+// 2020, Exp. Fluids 61:239). When the displacement field carries standard
+// uncertainties (sigma_u_px, sigma_v_px), each measured edge is weighted by
+// 1/σ² of its target: the trapezoid mean of the two nodes' component along
+// the edge has σ² = (σ_i² + σ_j²)/4, in px; the conversion to gradient units
+// is one constant factor for every edge, so it cancels in the weights. The
+// weights are taken relative to the median edge's (the median edge weighs 1,
+// as every measured edge did before), so fill_weight keeps its meaning, and
+// clamped to [1e-4, 1e4] so that one absurd σ cannot make the matrix
+// singular in floating point. A field with no σ at all (every measured
+// node 0) is solved unweighted, exactly as before. Mixed fields: a measured
+// node whose σ is 0, negative or not finite (an evaluator or a replacement
+// that did not estimate one) is given the median σ of that component over
+// the field's measured nodes that have one — neither trusted infinitely (a
+// 0 would be an infinite weight) nor discarded (it is a measurement); the
+// summary counts such nodes. Measured, σ decides; unmeasured, fill_weight.
+//
+// Uncertainty of T (estimate_uncertainty): the solve is linear in the
+// displacements, so its noise is the solve of the noise. The solver draws
+// K sets of displacement noise, each node's u and v ±σ with random signs
+// (zero mean, variance σ², its own absolute σ: the mean square estimates the
+// variance as normal deviates would, with no more spread, and cheaper: the
+// estimate on a 16 MP grid fell from ~2.9 to ~1.8 CPU-s with them), assembles their right-hand sides as the
+// measurement's is assembled, and solves them with the factor it already holds (in blocks of columns, so CHOLMOD's
+// supernodal solve works on dense blocks); the variance of δn at a node is the mean square of its K solutions. Chosen
+// over sampling (AᵀWA)⁻¹ through the factor (z ~ N(0, I), Lᵀx = z) and over
+// selected inversion because the trapezoid edges are not independent —
+// each node's u enters two edges — so (AᵀWA)⁻¹ is not the estimator's
+// covariance, while propagating the node noise is, whatever the weights
+// (clamped, median-filled, or none); and it needs nothing of the factor but
+// its solve, for both solvers. Its own relative error in σ is at most
+// ~1/√(2K): 8.8 % for the default K = 64. σ of T is σ of δn times |dT/dn| = T/(n − 1)
+// (the linearised Gladstone–Dale gas law). It is the random part only: the
+// border's ambient is taken as exact (σ 0 there), and the systematic
+// (Type B) parts — K, Z_D, magnification, ambient — are not in it. Where
+// it is not a measurement's (unmeasured, filled nodes: the fill's error is
+// no noise), not physical, or not estimated (option off, no σ in the
+// field), σ is NaN, flagged by `measured`, `physical` and the summary.
+//
 // A run's frames share one grid and so one sparsity pattern; only the
-// weights (which nodes are unmeasured) and the right-hand side change. The
-// TemperatureFieldSolver keeps what survives between frames: the ordering
-// and symbolic analysis while the grid stays, and the numeric factor too
-// while the unmeasured nodes stay the same, so such a frame costs only the
-// two triangular solves. recover_temperature_field is the one-shot form.
+// weights (which nodes are unmeasured, and their σ) and the right-hand side
+// change. The TemperatureFieldSolver keeps what survives between frames: the
+// ordering and symbolic analysis while the grid stays, and the numeric
+// factor too while the weights stay the same, so such a frame costs only the
+// two triangular solves. With weights from σ, which change every frame, a
+// frame is refactorised unless its σ are the last frame's (cost: docs/
+// BENCHMARKS.md, "Weighted integration"). recover_temperature_field is the
+// one-shot form.
 
 #include <cstdint>
 #include <filesystem>
@@ -60,6 +102,12 @@ struct TemperatureFieldOptions {
   // Image edges the heated air leaves through (not ambient); at least one edge must stay ambient.
   bool open_top = false, open_bottom = false, open_left = false, open_right = false;
   PoissonSolver solver = PoissonSolver::kCholmodSupernodal;
+  // Weight the edges by the displacements' σ when the field has them (false: unweighted whatever σ says).
+  bool weight_by_sigma = true;
+  // Estimate each node's σ of T by propagating K noise draws (see above); off: sigma_c all NaN.
+  bool estimate_uncertainty = false;
+  int uncertainty_samples = 64;         // K, ≥ 8; σ's own relative error ~1/√(2K)
+  std::uint64_t uncertainty_seed = 29;  // the draws' seed: the same field gives the same σ
 
   std::string Validate() const;  // empty when valid
 };
@@ -75,19 +123,33 @@ struct TemperatureField {
   std::vector<double> refractive_index;  // n at each node
   std::vector<std::uint8_t> measured;    // 1: the node's displacement was a measurement
   std::vector<std::uint8_t> physical;    // 0: the solve gave n ≤ 1, no temperature
+  // Standard uncertainty (random part) of T (°C) and of n at each node; NaN
+  // where not estimated, not measured or not physical (see the header).
+  std::vector<double> sigma_c;
+  std::vector<double> sigma_refractive_index;
 
   std::size_t index(int row, int col) const { return static_cast<std::size_t>(row) * cols + col; }
   // Bilinear between nodes; nullopt outside the grid or next to an
   // unphysical node.
   std::optional<double> temperature_at(double x_px, double y_px) const;
+  // σ of T there: the same bilinear weights applied to the nodes' σ — an
+  // upper bound of the interpolated T's σ (equal when the nodes' errors are
+  // fully correlated, as neighbours' nearly are); nullopt outside the grid
+  // or next to a node without σ.
+  std::optional<double> sigma_at(double x_px, double y_px) const;
 };
 
 struct TemperatureFieldSummary {
   std::size_t nodes = 0;
   std::size_t boundary_nodes = 0;
   std::size_t unknowns = 0;
-  std::size_t unmeasured_nodes = 0;  // filled by the solve (masked, no texture, ...)
-  std::size_t unphysical_nodes = 0;  // n ≤ 1: temperature NaN
+  std::size_t unmeasured_nodes = 0;    // filled by the solve (masked, no texture, ...)
+  std::size_t unphysical_nodes = 0;    // n ≤ 1: temperature NaN
+  bool weighted = false;               // the edges were weighted by the displacements' σ
+  std::size_t median_sigma_nodes = 0;  // measured nodes without a σ of their own, given the median's
+  bool uncertainty_estimated = false;  // sigma_c holds values (option on and σ in the field)
+  int uncertainty_samples = 0;         // K of the estimate
+  double uncertainty_seconds = 0;      // of `seconds`, the part spent on the estimate
   double min_c = 0;
   double max_c = 0;
   double seconds = 0;
@@ -143,7 +205,9 @@ class TemperatureFieldSolver {
   std::unique_ptr<State> state_;
 };
 
-// CSV with the header `x,y,temperature_c,measured`; NaN written as empty.
+// CSV with the header `x,y,temperature_c,measured,sigma_c` (field_csv.h);
+// NaN written as `nan`, the `measured` flag saying whether the node's value
+// is a measurement's.
 void write_csv(const TemperatureField& field, const std::filesystem::path& path);
 
 }  // namespace bosfuse::fusion

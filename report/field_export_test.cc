@@ -96,14 +96,14 @@ std::string displacement_csv(int k) {
 }
 
 std::string temperature_csv(int k) {
-  std::string text = "x,y,temperature_c,measured\n";
+  std::string text = "x,y,temperature_c,measured,sigma_c\n";
   for (int r = 0; r < kRows; ++r) {
     for (int c = 0; c < kCols; ++c) {
       const bool missing = r == 1 && c == 2;
       const bool filled = r == 0 && c == 1;  // a temperature the solve filled in: not a measurement
-      text += fmt::format("{:.1f},{:.1f},{},{}\n", 8.0 + 8 * c, 8.0 + 8 * r,
-                          missing ? std::string() : fmt::format("{:.4f}", 30 + r + 0.25 * c + k),
-                          missing || filled ? 0 : 1);
+      text += fmt::format("{:.1f},{:.1f},{},{},{}\n", 8.0 + 8 * c, 8.0 + 8 * r,
+                          missing ? "nan" : fmt::format("{:.4f}", 30 + r + 0.25 * c + k), missing || filled ? 0 : 1,
+                          missing ? "nan" : "0.01000");
     }
   }
   return text;
@@ -387,7 +387,7 @@ TEST_F(FieldExport, ARunWithoutStoredFieldsSaysToProcessItFirst) {
 TEST_F(FieldExport, AFailedExportLeavesTheDestinationAsItWas) {
   store_fields();
   std::ofstream(run() / fmt::format("fields/frame_{:06d}_temperature.csv", frames_[2].id))
-      << "x,y,temperature_c,measured\n8.0,8.0,hot,1\n";
+      << "x,y,temperature_c,measured,sigma_c\n8.0,8.0,hot,1,0.01\n";
   std::ofstream(dir_ / "fields.h5") << "the previous export";
   try {
     export_to(dir_ / "fields.h5");

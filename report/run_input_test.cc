@@ -212,7 +212,8 @@ TEST(RunInput, AHeaterFilledInByTheSolveIsNotMeasuredInTheTemperatureMapOrItsCsv
 TEST(RunInput, AStoredFieldPathLeadingOutOfTheRunIsRefusedByName) {
   testing::TempDir dir;
   testrun::create_run(dir / "run", true);
-  std::ofstream(dir / "outside.csv") << "x,y,temperature_c,measured\n8.0,8.0,30.5,1\n16.0,8.0,25.0,1\n";
+  std::ofstream(dir / "outside.csv")
+      << "x,y,temperature_c,measured,sigma_c\n8.0,8.0,30.5,1,0.01\n16.0,8.0,25.0,1,0.01\n";
   {
     const auto frames = storage::RunStore::open(dir / "run").frames();
     storage::ProcessingStore results(dir / "run", true);
@@ -290,8 +291,8 @@ TEST(RunInput, StoredProbesFitsAgreementsAndFieldsAreUsed) {
                                 "z": -5, "relative_difference": -0.5, "agree": false},
                                "series": {"common_points": 2, "rms_difference_c": 1.5, "bias_c": 1.0,
                                           "difference_std_c": 0.5, "loa_low_c": 0.02, "loa_high_c": 1.98}})"});
-    std::ofstream(dir / "run/fields/t.csv") << "x,y,temperature_c,measured\n8.0,8.0,30.5,1\n16.0,8.0,,0\n"
-                                            << "8.0,16.0,25.0,1\n16.0,16.0,22.0,0\n";
+    std::ofstream(dir / "run/fields/t.csv") << "x,y,temperature_c,measured,sigma_c\n8.0,8.0,30.5,1,0.01\n"
+                                            << "16.0,8.0,nan,0,nan\n8.0,16.0,25.0,1,0.01\n16.0,16.0,22.0,0,nan\n";
     std::ofstream(dir / "run/fields/d.csv") << "x,y,u,v,valid,peak_ratio\n8.0,8.0,0.30000,0.40000,1,3.0\n"
                                             << "16.0,8.0,9.0,9.0,0,1.0\n";
     results.add_field({0, frames[2].id, "temperature", "fields/t.csv", "{}"});
