@@ -89,6 +89,10 @@ StoredRates stored_rates(const fs::path& run) {
   for (const auto& a : results.agreements()) {
     const auto agreement = fitting::agreement_from_json(nlohmann::json::parse(a.json));
     EXPECT_TRUE(agreement.series) << a.json;
+    // The demo's experiment file states each thermocouple's simulated lag, and the agreement removes it.
+    EXPECT_EQ(agreement.lag.source, "given") << a.json;
+    EXPECT_EQ(agreement.lag.time_constant_s, 0.5) << a.json;
+    EXPECT_TRUE(agreement.curve) << a.json;
     if (agreement.series) out.rms_difference_c[channel_names[a.channel_id]] = agreement.series->rms_difference_c;
   }
   return out;
