@@ -314,6 +314,12 @@ std::string equivalence_cell(const PairSummary& p, Footnotes& notes) {
   return "<td class=\"text\">" + text + "</small></td>";
 }
 
+// The verdict's sentences name every parameter's test: folded, so that a
+// row stays a row and the figures below stay where a reader expects them.
+std::string verdict_sentences_cell(const std::string& verdict) {
+  return "<td class=\"text\"><details><summary>the test in words</summary>" + html_escape(verdict) + "</details></td>";
+}
+
 std::string pairs_count_cell(const PairSummary& p, Footnotes& notes) {
   if (!p.pairs) return "<td>—" + notes.mark(p.rms_difference.reason) + "</td>";
   return "<td>" + std::to_string(*p.pairs) + "</td>";
@@ -322,7 +328,7 @@ std::string pairs_count_cell(const PairSummary& p, Footnotes& notes) {
 std::string pair_row(const PairSummary& p, Footnotes& notes) {
   return "<tr><td class=\"text\">" + html_escape(p.thermocouple) + "</td><td class=\"text\">" + html_escape(p.probe) +
          "</td>" + equivalence_cell(p, notes) + delta_k_cell(p.delta_k, notes) + cell(p.z, "{:.2f}", "", notes) +
-         "<td class=\"text\">" + html_escape(p.verdict) + "</td>" + pairs_count_cell(p, notes) +
+         verdict_sentences_cell(p.verdict) + pairs_count_cell(p, notes) +
          cell(p.rms_difference, "{:.3g}", "°C", notes) + cell(p.bias, "{:.3g}", "°C", notes, false) +
          limits_cell(p.bias, notes) + "</tr>\n";
 }
