@@ -55,6 +55,17 @@ void read_position(const TomlReader& r, Channel& c) {
   }
 }
 
+// A thermocouple's response time: from 0 (none) to an hour, beyond which it
+// is a typo rather than a sensor.
+constexpr double kLongestTimeConstantS = 3600;
+
+template <typename Channel>
+void read_time_constant(const TomlReader& r, Channel& c) {
+  if (!r.has("time_constant_s")) return;
+  c.time_constant_s =
+      r.number_in("time_constant_s", 0.0, 0.0, kLongestTimeConstantS, "the sensor's first-order response time in s");
+}
+
 template <typename Channel>
 void read_alarms(const TomlReader& r, Channel& c) {
   c.alarms.low = r.optional_number("alarm_low");
@@ -72,6 +83,7 @@ void read_channel_identity(const TomlReader& r, Channel& c) {
   if (auto kind = r.optional_string("kind")) c.kind = *kind;
   if (auto unit = r.optional_string("unit")) c.unit = *unit;
   read_position(r, c);
+  read_time_constant(r, c);
   read_alarms(r, c);
 }
 
@@ -314,6 +326,7 @@ UsbTc32Channel read_usb_tc32_channel(const TomlReader& r) {
     r.fail("tc_type", "the USB-TC-32 takes types J, K, T, E, R, S, B or N");
   c.tc_type = type[0];
   read_position(r, c);
+  read_time_constant(r, c);
   read_alarms(r, c);
   r.reject_unknown_keys();
   return c;
@@ -417,6 +430,15 @@ void read_min_free(const TomlReader& run, ExperimentConfig& config) {
   config.min_free_key = run.where("min_free_mb");
 }
 
+// [agreement]: the equivalence margins of the thermocouple–BOS verdict.
+void read_agreement(const TomlReader& agreement, ExperimentConfig& config) {
+  config.agreement.margin_c =
+      agreement.number_in("margin_c", config.agreement.margin_c, 1e-6, 1000, "a temperature margin in °C");
+  config.agreement.margin_k_relative = agreement.number_in("margin_k_relative", config.agreement.margin_k_relative,
+                                                           1e-6, 10, "a margin of k as a fraction of k");
+  agreement.reject_unknown_keys();
+}
+
 }  // namespace
 
 std::string channel_name_key(std::string_view name) {
@@ -459,6 +481,7 @@ ExperimentConfig parse_experiment(std::string_view text, const std::string& sour
   // process reads and checks them); the logger only keeps them in the run.
   reader.node("geometry");
   reader.node("alignment");
+  if (const auto agreement = reader.table("agreement")) read_agreement(*agreement, config);
   for (const TomlReader& camera : reader.tables("cameras")) {
     config.cameras.push_back(read_camera(camera));
     if (!names.insert(config.cameras.back().name).second) {
@@ -485,6 +508,19 @@ ExperimentConfig load_experiment(const std::filesystem::path& path) {
   std::ostringstream text;
   text << in.rdbuf();
   return parse_experiment(text.str(), path.string());
+}
+
+std::map<std::string, double> channel_time_constants(const ExperimentConfig& config) {
+  std::map<std::string, double> out;
+  const auto add = [&](const auto& channels) {
+    for (const auto& c : channels) {
+      if (c.time_constant_s) out[channel_name_key(c.name)] = *c.time_constant_s;
+    }
+  };
+  for (const auto& d : config.modbus_devices) add(d.channels);
+  for (const auto& d : config.hid_devices) add(d.protocol.channels);
+  for (const auto& d : config.usb_devices) add(d.channels);
+  return out;
 }
 
 std::vector<ChannelAlarmLimits> alarm_limits(const ExperimentConfig& config) {

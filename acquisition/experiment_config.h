@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -86,6 +87,13 @@ struct CameraConfig {
   std::filesystem::path reference_flag;  // relative paths are relative to the run folder
 };
 
+// [agreement]: how far apart the thermocouple's and the BOS probe's curves
+// may be and still agree (fitting/agreement.h; docs/CONFIG.md).
+struct AgreementMargins {
+  double margin_c = 1.0;            // T0 and T_amb, °C
+  double margin_k_relative = 0.05;  // k, as a fraction of the two k's mean
+};
+
 struct ExperimentConfig {
   std::string run_name;
   std::string description;
@@ -101,6 +109,7 @@ struct ExperimentConfig {
   std::vector<HidDeviceConfig> hid_devices;
   std::vector<UsbDeviceConfig> usb_devices;
   std::vector<CameraConfig> cameras;
+  AgreementMargins agreement;
   std::string source_text;  // the file as written
 
   std::size_t device_count() const {
@@ -130,6 +139,10 @@ struct ChannelAlarmLimits {
 // then USB, each in file order. The live page reads them from a run's
 // stored experiment file (parse_experiment(run.config_toml, ...)).
 std::vector<ChannelAlarmLimits> alarm_limits(const ExperimentConfig& config);
+
+// Each channel's time_constant_s where the file states one, keyed by
+// channel_name_key(name): how processing finds a thermocouple's lag.
+std::map<std::string, double> channel_time_constants(const ExperimentConfig& config);
 
 // Throws ConfigError, naming the key and line, for a Modbus TCP host name
 // that does not resolve: at the start of logging a name that does not

@@ -467,12 +467,12 @@ TEST(ExperimentConfig, ACameraNameTooLongForAFolderIsRefusedNamingTheKey) {
   EXPECT_NE(camera(std::string(65, 'c')).find("exp.toml:2: cameras[0].name: "), std::string::npos);
 }
 
-
 // [run] min_free_mb: read, checked, and named with its line when the disk
 // has less room (an impossible amount here, so any disk has less).
 TEST(ExperimentConfig, TheLeastFreeSpaceIsReadAndARunDiskWithLessIsRefusedNamingTheKey) {
-  const std::string device = "[[devices]]\nname = \"a\"\nprofile = \"adam-6018\"\nhost = \"127.0.0.1\"\n"
-                             "[[devices.channels]]\nname = \"t\"\ninput = 0\n";
+  const std::string device =
+      "[[devices]]\nname = \"a\"\nprofile = \"adam-6018\"\nhost = \"127.0.0.1\"\n"
+      "[[devices.channels]]\nname = \"t\"\ninput = 0\n";
   const auto config = [&](const std::string& run) { return parse_experiment(run + device, "exp.toml"); };
   EXPECT_EQ(config("").min_free_mb, 100);
   EXPECT_EQ(config("").min_free_key, "exp.toml: run.min_free_mb (default 100)");
@@ -496,6 +496,55 @@ TEST(ExperimentConfig, TheLeastFreeSpaceIsReadAndARunDiskWithLessIsRefusedNaming
 }
 
 TEST(ExperimentConfig, MissingFileIsReported) { EXPECT_THROW(load_experiment("/nonexistent/exp.toml"), ConfigError); }
+
+}  // namespace
+}  // namespace bosfuse::acquisition
+
+namespace bosfuse::acquisition {
+namespace {
+
+std::string with_tc0_line(const std::string& line) {
+  std::string text = kTwoDevices;
+  const std::string anchor = "  name = \"tc0\"\n";
+  return text.insert(text.find(anchor) + anchor.size(), "  " + line + "\n");
+}
+
+TEST(ExperimentConfig, AChannelStatesItsResponseTimeConstant) {
+  const ExperimentConfig config = parse_experiment(with_tc0_line("time_constant_s = 0.5"), "exp.toml");
+  EXPECT_EQ(config.modbus_devices[0].channels[0].time_constant_s, 0.5);
+  EXPECT_FALSE(config.modbus_devices[0].channels[1].time_constant_s);
+  const auto constants = channel_time_constants(config);
+  ASSERT_EQ(constants.size(), 1u);
+  EXPECT_DOUBLE_EQ(constants.at(channel_name_key("tc0")), 0.5);
+}
+
+TEST(ExperimentConfig, ABadTimeConstantNamesItsKeyAndLine) {
+  // tc0's name is on line 13 of kTwoDevices, the inserted key on line 14.
+  const std::string negative = error_of(with_tc0_line("time_constant_s = -1"));
+  EXPECT_NE(negative.find("exp.toml:14"), std::string::npos) << negative;
+  EXPECT_NE(negative.find("time_constant_s"), std::string::npos) << negative;
+  EXPECT_NE(error_of(with_tc0_line("time_constant_s = \"fast\"")).find("time_constant_s"), std::string::npos);
+  EXPECT_NE(error_of(with_tc0_line("time_constant_s = 7200")).find("time_constant_s"), std::string::npos);
+}
+
+TEST(ExperimentConfig, AgreementMarginsAreReadWithDefaults) {
+  const ExperimentConfig defaults = parse_experiment(kTwoDevices, "exp.toml");
+  EXPECT_DOUBLE_EQ(defaults.agreement.margin_c, 1.0);
+  EXPECT_DOUBLE_EQ(defaults.agreement.margin_k_relative, 0.05);
+  const ExperimentConfig set = parse_experiment(
+      std::string(kTwoDevices) + "\n[agreement]\nmargin_c = 0.3\nmargin_k_relative = 0.1\n", "exp.toml");
+  EXPECT_DOUBLE_EQ(set.agreement.margin_c, 0.3);
+  EXPECT_DOUBLE_EQ(set.agreement.margin_k_relative, 0.1);
+}
+
+TEST(ExperimentConfig, ABadAgreementMarginNamesItsKeyAndLine) {
+  const std::string text = std::string(kTwoDevices) + "\n[agreement]\nmargin_c = 0\n";
+  const int line = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+  const std::string zero = error_of(text);
+  EXPECT_NE(zero.find("exp.toml:" + std::to_string(line) + ": agreement.margin_c"), std::string::npos) << zero;
+  const std::string unknown = error_of(std::string(kTwoDevices) + "\n[agreement]\nmargin_k = 0.1\n");
+  EXPECT_NE(unknown.find("margin_k"), std::string::npos) << unknown;
+}
 
 }  // namespace
 }  // namespace bosfuse::acquisition

@@ -40,6 +40,7 @@ struct HidChannel {
   std::optional<std::string> tc_type;
   std::optional<double> image_x_px;
   std::optional<double> image_y_px;
+  std::optional<double> time_constant_s;  // the sensor's first-order response time (agreement removes its lag)
 
   // How it is read.
   std::vector<std::uint8_t> request;            // report id first

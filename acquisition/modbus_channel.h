@@ -43,6 +43,7 @@ struct ModbusChannel {
   std::optional<std::string> tc_type;
   std::optional<double> image_x_px;
   std::optional<double> image_y_px;
+  std::optional<double> time_constant_s;  // the sensor's first-order response time (agreement removes its lag)
 
   // Where and how it is encoded.
   RegisterKind function = RegisterKind::kHolding;

@@ -31,6 +31,7 @@ struct UsbTc32Channel {
   char tc_type = 'K';
   std::optional<double> image_x_px;
   std::optional<double> image_y_px;
+  std::optional<double> time_constant_s;  // the sensor's first-order response time (agreement removes its lag)
   AlarmLimits alarms{};
 };
 

@@ -96,8 +96,8 @@ std::string demo_experiment(const DemoSetup& setup, int port, double poll_period
     const cv::Point2d at = scene.image_position_px(tc.x_m, tc.z_m);
     text += fmt::format(
         "\n  [[devices.channels]]\n  name = \"{}\"\n  input = {}\n  tc_type = \"K\"\n"
-        "  position_px = [{:.2f}, {:.2f}]\n",
-        tc.name, i, at.x, at.y);
+        "  position_px = [{:.2f}, {:.2f}]\n  time_constant_s = {}  # the simulated junction's first-order lag\n",
+        tc.name, i, at.x, at.y, tc.lag_s);
   }
   return text;
 }

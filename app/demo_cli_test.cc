@@ -89,9 +89,22 @@ StoredRates stored_rates(const fs::path& run) {
   for (const auto& a : results.agreements()) {
     const auto agreement = fitting::agreement_from_json(nlohmann::json::parse(a.json));
     EXPECT_TRUE(agreement.series) << a.json;
+    EXPECT_TRUE(agreement.curve) << a.json;
     if (agreement.series) out.rms_difference_c[channel_names[a.channel_id]] = agreement.series->rms_difference_c;
   }
   return out;
+}
+
+// The demo's experiment file states each thermocouple's simulated lag
+// (0.5 s), and every stored agreement removed it.
+void expect_stated_lag_removed(const fs::path& run) {
+  const storage::ProcessingStore results(run);
+  ASSERT_FALSE(results.agreements().empty());
+  for (const auto& a : results.agreements()) {
+    const auto agreement = fitting::agreement_from_json(nlohmann::json::parse(a.json));
+    EXPECT_EQ(agreement.lag.source, "given") << a.json;
+    EXPECT_EQ(agreement.lag.time_constant_s, 0.5) << a.json;
+  }
 }
 
 std::string read_text(const fs::path& path) {
@@ -138,6 +151,7 @@ TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
   for (const auto& [name, k] : by_demo.k) EXPECT_NEAR(k.value, true_k, 0.05 * true_k) << name;
   for (const auto& [name, rms] : by_demo.rms_difference_c) EXPECT_LT(rms, 0.5) << name;
   expect_report_states(run / "report", by_demo);
+  expect_stated_lag_removed(run);
   expect_every_number_present(read_text(run / "report/report.html"), run / "report/report.json");
 
   // 2. `process` with no options repeats the demo (its stored settings), `report` states it.

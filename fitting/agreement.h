@@ -1,48 +1,78 @@
 #pragma once
 // How well two measurements of one cooling process agree, typically a
-// thermocouple and the BOS probe at its image position. Use compare_fits()
-// once both series have been fitted with fit_newton(): it compares the two
-// fitted k with their combined uncertainty (difference, z-score), and the
-// two temperature series directly on common times (the second series is
-// interpolated linearly onto the first one's times where they overlap):
-// RMS difference, Bland–Altman bias and 95% limits of agreement. The verdict
-// says in one sentence whether k agrees within uncertainty and, if not, by
-// how much it differs.
+// thermocouple (a) and the BOS probe at its image position (b). Use
+// compare_fits() once both series have been fitted with fit_newton().
 //
-// The two fits' uncertainties are taken as independent (different sensors,
-// different noise). Times of both series are in one time base (e.g. seconds
-// since the run's origin, or epoch seconds); each series keeps its own
-// origin, which compare_fits() accounts for.
+// Like is compared with like. The thermocouple's first-order response lag
+// (sensor_lag.h; its τ given, else estimated) is removed first, from its fit
+// and its readings, so that the lag is not reported as disagreement. The
+// series are paired at b's times (the BOS frames) with a interpolated there:
+// RMS difference, Bland–Altman bias and 95% limits of agreement on as many
+// pairs as there are frames in the overlap, as read and de-lagged.
+//
+// The verdict is an equivalence test of the whole curve: for each of k, T0
+// (at a's T0 time) and T_amb the difference a − b gets its confidence
+// interval from the two fits' standard errors (the fits are independent:
+// different sensors, different noise; within each fit the parameters'
+// correlations are in its marginal standard errors), and is
+//   agree         when the interval lies inside ±margin,
+//   differ        when it lies wholly outside ±margin,
+//   inconclusive  otherwise (the uncertainty or the difference straddles the
+//                 margin: the data cannot tell).
+// The curve's verdict is the worst of its parameters' (differ over
+// inconclusive over agree): the curve agrees only when every parameter does,
+// which is stricter than a joint (Mahalanobis) test and needs no assumption
+// about how the two fits' parameters correlate with each other. With an
+// estimated τ the T0 difference is what τ was estimated from, so T0 is shown
+// but left out of the verdict. When b is not a temperature (a shift in px)
+// only k is tested. Times of both series are in one time base; each series
+// keeps its own origin, which compare_fits() accounts for.
 
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "fitting/newton_fit.h"
 #include "fitting/series.h"
 
 namespace bosfuse::fitting {
 
+enum class Verdict { kAgree, kDiffer, kInconclusive };
+const char* to_string(Verdict verdict);  // "agree", "differ", "inconclusive"
+
 struct AgreementOptions {
-  double confidence = 0.95;           // of the k test and the limits of agreement
+  double confidence = 0.95;           // of the intervals and the limits of agreement
   std::size_t min_common_points = 3;  // fewer common times: no series statistics
   std::string label_a = "thermocouple";
   std::string label_b = "BOS probe";
+  // Equivalence margins: |difference| a curve parameter may have and still agree.
+  double margin_c = 1.0;            // T0 and T_amb, °C
+  double margin_k_relative = 0.05;  // k, as a fraction of the two k's mean
+  bool b_is_temperature = true;     // false (a shift in px): only k is compared
+  // a's response time constant: given (the experiment file's time_constant_s),
+  // or nullopt: estimated from the paired differences when estimate_lag, else
+  // no lag is modelled.
+  std::optional<double> a_time_constant_s;
+  bool estimate_lag = true;
 
   // Empty when usable, else the reason.
   std::string invalid_reason() const;
 };
 
-// Statistics of the paired differences a − b on a's times within the overlap.
+// Statistics of the paired differences a − b at b's times within the overlap.
 struct SeriesAgreement {
-  std::size_t common_points = 0;
-  double overlap_start_s = 0.0;  // in a's time base (relative to a's origin)
+  std::size_t common_points = 0;  // b's samples in the overlap (Bland–Altman's n)
+  double overlap_start_s = 0.0;   // in a's time base (relative to a's origin)
   double overlap_end_s = 0.0;
-  double rms_difference_c = 0.0;
+  double rms_difference_c = 0.0;            // a de-lagged when a lag is modelled
   double bias_c = 0.0;                      // mean of a − b
   double difference_std_c = 0.0;            // sample standard deviation of a − b
   double limits_of_agreement_low_c = 0.0;   // bias − z·sd (Bland–Altman)
   double limits_of_agreement_high_c = 0.0;  // bias + z·sd
+  // The same two with a as read (no lag removed); equal to the above when no lag is modelled.
+  double rms_difference_as_read_c = 0.0;
+  double bias_as_read_c = 0.0;
 };
 
 struct KAgreement {
@@ -50,13 +80,49 @@ struct KAgreement {
   double std_error_per_s = 0.0;      // sqrt(se_a² + se_b²)
   double z = 0.0;                    // difference / std_error
   double relative_difference = 0.0;  // difference / mean of the two k
-  bool agree = false;                // |z| within the two-sided critical value
+  bool agree = false;                // |z| within the two-sided critical value (a significance test, not the verdict)
+};
+
+// One curve parameter's equivalence test.
+struct ParameterAgreement {
+  std::string name;           // "k_per_s", "T0_c", "T_amb_c"
+  double difference = 0.0;    // a − b
+  double std_error = 0.0;     // sqrt(se_a² + se_b²)
+  double z = 0.0;             // difference / std_error
+  double margin = 0.0;        // ± this is "the same"
+  double critical = 0.0;      // normal, or Student t with the Welch–Satterthwaite dof of two scaled fits
+  double interval_low = 0.0;  // difference ∓ critical · std_error
+  double interval_high = 0.0;
+  Verdict verdict = Verdict::kInconclusive;
+  bool in_verdict = true;  // false: shown only (T0 with an estimated lag)
+};
+
+struct CurveAgreement {
+  Verdict verdict = Verdict::kInconclusive;
+  // Of the parameters with the curve's verdict, the one whose interval
+  // reaches furthest relative to its margin: the closest call for agree, the
+  // clearest for differ.
+  std::string deciding_parameter;
+  std::vector<ParameterAgreement> parameters;  // k, then T0 and T_amb when b is a temperature
+
+  const ParameterAgreement* deciding() const;
+};
+
+// The lag removed from a before comparing.
+struct LagModel {
+  std::string source = "none";        // "given", "estimated", "none"
+  double time_constant_s = 0.0;       // applied (0 when none, or an estimate ≤ 0)
+  std::optional<double> estimated_s;  // the estimate, whether applied or not
+  double std_error_s = 0.0;           // of the estimate
 };
 
 struct Agreement {
   std::optional<KAgreement> k;            // nullopt when a fit failed
-  std::optional<SeriesAgreement> series;  // nullopt when the series share too few times
-  std::string verdict;                    // one or two plain sentences
+  std::optional<CurveAgreement> curve;    // nullopt when a fit failed
+  std::optional<SeriesAgreement> series;  // nullopt when the series share too few common times
+  LagModel lag;
+  double confidence = 0.95;
+  std::string verdict;  // plain sentences, beginning with the verdict
 
   std::string brief_report() const;
 };
@@ -64,7 +130,8 @@ struct Agreement {
 Agreement compare_fits(const NewtonFit& a, const NewtonFit& b, const CleanSeries& a_series, const CleanSeries& b_series,
                        const AgreementOptions& options = {});
 
-// Paired-difference statistics only (no fits needed).
+// Paired-difference statistics only (no fits needed): a − b at b's times
+// with a interpolated (the as-read fields equal the others).
 std::optional<SeriesAgreement> compare_series(const CleanSeries& a, const CleanSeries& b, double confidence = 0.95,
                                               std::size_t min_common_points = 3);
 

@@ -131,6 +131,61 @@ NewtonFit fit_from_json(const json& j) {
   return fit;
 }
 
+namespace {
+
+Verdict verdict_from_json(const json& j) {
+  const std::string text = j.is_string() ? j.get<std::string>() : std::string();
+  for (Verdict v : {Verdict::kAgree, Verdict::kDiffer, Verdict::kInconclusive}) {
+    if (text == to_string(v)) return v;
+  }
+  throw json::type_error::create(302, "unknown verdict \"" + text + "\"", &j);
+}
+
+CurveAgreement curve_from_json(const json& j) {
+  CurveAgreement c;
+  c.verdict = verdict_from_json(j.at("verdict"));
+  c.deciding_parameter = j.value("deciding_parameter", std::string());
+  for (const json& p : j.at("parameters")) {
+    ParameterAgreement pa;
+    pa.name = p.at("name").get<std::string>();
+    pa.difference = number_or_nan(p, "difference");
+    pa.std_error = number_or_nan(p, "std_error");
+    pa.z = number_or_nan(p, "z");
+    pa.margin = number_or_nan(p, "margin");
+    pa.critical = number_or_nan(p, "critical");
+    pa.interval_low = number_or_nan(p, "interval_low");
+    pa.interval_high = number_or_nan(p, "interval_high");
+    pa.verdict = verdict_from_json(p.at("verdict"));
+    pa.in_verdict = p.value("in_verdict", true);
+    c.parameters.push_back(pa);
+  }
+  return c;
+}
+
+ordered_json to_json(const CurveAgreement& c, double confidence) {
+  ordered_json parameters = ordered_json::array();
+  for (const auto& p : c.parameters) {
+    parameters.push_back({{"name", p.name},
+                          {"difference", number_or_null(p.difference)},
+                          {"std_error", number_or_null(p.std_error)},
+                          {"z", number_or_null(p.z)},
+                          {"margin", number_or_null(p.margin)},
+                          {"critical", number_or_null(p.critical)},
+                          {"interval_low", number_or_null(p.interval_low)},
+                          {"interval_high", number_or_null(p.interval_high)},
+                          {"verdict", to_string(p.verdict)},
+                          {"in_verdict", p.in_verdict}});
+  }
+  return {{"verdict", to_string(c.verdict)},
+          {"deciding_parameter", c.deciding_parameter},
+          {"confidence", confidence},
+          {"test", "the difference's interval inside +-margin: agree; wholly outside: differ; else inconclusive"},
+          {"combination", "the worst of the parameters in the verdict (differ over inconclusive over agree)"},
+          {"parameters", parameters}};
+}
+
+}  // namespace
+
 Agreement agreement_from_json(const json& j) {
   Agreement a;
   a.verdict = j.value("verdict", std::string());
@@ -153,7 +208,20 @@ Agreement agreement_from_json(const json& j) {
     sa.difference_std_c = number_or_nan(*s, "difference_std_c");
     sa.limits_of_agreement_low_c = number_or_nan(*s, "limits_of_agreement_low_c");
     sa.limits_of_agreement_high_c = number_or_nan(*s, "limits_of_agreement_high_c");
+    // Written before the lag was modelled: as read is all there was.
+    sa.rms_difference_as_read_c =
+        s->contains("rms_difference_as_read_c") ? number_or_nan(*s, "rms_difference_as_read_c") : sa.rms_difference_c;
+    sa.bias_as_read_c = s->contains("bias_as_read_c") ? number_or_nan(*s, "bias_as_read_c") : sa.bias_c;
     a.series = sa;
+  }
+  a.confidence = j.contains("confidence") ? number_or_nan(j, "confidence") : 0.95;
+  if (const auto e = j.find("equivalence"); e != j.end() && e->is_object()) a.curve = curve_from_json(*e);
+  if (const auto l = j.find("lag"); l != j.end() && l->is_object()) {
+    a.lag.source = l->value("source", std::string("none"));
+    a.lag.time_constant_s = number_or_nan(*l, "time_constant_s");
+    if (const auto it = l->find("estimated_s"); it != l->end() && it->is_number())
+      a.lag.estimated_s = it->get<double>();
+    a.lag.std_error_s = number_or_nan(*l, "std_error_s");
   }
   return a;
 }
@@ -224,8 +292,18 @@ ordered_json to_json(const Agreement& a) {
                    {"bias_c", number_or_null(s.bias_c)},
                    {"difference_std_c", number_or_null(s.difference_std_c)},
                    {"limits_of_agreement_low_c", number_or_null(s.limits_of_agreement_low_c)},
-                   {"limits_of_agreement_high_c", number_or_null(s.limits_of_agreement_high_c)}};
+                   {"limits_of_agreement_high_c", number_or_null(s.limits_of_agreement_high_c)},
+                   {"rms_difference_as_read_c", number_or_null(s.rms_difference_as_read_c)},
+                   {"bias_as_read_c", number_or_null(s.bias_as_read_c)},
+                   {"paired_at", "the BOS frame times, the thermocouple interpolated there"}};
   }
+  j["confidence"] = a.confidence;
+  j["equivalence"] = a.curve ? to_json(*a.curve, a.confidence) : ordered_json(nullptr);
+  j["lag"] = {{"source", a.lag.source},
+              {"time_constant_s", number_or_null(a.lag.time_constant_s)},
+              {"estimated_s", a.lag.estimated_s ? number_or_null(*a.lag.estimated_s) : ordered_json(nullptr)},
+              {"std_error_s", number_or_null(a.lag.std_error_s)},
+              {"model", "first order: the thermocouple compared as T + tau * dT/dt, dT/dt from its fit"}};
   return j;
 }
 

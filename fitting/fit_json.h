@@ -22,7 +22,9 @@ nlohmann::ordered_json to_json(const Estimate& estimate, double confidence);
 // diagnostics (with t_critical when ok), covariance (when ok: "parameters"
 // ["log_tau", "delta_c", "ambient_c"] and the 3 × 3 "matrix"), warnings.
 nlohmann::ordered_json to_json(const NewtonFit& fit);
-// verdict, k (difference, z, ...), series (RMS difference, Bland–Altman).
+// verdict (sentences), k (difference, z, ...), series (RMS difference,
+// Bland–Altman, as read and de-lagged), confidence, equivalence (the
+// agree / differ / inconclusive test of each curve parameter), lag.
 nlohmann::ordered_json to_json(const Agreement& agreement);
 
 // The readers of these layouts, for what a run stored. They live here, next

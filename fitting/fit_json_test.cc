@@ -184,5 +184,57 @@ TEST(FitJson, AnAgreementComesBackWithItsLimitsAndOverlap) {
   EXPECT_TRUE(std::isfinite(r.limits_of_agreement_low_c));
 }
 
+TEST(FitJson, AnAgreementKeepsItsOldKeysAndAddsTheEquivalenceTestAndTheLag) {
+  const NewtonFit a = a_fit(1);
+  const NewtonFit b = a_fit(2);
+  CleanSeries sa, sb;
+  sa.time_s = sb.time_s = {0, 1, 2, 3, 4, 5};
+  sa.temperature_c = {50, 48, 46, 44, 42, 40};
+  sb.temperature_c = {50.2, 47.9, 46.3, 43.8, 42.1, 40.2};
+  AgreementOptions options;
+  options.a_time_constant_s = 0.5;
+  const Agreement written = compare_fits(a, b, sa, sb, options);
+  ASSERT_TRUE(written.curve && written.series);
+  const nlohmann::json j = nlohmann::json::parse(to_json(written).dump());
+  for (const char* key : {"verdict", "k", "series", "confidence", "equivalence", "lag"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  for (const char* key :
+       {"rms_difference_c", "common_points", "bias_c", "rms_difference_as_read_c", "bias_as_read_c"}) {
+    EXPECT_TRUE(j["series"].contains(key)) << key;
+  }
+  EXPECT_EQ(j["equivalence"]["verdict"], to_string(written.curve->verdict));
+  EXPECT_EQ(j["equivalence"]["parameters"].size(), 3u);
+  EXPECT_EQ(j["lag"]["source"], "given");
+  const Agreement read = agreement_from_json(j);
+  ASSERT_TRUE(read.curve);
+  EXPECT_EQ(read.curve->verdict, written.curve->verdict);
+  EXPECT_EQ(read.curve->deciding_parameter, written.curve->deciding_parameter);
+  ASSERT_EQ(read.curve->parameters.size(), written.curve->parameters.size());
+  for (std::size_t i = 0; i < read.curve->parameters.size(); ++i) {
+    const auto &r = read.curve->parameters[i], &w = written.curve->parameters[i];
+    EXPECT_EQ(r.name, w.name);
+    EXPECT_DOUBLE_EQ(r.z, w.z);
+    EXPECT_DOUBLE_EQ(r.margin, w.margin);
+    EXPECT_DOUBLE_EQ(r.interval_low, w.interval_low);
+    EXPECT_EQ(r.verdict, w.verdict);
+    EXPECT_EQ(r.in_verdict, w.in_verdict);
+  }
+  EXPECT_EQ(read.lag.source, "given");
+  EXPECT_DOUBLE_EQ(read.lag.time_constant_s, 0.5);
+  EXPECT_DOUBLE_EQ(read.series->rms_difference_as_read_c, written.series->rms_difference_as_read_c);
+}
+
+TEST(FitJson, AnAgreementStoredBeforeTheEquivalenceTestReadsWithoutOne) {
+  const auto j = nlohmann::json::parse(R"({"verdict": "k agree within uncertainty.", "k": null,
+      "series": {"common_points": 5, "rms_difference_c": 0.2, "bias_c": 0.1}})");
+  const Agreement read = agreement_from_json(j);
+  EXPECT_FALSE(read.curve);
+  EXPECT_EQ(read.lag.source, "none");
+  ASSERT_TRUE(read.series);
+  EXPECT_DOUBLE_EQ(read.series->rms_difference_as_read_c, 0.2);
+  EXPECT_THROW(agreement_from_json(nlohmann::json::parse(R"({"equivalence": {"verdict": "maybe", "parameters": []}})")),
+               nlohmann::json::exception);
+}
+
 }  // namespace
 }  // namespace bosfuse::fitting

@@ -35,13 +35,13 @@ std::string format(const char* pattern, ...) {
   return text;
 }
 
-// Residuals (model − measured) / σ_w of a run of consecutive samples, with
+// Residuals (model − measured) / σ_i of a run of consecutive samples, with
 // analytic derivatives in (log τ, ΔT, T_amb). Without a robust loss the
 // samples go to Ceres in chunks, which cuts its per-block overhead; a robust
 // loss acts on a block's whole squared norm, so it gets one sample per block.
 class NewtonResidualChunk final : public ceres::CostFunction {
  public:
-  NewtonResidualChunk(const double* t_s, const double* temperature_c, int count, double inverse_sigma)
+  NewtonResidualChunk(const double* t_s, const double* temperature_c, const double* inverse_sigma, int count)
       : t_s_(t_s), temperature_c_(temperature_c), inverse_sigma_(inverse_sigma) {
     set_num_residuals(count);
     *mutable_parameter_block_sizes() = {1, 1, 1};
@@ -53,11 +53,12 @@ class NewtonResidualChunk final : public ceres::CostFunction {
     const double ambient = p[2][0];
     for (int i = 0; i < num_residuals(); ++i) {
       const double decay = std::exp(-k * t_s_[i]);
-      residuals[i] = (ambient + delta * decay - temperature_c_[i]) * inverse_sigma_;
+      const double w = inverse_sigma_[i];
+      residuals[i] = (ambient + delta * decay - temperature_c_[i]) * w;
       if (jacobians == nullptr) continue;
-      if (jacobians[0]) jacobians[0][i] = delta * decay * k * t_s_[i] * inverse_sigma_;
-      if (jacobians[1]) jacobians[1][i] = decay * inverse_sigma_;
-      if (jacobians[2]) jacobians[2][i] = inverse_sigma_;
+      if (jacobians[0]) jacobians[0][i] = delta * decay * k * t_s_[i] * w;
+      if (jacobians[1]) jacobians[1][i] = decay * w;
+      if (jacobians[2]) jacobians[2][i] = w;
     }
     return true;
   }
@@ -65,7 +66,7 @@ class NewtonResidualChunk final : public ceres::CostFunction {
  private:
   const double* t_s_;
   const double* temperature_c_;
-  double inverse_sigma_;
+  const double* inverse_sigma_;  // per sample
 };
 
 // The measured ambient as one more observation of T_amb.
@@ -177,18 +178,24 @@ std::unique_ptr<ceres::LossFunction> make_loss(const RobustLoss& loss, double si
   return nullptr;
 }
 
-// One Ceres problem over the cleaned series, with residuals weighted by σ_w.
+// One Ceres problem over the cleaned series, with residuals weighted by
+// each sample's σ when the series has them, else by one σ_w (which is also
+// the scale a robust loss's °C are turned into residual units by).
 class NewtonProblem {
  public:
   NewtonProblem(const CleanSeries& s, const NewtonFitOptions& options, const Parameters& start, double sigma_w_c)
-      : parameters_(start), loss_(make_loss(options.loss, sigma_w_c)), sigma_w_c_(sigma_w_c) {
+      : parameters_(start),
+        loss_(make_loss(options.loss, sigma_w_c)),
+        inverse_sigma_(s.size(), 1.0 / sigma_w_c),
+        sigma_w_c_(sigma_w_c) {
+    for (std::size_t i = 0; i < s.sigma_c.size(); ++i) inverse_sigma_[i] = 1.0 / s.sigma_c[i];
     ceres::Problem::Options problem_options;
     problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;  // one loss shared by every block
     problem_ = std::make_unique<ceres::Problem>(problem_options);
     const std::size_t chunk = loss_ ? 1 : kSamplesPerResidualBlock;
     for (std::size_t i = 0; i < s.size(); i += chunk) {
       const int count = static_cast<int>(std::min(chunk, s.size() - i));
-      problem_->AddResidualBlock(new NewtonResidualChunk(&s.time_s[i], &s.temperature_c[i], count, 1.0 / sigma_w_c),
+      problem_->AddResidualBlock(new NewtonResidualChunk(&s.time_s[i], &s.temperature_c[i], &inverse_sigma_[i], count),
                                  loss_.get(), &parameters_.log_tau, &parameters_.delta_c, &parameters_.ambient_c);
     }
     const double log_duration = std::log(s.duration_s());
@@ -256,6 +263,7 @@ class NewtonProblem {
  private:
   Parameters parameters_;
   std::unique_ptr<ceres::LossFunction> loss_;
+  std::vector<double> inverse_sigma_;  // 1/σ of each sample; the chunks point into it
   std::unique_ptr<ceres::Problem> problem_;
   double sigma_w_c_;
 };
@@ -294,6 +302,12 @@ double lag1_autocorrelation(const std::vector<double>& r) {
     if (i + 1 < r.size()) numerator += (r[i] - mean) * (r[i + 1] - mean);
   }
   return denominator > 0 ? numerator / denominator : 0.0;
+}
+
+double median_sigma(std::vector<double> sigma_c) {
+  const auto middle = sigma_c.begin() + static_cast<std::ptrdiff_t>(sigma_c.size() / 2);
+  std::nth_element(sigma_c.begin(), middle, sigma_c.end());
+  return *middle;
 }
 
 double first_sample_gap_s(const CleanSeries& s) {
@@ -407,9 +421,11 @@ void add_warnings(NewtonFit& fit, const NewtonFitOptions& options, const Paramet
     const double band = 3.0 * std::sqrt(2.0 / s.dof);
     if (std::abs(*s.reduced_chi_square - 1.0) > band) {
       s.warnings.push_back(format(
-          "reduced χ² = %.3g differs from 1 by more than chance allows: the given σ = %.4g °C "
-          "is %s, or the model does not describe the data",
-          *s.reduced_chi_square, *options.measurement_sigma_c, *s.reduced_chi_square > 1 ? "too small" : "too large"));
+          "reduced χ² = %.3g differs from 1 by more than chance allows: the given σ%s is %s, or the model does "
+          "not describe the data",
+          *s.reduced_chi_square,
+          options.measurement_sigma_c ? format(" = %.4g °C", *options.measurement_sigma_c).c_str() : " of each sample",
+          *s.reduced_chi_square > 1 ? "too small" : "too large"));
     }
   }
   if (options.ambient.mode == AmbientModel::Mode::kPrior) {
@@ -451,13 +467,17 @@ void describe_input(NewtonFitSummary& summary, const CleanSeries& s, const Newto
   summary.duplicate_times = s.duplicate_times;
   summary.parameters = free_parameter_count(options.ambient);
   summary.dof = degrees_of_freedom(s.size(), options.ambient);
-  summary.absolute_sigma = options.measurement_sigma_c.has_value();
+  summary.absolute_sigma = options.measurement_sigma_c.has_value() || !s.sigma_c.empty();
   summary.confidence = options.confidence;
 }
 
 std::optional<Failure> check_input(const NewtonFitSummary& summary, const CleanSeries& s,
                                    const NewtonFitOptions& options) {
   if (auto reason = options.invalid_reason(); !reason.empty()) return Failure{FitStatus::kInvalidOptions, reason};
+  if (options.measurement_sigma_c && !s.sigma_c.empty()) {
+    return Failure{FitStatus::kInvalidOptions,
+                   "both one measurement σ and a σ per sample are given: give one or the other"};
+  }
   if (summary.dof < 1 || s.size() < 3) {
     const int prior = options.ambient.mode == AmbientModel::Mode::kPrior ? 1 : 0;
     return Failure{
@@ -500,10 +520,12 @@ std::optional<Failure> solve(const CleanSeries& s, const NewtonFitOptions& optio
   double scale_c = 0.0;  // a temperature scale for the σ_w floor
   for (double v : s.temperature_c) scale_c = std::max(scale_c, std::abs(v - s.temperature_c.front()));
   const double sigma_floor_c = 1e-9 * (scale_c + 1.0);
-  double sigma_w_c = options.measurement_sigma_c.value_or(std::max(start.rms_c, sigma_floor_c));
+  double sigma_w_c = !s.sigma_c.empty() ? median_sigma(s.sigma_c)
+                                        : options.measurement_sigma_c.value_or(std::max(start.rms_c, sigma_floor_c));
   // With an ambient prior and unknown σ the prior's weight depends on the
   // data noise, which is estimated: one more pass with the estimate settles it.
-  const bool reweight = options.ambient.mode == AmbientModel::Mode::kPrior && !options.measurement_sigma_c;
+  const bool reweight =
+      options.ambient.mode == AmbientModel::Mode::kPrior && !options.measurement_sigma_c && s.sigma_c.empty();
   solution.parameters = start.parameters;
   for (int pass = 0; pass < (reweight ? 2 : 1); ++pass) {
     solution.problem = std::make_unique<NewtonProblem>(s, options, solution.parameters, sigma_w_c);
@@ -525,15 +547,25 @@ std::optional<Failure> solve(const CleanSeries& s, const NewtonFitOptions& optio
   return std::nullopt;
 }
 
-void set_residual_statistics(NewtonFit& fit, const std::vector<double>& r, const NewtonFitOptions& options) {
+// Σ (r_i/σ_i)², each sample with its own σ or all with one.
+double chi_square(const std::vector<double>& r, const CleanSeries& s, double one_sigma_c) {
+  double sum = 0;
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    const double sigma = s.sigma_c.empty() ? one_sigma_c : s.sigma_c[i];
+    sum += (r[i] / sigma) * (r[i] / sigma);
+  }
+  return sum;
+}
+
+void set_residual_statistics(NewtonFit& fit, const std::vector<double>& r, const CleanSeries& s,
+                             const NewtonFitOptions& options) {
   auto& summary = fit.summary;
   const double ssr_c = sum_of_squares(r);
   summary.residual_rms_c = std::sqrt(ssr_c / static_cast<double>(r.size()));
   summary.residual_std_c = std::sqrt(ssr_c / summary.dof);
   summary.lag1_autocorrelation = lag1_autocorrelation(r);
-  if (options.measurement_sigma_c) {
-    const double sigma = *options.measurement_sigma_c;
-    summary.reduced_chi_square = ssr_c / (sigma * sigma) / summary.dof;
+  if (summary.absolute_sigma) {
+    summary.reduced_chi_square = chi_square(r, s, options.measurement_sigma_c.value_or(1.0)) / summary.dof;
   }
 }
 
@@ -592,7 +624,7 @@ NewtonFit fit_from_first_sample(const CleanSeries& data, double origin_s, double
 
   Solution solution;
   if (auto failure = solve(data, options, solution, fit.summary)) return failed(fit, std::move(*failure));
-  set_residual_statistics(fit, solution.residuals_c, options);
+  set_residual_statistics(fit, solution.residuals_c, data, options);
   if (auto failure = set_uncertainties(fit, solution, options, first_sample_s)) {
     return failed(fit, std::move(*failure));
   }
@@ -653,6 +685,17 @@ NewtonFit fit_newton(std::span<const double> time_s, std::span<const double> tem
     return failed(fit, FitStatus::kInvalidOptions, reason);
   }
   const CleanSeries data = clean_series(time_s, temperature_c);  // from the first sample, rounded once
+  const double origin_s = options.origin_s.value_or(data.origin_s);
+  return fit_from_first_sample(data, origin_s, data.origin_s - origin_s, options);
+}
+
+NewtonFit fit_newton(std::span<const double> time_s, std::span<const double> temperature_c,
+                     std::span<const double> sigma_c, const NewtonFitOptions& options) {
+  NewtonFit fit;
+  if (auto reason = options.invalid_reason(); !reason.empty()) {
+    return failed(fit, FitStatus::kInvalidOptions, reason);
+  }
+  const CleanSeries data = clean_series(time_s, temperature_c, sigma_c);
   const double origin_s = options.origin_s.value_or(data.origin_s);
   return fit_from_first_sample(data, origin_s, data.origin_s - origin_s, options);
 }

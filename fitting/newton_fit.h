@@ -65,7 +65,8 @@ struct NewtonFitOptions {
   std::optional<double> origin_s;             // default: the earliest finite sample time
   AmbientModel ambient;                       // default: free
   RobustLoss loss;                            // default: plain least squares
-  std::optional<double> measurement_sigma_c;  // known σ: absolute uncertainties and a χ² test
+  std::optional<double> measurement_sigma_c;  // known σ of every sample: absolute uncertainties and a χ² test
+                                              // (a σ per sample: fit_newton's sigma_c or CleanSeries::sigma_c)
   double confidence = 0.95;                   // of the reported intervals
   int max_iterations = 200;
   // A free ambient is weakly identified when the record spans fewer time
@@ -183,7 +184,18 @@ struct NewtonFit {
 NewtonFit fit_newton(std::span<const double> time_s, std::span<const double> temperature_c,
                      const NewtonFitOptions& options = {});
 
-// The same on an already cleaned series (its origin is kept).
+// Weighted by each sample's standard uncertainty σ_i (sigma_c, in the order
+// of the samples): residuals count as (T_i − T(t_i))/σ_i, uncertainties are
+// absolute (the covariance of the weighted problem, not scaled by s²) and
+// reduced χ² = Σ(r_i/σ_i)²/dof tells whether the σ_i were right. A sample
+// whose σ is NaN or infinite is left out like a NaN temperature; throws
+// std::invalid_argument when the spans differ in length or a σ is ≤ 0.
+// options.measurement_sigma_c must then be unset (kInvalidOptions).
+NewtonFit fit_newton(std::span<const double> time_s, std::span<const double> temperature_c,
+                     std::span<const double> sigma_c, const NewtonFitOptions& options = {});
+
+// The same on an already cleaned series (its origin is kept), weighted by
+// its sigma_c when it has them.
 NewtonFit fit_newton(const CleanSeries& series, const NewtonFitOptions& options = {});
 
 }  // namespace bosfuse::fitting

@@ -12,6 +12,7 @@
 #include <set>
 
 #include "acquisition/clock.h"
+#include "acquisition/experiment_config.h"
 #include "fitting/agreement.h"
 #include "fitting/fit_json.h"
 #include "fitting/newton_fit.h"
@@ -128,14 +129,37 @@ fitting::NewtonFit fit_at_origin(const fitting::CleanSeries& series) {
   return fitting::fit_newton(series, options);
 }
 
+// What the run's experiment file says about comparing a thermocouple with
+// its probe: each channel's response time constant and the margins.
+struct AgreementSettings {
+  std::map<std::string, double> time_constants_s;  // by acquisition::channel_name_key
+  acquisition::AgreementMargins margins;
+};
+
+AgreementSettings agreement_settings(const storage::RunStore& store) {
+  const std::string& text = store.run().config_toml;
+  if (text.empty()) return {};
+  const auto config = acquisition::parse_experiment(text, "run config");
+  return {acquisition::channel_time_constants(config), config.agreement};
+}
+
 // A shift series is not a temperature: then only the two k are compared.
+// A channel without a stated time constant has its lag estimated.
 fitting::Agreement agree(const fitting::NewtonFit& tc_fit, const fitting::CleanSeries& tc_series,
-                         const fitting::NewtonFit& probe_fit, const ProbeSeries& probe, const std::string& name) {
+                         const fitting::NewtonFit& probe_fit, const ProbeSeries& probe, const std::string& name,
+                         const AgreementSettings& settings) {
   fitting::AgreementOptions options;
   options.label_a = "thermocouple " + name;
   options.label_b = "BOS probe at " + name;
+  options.margin_c = settings.margins.margin_c;
+  options.margin_k_relative = settings.margins.margin_k_relative;
+  options.b_is_temperature = probe.quantity != "shift_px";
+  if (const auto it = settings.time_constants_s.find(acquisition::channel_name_key(name));
+      it != settings.time_constants_s.end()) {
+    options.a_time_constant_s = it->second;
+  }
   return fitting::compare_fits(tc_fit, probe_fit, tc_series,
-                               probe.quantity == "shift_px" ? fitting::CleanSeries{} : probe.series, options);
+                               options.b_is_temperature ? probe.series : fitting::CleanSeries{}, options);
 }
 
 // The processing this call carries on: a new one with resolved settings,
@@ -202,6 +226,7 @@ FitsAndAgreements fit_everything(const storage::RunStore& store, const storage::
     tc_fits[c.id] = {std::move(fit), std::move(series)};
   }
   const auto probes = results.staged_probes(processing_id);
+  const AgreementSettings agreement_options = agreement_settings(store);
   for (std::size_t p = 0; p < probes.size(); ++p) {
     const ChannelInfo& c = ctx.channels[p];
     const auto cal = ctx.calibration.find(c.id);
@@ -213,7 +238,7 @@ FitsAndAgreements fit_everything(const storage::RunStore& store, const storage::
         {0, storage::FitSubject::kProbe, probes[p].id, clock.origin_ns, probe_fit.ok(),
          fit_json(probe_fit, probe.quantity, probe.quantity == "shift_px" ? "px" : "degC", clock).dump()});
     const auto& [tc_fit, tc_series] = tc_fits.at(c.id);
-    const auto agreement = agree(tc_fit, tc_series, probe_fit, probe, c.name);
+    const auto agreement = agree(tc_fit, tc_series, probe_fit, probe, c.name, agreement_options);
     json j = fitting::to_json(agreement);
     j["probe_quantity"] = probe.quantity;
     out.agreements.push_back({0, c.id, probes[p].id, j.dump()});

@@ -415,6 +415,48 @@ TEST_F(Report, NoNumberIsNanInfOrNullAndEveryGapSaysWhy) {
       << "an empty value with its reason";
 }
 
+TEST_F(Report, ThePairTableShowsTheVerdictItsZItsMarginAndBlandAltmansN) {
+  ReportInput input = testdata::sample_input(true);
+  CurveSeries probe = testdata::cooling_series("tc0 probe", 0.0102, 80, 22, 40, 10.0, 0.4, 9);
+  probe.kind = SeriesKind::kBosProbe;
+  input.series.push_back(probe);
+  fit_missing(input);
+  const auto a = fitting::clean_series(input.series[0].time_s, input.series[0].temperature_c, 0.0);
+  const auto b = fitting::clean_series(input.series[2].time_s, input.series[2].temperature_c, 0.0);
+  const auto agreement = fitting::compare_fits(*input.series[0].fit, *input.series[2].fit, a, b);
+  ASSERT_TRUE(agreement.curve && agreement.series);
+  input.agreements.push_back({"tc0", "tc0 probe", agreement});
+  const ReportSummary summary = summarize(input);
+  ASSERT_EQ(summary.pairs.size(), 1u);
+  const PairSummary& p = summary.pairs[0];
+  const fitting::ParameterAgreement* deciding = agreement.curve->deciding();
+  ASSERT_NE(deciding, nullptr);
+  EXPECT_EQ(p.equivalence, fitting::to_string(agreement.curve->verdict));
+  ASSERT_TRUE(p.deciding_z.value && p.margin.value && p.pairs);
+  EXPECT_DOUBLE_EQ(*p.deciding_z.value, deciding->z);
+  EXPECT_DOUBLE_EQ(*p.margin.value, deciding->margin);
+  EXPECT_EQ(*p.pairs, agreement.series->common_points);
+  const std::string html = summary_html(summary);
+  EXPECT_NE(html.find("<strong>" + p.equivalence + "</strong>"), std::string::npos) << html;
+  EXPECT_NE(html.find("z = " + display_number(deciding->z, "{:.2f}")), std::string::npos) << html;
+  EXPECT_NE(html.find("margin ±" + display_number(deciding->margin, "{:.2g}")), std::string::npos) << html;
+  EXPECT_NE(html.find("<td>" + std::to_string(*p.pairs) + "</td>"), std::string::npos) << html;
+}
+
+TEST_F(Report, APixelProbesVerdictIsOnKAloneAndAnOldAgreementSaysItHasNone) {
+  ReportInput input = input_with_gaps();
+  const ReportSummary summary = summarize(input);
+  const PairSummary& px = summary.pairs[0];
+  ASSERT_TRUE(input.agreements[0].agreement.curve);
+  EXPECT_EQ(px.equivalence, fitting::to_string(input.agreements[0].agreement.curve->parameters[0].verdict));
+  EXPECT_EQ(px.deciding, "k");
+  EXPECT_NE(px.verdict.find(" on k alone: k "), std::string::npos) << px.verdict;
+  input.agreements[0].agreement.curve.reset();  // as stored before the equivalence test
+  const PairSummary old = summarize(input).pairs[0];
+  EXPECT_TRUE(old.equivalence.empty());
+  EXPECT_NE(old.deciding_z.reason.find("stored before the equivalence test"), std::string::npos);
+}
+
 TEST_F(Report, TheSummaryComesFirstInTheRunsTimeBasis) {
   ReportInput input = input_with_gaps();
   const auto files = write_report(input, {}, dir_ / "out");
@@ -457,7 +499,8 @@ TEST_F(Report, TheSummaryComesFirstInTheRunsTimeBasis) {
 TEST_F(Report, AReportThatFailsHalfWayLeavesTheEarlierOneWhole) {
   const auto first = write(testdata::sample_input(true));
   std::map<fs::path, std::string> before;
-  for (const auto& entry : fs::directory_iterator(dir_ / "out")) before[entry.path()] = testing::file_bytes(entry.path());
+  for (const auto& entry : fs::directory_iterator(dir_ / "out"))
+    before[entry.path()] = testing::file_bytes(entry.path());
   ASSERT_GT(before.size(), 8u);
   ReportInput input = testdata::sample_input(true);
   fit_missing(input);
@@ -466,7 +509,8 @@ TEST_F(Report, AReportThatFailsHalfWayLeavesTheEarlierOneWhole) {
   options.map_size = {50, 50};  // refused by the map, after the curves are drawn
   EXPECT_THROW(write_report(input, options, dir_ / "out"), std::invalid_argument);
   std::map<fs::path, std::string> after;
-  for (const auto& entry : fs::directory_iterator(dir_ / "out")) after[entry.path()] = testing::file_bytes(entry.path());
+  for (const auto& entry : fs::directory_iterator(dir_ / "out"))
+    after[entry.path()] = testing::file_bytes(entry.path());
   EXPECT_EQ(after, before) << "every file of the first report byte for byte, no staging folder left";
 }
 

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -145,23 +146,61 @@ std::string no_difference_reason(const AgreementEntry& e, const ReportInput& inp
   return {};
 }
 
-// The stored verdict of a pair with a px series ends with a sentence on
-// temperature differences (°C against px, meaningless): it is replaced by
-// the reason. compare_fits() begins that sentence with "On N common times".
-std::string k_only_verdict(const std::string& verdict, const std::string& name, const std::string& unit) {
-  const auto cut = verdict.find(" On ");
-  return verdict.substr(0, cut == std::string::npos ? verdict.size() : cut + 1) +
-         fmt::format(" The temperatures are not compared: {} is in {}, not °C.", name, unit);
+const fitting::ParameterAgreement* k_test(const fitting::Agreement& a) {
+  if (!a.curve) return nullptr;
+  for (const auto& p : a.curve->parameters) {
+    if (p.name == "k_per_s") return &p;
+  }
+  return nullptr;
+}
+
+// The stored verdict of a pair with a px series also judges T0 and T_amb
+// and the temperature differences (°C against px, meaningless): it is
+// replaced by the verdict on k alone and the reason. An agreement stored
+// before the equivalence test has its k sentence first and the one on
+// temperatures beginning with " On ".
+std::string k_only_verdict(const fitting::Agreement& a, const std::string& name, const std::string& unit) {
+  const std::string reason = fmt::format(" The temperatures are not compared: {} is in {}, not °C.", name, unit);
+  if (const fitting::ParameterAgreement* k = k_test(a)) {
+    const std::string word = fitting::to_string(k->verdict);
+    return fmt::format("{}{} on k alone: k {} (Δ = {} ± {} 1/s, z = {}, margin ±{} 1/s).", char(std::toupper(word[0])),
+                       word.substr(1), word, display_number(k->difference, "{:.3g}"),
+                       display_number(k->std_error, "{:.2g}"), display_number(k->z, "{:.2f}"),
+                       display_number(k->margin, "{:.2g}")) +
+           reason;
+  }
+  const auto cut = a.verdict.find(" On ");
+  return a.verdict.substr(0, cut == std::string::npos ? a.verdict.size() : cut + 1) + reason;
+}
+
+// The verdict word, what decided it and its z and margin; k's alone for a px probe.
+void set_equivalence(PairSummary& p, const fitting::Agreement& a, bool k_only) {
+  const fitting::ParameterAgreement* deciding = k_only ? k_test(a) : (a.curve ? a.curve->deciding() : nullptr);
+  if (!deciding) {
+    const std::string reason = a.curve ? "no parameter decided the verdict"
+                               : a.k   ? "stored before the equivalence test: no verdict of agree, differ or "
+                                         "inconclusive"
+                                       : "no equivalence test: a fit failed";
+    p.deciding_z = missing("", reason);
+    p.margin = missing("", reason);
+    return;
+  }
+  p.equivalence = fitting::to_string(k_only ? deciding->verdict : a.curve->verdict);
+  const bool k = deciding->name == "k_per_s";
+  p.deciding = k ? "k" : deciding->name == "T0_c" ? "T0" : "T_amb";
+  p.deciding_z = number(deciding->z, "", "no z: the difference has no finite, non-zero standard error");
+  p.margin = number(deciding->margin, k ? "1/s" : "°C", "no finite margin");
 }
 
 void set_difference_quantities(PairSummary& p, const AgreementEntry& e, const ReportInput& input) {
   if (const std::string reason = no_difference_reason(e, input); !reason.empty()) {
     p.rms_difference = missing("°C", reason);
     p.bias = missing("°C", reason);
-    if (const CurveSeries* s = non_celsius(e, input)) p.verdict = k_only_verdict(p.verdict, s->name, s->unit);
+    if (const CurveSeries* s = non_celsius(e, input)) p.verdict = k_only_verdict(e.agreement, s->name, s->unit);
     return;
   }
   const auto& d = *e.agreement.series;
+  p.pairs = d.common_points;
   p.rms_difference = number(d.rms_difference_c, "°C", "the stored agreement holds no finite RMS difference");
   const bool limits = std::isfinite(d.limits_of_agreement_low_c) && std::isfinite(d.limits_of_agreement_high_c);
   p.bias = number(limits ? d.bias_c : NAN, "°C", "the stored agreement holds no finite bias and limits of agreement");
@@ -177,6 +216,7 @@ PairSummary summarize_pair(const AgreementEntry& e, const ReportInput& input) {
   p.verdict = e.agreement.verdict;
   set_k_quantities(p, e, input);
   set_difference_quantities(p, e, input);
+  set_equivalence(p, e.agreement, non_celsius(e, input) != nullptr);
   return p;
 }
 
@@ -264,25 +304,51 @@ std::string limits_cell(const SummaryQuantity& bias, Footnotes& notes) {
   return fmt::format("<td>[{}, {}]</td>", display_number(*bias.low, "{:.3g}"), display_number(*bias.high, "{:.3g}"));
 }
 
+// agree / differ / inconclusive, with what decided it, its z and margin.
+std::string equivalence_cell(const PairSummary& p, Footnotes& notes) {
+  if (p.equivalence.empty()) return "<td class=\"text\">—" + notes.mark(p.deciding_z.reason) + "</td>";
+  std::string text = "<strong>" + html_escape(p.equivalence) + "</strong><br><small>by " + html_escape(p.deciding);
+  if (p.deciding_z.value) text += ", z = " + display_number(*p.deciding_z.value, "{:.2f}");
+  if (p.margin.value)
+    text += ", margin ±" + display_number(*p.margin.value, "{:.2g}") + " " + html_escape(p.margin.unit);
+  return "<td class=\"text\">" + text + "</small></td>";
+}
+
+// The verdict's sentences name every parameter's test: folded, so that a
+// row stays a row and the figures below stay where a reader expects them.
+std::string verdict_sentences_cell(const std::string& verdict) {
+  return "<td class=\"text\"><details><summary>the test in words</summary>" + html_escape(verdict) + "</details></td>";
+}
+
+std::string pairs_count_cell(const PairSummary& p, Footnotes& notes) {
+  if (!p.pairs) return "<td>—" + notes.mark(p.rms_difference.reason) + "</td>";
+  return "<td>" + std::to_string(*p.pairs) + "</td>";
+}
+
 std::string pair_row(const PairSummary& p, Footnotes& notes) {
   return "<tr><td class=\"text\">" + html_escape(p.thermocouple) + "</td><td class=\"text\">" + html_escape(p.probe) +
-         "</td>" + delta_k_cell(p.delta_k, notes) + cell(p.z, "{:.2f}", "", notes) + "<td class=\"text\">" +
-         html_escape(p.verdict) + "</td>" + cell(p.rms_difference, "{:.3g}", "°C", notes) +
-         cell(p.bias, "{:.3g}", "°C", notes, false) + limits_cell(p.bias, notes) + "</tr>\n";
+         "</td>" + equivalence_cell(p, notes) + delta_k_cell(p.delta_k, notes) + cell(p.z, "{:.2f}", "", notes) +
+         verdict_sentences_cell(p.verdict) + pairs_count_cell(p, notes) +
+         cell(p.rms_difference, "{:.3g}", "°C", notes) + cell(p.bias, "{:.3g}", "°C", notes, false) +
+         limits_cell(p.bias, notes) + "</tr>\n";
 }
 
 std::string pairs_table(const ReportSummary& s) {
   Footnotes notes;
   std::ostringstream h;
-  h << "<table class=\"summary agreement\"><caption>Each thermocouple against the BOS probe at its position: "
-       "Δk = k_thermocouple − k_probe ± its combined standard error σ, z = Δk/σ; the temperature differences "
-       "thermocouple − probe on the thermocouple's times within their overlap (probe interpolated), t in "
+  h << "<table class=\"summary agreement\"><caption>Each thermocouple against the BOS probe at its position. "
+       "Verdict: each of k, T0 and T_amb agrees when the 95% interval of its difference lies inside ±margin, "
+       "differs when it lies wholly outside, and is inconclusive otherwise; the curve takes the worst of them "
+       "(by: the parameter that decided it, its z = difference/σ and margin). The thermocouple's response lag "
+       "is removed first (docs/FITTING.md). Δk = k_thermocouple − k_probe ± its combined standard error σ, "
+       "z = Δk/σ; the temperature differences thermocouple − probe at the BOS frame times within their overlap "
+       "(thermocouple interpolated; n pairs), t in "
     << html_escape(s.time_basis)
     << ": RMS, Bland–Altman bias and 95% limits of agreement. “—”: not computed, for the reason in the "
        "footnote.</caption>\n"
-       "<tr><th class=\"text\">thermocouple</th><th class=\"text\">BOS probe</th><th>Δk ± σ (1/s)</th><th>z</th>"
-       "<th class=\"text\">verdict</th><th>RMS difference (°C)</th><th>bias (°C)</th>"
-       "<th>95% limits of agreement (°C)</th></tr>\n";
+       "<tr><th class=\"text\">thermocouple</th><th class=\"text\">BOS probe</th><th class=\"text\">verdict</th>"
+       "<th>Δk ± σ (1/s)</th><th>z</th><th class=\"text\">in words</th><th>n</th><th>RMS difference (°C)</th>"
+       "<th>bias (°C)</th><th>95% limits of agreement (°C)</th></tr>\n";
   for (const auto& p : s.pairs) h << pair_row(p, notes);
   h << "</table>\n" << notes.html();
   return h.str();

@@ -44,6 +44,14 @@ struct PairSummary {
   SummaryQuantity z;
   std::optional<bool> k_agree;
   std::string verdict;
+  // The equivalence test (fitting/agreement.h): agree, differ or
+  // inconclusive, decided by `deciding` (k, T0 or T_amb), whose z and
+  // margin are shown; empty with a reason in deciding_z when not tested.
+  std::string equivalence;
+  std::string deciding;
+  SummaryQuantity deciding_z;
+  SummaryQuantity margin;            // ± in the deciding parameter's unit
+  std::optional<std::size_t> pairs;  // Bland–Altman n: BOS frames in the overlap
   SummaryQuantity rms_difference;
   SummaryQuantity bias;  // low, high: the 95% limits of agreement
 };
