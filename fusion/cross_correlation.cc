@@ -364,7 +364,6 @@ void copy_field(const DisplacementField& from, DisplacementField& to, const cv::
 struct CorrelatorScratch {
   WindowCorrelator correlator;
   CorrelationPlane plane;
-  UncertaintyScratch uncertainty;
 };
 
 CorrelatorScratch& thread_scratch() {
@@ -399,7 +398,6 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
 void estimate_uncertainty(const PreparedPair& pair, const PassInput& in, DisplacementField& field) {
   const int node_count = static_cast<int>(field.vectors.size());
   auto estimate_range = [&](const cv::Range& range) {
-    UncertaintyScratch& scratch = thread_scratch().uncertainty;
     for (int i = range.start; i < range.end; ++i) {
       if (in.refine && !in.refine->data[i]) continue;
       auto& vec = field.vectors[static_cast<std::size_t>(i)];
@@ -408,7 +406,7 @@ void estimate_uncertainty(const PreparedPair& pair, const PassInput& in, Displac
       const cv::Rect at_peak(w.search.x + in.radius_px + in.peak_dx[i], w.search.y + in.radius_px + in.peak_dy[i],
                              in.window_px, in.window_px);
       const VectorUncertainty sigma =
-          correlation_statistics(reference_window_of(pair, in, w.window), view(in.warped, at_peak), scratch);
+          correlation_statistics(reference_window_of(pair, in, w.window), view(in.warped, at_peak));
       vec.sigma_u_px = sigma.sigma_u_px;
       vec.sigma_v_px = sigma.sigma_v_px;
     }

@@ -7,32 +7,48 @@
 namespace bosfuse::fusion {
 namespace {
 
-// A window less its mean, row-major into `out`.
-void centred(const cv::Mat& window, std::vector<double>& out) {
-  const int n = window.rows;
-  out.resize(static_cast<std::size_t>(n) * n);
+double mean_of(const cv::Mat& window) {
   double sum = 0;
-  for (int y = 0; y < n; ++y) {
+  for (int y = 0; y < window.rows; ++y) {
     const float* row = window.ptr<float>(y);
-    double* o = out.data() + static_cast<std::ptrdiff_t>(y) * n;
-    for (int x = 0; x < n; ++x) {
-      o[x] = row[x];
-      sum += row[x];
-    }
+    for (int x = 0; x < window.cols; ++x) sum += row[x];
   }
-  const double mean = sum / static_cast<double>(out.size());
-  for (double& v : out) v -= mean;
+  return sum / (static_cast<double>(window.rows) * window.cols);
 }
 
-// The variance of Σ d from its terms' spread, Σ (d − mean d)², as Wieneke
-// takes it.
-double variance_of_sum(const std::vector<double>& d) {
-  double mean = 0;
-  for (const double v : d) mean += v;
-  mean /= static_cast<double>(d.size());
-  double sum_sq = 0;
-  for (const double v : d) sum_sq += (v - mean) * (v - mean);
-  return sum_sq;
+// The sums the estimator needs, each in four lanes that the compiler keeps
+// in one vector register (a single double accumulator would serialise the
+// loop on its additions): C0, C± along x and y, and Σ ΔC, Σ ΔC² along each.
+struct Sums {
+  static constexpr int kLanes = 4;
+  enum Index { kC0, kPlusX, kMinusX, kPlusY, kMinusY, kDx, kDx2, kDy, kDy2, kCount };
+  double lane[kCount][kLanes] = {};
+
+  double total(Index i) const { return lane[i][0] + lane[i][1] + lane[i][2] + lane[i][3]; }
+};
+
+// One pixel's contributions at (x, y), `below` the next row's pixels (null
+// on the last row), into lane k.
+inline void add_pixel(Sums& s, int k, const float* a, const float* b, const float* a_below, const float* b_below,
+                      int x, bool has_right, double mean_a, double mean_b) {
+  const double a0 = a[x] - mean_a, b0 = b[x] - mean_b;
+  s.lane[Sums::kC0][k] += a0 * b0;
+  if (has_right) {
+    const double a1 = a[x + 1] - mean_a, b1 = b[x + 1] - mean_b;
+    const double plus = a0 * b1, minus = a1 * b0;
+    s.lane[Sums::kPlusX][k] += plus;
+    s.lane[Sums::kMinusX][k] += minus;
+    s.lane[Sums::kDx][k] += plus - minus;
+    s.lane[Sums::kDx2][k] += (plus - minus) * (plus - minus);
+  }
+  if (a_below) {
+    const double a1 = a_below[x] - mean_a, b1 = b_below[x] - mean_b;
+    const double plus = a0 * b1, minus = a1 * b0;
+    s.lane[Sums::kPlusY][k] += plus;
+    s.lane[Sums::kMinusY][k] += minus;
+    s.lane[Sums::kDy][k] += plus - minus;
+    s.lane[Sums::kDy2][k] += (plus - minus) * (plus - minus);
+  }
 }
 
 }  // namespace
@@ -46,48 +62,37 @@ double gaussian_peak_uncertainty(double c0, double c_pm, double sigma_delta) {
   return std::clamp(std::abs(sigma), kFloorPx, kUnresolvedPx);
 }
 
-VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window,
-                                         UncertaintyScratch& scratch) {
+VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window) {
   const int n = reference_window.rows;
   if (n < 4 || reference_window.cols != n || measurement_window.size() != reference_window.size() ||
       reference_window.type() != CV_32FC1 || measurement_window.type() != CV_32FC1) {
     throw std::invalid_argument("correlation statistics need two equal square float windows of at least 4 px");
   }
-  centred(reference_window, scratch.a);
-  centred(measurement_window, scratch.b);
-  const double* a = scratch.a.data();
-  const double* b = scratch.b.data();
-  scratch.dx.resize(static_cast<std::size_t>(n) * (n - 1));
-  scratch.dy.resize(static_cast<std::size_t>(n - 1) * n);
-  double c0 = 0, c_plus_x = 0, c_minus_x = 0, c_plus_y = 0, c_minus_y = 0;
+  const double mean_a = mean_of(reference_window), mean_b = mean_of(measurement_window);
+  Sums s;
   for (int y = 0; y < n; ++y) {
-    const double* ar = a + static_cast<std::ptrdiff_t>(y) * n;
-    const double* br = b + static_cast<std::ptrdiff_t>(y) * n;
-    double* dxr = scratch.dx.data() + static_cast<std::ptrdiff_t>(y) * (n - 1);
-    for (int x = 0; x < n; ++x) c0 += ar[x] * br[x];
-    for (int x = 0; x + 1 < n; ++x) {
-      const double plus = ar[x] * br[x + 1], minus = ar[x + 1] * br[x];
-      c_plus_x += plus;
-      c_minus_x += minus;
-      dxr[x] = plus - minus;
+    const float* a = reference_window.ptr<float>(y);
+    const float* b = measurement_window.ptr<float>(y);
+    const float* a_below = y + 1 < n ? reference_window.ptr<float>(y + 1) : nullptr;
+    const float* b_below = y + 1 < n ? measurement_window.ptr<float>(y + 1) : nullptr;
+    int x = 0;
+    for (; x + Sums::kLanes < n; x += Sums::kLanes) {
+      for (int k = 0; k < Sums::kLanes; ++k) add_pixel(s, k, a, b, a_below, b_below, x + k, true, mean_a, mean_b);
     }
-    if (y + 1 == n) break;
-    const double* ar_below = ar + n;
-    const double* br_below = br + n;
-    double* dyr = scratch.dy.data() + static_cast<std::ptrdiff_t>(y) * n;
-    for (int x = 0; x < n; ++x) {
-      const double plus = ar[x] * br_below[x], minus = ar_below[x] * br[x];
-      c_plus_y += plus;
-      c_minus_y += minus;
-      dyr[x] = plus - minus;
-    }
+    for (; x < n; ++x) add_pixel(s, 0, a, b, a_below, b_below, x, x + 1 < n, mean_a, mean_b);
   }
-  const double sigma_dx = std::sqrt(variance_of_sum(scratch.dx));
-  const double sigma_dy = std::sqrt(variance_of_sum(scratch.dy));
+  // ΔC has n(n − 1) terms along each axis; its variance as their spread.
+  const double terms = static_cast<double>(n) * (n - 1);
+  const auto spread = [&](Sums::Index sum, Sums::Index sum_sq) {
+    const double total = s.total(sum);
+    return std::sqrt(std::max(s.total(sum_sq) - total * total / terms, 0.0));
+  };
   // C± sum over n − 1 of the n columns (rows): C0 on as many pixels.
-  const double c0_part = c0 * (n - 1) / n;
-  return {gaussian_peak_uncertainty(c0_part, (c_plus_x + c_minus_x) / 2, sigma_dx),
-          gaussian_peak_uncertainty(c0_part, (c_plus_y + c_minus_y) / 2, sigma_dy)};
+  const double c0_part = s.total(Sums::kC0) * (n - 1) / n;
+  return {gaussian_peak_uncertainty(c0_part, (s.total(Sums::kPlusX) + s.total(Sums::kMinusX)) / 2,
+                                    spread(Sums::kDx, Sums::kDx2)),
+          gaussian_peak_uncertainty(c0_part, (s.total(Sums::kPlusY) + s.total(Sums::kMinusY)) / 2,
+                                    spread(Sums::kDy, Sums::kDy2))};
 }
 
 }  // namespace bosfuse::fusion

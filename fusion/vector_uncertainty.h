@@ -44,7 +44,6 @@
 // width the sub-pixel fit is bounded to; none gets less than kFloorPx.
 
 #include <opencv2/core.hpp>
-#include <vector>
 
 namespace bosfuse::fusion {
 
@@ -58,17 +57,10 @@ inline constexpr double kUnresolvedPx = 1.0;
 // DisplacementVector keeps for "not estimated".
 inline constexpr double kFloorPx = 1e-4;
 
-// Scratch kept between calls (one per thread): the centred windows and the
-// contributions.
-struct UncertaintyScratch {
-  std::vector<double> a, b, dx, dy;
-};
-
 // `reference_window` and `measurement_window` are n×n CV_32FC1 (views into
 // larger images are fine), n ≥ 4; the measurement window is the one at the
 // correlation's integer peak.
-VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window,
-                                         UncertaintyScratch& scratch);
+VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window);
 
 // The 3-point Gaussian fit's standard uncertainty along one axis, from the
 // correlation at the peak (c0), the mean of its two neighbours (c_pm) and

@@ -27,8 +27,7 @@ cv::Mat random_window(int n, std::uint64_t seed) {
 
 TEST(VectorUncertainty, IdenticalWindowsGiveTheFloor) {
   const cv::Mat a = random_window(16, 1);
-  UncertaintyScratch scratch;
-  const VectorUncertainty s = correlation_statistics(a, a.clone(), scratch);
+  const VectorUncertainty s = correlation_statistics(a, a.clone());
   EXPECT_DOUBLE_EQ(s.sigma_u_px, kFloorPx);
   EXPECT_DOUBLE_EQ(s.sigma_v_px, kFloorPx);
 }
@@ -37,9 +36,8 @@ TEST(VectorUncertainty, GrowsInProportionToTheNoise) {
   const cv::Mat a = random_window(32, 2);
   cv::Mat noise(a.size(), CV_32F);
   cv::RNG(3).fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
-  UncertaintyScratch scratch;
-  const VectorUncertainty low = correlation_statistics(a, a + 0.01 * noise, scratch);
-  const VectorUncertainty high = correlation_statistics(a, a + 0.04 * noise, scratch);
+  const VectorUncertainty low = correlation_statistics(a, a + 0.01 * noise);
+  const VectorUncertainty high = correlation_statistics(a, a + 0.04 * noise);
   EXPECT_GT(low.sigma_u_px, kFloorPx);
   EXPECT_NEAR(high.sigma_u_px / low.sigma_u_px, 4.0, 0.4);
   EXPECT_NEAR(high.sigma_v_px / low.sigma_v_px, 4.0, 0.4);
@@ -49,8 +47,7 @@ TEST(VectorUncertainty, AWindowOfNoiseAloneIsUnresolved) {
   cv::Mat a(16, 16, CV_32F), b(16, 16, CV_32F);
   cv::RNG(4).fill(a, cv::RNG::UNIFORM, 0.0, 1.0);
   cv::RNG(5).fill(b, cv::RNG::UNIFORM, 0.0, 1.0);
-  UncertaintyScratch scratch;
-  const VectorUncertainty s = correlation_statistics(a, b, scratch);
+  const VectorUncertainty s = correlation_statistics(a, b);
   EXPECT_GT(s.sigma_u_px, 0.2);
   EXPECT_LE(s.sigma_u_px, kUnresolvedPx);
 }
@@ -68,8 +65,7 @@ TEST(VectorUncertainty, GaussianPeakFormula) {
 }
 
 TEST(VectorUncertainty, RejectsMismatchedWindows) {
-  UncertaintyScratch scratch;
-  EXPECT_THROW(correlation_statistics(random_window(16, 1), random_window(8, 1), scratch), std::invalid_argument);
+  EXPECT_THROW(correlation_statistics(random_window(16, 1), random_window(8, 1)), std::invalid_argument);
 }
 
 // The periodic equal-window correlation the final pass computes, at shift (sx, sy).
@@ -93,7 +89,6 @@ TEST(VectorUncertainty, MatchesTheScatterOfNoisyWindows) {
   pattern.seed = 5;
   cv::Mat clean;
   sim::render_dots(sim::generate_pattern(pattern), nullptr).convertTo(clean, CV_32F);
-  UncertaintyScratch scratch;
   for (const double noise : {0.01, 0.03}) {
     constexpr int kDraws = 400;
     double sum = 0, sum_sq = 0, sigma_sum = 0, covered = 0;
@@ -105,7 +100,7 @@ TEST(VectorUncertainty, MatchesTheScatterOfNoisyWindows) {
       const cv::Mat a = (clean + noise_a)(window), b = (clean + noise_b)(window);
       const double dx = gaussian_3point(periodic_correlation(a, b, -1, 0), periodic_correlation(a, b, 0, 0),
                                         periodic_correlation(a, b, 1, 0));
-      const double sigma = correlation_statistics(a, b, scratch).sigma_u_px;
+      const double sigma = correlation_statistics(a, b).sigma_u_px;
       sum += dx;
       sum_sq += dx * dx;
       sigma_sum += sigma;

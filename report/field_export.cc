@@ -43,6 +43,11 @@ constexpr Quantity kDisplacementQuantities[] = {
      "its neighbours' median",
      true},
     {"peak_ratio", "peak_ratio", "1", "first / second correlation peak height; 0 where not measured", false},
+    {"sigma_u", "sigma_u_px", "px",
+     "standard uncertainty of u (correlation statistics on the final pass's windows; a replaced outlier its "
+     "neighbours' spread); 0 where not estimated, NaN in a field stored before it was",
+     false},
+    {"sigma_v", "sigma_v_px", "px", "standard uncertainty of v; as sigma_u_px", false},
 };
 
 constexpr Quantity kTemperatureQuantities[] = {
