@@ -196,6 +196,10 @@ struct PassInput {
   // uncertainty of the final pass; null where no one reads it.
   std::int8_t* peak_dx = nullptr;
   std::int8_t* peak_dy = nullptr;
+  // The pass is known to be the final one: each vector's σ is estimated as
+  // it is measured, while its windows are in cache (a sweep afterwards
+  // reads 128 MB of a 16 MP frame's images again).
+  bool uncertainty_now = false;
 };
 
 // Where a node's windows lie: the reference window, the search patch in the
@@ -266,6 +270,13 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
   if (in.peak_dx) {
     in.peak_dx[node] = static_cast<std::int8_t>(peak.dx);
     in.peak_dy[node] = static_cast<std::int8_t>(peak.dy);
+  }
+  if (in.uncertainty_now) {
+    const cv::Rect at_peak(w.search.x + r + peak.dx, w.search.y + r + peak.dy, in.window_px, in.window_px);
+    const VectorUncertainty sigma =
+        correlation_statistics(reference_window_of(pair, in, w.window), view(in.warped, at_peak));
+    vec.sigma_u_px = sigma.sigma_u_px;
+    vec.sigma_v_px = sigma.sigma_v_px;
   }
 }
 
@@ -396,6 +407,10 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
 // (vector_uncertainty.h); then the outliers it replaced get their
 // neighbours' spread (outlier_filter.h).
 void estimate_uncertainty(const PreparedPair& pair, const PassInput& in, DisplacementField& field) {
+  if (in.uncertainty_now) {  // estimated as the pass measured
+    estimate_replaced_uncertainty(field, in.refine);
+    return;
+  }
   const int node_count = static_cast<int>(field.vectors.size());
   auto estimate_range = [&](const cv::Range& range) {
     for (int i = range.start; i < range.end; ++i) {
@@ -763,6 +778,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     // pass with the accurate kernel finishes.
     const bool last = pass + 1 == static_cast<int>(windows.size()) || finish_now;
     const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
+    in.uncertainty_now = options.estimate_uncertainty && last && warp;
     auto warp_pass = [&](const cv::Mat& image, const GridField& by, cv::Mat& out) {
       if (in.refine) {
         warp_tiles(image, by, in.region, tiles, interpolator, out);

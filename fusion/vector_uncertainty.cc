@@ -27,13 +27,15 @@ struct Sums {
   double total(Index i) const { return lane[i][0] + lane[i][1] + lane[i][2] + lane[i][3]; }
 };
 
-// One pixel's contributions at (x, y), `below` the next row's pixels (null
-// on the last row), into lane k.
+// One pixel's contributions at (x, y) into lane k: to C0, and with `kRight`
+// and `kBelow` (known when compiled, so the lanes' loop has no branch) to
+// C± and ΔC along x and y, `below` being the next row's pixels.
+template <bool kRight, bool kBelow>
 inline void add_pixel(Sums& s, int k, const float* a, const float* b, const float* a_below, const float* b_below,
-                      int x, bool has_right, double mean_a, double mean_b) {
+                      int x, double mean_a, double mean_b) {
   const double a0 = a[x] - mean_a, b0 = b[x] - mean_b;
   s.lane[Sums::kC0][k] += a0 * b0;
-  if (has_right) {
+  if constexpr (kRight) {
     const double a1 = a[x + 1] - mean_a, b1 = b[x + 1] - mean_b;
     const double plus = a0 * b1, minus = a1 * b0;
     s.lane[Sums::kPlusX][k] += plus;
@@ -41,7 +43,7 @@ inline void add_pixel(Sums& s, int k, const float* a, const float* b, const floa
     s.lane[Sums::kDx][k] += plus - minus;
     s.lane[Sums::kDx2][k] += (plus - minus) * (plus - minus);
   }
-  if (a_below) {
+  if constexpr (kBelow) {
     const double a1 = a_below[x] - mean_a, b1 = b_below[x] - mean_b;
     const double plus = a0 * b1, minus = a1 * b0;
     s.lane[Sums::kPlusY][k] += plus;
@@ -49,6 +51,18 @@ inline void add_pixel(Sums& s, int k, const float* a, const float* b, const floa
     s.lane[Sums::kDy][k] += plus - minus;
     s.lane[Sums::kDy2][k] += (plus - minus) * (plus - minus);
   }
+}
+
+// A row's pixels: all but the last have a right neighbour.
+template <bool kBelow>
+void add_row(Sums& s, const float* a, const float* b, const float* a_below, const float* b_below, int n,
+             double mean_a, double mean_b) {
+  int x = 0;
+  for (; x + Sums::kLanes < n; x += Sums::kLanes) {
+    for (int k = 0; k < Sums::kLanes; ++k) add_pixel<true, kBelow>(s, k, a, b, a_below, b_below, x + k, mean_a, mean_b);
+  }
+  for (; x + 1 < n; ++x) add_pixel<true, kBelow>(s, 0, a, b, a_below, b_below, x, mean_a, mean_b);
+  add_pixel<false, kBelow>(s, 0, a, b, a_below, b_below, n - 1, mean_a, mean_b);
 }
 
 }  // namespace
@@ -70,17 +84,12 @@ VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const 
   }
   const double mean_a = mean_of(reference_window), mean_b = mean_of(measurement_window);
   Sums s;
-  for (int y = 0; y < n; ++y) {
-    const float* a = reference_window.ptr<float>(y);
-    const float* b = measurement_window.ptr<float>(y);
-    const float* a_below = y + 1 < n ? reference_window.ptr<float>(y + 1) : nullptr;
-    const float* b_below = y + 1 < n ? measurement_window.ptr<float>(y + 1) : nullptr;
-    int x = 0;
-    for (; x + Sums::kLanes < n; x += Sums::kLanes) {
-      for (int k = 0; k < Sums::kLanes; ++k) add_pixel(s, k, a, b, a_below, b_below, x + k, true, mean_a, mean_b);
-    }
-    for (; x < n; ++x) add_pixel(s, 0, a, b, a_below, b_below, x, x + 1 < n, mean_a, mean_b);
+  for (int y = 0; y + 1 < n; ++y) {
+    add_row<true>(s, reference_window.ptr<float>(y), measurement_window.ptr<float>(y),
+                  reference_window.ptr<float>(y + 1), measurement_window.ptr<float>(y + 1), n, mean_a, mean_b);
   }
+  add_row<false>(s, reference_window.ptr<float>(n - 1), measurement_window.ptr<float>(n - 1), nullptr, nullptr, n,
+                 mean_a, mean_b);
   // ΔC has n(n − 1) terms along each axis; its variance as their spread.
   const double terms = static_cast<double>(n) * (n - 1);
   const auto spread = [&](Sums::Index sum, Sums::Index sum_sq) {
