@@ -22,8 +22,8 @@
 // double.
 //
 // What it covers: on two windows with independent noise the fit's scatter
-// (a Monte Carlo of 400 noise draws, VectorUncertainty.MatchesTheScatterOf
-// NoisyWindows: σ within 7 % of the scatter, 95–96 % coverage). Over a whole
+// (a Monte Carlo of 400 noise draws in the test
+// MatchesTheScatterOfNoisyWindows: σ within 7 % of it, 95–96 % coverage). Over a whole
 // multipass field it sees only what the final windows show: the error the
 // earlier passes leave in the predictor, and the spatial-response bias of a
 // curved field, are not in them. The per-pixel sum neglects the correlation
@@ -35,9 +35,9 @@
 // alone, gave 0.8× the fields' errors.
 //
 // The moment-of-correlation method (Bhattacharya et al. 2018) is the other
-// established estimator; it needs the correlation plane's peak shape and a
-// calibration curve fitted to simulated pairs, while this one needs only the
-// two windows and is calibrated by construction.
+// established estimator; it reads the correlation plane's peak shape and
+// maps it to σ through a curve fitted to simulated pairs. It has not been
+// compared here; this one needs only the two windows and no fitted curve.
 //
 // A vector whose peak cannot resolve its own uncertainty (C± − σ_ΔC/2 ≤ 0,
 // or the peak no higher than its shifted neighbours) gets kUnresolvedPx, the
