@@ -308,6 +308,33 @@ TEST(VectorUncertaintyInFields, AReplacedOutlierGetsItsNeighboursSpread) {
   EXPECT_EQ(field.at(0, 2).sigma_u_px, 0);  // unmeasured vectors keep none
 }
 
+// Refinement that stops on convergence did not know its pass was the last:
+// σ then comes from a sweep over that pass's windows, the same as if it had.
+TEST(VectorUncertaintyInFields, RefinementStoppedByConvergenceStillGivesSigma) {
+  const auto pair = dot_pair(sim::DisplacementModel::uniform(0.25, 0.25));
+  XcorrOptions stopped;
+  stopped.passes = 10;
+  stopped.convergence_px = 0.05;
+  const auto early = evaluate_xcorr(pair.reference, pair.measurement, stopped);
+  ASSERT_TRUE(early.summary.converged);
+  ASSERT_LT(early.summary.passes_run, 10);
+  XcorrOptions fixed = stopped;
+  fixed.passes = early.summary.passes_run;
+  fixed.convergence_px = 0;
+  const auto known = evaluate_xcorr(pair.reference, pair.measurement, fixed);
+  ASSERT_EQ(known.field.size(), early.field.size());
+  std::size_t compared = 0;
+  for (std::size_t i = 0; i < early.field.size(); ++i) {
+    const auto &a = early.field.vectors[i], &b = known.field.vectors[i];
+    if (!a.valid() || !b.valid()) continue;
+    EXPECT_GT(a.sigma_u_px, 0);
+    EXPECT_DOUBLE_EQ(a.sigma_u_px, b.sigma_u_px);
+    EXPECT_DOUBLE_EQ(a.sigma_v_px, b.sigma_v_px);
+    ++compared;
+  }
+  EXPECT_GT(compared, 100u);
+}
+
 TEST(VectorUncertaintyInFields, AProbeHasTheFullFieldsSigma) {
   const auto pair = dot_pair(sim::DisplacementModel::sinusoid(0.8, 96), 256);
   XcorrOptions options;
