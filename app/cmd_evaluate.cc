@@ -1,5 +1,5 @@
 // bosfuse evaluate: a reference and a measurement image → a displacement
-// field as CSV (x,y,u,v,valid,peak_ratio) on standard output or in the
+// field as CSV (x,y,u,v,valid,peak_ratio,sigma_u,sigma_v) on standard output or in the
 // file -o names, optionally a map PNG (--map); the summary goes to standard
 // error. With --sequence, a whole folder or glob of frames against one
 // reference → one HDF5 file (report/sequence_export.h), with progress on
@@ -302,7 +302,7 @@ void add_evaluate(CLI::App& root) {
   auto args = std::make_shared<EvaluateArgs>();
   CLI::App* cmd = root.add_subcommand(
       "evaluate",
-      "Displacement field of an image pair (CSV: x,y,u,v,valid,peak_ratio), or of every frame of a sequence "
+      "Displacement field of an image pair (CSV: x,y,u,v,valid,peak_ratio,sigma_u,sigma_v), or of every frame of a sequence "
       "against one reference (--sequence: HDF5)");
   cmd->add_option("reference", args->reference, "Reference image (no flow)");
   cmd->add_option("measurement", args->measurement, "Measurement image (through the flow)");

@@ -55,7 +55,7 @@ TEST_F(EvaluateCli, AGoodPairGivesACsvWithTheHeader) {
   std::istringstream lines(csv);
   std::string header;
   std::getline(lines, header);
-  EXPECT_EQ(header, "x,y,u,v,valid,peak_ratio");
+  EXPECT_EQ(header, "x,y,u,v,valid,peak_ratio,sigma_u,sigma_v");
   int rows = 0, valid = 0;
   double sum_u = 0;
   for (std::string line; std::getline(lines, line) && rows < 10000; ++rows) {
@@ -88,7 +88,7 @@ TEST_F(EvaluateCli, AdaptiveRefinementOfAShiftEverywhereRefinesEverything) {
 TEST_F(EvaluateCli, ProbesGiveOneRowEach) {
   const auto run = bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " --probe 40,40 --probe 80.5,50");
   ASSERT_EQ(run.exit_code, 0) << run.output;
-  EXPECT_NE(run.output.find("x,y,u,v,valid,peak_ratio\n"), std::string::npos);
+  EXPECT_NE(run.output.find("x,y,u,v,valid,peak_ratio,sigma_u,sigma_v\n"), std::string::npos);
   // (40, 40) lies halfway between window centres 39.5 and 40.5: it snaps up.
   EXPECT_NE(run.output.find("\n40.5,40.5,0.4"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("\n80.5,50.5,0.3"), std::string::npos) << run.output;
@@ -332,7 +332,7 @@ TEST_F(EvaluateCli, BackgroundAndQuality) {
 TEST_F(EvaluateCli, DashIsStandardOutputWithOnlyTheCsvOnIt) {
   const auto dash = streams("evaluate " + path("ref.png") + " " + path("meas.png") + " -o -");
   ASSERT_EQ(dash.exit_code, 0) << dash.err;
-  EXPECT_TRUE(dash.out.starts_with("x,y,u,v,valid,peak_ratio\n")) << dash.out.substr(0, 200);
+  EXPECT_TRUE(dash.out.starts_with("x,y,u,v,valid,peak_ratio,sigma_u,sigma_v\n")) << dash.out.substr(0, 200);
   EXPECT_EQ(std::count(dash.out.begin(), dash.out.end(), '\n'), 1 + 15 * 11);
   EXPECT_NE(dash.err.find("vectors"), std::string::npos) << "the summary goes to stderr: " << dash.err;
   EXPECT_EQ(dash.err.find("x,y,u,v"), std::string::npos) << dash.err;

@@ -105,7 +105,7 @@ TEST_F(SequenceCli, AGlobOfFramesGivesOneFileWithEveryFieldNameAndTime) {
 
   const json f = h5("fields.h5");
   const int nx = (kWidth - 16) / 8 + 1, ny = (kHeight - 16) / 8 + 1;
-  for (const char* name : {"u_px", "v_px", "peak_ratio", "valid", "flag"}) {
+  for (const char* name : {"u_px", "v_px", "peak_ratio", "sigma_u_px", "sigma_v_px", "valid", "flag"}) {
     EXPECT_EQ(f.at(std::string("/") + name).at("shape"), json::array({3, ny, nx})) << name;
     EXPECT_EQ(f.at(std::string("/") + name).at("compression"), "gzip") << name;
   }
@@ -154,7 +154,7 @@ TEST_F(SequenceCli, AGlobOfFramesGivesOneFileWithEveryFieldNameAndTime) {
   for (std::size_t i = 0; i < 3; ++i) {
     EXPECT_EQ(std::stod(grids[i].at("time").get<std::string>()), f.at("/t_s").at("data")[i].get<double>());
     EXPECT_EQ(grids[i].at("geometry")[0].at("shape"), json::array({nx}));
-    for (const char* name : {"u_px", "v_px", "peak_ratio", "valid", "flag"}) {
+    for (const char* name : {"u_px", "v_px", "peak_ratio", "sigma_u_px", "sigma_v_px", "valid", "flag"}) {
       const json& a = grids[i].at("attributes").at(name);
       EXPECT_EQ(a.at("shape"), json::array({1, ny, nx})) << name;
       EXPECT_EQ(a.at("start")[0], i) << name;

@@ -226,7 +226,10 @@ BENCHMARK(BM_FullFrame16MPMethods)
 void BM_FullFrame16MPEvaluator(benchmark::State& state) {
   const auto& pair = full_frame();
   const bool from_32 = state.range(0) == 1;
-  fusion::DisplacementEvaluator frames(pair.reference, full_frame_options(0, from_32 ? 2 : 3, from_32 ? 32 : 0));
+  auto options = full_frame_options(0, from_32 ? 2 : 3, from_32 ? 32 : 0);
+  // sigma:0 leaves out the per-vector uncertainty: its cost is the difference.
+  options.xcorr.estimate_uncertainty = state.range(1) == 1;
+  fusion::DisplacementEvaluator frames(pair.reference, options);
   frames.evaluate(pair.measurement);
   for (auto _ : state) {
     const auto result = frames.evaluate(pair.measurement);
@@ -235,8 +238,8 @@ void BM_FullFrame16MPEvaluator(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_FullFrame16MPEvaluator)
-    ->ArgName("schedule")
-    ->DenseRange(0, 1)
+    ->ArgNames({"schedule", "sigma"})
+    ->ArgsProduct({{0, 1}, {0, 1}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond)
     ->Iterations(2);

@@ -17,6 +17,7 @@
 #include "fusion/for_rows.h"
 #include "fusion/image_input.h"
 #include "fusion/memory_budget.h"
+#include "fusion/vector_uncertainty.h"
 
 namespace bosfuse::fusion {
 namespace {
@@ -191,35 +192,62 @@ struct PassInput {
            stats_stride * col;
   }
   const cv::Mat* refine = nullptr;  // adaptive refinement: only nodes marked 1 here are evaluated
+  // Where each node's integer peak is kept (the field's size), for the
+  // uncertainty of the final pass; null where no one reads it.
+  std::int8_t* peak_dx = nullptr;
+  std::int8_t* peak_dy = nullptr;
+  // The pass is known to be the final one: each vector's σ is estimated as
+  // it is measured, while its windows are in cache (a sweep afterwards
+  // reads 128 MB of a 16 MP frame's images again).
+  bool uncertainty_now = false;
 };
 
-void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, int row, int col,
-                   WindowCorrelator& correlator, CorrelationPlane& plane, DisplacementVector& vec) {
+// Where a node's windows lie: the reference window, the search patch in the
+// pass's warped image (its top-left the window's, shifted by −radius and
+// the whole-pixel offset) and the shift the pass measures from.
+struct NodeWindows {
+  cv::Rect window;
+  cv::Rect search;
+  double base_u = 0, base_v = 0;
+};
+
+NodeWindows node_windows(const PreparedPair& pair, const PassInput& in, int row, int col,
+                         const DisplacementVector& vec) {
   const int n = in.window_px, r = in.radius_px;
-  const cv::Point origin = window_origin(vec.x_px, vec.y_px, n, pair.roi);
-  const cv::Rect window(origin, cv::Size(n, n));
+  NodeWindows w;
+  w.window = cv::Rect(window_origin(vec.x_px, vec.y_px, n, pair.roi), cv::Size(n, n));
+  w.base_u = in.predictor ? in.predictor->u_px.at<double>(row, col) : 0.0;
+  w.base_v = in.predictor ? in.predictor->v_px.at<double>(row, col) : 0.0;
+  cv::Point offset_px(0, 0);
+  if (in.shift_whole_pixels) {
+    offset_px = {static_cast<int>(std::lround(w.base_u)), static_cast<int>(std::lround(w.base_v))};
+    w.base_u = offset_px.x;
+    w.base_v = offset_px.y;
+  }
+  w.search = cv::Rect(w.window.x + offset_px.x - r - in.region.x, w.window.y + offset_px.y - r - in.region.y, n + 2 * r,
+                      n + 2 * r);
+  return w;
+}
+
+cv::Mat reference_window_of(const PreparedPair& pair, const PassInput& in, cv::Rect window) {
+  return in.warped_reference.empty() ? view(pair.reference, window) : view(in.warped_reference, window - in.region.tl());
+}
+
+void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, int row, int col,
+                   std::size_t node, WindowCorrelator& correlator, CorrelationPlane& plane, DisplacementVector& vec) {
+  const int r = in.radius_px;
+  const NodeWindows w = node_windows(pair, in, row, col, vec);
   vec.u_px = vec.v_px = vec.peak_ratio = 0;
-  if (window_masked(pair, window, options.max_masked_fraction, vec.x_px, vec.y_px)) {
+  vec.sigma_u_px = vec.sigma_v_px = 0;
+  if (window_masked(pair, w.window, options.max_masked_fraction, vec.x_px, vec.y_px)) {
     vec.flag = VectorFlag::kMasked;
     return;
   }
-  double base_u = in.predictor ? in.predictor->u_px.at<double>(row, col) : 0.0;
-  double base_v = in.predictor ? in.predictor->v_px.at<double>(row, col) : 0.0;
-  cv::Point offset_px(0, 0);
-  if (in.shift_whole_pixels) {
-    offset_px = {static_cast<int>(std::lround(base_u)), static_cast<int>(std::lround(base_v))};
-    base_u = offset_px.x;
-    base_v = offset_px.y;
-  }
-  const cv::Rect search(origin.x + offset_px.x - r - in.region.x, origin.y + offset_px.y - r - in.region.y, n + 2 * r,
-                        n + 2 * r);
   // After deformation the remaining shift is near 0: equal windows give an
   // unbiased peak there (see window_correlator.h).
   const auto pairing = in.predictor && options.deform ? WindowPairing::kEqualWindows : WindowPairing::kSearchArea;
-  const cv::Mat reference_window =
-      in.warped_reference.empty() ? view(pair.reference, window) : view(in.warped_reference, window - in.region.tl());
-  correlator.correlate(reference_window, view(in.warped, search), r, options.correlation, plane, pairing,
-                       in.stats_at(row, col));
+  correlator.correlate(reference_window_of(pair, in, w.window), view(in.warped, w.search), r, options.correlation,
+                       plane, pairing, in.stats_at(row, col));
   if (plane.reference_std < options.min_texture_std) {
     vec.flag = VectorFlag::kNoTexture;
     return;
@@ -235,10 +263,21 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
   }
   const SubpixelOffset offset =
       subpixel_offset(c, pairing == WindowPairing::kEqualWindows ? options.refinement_subpixel : options.subpixel);
-  vec.u_px = base_u + peak.dx + offset.dx_px;
-  vec.v_px = base_v + peak.dy + offset.dy_px;
+  vec.u_px = w.base_u + peak.dx + offset.dx_px;
+  vec.v_px = w.base_v + peak.dy + offset.dy_px;
   vec.peak_ratio = peak.ratio;
   vec.flag = VectorFlag::kOk;
+  if (in.peak_dx) {
+    in.peak_dx[node] = static_cast<std::int8_t>(peak.dx);
+    in.peak_dy[node] = static_cast<std::int8_t>(peak.dy);
+  }
+  if (in.uncertainty_now) {
+    const cv::Rect at_peak(w.search.x + r + peak.dx, w.search.y + r + peak.dy, in.window_px, in.window_px);
+    const VectorUncertainty sigma =
+        correlation_statistics(reference_window_of(pair, in, w.window), view(in.warped, at_peak));
+    vec.sigma_u_px = sigma.sigma_u_px;
+    vec.sigma_v_px = sigma.sigma_v_px;
+  }
 }
 
 // The bounding box of windows; "none" starts inverted across the ROI.
@@ -351,7 +390,8 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
       if (in.refine && !in.refine->data[i]) continue;  // before the vector: most nodes are not selected
       auto& vec = field.vectors[static_cast<std::size_t>(i)];
       if (vec.flag == VectorFlag::kOutOfRoi) continue;
-      evaluate_node(pair, in, options, i / field.cols, i % field.cols, scratch.correlator, scratch.plane, vec);
+      evaluate_node(pair, in, options, i / field.cols, i % field.cols, static_cast<std::size_t>(i), scratch.correlator,
+                    scratch.plane, vec);
     }
   };
   // A probe's few windows cost less than waking the other thread.
@@ -360,6 +400,38 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
     return;
   }
   cv::parallel_for_(cv::Range(0, node_count), evaluate_range, std::max(1.0, node_count / 256.0));
+}
+
+// σu, σv of the vectors the final pass `in` measured (kOk, and under
+// adaptive refinement the selected ones), from the windows it correlated
+// (vector_uncertainty.h); then the outliers it replaced get their
+// neighbours' spread (outlier_filter.h).
+void estimate_uncertainty(const PreparedPair& pair, const PassInput& in, DisplacementField& field) {
+  if (in.uncertainty_now) {  // estimated as the pass measured
+    estimate_replaced_uncertainty(field, in.refine);
+    return;
+  }
+  const int node_count = static_cast<int>(field.vectors.size());
+  auto estimate_range = [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      if (in.refine && !in.refine->data[i]) continue;
+      auto& vec = field.vectors[static_cast<std::size_t>(i)];
+      if (vec.flag != VectorFlag::kOk) continue;
+      const NodeWindows w = node_windows(pair, in, i / field.cols, i % field.cols, vec);
+      const cv::Rect at_peak(w.search.x + in.radius_px + in.peak_dx[i], w.search.y + in.radius_px + in.peak_dy[i],
+                             in.window_px, in.window_px);
+      const VectorUncertainty sigma =
+          correlation_statistics(reference_window_of(pair, in, w.window), view(in.warped, at_peak));
+      vec.sigma_u_px = sigma.sigma_u_px;
+      vec.sigma_v_px = sigma.sigma_v_px;
+    }
+  };
+  if (node_count < 64) {
+    estimate_range(cv::Range(0, node_count));
+  } else {
+    cv::parallel_for_(cv::Range(0, node_count), estimate_range, std::max(1.0, node_count / 256.0));
+  }
+  estimate_replaced_uncertainty(field, in.refine);
 }
 
 // The selection of the refinement passes and what the others keep.
@@ -382,6 +454,7 @@ struct PassWorkspace {
   cv::Mat warped_storage, warped_reference_storage;
   bool cache_reference_stats = false;
   std::map<int, std::vector<WindowStats>> reference_stats;  // by window size
+  std::vector<std::int8_t> peak_dx, peak_dy;                 // the last pass's integer peaks, for its uncertainty
   DisplacementField previous_field;                         // the field before a pass, for its change
   GridField predictor;                                      // a refinement pass's, and its smoothing's scratch
   cv::Mat predictor_scratch;
@@ -635,6 +708,11 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
   adaptive.selection = {};  // none until this frame's first pass selects
   PassArea area;
   bool finish_now = false;
+  std::optional<PassInput> final_pass;  // the pass the vectors come from, for their uncertainty
+  if (options.estimate_uncertainty) {
+    workspace.peak_dx.resize(field.vectors.size());
+    workspace.peak_dy.resize(field.vectors.size());
+  }
   for (int pass = 0; pass < static_cast<int>(windows.size()); ++pass) {
     PassInput in;
     in.window_px = windows[pass];
@@ -691,11 +769,16 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     }
     read_area(reach_px);
     const std::vector<cv::Rect>& tiles = area.tiles;
+    if (options.estimate_uncertainty) {
+      in.peak_dx = workspace.peak_dx.data();
+      in.peak_dy = workspace.peak_dy.data();
+    }
     // Passes before the last only feed the next pass's predictor: the
     // cheaper cubic kernel serves them as well; when they have converged, one
     // pass with the accurate kernel finishes.
     const bool last = pass + 1 == static_cast<int>(windows.size()) || finish_now;
     const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
+    in.uncertainty_now = options.estimate_uncertainty && last && warp;
     auto warp_pass = [&](const cv::Mat& image, const GridField& by, cv::Mat& out) {
       if (in.refine) {
         warp_tiles(image, by, in.region, tiles, interpolator, out);
@@ -724,6 +807,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     // each pass would page-fault it anew.
     if (pass > 0) copy_field(field, workspace.previous_field, changeable);
     run_pass(pair, in, options, field);
+    final_pass = in;
     if (options.replace_outliers) {
       replace_outliers(field, options.outliers, adaptive.active() ? &adaptive.outlier_tested : nullptr, changeable);
     }
@@ -740,6 +824,12 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
       if (interpolator == options.interpolator) break;
       finish_now = true;
     }
+  }
+  // Without deformation the final pass pairs a window with a larger search
+  // patch, whose C(±1) read different pixels: the statistics of equal
+  // windows do not describe that peak, and σ is left 0 (not estimated).
+  if (options.estimate_uncertainty && final_pass && final_pass->predictor && options.deform) {
+    estimate_uncertainty(pair, *final_pass, field);
   }
   count_flags(field, summary);
   summary.refined_fraction = adaptive.active() ? adaptive.selection.fraction() : summary.passes_run > 1 ? 1.0 : 0.0;

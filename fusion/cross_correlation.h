@@ -77,6 +77,11 @@ struct XcorrOptions {
   bool adaptive_refinement = false;
   double adaptive_threshold = 4;
   double adaptive_smoothing_nodes = 2;
+  // σu, σv of every vector the final pass measured, by correlation
+  // statistics on its windows (vector_uncertainty.h); a replaced outlier
+  // gets its neighbours' spread. Only when the final pass deforms (passes
+  // ≥ 2 and deform); otherwise, or off, σ stays 0, "not estimated".
+  bool estimate_uncertainty = true;
 
   std::string Validate() const;  // empty when valid
   std::vector<int> window_px_per_pass() const;

@@ -43,6 +43,8 @@ FieldCsvWriter field_text(const DisplacementField& field) {
     csv.fixed(v.v_px, 5);
     csv.integer(v.valid() ? 1 : 0);
     csv.fixed(v.peak_ratio, 3);
+    csv.fixed(v.sigma_u_px, 5);
+    csv.fixed(v.sigma_v_px, 5);
     csv.end_line();
   }
   return csv;

@@ -61,7 +61,8 @@ struct DisplacementField {
   std::size_t count_valid() const { return count(VectorFlag::kOk); }
 };
 
-// CSV with the header `x,y,u,v,valid,peak_ratio`, one vector per line.
+// CSV with the header `x,y,u,v,valid,peak_ratio,sigma_u,sigma_v`, one
+// vector per line (σ 0 where not estimated).
 void write_csv(const DisplacementField& field, std::ostream& out);
 void write_csv(const DisplacementField& field, const std::filesystem::path& path);
 

@@ -129,6 +129,24 @@ void FieldCsvWriter::save(const std::filesystem::path& path) const {
   if (!out.flush()) throw std::runtime_error(path.string() + ": write failed");
 }
 
+namespace {
+
+// How many of `value_columns` the header line holds: all of them, or all
+// but a tail that kColumnsAddedLater lists; 0 when it is neither.
+std::size_t columns_in_header(const std::string& header, std::span<const std::string_view> value_columns) {
+  for (std::size_t count = value_columns.size(); count > 0; --count) {
+    if (header == field_csv_header(value_columns.first(count))) return count;
+    const std::string_view dropped = value_columns[count - 1];
+    if (std::find(std::begin(kColumnsAddedLater), std::end(kColumnsAddedLater), dropped) ==
+        std::end(kColumnsAddedLater)) {
+      break;
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
 StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<const std::string_view> value_columns) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(fmt::format("cannot read '{}'", path.string()));
@@ -136,11 +154,12 @@ StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<c
   std::string line;
   std::getline(in, line);
   if (!line.empty() && line.back() == '\r') line.pop_back();
-  if (line != expected) {
+  const std::size_t in_file = columns_in_header(line, value_columns);
+  if (in_file == 0) {
     throw std::runtime_error(
         fmt::format("'{}': the header is '{}', expected '{}'", path.string(), line.substr(0, 80), expected));
   }
-  const std::size_t width = value_columns.size() + 2;
+  const std::size_t width = in_file + 2;
   // Nodes keyed by (y, x) so rows come out in order; the grid is known only at the end.
   std::map<std::pair<double, double>, std::vector<double>> nodes;
   std::size_t line_number = 1;
@@ -162,6 +181,7 @@ StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<c
     }
     const std::pair key{numbers[1], numbers[0]};
     numbers.erase(numbers.begin(), numbers.begin() + 2);
+    numbers.resize(value_columns.size(), std::numeric_limits<double>::quiet_NaN());
     if (!nodes.emplace(key, std::move(numbers)).second) {
       throw std::runtime_error(fmt::format("'{}' line {}: the node ({}, {}) appears twice", path.string(), line_number,
                                            key.second, key.first));

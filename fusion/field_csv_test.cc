@@ -8,6 +8,7 @@
 #include <limits>
 #include <random>
 
+#include "fusion/displacement_field.h"
 #include "tests/support/temp_dir.h"
 
 namespace bosfuse::fusion {
@@ -98,13 +99,39 @@ TEST(FieldCsv, ReadsTheGridInRowOrderWhateverTheLineOrder) {
   const auto grid = read_stored_field(dir / "d.csv", kDisplacementColumns);
   EXPECT_EQ(grid.x_px, (std::vector<double>{8, 16}));
   EXPECT_EQ(grid.y_px, (std::vector<double>{8, 16}));
-  ASSERT_EQ(grid.columns.size(), 4u);
+  ASSERT_EQ(grid.columns.size(), 6u);
+  // Written before issue 29: no σ columns, read as NaN.
+  EXPECT_TRUE(std::isnan(grid.column("sigma_u").at<double>(0, 0)));
+  EXPECT_TRUE(std::isnan(grid.column("sigma_v").at<double>(1, 1)));
   EXPECT_EQ(grid.column("u").at<double>(0, 0), 0.3) << "the text's double, exactly";
   EXPECT_EQ(grid.column("v").at<double>(0, 1), -0.2);
   EXPECT_EQ(grid.column("valid").at<double>(1, 0), 0.0);
   EXPECT_EQ(grid.column("peak_ratio").at<double>(0, 1), 2.5);
   EXPECT_EQ(cv::countNonZero(grid.present), 4);
   EXPECT_THROW(grid.column("w"), std::out_of_range);
+}
+
+TEST(FieldCsv, ReadsTheUncertaintyColumnsWrittenBack) {
+  testing::TempDir dir;
+  DisplacementField field;
+  field.rows = 1;
+  field.cols = 2;
+  field.vectors = {{7.5, 7.5, 0.25, -1.5, 3.2, VectorFlag::kOk, false, 0.0123, 0.0045},
+                   {15.5, 7.5, 0, 0, 0, VectorFlag::kMasked}};
+  write_csv(field, dir / "d.csv");
+  const auto grid = read_stored_field(dir / "d.csv", kDisplacementColumns);
+  EXPECT_EQ(grid.column("sigma_u").at<double>(0, 0), 0.0123);
+  EXPECT_EQ(grid.column("sigma_v").at<double>(0, 0), 0.0045);
+  EXPECT_EQ(grid.column("sigma_u").at<double>(0, 1), 0.0) << "not estimated";
+}
+
+TEST(FieldCsv, OnlyTheColumnsAddedLaterMayBeMissing) {
+  testing::TempDir dir;
+  const auto path = dir / "d.csv";
+  std::ofstream(path) << "x,y,u,v,valid,peak_ratio,sigma_u\n8,8,1,1,1,2,0.1\n";
+  EXPECT_EQ(read_stored_field(path, kDisplacementColumns).column("sigma_u").at<double>(0, 0), 0.1);
+  std::ofstream(path) << "x,y,u,v,valid\n8,8,1,1,1\n";
+  EXPECT_NE(error_of(path, kDisplacementColumns).find("the header is 'x,y,u,v,valid'"), std::string::npos);
 }
 
 TEST(FieldCsv, EmptyCellsAndMissingNodesAreNaN) {

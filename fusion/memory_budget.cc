@@ -30,11 +30,12 @@ constexpr Bytes kFixedBytes = Bytes{8} << 20;
 // between passes), the predictor's u and v and its smoothing's scratch
 // component (kept between passes and frames), the outlier flags and, at
 // worst for every node, an outlier's index and its replacement value, and
-// the reference window's mean and energy kept per node for each window size.
+// the reference window's mean and energy kept per node for each window size,
+// and the integer peak kept per node for the final pass's uncertainty.
 // predictor_from's peak (the field, two predictors, a work copy when there
 // are gaps, fill flags and updates: 153 B) is below it.
 constexpr Bytes kXcorrBytesPerNode = 2 * sizeof(DisplacementVector) + 3 * sizeof(double) + 1 + sizeof(std::size_t) +
-                                     sizeof(cv::Point2d) + 2 * 2 * sizeof(double);
+                                     sizeof(cv::Point2d) + 2 * 2 * sizeof(double) + 2 * sizeof(std::int8_t);
 
 // Adaptive refinement's, kept between frames: four masks (the selection,
 // the outlier test's, and the nodes a pass reads its predictor at, with
@@ -271,7 +272,7 @@ PairShape PairShape::of(const cv::Mat& reference, const cv::Mat& mask) {
 //     its 0/1 copy and CV_32S integral (6 B/px);
 //   a pass: the float copies, the mask and its integral (5 B/px), the warped
 //     regions (4 B/px of the ROI grown by the search reach, in one buffer
-//     all passes reuse; two with symmetric deformation) and 177 B per grid
+//     all passes reuse; two with symmetric deformation) and 211 B per grid
 //     node (kXcorrBytesPerNode), 4 B more with adaptive refinement, and
 //     its smoothing's rows per thread.
 std::uint64_t xcorr_bytes_needed(const PairShape& pair, const XcorrOptions& options) {

@@ -161,8 +161,8 @@ TEST(MemoryBudget, EstimateFollowsTheSettings) {
   const XcorrOptions defaults;
   const std::uint64_t base = xcorr_bytes_needed(pair, defaults);
   // Float copies, the passes' one warped region (the ROI grown by the 5 px
-  // search reach), 186626 nodes of 177 B, and 8 MB.
-  EXPECT_EQ(base, 96 * kMB + 4ull * 4010 * 3010 + 186626ull * 177 + (8ull << 20));
+  // search reach), 186626 nodes of 211 B, and 8 MB.
+  EXPECT_EQ(base, 96 * kMB + 4ull * 4010 * 3010 + 186626ull * 211 + (8ull << 20));
   XcorrOptions adaptive = defaults;
   adaptive.adaptive_refinement = true;
   // 499 nodes a row (4000 px, IW 16, step 8); the smoothing's rows: σ = 2

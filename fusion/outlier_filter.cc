@@ -175,6 +175,45 @@ std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& opt
   return replaced.size();
 }
 
+namespace {
+
+// 1.4826 × the median absolute deviation of values[0 … count) (the
+// standard deviation of normally distributed values), reordering them.
+double robust_spread(double* values, int count) {
+  const double med = median_in_place(values, count);
+  for (int i = 0; i < count; ++i) values[i] = std::abs(values[i] - med);
+  return 1.4826 * median_in_place(values, count);
+}
+
+}  // namespace
+
+void estimate_replaced_uncertainty(DisplacementField& field, const cv::Mat* only) {
+  for_rows(field.rows, [&](int row) {
+    const std::uint8_t* marked = only ? only->ptr<std::uint8_t>(row) : nullptr;
+    for (int col = 0; col < field.cols; ++col) {
+      if (marked && !marked[col]) continue;
+      auto& vec = field.at(row, col);
+      if (vec.flag != VectorFlag::kOutlierReplaced) continue;
+      std::array<double, 8> sigma_u{}, sigma_v{};
+      int with_sigma = 0;
+      Neighbours n = neighbours_of(field, row, col, [&](const DisplacementVector& v) {
+        if (v.flag != VectorFlag::kOk) return false;
+        if (v.sigma_u_px > 0 && v.sigma_v_px > 0) {
+          sigma_u[with_sigma] = v.sigma_u_px;
+          sigma_v[with_sigma] = v.sigma_v_px;
+          ++with_sigma;
+        }
+        return true;
+      });
+      if (n.count == 0) continue;  // replaced from none: cannot happen, but then nothing to say
+      const double own_u = with_sigma > 0 ? median_in_place(sigma_u.data(), with_sigma) : 0.0;
+      const double own_v = with_sigma > 0 ? median_in_place(sigma_v.data(), with_sigma) : 0.0;
+      vec.sigma_u_px = std::hypot(robust_spread(n.u.data(), n.count), own_u);
+      vec.sigma_v_px = std::hypot(robust_spread(n.v.data(), n.count), own_v);
+    }
+  });
+}
+
 GridField predictor_from(const DisplacementField& field, const GridGeometry& grid, int max_sweeps) {
   GridField predictor;
   predictor_from(field, grid, predictor, max_sweeps);

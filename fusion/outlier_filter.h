@@ -58,6 +58,16 @@ double median_of_non_negative(std::span<const double> values);
 std::size_t replace_outliers(DisplacementField& field, const OutlierOptions& options, const cv::Mat* only = nullptr,
                              const cv::Mat* replace_in = nullptr);
 
+// σu, σv of each vector replace_outliers replaced (kOutlierReplaced), once
+// its neighbours' σ are known: the replacement is the median of its measured
+// neighbours, so its error is how far the field at the node lies from them
+// (their robust spread, 1.4826 × the median absolute deviation of their u
+// and of their v, which holds their noise and the field's change across
+// the node) together with one neighbour's own error (their median σ), in
+// quadrature: σ² = spread² + median(σ)². With `only` (CV_8U, the field's
+// shape) only the nodes marked there. Unmeasured vectors keep σ = 0.
+void estimate_replaced_uncertainty(DisplacementField& field, const cv::Mat* only = nullptr);
+
 // The predictor for the next pass on `grid` (the field's own grid):
 // measured and replaced vectors as they are; every other node the median of
 // its already-filled neighbours, spreading outwards for at most `max_sweeps`

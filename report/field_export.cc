@@ -45,6 +45,11 @@ constexpr Quantity kDisplacementQuantities[] = {
      "its neighbours' median",
      true},
     {"peak_ratio", "peak_ratio", "1", "first / second correlation peak height; NaN where valid is 0", false},
+    {"sigma_u", "sigma_u_px", "px",
+     "standard uncertainty of u (correlation statistics on the final pass's windows); NaN where valid is 0 or in a "
+     "field stored before it was, 0 where not estimated",
+     false},
+    {"sigma_v", "sigma_v_px", "px", "standard uncertainty of v; as sigma_u_px", false},
 };
 
 constexpr Quantity kTemperatureQuantities[] = {

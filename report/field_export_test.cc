@@ -309,7 +309,9 @@ TEST_F(FieldExport, TheXdmfSidecarIsWellFormedAndPointsAtTheDatasets) {
       }
     }
   }
-  EXPECT_EQ(xdmf.at("collections").at("displacement")[0].at("attributes").size(), 4u);
+  // u_px, v_px, valid, peak_ratio, sigma_u_px, sigma_v_px.
+  EXPECT_EQ(xdmf.at("collections").at("displacement")[0].at("attributes").size(), 6u);
+  EXPECT_TRUE(xdmf.at("collections").at("displacement")[0].at("attributes").contains("sigma_u_px"));
   EXPECT_TRUE(xdmf.at("collections").at("temperature")[0].at("attributes").contains("temperature_c"));
 }
 

@@ -40,6 +40,11 @@ constexpr Quantity kQuantities[] = {
      false},
     {"v_px", "px", "displacement along y (down); as u_px", false},
     {"peak_ratio", "1", "first / second correlation peak height; 0 where not measured, NaN for a failed frame", false},
+    {"sigma_u_px", "px",
+     "standard uncertainty of u_px (correlation statistics on the final pass's windows; a replaced outlier its "
+     "neighbours' spread); 0 where not estimated, NaN for a failed frame",
+     false},
+    {"sigma_v_px", "px", "standard uncertainty of v_px; as sigma_u_px", false},
     {"valid", "1", "1 where (u, v) was measured (flag 0), else 0", true},
     {"flag", "1",
      "why a node is or is not a measurement: 0 ok, 1 outlier replaced by its neighbours' median, 2 no texture, "
@@ -96,7 +101,7 @@ SequenceFieldWriter::SequenceFieldWriter(const fs::path& hdf5_path, SequenceExpo
   out.set_attribute("/", "layout_version", kLayoutVersion);
   out.set_attribute("/", "content",
                     "frame i of the sequence: frame_name[i], t_s[i], time_source[i], status[i] and the fields "
-                    "u_px[i], v_px[i], peak_ratio[i], valid[i], flag[i] ([ny, nx], nodes at x_px, y_px); see "
+                    "u_px[i], v_px[i], peak_ratio[i], sigma_u_px[i], sigma_v_px[i], valid[i], flag[i] ([ny, nx], nodes at x_px, y_px); see "
                     "docs/REPORT.md, Sequence fields");
   out.set_attribute("/", "reference", in.reference);
   out.set_attribute("/", "settings", in.settings_json);
@@ -143,18 +148,22 @@ void SequenceFieldWriter::write(std::size_t index, const pipeline::SequenceFrame
       throw std::invalid_argument(fmt::format("frame {} ({}): a {}x{} field for a {}x{} grid", index, frame.name,
                                               field.cols, field.rows, s.info.grid.cols, s.info.grid.rows));
     }
-    std::vector<double> u, v, peak;
+    std::vector<double> u, v, peak, sigma_u, sigma_v;
     std::vector<std::uint8_t> valid, flag;
     for (const auto& node : field.vectors) {
       u.push_back(node.u_px);
       v.push_back(node.v_px);
       peak.push_back(node.peak_ratio);
+      sigma_u.push_back(node.sigma_u_px);
+      sigma_v.push_back(node.sigma_v_px);
       valid.push_back(node.valid() ? 1 : 0);
       flag.push_back(static_cast<std::uint8_t>(node.flag));
     }
     s.out.write_frame("/u_px", index, u);
     s.out.write_frame("/v_px", index, v);
     s.out.write_frame("/peak_ratio", index, peak);
+    s.out.write_frame("/sigma_u_px", index, sigma_u);
+    s.out.write_frame("/sigma_v_px", index, sigma_v);
     s.out.write_frame("/valid", index, valid);
     s.out.write_frame("/flag", index, flag);
   }

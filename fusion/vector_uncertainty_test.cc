@@ -1,0 +1,354 @@
+#include "fusion/vector_uncertainty.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+#include "fusion/cross_correlation.h"
+#include "fusion/subpixel.h"
+#include "sim/background_pattern.h"
+#include "sim/synthetic_pair.h"
+
+namespace bosfuse::fusion {
+namespace {
+
+// ---- The estimator on its own ----
+
+cv::Mat random_window(int n, std::uint64_t seed) {
+  cv::Mat w(n, n, CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(w, cv::RNG::UNIFORM, 0.0, 1.0);
+  cv::GaussianBlur(w, w, cv::Size(0, 0), 0.8);
+  return w;
+}
+
+TEST(VectorUncertainty, IdenticalWindowsGiveTheFloor) {
+  const cv::Mat a = random_window(16, 1);
+  const VectorUncertainty s = correlation_statistics(a, a.clone());
+  EXPECT_DOUBLE_EQ(s.sigma_u_px, kFloorPx);
+  EXPECT_DOUBLE_EQ(s.sigma_v_px, kFloorPx);
+}
+
+TEST(VectorUncertainty, GrowsInProportionToTheNoise) {
+  const cv::Mat a = random_window(32, 2);
+  cv::Mat noise(a.size(), CV_32F);
+  cv::RNG(3).fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
+  const VectorUncertainty low = correlation_statistics(a, a + 0.01 * noise);
+  const VectorUncertainty high = correlation_statistics(a, a + 0.04 * noise);
+  EXPECT_GT(low.sigma_u_px, kFloorPx);
+  EXPECT_NEAR(high.sigma_u_px / low.sigma_u_px, 4.0, 0.4);
+  EXPECT_NEAR(high.sigma_v_px / low.sigma_v_px, 4.0, 0.4);
+}
+
+TEST(VectorUncertainty, AWindowOfNoiseAloneIsUnresolved) {
+  cv::Mat a(16, 16, CV_32F), b(16, 16, CV_32F);
+  cv::RNG(4).fill(a, cv::RNG::UNIFORM, 0.0, 1.0);
+  cv::RNG(5).fill(b, cv::RNG::UNIFORM, 0.0, 1.0);
+  const VectorUncertainty s = correlation_statistics(a, b);
+  EXPECT_GT(s.sigma_u_px, 0.2);
+  EXPECT_LE(s.sigma_u_px, kUnresolvedPx);
+}
+
+TEST(VectorUncertainty, GaussianPeakFormula) {
+  // A Gaussian peak exp(−x²/2w²) sampled at 0, ±1: σ_ΔC → 0 gives 0, and a
+  // small σ_ΔC the linearised fit's σ_ΔC / (2 C± (ln C0 − ln C±)·2).
+  const double c0 = 1, c_pm = std::exp(-0.5 / 1.5);
+  const double small = 1e-3;
+  const double expected = small / (c_pm * 4 * std::log(c0 / c_pm));
+  EXPECT_NEAR(gaussian_peak_uncertainty(c0, c_pm, small), expected, 1e-3 * expected);
+  EXPECT_EQ(gaussian_peak_uncertainty(c0, c_pm, 2 * c_pm), kUnresolvedPx);
+  EXPECT_EQ(gaussian_peak_uncertainty(c0, c0, small), kUnresolvedPx);
+  EXPECT_EQ(gaussian_peak_uncertainty(c0, -0.1, small), kUnresolvedPx);
+}
+
+TEST(VectorUncertainty, RejectsMismatchedWindows) {
+  EXPECT_THROW(correlation_statistics(random_window(16, 1), random_window(8, 1)), std::invalid_argument);
+}
+
+// The periodic equal-window correlation the final pass computes, at shift (sx, sy).
+double periodic_correlation(const cv::Mat& a, const cv::Mat& b, int sx, int sy) {
+  const int n = a.rows;
+  const double mean_a = cv::mean(a)[0], mean_b = cv::mean(b)[0];
+  double sum = 0;
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      sum += (a.at<float>(y, x) - mean_a) * (b.at<float>((y + sy + n) % n, (x + sx + n) % n) - mean_b);
+    }
+  }
+  return sum;
+}
+
+// On one window pair with independent noise, σu is the 3-point fit's
+// scatter over noise draws, and covers it as a standard uncertainty should.
+TEST(VectorUncertainty, MatchesTheScatterOfNoisyWindows) {
+  sim::PatternOptions pattern;
+  pattern.width_px = pattern.height_px = 64;
+  pattern.seed = 5;
+  cv::Mat clean;
+  sim::render_dots(sim::generate_pattern(pattern), nullptr).convertTo(clean, CV_32F);
+  for (const double noise : {0.01, 0.03}) {
+    constexpr int kDraws = 400;
+    double sum = 0, sum_sq = 0, sigma_sum = 0, covered = 0;
+    for (int draw = 0; draw < kDraws; ++draw) {
+      cv::Mat noise_a(clean.size(), CV_32F), noise_b(clean.size(), CV_32F);
+      cv::RNG(1000 + draw).fill(noise_a, cv::RNG::NORMAL, 0.0, noise);
+      cv::RNG(5000 + draw).fill(noise_b, cv::RNG::NORMAL, 0.0, noise);
+      const cv::Rect window(20, 20, 16, 16);
+      const cv::Mat a = (clean + noise_a)(window), b = (clean + noise_b)(window);
+      const double dx = gaussian_3point(periodic_correlation(a, b, -1, 0), periodic_correlation(a, b, 0, 0),
+                                        periodic_correlation(a, b, 1, 0));
+      const double sigma = correlation_statistics(a, b).sigma_u_px;
+      sum += dx;
+      sum_sq += dx * dx;
+      sigma_sum += sigma;
+      covered += std::abs(dx) <= 1.96 * sigma;
+    }
+    const double scatter = std::sqrt(sum_sq / kDraws - (sum / kDraws) * (sum / kDraws));
+    EXPECT_NEAR(sigma_sum / kDraws / scatter, 1.0, 0.1) << "noise " << noise;
+    EXPECT_GE(covered / kDraws, 0.93) << "noise " << noise;
+    EXPECT_LE(covered / kDraws, 0.97) << "noise " << noise;
+  }
+}
+
+// ---- Coverage on synthetic pairs with known truth ----
+
+// A camera the sim's pairs do not model: contrast, exposure gain per image,
+// vignetting, optical blur, noise and quantisation to `bits`, stored
+// MSB-aligned in 16 bits as such cameras write them.
+struct Camera {
+  double contrast = 1;       // of the dots' range, around mid-grey
+  double gain_measurement = 1;  // the measurement's exposure against the reference's
+  double vignetting = 0;     // fraction lost at the image's corners (cos⁴-like, as r²)
+  double blur_sigma_px = 0;
+  double noise_std = 0.01;  // of full scale
+  int bits = 8;
+};
+
+cv::Mat expose(cv::Mat image, const Camera& camera, double gain, std::uint64_t noise_seed) {
+  image = 0.5 + camera.contrast * (image - 0.5);
+  if (camera.vignetting > 0) {
+    const double cx = (image.cols - 1) / 2.0, cy = (image.rows - 1) / 2.0, r2_max = cx * cx + cy * cy;
+    for (int y = 0; y < image.rows; ++y) {
+      double* row = image.ptr<double>(y);
+      for (int x = 0; x < image.cols; ++x) {
+        row[x] *= 1 - camera.vignetting * ((x - cx) * (x - cx) + (y - cy) * (y - cy)) / r2_max;
+      }
+    }
+  }
+  image *= gain;
+  if (camera.blur_sigma_px > 0) cv::GaussianBlur(image, image, cv::Size(0, 0), camera.blur_sigma_px);
+  cv::Mat noise(image.size(), CV_64F);
+  cv::RNG(noise_seed).fill(noise, cv::RNG::NORMAL, 0.0, camera.noise_std);
+  image += noise;
+  const double levels = std::ldexp(1.0, camera.bits) - 1, lsb = std::ldexp(1.0, 16 - camera.bits);
+  cv::Mat out(image.size(), CV_16U);
+  for (int y = 0; y < image.rows; ++y) {
+    const double* in = image.ptr<double>(y);
+    auto* o = out.ptr<std::uint16_t>(y);
+    for (int x = 0; x < image.cols; ++x) {
+      o[x] = static_cast<std::uint16_t>(std::clamp(std::round(in[x] * levels), 0.0, levels) * lsb);
+    }
+  }
+  return out;
+}
+
+struct Coverage {
+  std::size_t components = 0;
+  double within = 0;        // fraction of components with |error| ≤ 1.96 σ
+  double sigma_over_rms = 0;  // median σ / RMS error
+};
+
+// Errors against the window-mean truth of every valid vector of `seeds`
+// renderings of `field` through `camera`.
+Coverage coverage(const sim::DisplacementModel& field, const Camera& camera, int seeds, int size_px = 256) {
+  XcorrOptions options;  // the evaluator's defaults: IW 16, step 8, 3 passes
+  std::vector<double> sigma, error;
+  for (int seed = 0; seed < seeds; ++seed) {
+    sim::PatternOptions pattern;
+    pattern.width_px = pattern.height_px = size_px;
+    pattern.dot_diameter_px = 3;
+    pattern.seed = 11 + seed;
+    const sim::BackgroundPattern dots = sim::generate_pattern(pattern);
+    const cv::Mat reference = expose(sim::render_dots(dots, nullptr), camera, 1.0, 100 + 2 * seed);
+    const cv::Mat measurement =
+        expose(sim::render_dots(dots, &field), camera, camera.gain_measurement, 101 + 2 * seed);
+    const EvaluationResult result = evaluate_xcorr(reference, measurement, options);
+    for (const auto& vec : result.field.vectors) {
+      if (!vec.valid()) continue;
+      const cv::Point2d truth = field.at(vec.x_px, vec.y_px);
+      sigma.push_back(vec.sigma_u_px);
+      error.push_back(vec.u_px - truth.x);
+      sigma.push_back(vec.sigma_v_px);
+      error.push_back(vec.v_px - truth.y);
+    }
+  }
+  Coverage c;
+  c.components = sigma.size();
+  if (sigma.empty()) return c;
+  double within = 0, sum_sq = 0;
+  for (std::size_t i = 0; i < sigma.size(); ++i) {
+    within += std::abs(error[i]) <= 1.96 * sigma[i];
+    sum_sq += error[i] * error[i];
+  }
+  c.within = within / sigma.size();
+
+  std::nth_element(sigma.begin(), sigma.begin() + sigma.size() / 2, sigma.end());
+  c.sigma_over_rms = sigma[sigma.size() / 2] / std::sqrt(sum_sq / sigma.size());
+  return c;
+}
+
+void expect_honest(const Coverage& c) {
+  EXPECT_GT(c.components, 1000u);
+  EXPECT_GE(c.within, 0.93) << "coverage " << c.within << ", median σ / RMS error " << c.sigma_over_rms;
+  EXPECT_LE(c.within, 0.97) << "coverage " << c.within << ", median σ / RMS error " << c.sigma_over_rms;
+  EXPECT_GE(c.sigma_over_rms, 0.8) << "coverage " << c.within;
+  EXPECT_LE(c.sigma_over_rms, 1.25) << "coverage " << c.within;
+  std::printf("coverage %.3f, median sigma / rms error %.3f over %zu components\n", c.within, c.sigma_over_rms,
+              c.components);
+}
+
+// A gentle sinusoid: where the field curves more (1 px over 128 px), the
+// evaluator's spatial response leaves a bias the final windows cannot show
+// (docs/BENCHMARKS.md, "Per-vector uncertainty").
+TEST(VectorUncertaintyCoverage, SinusoidalField) {
+  expect_honest(coverage(sim::DisplacementModel::sinusoid(0.5, 256), Camera{}, 2));
+}
+
+TEST(VectorUncertaintyCoverage, CameraLikeImages) {
+  Camera camera;
+  camera.blur_sigma_px = 0.6;
+  camera.vignetting = 0.35;
+  camera.noise_std = 0.005;
+  camera.bits = 12;
+  expect_honest(coverage(sim::DisplacementModel::uniform(0.35, -0.55), camera, 2));
+}
+
+TEST(VectorUncertaintyCoverage, LowContrastTenBitCamera) {
+  Camera camera;
+  camera.contrast = 0.15;
+  camera.noise_std = 0.004;
+  camera.bits = 10;
+  expect_honest(coverage(sim::DisplacementModel::uniform(-0.4, 0.25), camera, 2));
+}
+
+// ---- σ in the evaluator's fields ----
+
+sim::SyntheticPair dot_pair(const sim::DisplacementModel& field, int size_px = 128) {
+  sim::PairOptions options;
+  options.pattern.width_px = options.pattern.height_px = size_px;
+  options.pattern.seed = 3;
+  options.noise_std = 0.01;
+  options.field = field;
+  return sim::render_pair(options);
+}
+
+TEST(VectorUncertaintyInFields, EveryMeasuredVectorHasSigmaAndTheOthersNone) {
+  const auto pair = dot_pair(sim::DisplacementModel::uniform(0.4, 0.2));
+  cv::Mat mask = cv::Mat::zeros(pair.reference.size(), CV_8U);
+  mask(cv::Rect(40, 40, 40, 40)).setTo(255);
+  const auto result = evaluate_xcorr(pair.reference, pair.measurement, XcorrOptions{}, mask);
+  std::size_t masked = 0;
+  for (const auto& vec : result.field.vectors) {
+    if (vec.valid()) {
+      EXPECT_GT(vec.sigma_u_px, kFloorPx / 2);
+      EXPECT_LT(vec.sigma_u_px, 0.05);
+      EXPECT_GT(vec.sigma_v_px, kFloorPx / 2);
+      EXPECT_LT(vec.sigma_v_px, 0.05);
+    } else if (vec.flag != VectorFlag::kOutlierReplaced) {
+      masked += vec.flag == VectorFlag::kMasked;
+      EXPECT_EQ(vec.sigma_u_px, 0);
+      EXPECT_EQ(vec.sigma_v_px, 0);
+    }
+  }
+  EXPECT_GT(masked, 0u);
+}
+
+TEST(VectorUncertaintyInFields, SwitchedOffOrWithoutDeformationSigmaIsNotEstimated) {
+  const auto pair = dot_pair(sim::DisplacementModel::uniform(0.4, 0.2));
+  XcorrOptions off;
+  off.estimate_uncertainty = false;
+  XcorrOptions one_pass;
+  one_pass.passes = 1;
+  for (const XcorrOptions& options : {off, one_pass}) {
+    const auto result = evaluate_xcorr(pair.reference, pair.measurement, options);
+    ASSERT_GT(result.field.count_valid(), 0u);
+    for (const auto& vec : result.field.vectors) {
+      EXPECT_EQ(vec.sigma_u_px, 0);
+      EXPECT_EQ(vec.sigma_v_px, 0);
+    }
+  }
+}
+
+TEST(VectorUncertaintyInFields, AReplacedOutlierGetsItsNeighboursSpread) {
+  DisplacementField field;
+  field.rows = field.cols = 3;
+  field.vectors.resize(9);
+  const double u[9] = {1.0, 1.2, 0.9, 1.1, 5.0, 1.3, 0.8, 1.0, 1.05};
+  for (int i = 0; i < 9; ++i) {
+    auto& vec = field.vectors[i];
+    vec.u_px = u[i];
+    vec.v_px = 0.1 * i;
+    vec.sigma_u_px = 0.01 * (i + 1);
+    vec.sigma_v_px = 0.02;
+  }
+  field.at(1, 1).flag = VectorFlag::kOutlierReplaced;
+  field.at(1, 1).sigma_u_px = field.at(1, 1).sigma_v_px = 0;
+  field.at(0, 2).flag = VectorFlag::kNoPeak;  // not a neighbour that replaced it
+  field.at(0, 2).sigma_u_px = field.at(0, 2).sigma_v_px = 0;
+  estimate_replaced_uncertainty(field);
+  // Neighbours' u: 1.0 1.2 1.1 1.3 0.8 1.0 1.05 → median 1.05, absolute
+  // deviations 0.05 0.15 0.05 0.25 0.25 0.05 0 → MAD 0.05; σu: 0.01 0.02
+  // 0.04 0.06 0.07 0.08 0.09 → median 0.06.
+  EXPECT_NEAR(field.at(1, 1).sigma_u_px, std::hypot(1.4826 * 0.05, 0.06), 1e-12);
+  // v: 0 0.1 0.3 0.5 0.6 0.7 0.8 → median 0.5, deviations 0.5 0.4 0.2 0 0.1 0.2 0.3 → MAD 0.2.
+  EXPECT_NEAR(field.at(1, 1).sigma_v_px, std::hypot(1.4826 * 0.2, 0.02), 1e-12);
+  EXPECT_EQ(field.at(0, 2).sigma_u_px, 0);  // unmeasured vectors keep none
+}
+
+// Refinement that stops on convergence did not know its pass was the last:
+// σ then comes from a sweep over that pass's windows, the same as if it had.
+TEST(VectorUncertaintyInFields, RefinementStoppedByConvergenceStillGivesSigma) {
+  const auto pair = dot_pair(sim::DisplacementModel::uniform(0.25, 0.25));
+  XcorrOptions stopped;
+  stopped.passes = 10;
+  stopped.convergence_px = 0.05;
+  const auto early = evaluate_xcorr(pair.reference, pair.measurement, stopped);
+  ASSERT_TRUE(early.summary.converged);
+  ASSERT_LT(early.summary.passes_run, 10);
+  XcorrOptions fixed = stopped;
+  fixed.passes = early.summary.passes_run;
+  fixed.convergence_px = 0;
+  const auto known = evaluate_xcorr(pair.reference, pair.measurement, fixed);
+  ASSERT_EQ(known.field.size(), early.field.size());
+  std::size_t compared = 0;
+  for (std::size_t i = 0; i < early.field.size(); ++i) {
+    const auto &a = early.field.vectors[i], &b = known.field.vectors[i];
+    if (!a.valid() || !b.valid()) continue;
+    EXPECT_GT(a.sigma_u_px, 0);
+    EXPECT_DOUBLE_EQ(a.sigma_u_px, b.sigma_u_px);
+    EXPECT_DOUBLE_EQ(a.sigma_v_px, b.sigma_v_px);
+    ++compared;
+  }
+  EXPECT_GT(compared, 100u);
+}
+
+TEST(VectorUncertaintyInFields, AProbeHasTheFullFieldsSigma) {
+  const auto pair = dot_pair(sim::DisplacementModel::sinusoid(0.8, 96), 256);
+  XcorrOptions options;
+  options.convergence_px = 0;
+  options.probe_context_nodes = -1;
+  const auto full = evaluate_xcorr(pair.reference, pair.measurement, options);
+  const auto& node = full.field.at(full.field.rows / 2, full.field.cols / 2);
+  ASSERT_TRUE(node.valid());
+  const auto probe = probe_xcorr(pair.reference, pair.measurement, {{node.x_px, node.y_px}}, options);
+  ASSERT_EQ(probe.field.size(), 1u);
+  EXPECT_GT(probe.field.vectors[0].sigma_u_px, 0);
+  EXPECT_NEAR(probe.field.vectors[0].sigma_u_px, node.sigma_u_px, 1e-9);
+  EXPECT_NEAR(probe.field.vectors[0].sigma_v_px, node.sigma_v_px, 1e-9);
+}
+
+}  // namespace
+}  // namespace bosfuse::fusion
