@@ -35,14 +35,14 @@ struct Quantity {
 
 constexpr Quantity kQuantities[] = {
     {"u_px", "px",
-     "displacement along x of frame i against the reference (DESIGN.md convention); not a measurement where valid "
-     "is 0; NaN for a frame whose status is not ok",
+     "displacement along x of frame i against the reference (DESIGN.md convention); NaN where valid is 0 and for "
+     "a frame whose status is not ok",
      false},
     {"v_px", "px", "displacement along y (down); as u_px", false},
-    {"peak_ratio", "1", "first / second correlation peak height; 0 where not measured, NaN for a failed frame", false},
+    {"peak_ratio", "1", "first / second correlation peak height; NaN where valid is 0 and for a failed frame", false},
     {"sigma_u_px", "px",
      "standard uncertainty of u_px (correlation statistics on the final pass's windows; a replaced outlier its "
-     "neighbours' spread); 0 where not estimated, NaN for a failed frame",
+     "neighbours' spread); 0 where not estimated, NaN where valid is 0 and for a failed frame",
      false},
     {"sigma_v_px", "px", "standard uncertainty of v_px; as sigma_u_px", false},
     {"valid", "1", "1 where (u, v) was measured (flag 0), else 0", true},
@@ -150,13 +150,16 @@ void SequenceFieldWriter::write(std::size_t index, const pipeline::SequenceFrame
     }
     std::vector<double> u, v, peak, sigma_u, sigma_v;
     std::vector<std::uint8_t> valid, flag;
+    // What was not measured carries no number (docs/REPORT.md, "Not measured").
+    constexpr double kNotMeasured = std::numeric_limits<double>::quiet_NaN();
     for (const auto& node : field.vectors) {
-      u.push_back(node.u_px);
-      v.push_back(node.v_px);
-      peak.push_back(node.peak_ratio);
-      sigma_u.push_back(node.sigma_u_px);
-      sigma_v.push_back(node.sigma_v_px);
-      valid.push_back(node.valid() ? 1 : 0);
+      const bool measured = node.valid();
+      u.push_back(measured ? node.u_px : kNotMeasured);
+      v.push_back(measured ? node.v_px : kNotMeasured);
+      peak.push_back(measured ? node.peak_ratio : kNotMeasured);
+      sigma_u.push_back(measured ? node.sigma_u_px : kNotMeasured);
+      sigma_v.push_back(measured ? node.sigma_v_px : kNotMeasured);
+      valid.push_back(measured ? 1 : 0);
       flag.push_back(static_cast<std::uint8_t>(node.flag));
     }
     s.out.write_frame("/u_px", index, u);

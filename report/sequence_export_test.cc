@@ -54,6 +54,9 @@ TEST(SequenceExport, ResultsInAnyOrderLandAtTheirIndex) {
   EXPECT_EQ(u[12], 3.0);
   EXPECT_EQ(f.at("/flag").at("data")[5], 3) << "masked";
   EXPECT_EQ(f.at("/valid").at("data")[5], 0);
+  for (const char* quantity : {"/u_px", "/v_px", "/peak_ratio", "/sigma_u_px", "/sigma_v_px"}) {
+    EXPECT_TRUE(f.at(quantity).at("data")[5].is_null()) << quantity << ": the masked node has no number";
+  }
   EXPECT_EQ(f.at("/flag").at("data")[6], 255);
   EXPECT_EQ(f.at("/t_s").at("data"), nlohmann::json::array({0.0, 1.5, 2.0}));
   EXPECT_EQ(f.at("/status").at("data"), nlohmann::json::array({"ok", "unreadable image", "ok"}));
