@@ -34,39 +34,16 @@ class CalibrateCli : public ProcessCli {
   void SetUp() override {}
 
   void make_calibration_run(const Layout& layout) {
-    storage::RunInfo info{0, "synthetic", at_ns(-15), std::nullopt, "", {}, 1.0, "heater off"};
-    auto store = storage::RunStore::create(run_dir(), info, storage::RunStore::CreateMode::kNew);
-    const storage::Event heater_off{0, std::nullopt, kOriginNs, "marker", "heater off"};
-    store.write_events({&heater_off, 1});
+    auto store = create_run_store();
     const auto device = store.add_device({0, "daq", "modbus-tcp", "generic", "sim"});
     for (std::size_t c = 0; c < layout.thermocouples.size(); ++c) {
       const auto& p = layout.thermocouples[c];
       channels_.push_back(
           store.add_channel({0, device, fmt::format("tc{}", c + 1), "thermocouple", "degC", "K", p.x, p.y}));
     }
-    std::mt19937 random(11);
-    std::normal_distribution<double> noise(0, 0.05);
-    std::vector<storage::Sample> samples;
-    for (double t = layout.first_sample_t_s; t <= 40; t += 1) {
-      for (const auto channel : channels_) {
-        samples.push_back({channel, at_ns(t), std::nullopt, 20 + rise_c(t) + noise(random), std::nullopt, {}});
-      }
-    }
-    store.write_samples(samples);
-    std::filesystem::create_directories(run_dir() / "frames");
-    auto add = [&](double t_s, bool reference, int index) {
-      sim::PairOptions pair;
-      pair.pattern.width_px = 256;
-      pair.pattern.height_px = 192;
-      pair.field = hot_spot(t_s);
-      pair.noise_seed = static_cast<std::uint64_t>(100 + index);
-      const auto images = sim::render_pair(pair);
-      const std::string path = "frames/f" + std::to_string(index) + ".png";
-      cv::imwrite((run_dir() / path).string(), reference ? images.reference : images.measurement);
-      store.add_frame({0, std::nullopt, at_ns(t_s), std::nullopt, path, 256, 192, 8, reference});
-    };
-    add(layout.reference_t_s, true, 0);
-    for (int i = 0; i < 8; ++i) add(35.0 * i / 7, false, i + 1);
+    write_readings(store, layout.first_sample_t_s);
+    add_frame(store, layout.reference_t_s, true, 0);
+    for (int i = 0; i < 8; ++i) add_frame(store, 35.0 * i / 7, false, i + 1);
     store.finish(storage::RunStatus::kComplete, at_ns(41));
   }
 

@@ -44,41 +44,53 @@ class ProcessCli : public ::testing::Test {
 
   // `frames` measurements spread over the first 35 s after the origin.
   void make_run(bool with_reference, int frames = 8) {
-    // Samples begin 15 s before the heater is switched off: the run declares that moment its origin.
-    storage::RunInfo info{0, "synthetic", at_ns(-15), std::nullopt, "", {}, 1.0, "heater off"};
-    auto store = storage::RunStore::create(run_dir(), info, storage::RunStore::CreateMode::kNew);
-    const storage::Event heater_off{0, std::nullopt, kOriginNs, "marker", "heater off"};
-    store.write_events({&heater_off, 1});
+    auto store = create_run_store();
     const auto device = store.add_device({0, "daq", "modbus-tcp", "generic", "sim"});
     for (const auto& [name, x, y] :
          {std::tuple{"tc1", kCentreX + kRadius, kCentreY}, std::tuple{"tc2", kCentreX, kCentreY - kRadius}}) {
       channels_.push_back(store.add_channel({0, device, name, "thermocouple", "degC", "K", x, y}));
       points_.emplace_back(x, y);
     }
+    write_readings(store, -15);
+    add_frame(store, -10, with_reference, 0);
+    for (int i = 0; i < frames; ++i) add_frame(store, 35.0 * i / (frames - 1), false, i + 1);
+    store.finish(storage::RunStatus::kComplete, at_ns(41));
+  }
+
+  // Samples begin 15 s before the heater is switched off: the run declares that moment its origin.
+  storage::RunStore create_run_store() const {
+    storage::RunInfo info{0, "synthetic", at_ns(-15), std::nullopt, "", {}, 1.0, "heater off"};
+    auto store = storage::RunStore::create(run_dir(), info, storage::RunStore::CreateMode::kNew);
+    const storage::Event heater_off{0, std::nullopt, kOriginNs, "marker", "heater off"};
+    store.write_events({&heater_off, 1});
+    std::filesystem::create_directories(run_dir() / "frames");
+    return store;
+  }
+
+  // One reading a second of every channel from `first_t_s` to 40 s, on Newton's law with noise.
+  void write_readings(storage::RunStore& store, double first_t_s) const {
     std::mt19937 random(11);
     std::normal_distribution<double> noise(0, 0.05);
     std::vector<storage::Sample> samples;
-    for (int i = -15; i <= 40; ++i) {
+    for (double t = first_t_s; t <= 40; t += 1) {
       for (const auto channel : channels_) {
-        samples.push_back({channel, at_ns(i), std::nullopt, 20 + rise_c(i) + noise(random), std::nullopt, {}});
+        samples.push_back({channel, at_ns(t), std::nullopt, 20 + rise_c(t) + noise(random), std::nullopt, {}});
       }
     }
     store.write_samples(samples);
-    std::filesystem::create_directories(run_dir() / "frames");
-    auto add = [&](double t_s, bool reference, int index) {
-      sim::PairOptions pair;
-      pair.pattern.width_px = 256;
-      pair.pattern.height_px = 192;
-      pair.field = hot_spot(t_s);
-      pair.noise_seed = static_cast<std::uint64_t>(100 + index);
-      const auto images = sim::render_pair(pair);
-      const std::string path = "frames/f" + std::to_string(index) + ".png";
-      cv::imwrite((run_dir() / path).string(), reference ? images.reference : images.measurement);
-      store.add_frame({0, std::nullopt, at_ns(t_s), std::nullopt, path, 256, 192, 8, reference});
-    };
-    add(-10, with_reference, 0);
-    for (int i = 0; i < frames; ++i) add(35.0 * i / (frames - 1), false, i + 1);
-    store.finish(storage::RunStatus::kComplete, at_ns(41));
+  }
+
+  // A frame of the hot spot at `t_s` (the reference image of a pair when `reference`).
+  void add_frame(storage::RunStore& store, double t_s, bool reference, int index) const {
+    sim::PairOptions pair;
+    pair.pattern.width_px = 256;
+    pair.pattern.height_px = 192;
+    pair.field = hot_spot(t_s);
+    pair.noise_seed = static_cast<std::uint64_t>(100 + index);
+    const auto images = sim::render_pair(pair);
+    const std::string path = "frames/f" + std::to_string(index) + ".png";
+    cv::imwrite((run_dir() / path).string(), reference ? images.reference : images.measurement);
+    store.add_frame({0, std::nullopt, at_ns(t_s), std::nullopt, path, 256, 192, 8, reference});
   }
 
   std::filesystem::path run_dir() const { return dir_.path() / "run"; }
