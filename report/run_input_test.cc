@@ -102,14 +102,19 @@ TEST(RunInput, AProcessedRunIsReadFromWhatProcessStoredWithoutItsFrames) {
   EXPECT_NE(all_notes(input).find("full fields, cross-correlation, window 16 px, step 8 px"), std::string::npos);
 }
 
+// The synthetic run, processed with its holder under the mask.
+void process_with_the_holder_masked(const std::filesystem::path& run, const testrun::Truth& truth) {
+  testrun::create_run(run, true, truth);
+  cv::imwrite((run / "holder.png").string(), testrun::holder_mask(truth));
+  pipeline::SettingsOverrides overrides;
+  overrides.mask = "holder.png";
+  ASSERT_TRUE(process(run, overrides).complete);
+}
+
 TEST(RunInput, TheStoredMaskShowsAsMaskedCellsInTheMaps) {
   testing::TempDir dir;
   const testrun::Truth truth;
-  testrun::create_run(dir / "run", true, truth);
-  cv::imwrite((dir / "run/holder.png").string(), testrun::holder_mask(truth));
-  pipeline::SettingsOverrides overrides;
-  overrides.mask = "holder.png";
-  ASSERT_TRUE(process(dir / "run", overrides).complete);
+  ASSERT_NO_FATAL_FAILURE(process_with_the_holder_masked(dir / "run", truth));
   RunReportOptions options;
   options.map_times_s = {10};
   const auto input = build_report_input(storage::RunStore::open(dir / "run"), options);
@@ -134,11 +139,7 @@ TEST(RunInput, TheStoredMaskShowsAsMaskedCellsInTheMaps) {
 TEST(RunInput, AHeaterFilledInByTheSolveIsNotMeasuredInTheTemperatureMapOrItsCsv) {
   testing::TempDir dir;
   const testrun::Truth truth;
-  testrun::create_run(dir / "run", true, truth);
-  cv::imwrite((dir / "run/holder.png").string(), testrun::holder_mask(truth));
-  pipeline::SettingsOverrides overrides;
-  overrides.mask = "holder.png";
-  ASSERT_TRUE(process(dir / "run", overrides).complete);
+  ASSERT_NO_FATAL_FAILURE(process_with_the_holder_masked(dir / "run", truth));
   RunReportOptions options;
   options.map_times_s = {10};
   const auto store = storage::RunStore::open(dir / "run");
