@@ -162,6 +162,34 @@ TEST_F(Cli, AnUnknownSubcommandIsNamed) {
   EXPECT_NE(result.output.find("acquire"), std::string::npos) << result.output;
 }
 
+// A typo is named at the level it is made, with the nearest name (issue 31,
+// item 7), before anything runs; CLI11's code for arguments it cannot place.
+TEST_F(Cli, ATypoOfANestedSubcommandOrAnOptionIsNamedWithTheNearestName) {
+  constexpr int kExtrasError = 109;
+  const auto nested = bosfuse("sim modbsu --port 0");
+  EXPECT_EQ(nested.exit_code, kExtrasError) << nested.output;
+  EXPECT_NE(nested.output.find("unknown subcommand 'modbsu' of 'bosfuse sim' (one of: modbus); did you mean 'modbus'?"),
+            std::string::npos)
+      << nested.output;
+  const auto option = bosfuse("process " + run_dir() + " --windw 32");
+  EXPECT_EQ(option.exit_code, kExtrasError) << option.output;
+  EXPECT_NE(option.output.find("unknown option '--windw' of 'bosfuse process'; did you mean '--window'?"),
+            std::string::npos)
+      << option.output;
+  const auto root = bosfuse("--qiet runs " + run_dir());
+  EXPECT_EQ(root.exit_code, kExtrasError) << root.output;
+  EXPECT_NE(root.output.find("unknown option '--qiet' of 'bosfuse'; did you mean '--quiet'?"), std::string::npos)
+      << root.output;
+  // Far from every name: named, nothing suggested.
+  const auto far = bosfuse("process " + run_dir() + " --colour-of-the-sky blue");
+  EXPECT_NE(far.output.find("unknown option '--colour-of-the-sky' of 'bosfuse process'"), std::string::npos)
+      << far.output;
+  EXPECT_EQ(far.output.find("did you mean"), std::string::npos) << far.output;
+  // Values and root options before the subcommand are not taken for names.
+  const auto values = bosfuse("-q sim modbus --port 0 --duration 100ms");
+  EXPECT_EQ(values.exit_code, 0) << values.output;
+}
+
 TEST_F(Cli, QuietLeavesOnlyWarningsAndADurationWithoutUnitSaysWhatItAssumed) {
   const auto chatty = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 0.3");
   ASSERT_EQ(chatty.exit_code, 0) << chatty.output;

@@ -50,10 +50,10 @@ std::vector<int> parse_ints(const std::string& text, std::size_t count, const st
     try {
       values.push_back(std::stoi(item));
     } catch (const std::exception&) {
-      throw std::runtime_error(fmt::format("{} '{}': '{}' is not a whole number", what, text, item));
+      throw CLI::ValidationError(fmt::format("{} '{}': '{}' is not a whole number", what, text, item));
     }
   }
-  if (values.size() != count) throw std::runtime_error(fmt::format("{} '{}' needs {} numbers", what, text, count));
+  if (values.size() != count) throw CLI::ValidationError(fmt::format("{} '{}' needs {} numbers", what, text, count));
   return values;
 }
 
@@ -65,10 +65,10 @@ cv::Point2d parse_point(const std::string& text, cv::Size image_size) {
     if (comma == std::string::npos) throw std::invalid_argument("no comma");
     point = {std::stod(text.substr(0, comma)), std::stod(text.substr(comma + 1))};
   } catch (const std::exception&) {
-    throw std::runtime_error("probe '" + text + "' must be x,y in pixels");
+    throw CLI::ValidationError("probe '" + text + "' must be x,y in pixels");
   }
   if (!(point.x >= 0 && point.y >= 0 && point.x <= image_size.width - 1 && point.y <= image_size.height - 1)) {
-    throw std::runtime_error(
+    throw CLI::ValidationError(
         fmt::format("probe '{}' lies outside the {}x{} image", text, image_size.width, image_size.height));
   }
   return point;
@@ -111,7 +111,7 @@ fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
                                                            {"farneback", fusion::FlowAlgorithm::kFarneback},
                                                            {"tvl1", fusion::FlowAlgorithm::kTvl1}};
   options.flow.algorithm = flows.at(args.flow);
-  if (const auto problem = options.Validate(); !problem.empty()) throw std::runtime_error(problem);
+  if (const auto problem = options.Validate(); !problem.empty()) throw CLI::ValidationError(problem);
   return options;
 }
 
@@ -120,7 +120,7 @@ void evaluate(const EvaluateArgs& args) {
   check_output(args.out, "--out");
   if (!args.map.empty()) {
     refuse_standard_output(args.map, "--map", "the image format comes from the file name (.png)");
-    if (!args.probes.empty()) throw std::runtime_error("--map draws a full field; it cannot be used with --probe");
+    if (!args.probes.empty()) throw CLI::ValidationError("--map draws a full field; it cannot be used with --probe");
     check_figure_output(args.map, "--map");
   }
   const cv::Mat reference = read_image(args.reference, "reference");
@@ -259,17 +259,17 @@ void write_sequence(const EvaluateArgs& args, const pipeline::ProcessingSettings
 
 void evaluate_sequence(const EvaluateArgs& args, const CLI::App& cmd) {
   if (!args.reference.empty() || !args.measurement.empty()) {
-    throw std::runtime_error("--sequence takes the reference as --reference REF, not as a positional image");
+    throw CLI::ValidationError("--sequence takes the reference as --reference REF, not as a positional image");
   }
-  if (args.sequence_reference.empty()) throw std::runtime_error("--sequence needs --reference REF");
+  if (args.sequence_reference.empty()) throw CLI::ValidationError("--sequence needs --reference REF");
   if (args.out == "-") {
-    throw std::runtime_error("--sequence needs --out FILE.h5: the fields go to an HDF5 file, not standard output");
+    throw CLI::ValidationError("--sequence needs --out FILE.h5: the fields go to an HDF5 file, not standard output");
   }
   check_output(args.out, "--out");
   check_output(report::xdmf_path_for(args.out).string(), "--out (its .xmf sidecar)");
   for (const char* pair_only : {"--probe", "--map", "--contour"}) {
     if (cmd.count(pair_only) > 0) {
-      throw std::runtime_error(std::string(pair_only) + " is for an image pair, not --sequence");
+      throw CLI::ValidationError(std::string(pair_only) + " is for an image pair, not --sequence");
     }
   }
   pipeline::ProcessingSettings settings = pipeline::resolve_runless_settings(args.settings, given_overrides(args, cmd));
@@ -278,7 +278,7 @@ void evaluate_sequence(const EvaluateArgs& args, const CLI::App& cmd) {
                              ": mode = \"probes\" needs a run's thermocouples; a sequence is evaluated in full fields");
   }
   apply_xcorr_choices(args, settings.evaluator);
-  if (const auto problem = settings.evaluator.Validate(); !problem.empty()) throw std::runtime_error(problem);
+  if (const auto problem = settings.evaluator.Validate(); !problem.empty()) throw CLI::ValidationError(problem);
   spdlog::info("settings: {} ({})", pipeline::describe(settings), settings.source);
 
   run_on_ranks(
@@ -289,10 +289,10 @@ void evaluate_sequence(const EvaluateArgs& args, const CLI::App& cmd) {
 void evaluate_command(const EvaluateArgs& args, const CLI::App& cmd) {
   if (!args.sequence.empty()) return evaluate_sequence(args, cmd);
   if (!args.sequence_reference.empty() || !args.settings.empty()) {
-    throw std::runtime_error("--reference and --settings go with --sequence; an image pair is REF MEAS");
+    throw CLI::ValidationError("--reference and --settings go with --sequence; an image pair is REF MEAS");
   }
   if (args.reference.empty() || args.measurement.empty()) {
-    throw std::runtime_error(
+    throw CLI::ValidationError(
         "evaluate needs REF MEAS (an image pair), or --reference REF --sequence GLOB --out FILE.h5");
   }
   evaluate(args);

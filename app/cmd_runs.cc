@@ -47,6 +47,13 @@ void print_channels(const storage::RunStore& store) {
   }
 }
 
+// A marker's experiment time, and whether it is the run's t = 0.
+std::string marker_time(const storage::ExperimentClock& clock, const storage::Event& e) {
+  if (e.kind != "marker") return "";
+  if (e.t_ns == clock.origin_ns && clock.origin_name == e.message) return "  (t = 0, the run's origin)";
+  return fmt::format("  (t = {:.3f} s)", clock.seconds(e.t_ns));
+}
+
 void print_events(const storage::RunStore& store) {
   const auto events = store.events();
   std::map<std::string, int> counts;
@@ -56,10 +63,11 @@ void print_events(const storage::RunStore& store) {
   std::cout << "\n";
   std::map<std::int64_t, std::string> device_names;
   for (const auto& d : store.devices()) device_names[d.id] = d.name;
+  const storage::ExperimentClock clock = storage::experiment_clock(store);
   for (const auto& e : events) {
     if (e.kind == "started" || e.kind == "stopped" || e.kind == "connect") continue;
-    std::cout << fmt::format("  {}  {:<10} {:<12} {}\n", acquisition::format_iso8601_utc(e.t_ns, 3), e.kind,
-                             e.device_id ? device_names[*e.device_id] : "", e.message);
+    std::cout << fmt::format("  {}  {:<10} {:<12} {}{}\n", acquisition::format_iso8601_utc(e.t_ns, 3), e.kind,
+                             e.device_id ? device_names[*e.device_id] : "", e.message, marker_time(clock, e));
   }
   std::cout << fmt::format("frames    {}\n", store.frames().size());
 }

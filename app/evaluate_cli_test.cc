@@ -359,6 +359,34 @@ TEST_F(EvaluateCli, TheMapIsWrittenWithMapAndNeedsAFileName) {
       << dash.err;
 }
 
+// Usage mistakes exit with CLI11's code for a refused value, as the
+// parser's own refusals do (README, "Exit statuses").
+TEST_F(EvaluateCli, UsageMistakesExitWithCli11sValidationCode) {
+  constexpr int kValidationError = 105;
+  const std::string pair = "evaluate " + path("ref.png") + " " + path("meas.png");
+  for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+           {" --window 7", "window must be 8 to 128 px, not 7"},
+           {" --probe 12", "probe '12' must be x,y in pixels"},
+           {" --probe 5000,10", "probe '5000,10' lies outside the"},
+           {" --roi 1,2,3", "--roi '1,2,3' needs 4 numbers"},
+           {" --sequence 'x*.png'", "--sequence takes the reference as --reference REF"}}) {
+    SCOPED_TRACE(args);
+    const auto run = streams(pair + args);
+    EXPECT_EQ(run.exit_code, kValidationError) << run.err;
+    EXPECT_NE(run.err.find(message), std::string::npos) << run.err;
+  }
+}
+
+// An output's format is checked before anything is written (issue 31).
+TEST_F(EvaluateCli, AMapThatIsNotAPngIsRefusedBeforeTheCsvIsWritten) {
+  const auto jpeg = streams("evaluate " + path("ref.png") + " " + path("meas.png") + " -o " + path("f.csv") +
+                            " --map " + path("m.jpg"));
+  EXPECT_NE(jpeg.exit_code, 0);
+  EXPECT_NE(jpeg.err.find("a figure is named by its PNG file (name.png)"), std::string::npos) << jpeg.err;
+  EXPECT_FALSE(std::filesystem::exists(path("f.csv"))) << "the CSV was written before the map was refused";
+  EXPECT_FALSE(std::filesystem::exists(path("m.jpg")));
+}
+
 TEST_F(EvaluateCli, QualityTextIsTheOutputUnlessJsonTakesStandardOutput) {
   const auto made = bosfuse("background --out " + path("bg.png") + " --width 160 --height 120 --seed 2");
   ASSERT_EQ(made.exit_code, 0) << made.output;

@@ -5,6 +5,7 @@
 #include <exception>
 #include <iostream>
 
+#include "app/argument_check.h"
 #include "app/command.h"
 #include "app/run_control.h"
 
@@ -22,19 +23,6 @@ namespace {
 void log_to_stderr() {
   spdlog::set_default_logger(
       std::make_shared<spdlog::logger>("", std::make_shared<spdlog::sinks::stderr_color_sink_mt>()));
-}
-
-// The first word names a subcommand, or the parser would call a typo
-// "a subcommand is required".
-bool names_unknown_subcommand(const CLI::App& root, int argc, char** argv) {
-  if (argc < 2 || argv[1][0] == '-') return false;
-  std::string known;
-  for (const CLI::App* sub : root.get_subcommands([](const CLI::App*) { return true; })) {
-    if (sub->get_name() == argv[1]) return false;
-    known += (known.empty() ? "" : ", ") + sub->get_name();
-  }
-  spdlog::error("unknown subcommand '{}' (one of: {})", argv[1], known);
-  return true;
 }
 
 }  // namespace
@@ -56,7 +44,10 @@ int main(int argc, char** argv) {
       "-v,--verbose", [] { spdlog::set_level(spdlog::level::debug); }, "Say more of what is done (on standard error)");
   for (const auto& add : command_registry()) add(root);
   try {
-    if (names_unknown_subcommand(root, argc, argv)) return static_cast<int>(CLI::ExitCodes::ExtrasError);
+    if (const auto unknown = unknown_argument(root, argc, argv)) {
+      spdlog::error("{}", *unknown);
+      return static_cast<int>(CLI::ExitCodes::ExtrasError);
+    }
     root.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return root.exit(e);

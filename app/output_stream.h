@@ -26,6 +26,7 @@
 #include <string>
 #include <string_view>
 
+#include "report/figures.h"
 #include "storage/output_path.h"
 #include "storage/partial_file.h"
 
@@ -47,6 +48,7 @@ inline void check_new_run_output(std::string_view path, std::string_view option)
 
 // A figure named by its PNG is also drawn as the SVG beside it (report/figures.h).
 inline void check_figure_output(std::string_view png_path, std::string_view option) {
+  report::figure_base(png_path);  // a figure is named by its PNG: said before anything is written
   check_output(png_path, option);
   check_output(std::filesystem::path(png_path).replace_extension(".svg").string(), option);
 }

@@ -28,6 +28,14 @@ std::atomic<bool>& stop_requested_by_signal() {
   return g_stop;
 }
 
+double seconds_per_time_unit(std::string_view unit) {
+  if (unit == "s") return 1;
+  if (unit == "ms") return 1e-3;
+  if (unit == "m" || unit == "min") return 60;
+  if (unit == "h") return 3600;
+  return 0;
+}
+
 std::chrono::nanoseconds parse_duration(const std::string& text) {
   std::size_t used = 0;
   double value = 0;
@@ -37,11 +45,7 @@ std::chrono::nanoseconds parse_duration(const std::string& text) {
     used = 0;
   }
   const std::string unit = text.substr(used);
-  double seconds_per_unit = 0;
-  if (unit.empty() || unit == "s") seconds_per_unit = 1;
-  if (unit == "ms") seconds_per_unit = 1e-3;
-  if (unit == "m" || unit == "min") seconds_per_unit = 60;
-  if (unit == "h") seconds_per_unit = 3600;
+  const double seconds_per_unit = unit.empty() ? 1 : seconds_per_time_unit(unit);
   if (used == 0 || seconds_per_unit == 0 || !std::isfinite(value) || value <= 0) {
     throw std::invalid_argument("cannot read duration '" + text + "' (examples: 30s, 10m, 1.5h, 250ms)");
   }

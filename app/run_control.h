@@ -8,6 +8,7 @@
 #include <chrono>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace bosfuse::app {
 
@@ -34,6 +35,9 @@ class CommandFailure : public std::runtime_error {
  private:
   ExitStatus status_;
 };
+
+// Seconds in one ms, s, m (or min) or h; 0 for anything else.
+double seconds_per_time_unit(std::string_view unit);
 
 // Throws std::invalid_argument naming the text on anything it cannot read.
 // A plain number is seconds, and a warning says it was taken so.
