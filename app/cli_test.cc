@@ -78,7 +78,16 @@ TEST_F(Cli, AFolderHoldingARunIsRefusedUnlessAppending) {
   const std::size_t first = storage::RunStore::open(run_dir()).channel_summaries()[0].sample_count;
   const auto refused = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 300ms");
   EXPECT_NE(refused.exit_code, 0);
-  EXPECT_NE(refused.output.find("already holds a run"), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("already holds a run (" + run_dir() +
+                                "), which a new run never overwrites; choose another folder, or append to that run "
+                                "where the command can (acquire --append)"),
+            std::string::npos)
+      << refused.output;
+  // The experiment file given where --live expects HOST:PORT is named, not served on.
+  const auto live = bosfuse("acquire --live " + experiment_ + " --out " + (dir_ / "live-run").string());
+  EXPECT_EQ(live.exit_code, 105) << live.output;
+  EXPECT_NE(live.output.find("--live takes HOST:PORT (e.g. 127.0.0.1:"), std::string::npos) << live.output;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "live-run"));
   EXPECT_EQ(storage::RunStore::open(run_dir()).channel_summaries()[0].sample_count, first) << "refusal touched the run";
   const auto appended = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 300ms --append");
   ASSERT_EQ(appended.exit_code, 0) << appended.output;

@@ -38,7 +38,8 @@ void refuse_now_after_the_run(const storage::RunStore& store, const MarkArgs& ar
   const storage::RunInfo run = store.run();
   if (run.status == storage::RunStatus::kRunning) return;
   throw CLI::ValidationError(
-      "--at", fmt::format("the run is {} (ended {}): a marker made now would lie after everything it recorded. "
+      "--at",
+      fmt::format("the run is {} (ended {}): a marker made now would lie after everything it recorded. "
                   "Say when it happened: bosfuse mark {} \"{}\" --at 2026-12-01T18:11:29.5Z (UTC) or --at +12.5s "
                   "(from the first sample)",
                   storage::to_string(run.status), run.ended_ns ? storage::format_iso8601_utc(*run.ended_ns, 3) : "-",
@@ -86,7 +87,8 @@ void mark(const MarkArgs& args) {
 void add_mark(CLI::App& root) {
   auto args = std::make_shared<MarkArgs>();
   CLI::App* cmd = root.add_subcommand(
-      "mark", "Record a marker event (e.g. \"heater off\") in a run: now while a logger records it, or --at a past time");
+      "mark",
+      "Record a marker event (e.g. \"heater off\") in a run: now while a logger records it, or --at a past time");
   cmd->add_option("run", args->run, "Run folder")->required();
   cmd->add_option("message", args->message, "What happened; the run's [run] origin names the marker that is t = 0")
       ->required();

@@ -29,7 +29,8 @@ void print_run(const storage::RunStore& store) {
                            store.dir().string(), status, acquisition::format_iso8601_utc(run.started_ns, 3),
                            time_or_dash(run.ended_ns));
   if (run.ended_ns) {
-    std::cout << fmt::format("duration  {:.1f} s recorded\n", static_cast<double>(*run.ended_ns - run.started_ns) * 1e-9);
+    std::cout << fmt::format("duration  {:.1f} s recorded\n",
+                             static_cast<double>(*run.ended_ns - run.started_ns) * 1e-9);
   }
   const storage::ExperimentClock clock = storage::experiment_clock(store);
   std::cout << "time      " << clock.basis() << "\n";

@@ -50,7 +50,20 @@ void add_live_option(CLI::App& command, std::string& listen) {
           },
           std::string("Serve the live page of the run while recording, on HOST:PORT (") + kDefaultListen +
               " when not given); loopback unless you say otherwise")
-      ->expected(0, 1);
+      ->expected(0, 1)
+      ->check(
+          [](const std::string& value) {
+            const auto colon = value.rfind(':');
+            const std::string port = colon == std::string::npos ? "" : value.substr(colon + 1);
+            const bool ok = value.empty() ||
+                            (colon > 0 && !port.empty() && port.size() <= 5 &&
+                             port.find_first_not_of("0123456789") == std::string::npos && std::stoi(port) <= 65535);
+            return ok ? std::string()
+                      : "--live takes HOST:PORT (e.g. " + std::string(kDefaultListen) + "), not '" + value +
+                            "'; to serve on the default, put --live after the other arguments or write --live=" +
+                            kDefaultListen;
+          },
+          "HOST:PORT");
 }
 
 }  // namespace bosfuse::app

@@ -1,7 +1,5 @@
 #include "app/time_argument.h"
 
-#include "app/run_control.h"
-
 #include <fmt/format.h>
 
 #include <charconv>
@@ -10,14 +8,16 @@
 #include <stdexcept>
 #include <string>
 
+#include "app/run_control.h"
+
 namespace bosfuse::app {
 namespace {
 
 [[noreturn]] void refuse(std::string_view text, std::string_view why) {
-  throw std::invalid_argument(fmt::format(
-      "'{}' is not a time of the run ({}): give a UTC time in ISO 8601, e.g. 2026-12-01T18:11:29.5Z, "
-      "or a time from the run's first sample with a unit, e.g. +12.5s (units ms, s, min, h)",
-      text, why));
+  throw std::invalid_argument(
+      fmt::format("'{}' is not a time of the run ({}): give a UTC time in ISO 8601, e.g. 2026-12-01T18:11:29.5Z, "
+                  "or a time from the run's first sample with a unit, e.g. +12.5s (units ms, s, min, h)",
+                  text, why));
 }
 
 // Digits of a fixed width at `pos`; -1 when they are not there.
