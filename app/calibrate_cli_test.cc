@@ -162,7 +162,8 @@ TEST_F(CalibrateCli, AReferenceFrameFartherFromAnyReadingThanTheToleranceIsRefus
 // A geometry stating the room's ambient and its standard uncertainty.
 std::string ambient_geometry(const testing::TempDir& dir) {
   const auto path = dir.path() / "ambient.toml";
-  std::ofstream(path) << "[geometry]\nambient_temperature_c = 20\n[geometry.uncertainty]\nambient_temperature_c = 0.2\n";
+  std::ofstream(path)
+      << "[geometry]\nambient_temperature_c = 20\n[geometry.uncertainty]\nambient_temperature_c = 0.2\n";
   return "--geometry " + path.string();
 }
 

@@ -206,9 +206,10 @@ ChannelResult calibrate_channel(const TimeSeries& tc, const ProbeShifts& probe, 
   record_fit(fit, shift, aligned.outside, record);
   record["checks_failed"] = result.problems;
   record["forced"] = fit.ok && !result.problems.empty() && options.force;
-  text += fmt::format("{}: {} (per px of shift), anchored at {:.2f} ± {:.2g} degC, {}; the reference frame's reading: "
-                      "{}\n",
-                      name, fit.brief_report(), anchor.value_c, anchor.std_error_c, anchor.source, reference.how);
+  text += fmt::format(
+      "{}: {} (per px of shift), anchored at {:.2f} ± {:.2g} degC, {}; the reference frame's reading: "
+      "{}\n",
+      name, fit.brief_report(), anchor.value_c, anchor.std_error_c, anchor.source, reference.how);
   if (!warning.empty()) text += name + ": note: " + warning + "\n";
   return result;
 }
@@ -275,15 +276,15 @@ CalibrationOutcome calibrate_run(const fs::path& run_dir, const CalibrateOptions
                                   "its earlier conversion\n";
     return outcome;
   }
-  const json j = {{"kind", "celsius_per_px_shift"},
-                  {"model",
-                   "T = anchor_c + slope * |shift|, least squares through the origin; anchor_c: the geometry's "
-                   "ambient, else the thermocouple at the reference frame"},
-                  {"uncertainty",
-                   "standard: the slope's scaled by the residual variance, the anchor's the ambient's sigma"},
-                  {"forced", !outcome.problems.empty()},
-                  {"checks", checks_json(options.checks)},
-                  {"channels", channels}};
+  const json j = {
+      {"kind", "celsius_per_px_shift"},
+      {"model",
+       "T = anchor_c + slope * |shift|, least squares through the origin; anchor_c: the geometry's "
+       "ambient, else the thermocouple at the reference frame"},
+      {"uncertainty", "standard: the slope's scaled by the residual variance, the anchor's the ambient's sigma"},
+      {"forced", !outcome.problems.empty()},
+      {"checks", checks_json(options.checks)},
+      {"channels", channels}};
   results.add_calibration({0, acquisition::utc_now_ns(), j.dump()});
   outcome.stored = true;
   outcome.text += fmt::format("stored a {}calibration for {} thermocouple(s); `bosfuse process` now uses it\n",

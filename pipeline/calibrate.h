@@ -17,8 +17,10 @@
 // where the image is undisturbed), but nothing is refused for it. One rule
 // when the geometry states no ambient: the physics conversion then takes
 // the thermocouples at the reference frame as the ambient, and so does the
-// calibration (each its own reading, σ 0), the room taken as still. The calibration is stored in the run only when every channel's
-// fit passes its checks (fusion/calibration.h: the slope's sign physics
+// calibration (each its own reading, σ 0), the room taken as still.
+//
+// The calibration is stored in the run only when every channel's fit
+// passes its checks (fusion/calibration.h: the slope's sign physics
 // expects, r², residual, points, the shift range against its uncertainty);
 // otherwise it is refused, each problem named with its numbers, and nothing
 // is stored — unless `force`, which stores it marked forced, with a warning
@@ -27,10 +29,10 @@
 // again), keeping the calibrations before it as the run's history.
 //
 // The reference frame's thermocouple reading (the anchor without an
-// ambient, else the check): interpolated between the
-// readings around it when the frame lies within the thermocouple's record;
-// else the nearest reading when it lies within reference_tolerance_s of the
-// frame (a reference frame taken a few ms before the first reading).
+// ambient, else the check): interpolated between the readings around it
+// when the frame lies within the thermocouple's record; else the nearest
+// reading when it lies within reference_tolerance_s of the frame (a
+// reference frame taken a few ms before the first reading).
 
 #include <filesystem>
 #include <optional>

@@ -187,8 +187,8 @@ double ConvectionScene::window_mean_temperature_c(double x_px, double y_px, doub
   double sum = 0;
   for (int i = 0; i < kSteps; ++i) {
     for (int j = 0; j < kSteps; ++j) {
-      const cv::Point2d at = flow_position_m(x_px + window_px * ((i + 0.5) / kSteps - 0.5),
-                                             y_px + window_px * ((j + 0.5) / kSteps - 0.5));
+      const cv::Point2d at =
+          flow_position_m(x_px + window_px * ((i + 0.5) / kSteps - 0.5), y_px + window_px * ((j + 0.5) / kSteps - 0.5));
       sum += temperature_c(at.x, at.y, t_s);
     }
   }
