@@ -5,6 +5,8 @@
 
 #include <fmt/format.h>
 
+#include <fstream>
+
 #include "app/process_test_run.h"
 #include "app/run_control.h"
 #include "pipeline/probe_calibration.h"
@@ -155,6 +157,91 @@ TEST_F(CalibrateCli, AReferenceFrameFartherFromAnyReadingThanTheToleranceIsRefus
         << wrong << ": the option is named\n"
         << refused_option.output;
   }
+}
+
+// A geometry stating the room's ambient and its standard uncertainty.
+std::string ambient_geometry(const testing::TempDir& dir) {
+  const auto path = dir.path() / "ambient.toml";
+  std::ofstream(path)
+      << "[geometry]\nambient_temperature_c = 20\n[geometry.uncertainty]\nambient_temperature_c = 0.2\n";
+  return "--geometry " + path.string();
+}
+
+// The demo's case: the reference image has no flow in it, but it is stamped
+// when the thermocouples already read the hot air (50 °C). BOS measures from
+// the reference image, the undisturbed air: the line starts at the ambient,
+// and the hot reading is named as a check.
+TEST_F(CalibrateCli, TheLineStartsAtTheAmbientWhenTheThermocouplesReadHotAtTheReferenceFrame) {
+  Layout layout = off_centre();
+  layout.reference_t_s = 0;
+  make_calibration_run(layout);
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  const auto calibrate = bosfuse("calibrate " + ambient_geometry(dir_));
+  RecordProperty("calibrate_output", calibrate.output);
+  ASSERT_EQ(calibrate.exit_code, 0) << calibrate.output;
+  for (const char* text : {"anchored at 20.00 ± 0.2 degC, the ambient_temperature_c of the geometry",
+                           "tc1: note: the thermocouple read 5", "from the ambient 20.00 degC (tolerance 0.6 degC",
+                           "the reference image was not taken at ambient, or the thermocouple is not where the image "
+                           "is undisturbed"}) {
+    EXPECT_NE(calibrate.output.find(text), std::string::npos) << text << "\n" << calibrate.output;
+  }
+  const auto j = nlohmann::json::parse(storage::ProcessingStore(run_dir()).latest_calibration()->json);
+  EXPECT_FALSE(j.at("forced").get<bool>());
+  for (const auto& c : j.at("channels")) {
+    EXPECT_TRUE(c.at("ok").get<bool>()) << c;
+    EXPECT_DOUBLE_EQ(c.at("anchor_c").get<double>(), 20);
+    EXPECT_DOUBLE_EQ(c.at("anchor_std_error_c").get<double>(), 0.2);
+    // The peak shift is kPxPerDegree per °C of rise at both thermocouples.
+    EXPECT_NEAR(c.at("slope_c_per_px").get<double>(), 1 / kPxPerDegree, 0.15 / kPxPerDegree) << c;
+    const auto& check = c.at("reference_check");
+    EXPECT_FALSE(check.at("within_tolerance").get<bool>()) << check;
+    EXPECT_NEAR(check.at("difference_c").get<double>(), kRise, 0.3) << check;
+  }
+  // What the next processing makes of it: the thermocouples' temperatures.
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  const auto store = storage::RunStore::open(run_dir());
+  const storage::ProcessingStore results(run_dir());
+  std::size_t compared = 0;
+  for (const auto& p : results.probes()) {
+    for (const auto& s : results.probe_samples(p.id)) {
+      if (!s.valid) continue;
+      ASSERT_TRUE(s.temperature_c.has_value());
+      const double t_s = static_cast<double>(s.t_ns - kOriginNs) * 1e-9;
+      EXPECT_NEAR(*s.temperature_c, 20 + rise_c(t_s), 1.5) << p.name << " at t = " << t_s << " s";
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 14u);
+}
+
+TEST_F(CalibrateCli, AThermocoupleAtAmbientAtTheReferenceFrameIsWithinTheCheck) {
+  make_calibration_run(off_centre());
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  const auto calibrate = bosfuse("calibrate " + ambient_geometry(dir_));
+  ASSERT_EQ(calibrate.exit_code, 0) << calibrate.output;
+  EXPECT_EQ(calibrate.output.find("note:"), std::string::npos) << calibrate.output;
+  const auto j = nlohmann::json::parse(storage::ProcessingStore(run_dir()).latest_calibration()->json);
+  for (const auto& c : j.at("channels")) {
+    EXPECT_TRUE(c.at("reference_check").at("within_tolerance").get<bool>()) << c;
+    EXPECT_NEAR(c.at("slope_c_per_px").get<double>(), 1 / kPxPerDegree, 0.15 / kPxPerDegree) << c;
+  }
+}
+
+// Without an ambient in the geometry the physics conversion takes the
+// thermocouples at the reference frame as the ambient, and so does the
+// calibration: the hot reference reading then gives the wrong sign.
+TEST_F(CalibrateCli, WithoutAnAmbientTheLineStartsAtTheThermocouplesReadingAtTheReferenceFrame) {
+  Layout layout = off_centre();
+  layout.reference_t_s = 0;
+  make_calibration_run(layout);
+  ASSERT_EQ(bosfuse("process --mode probes " + grid_).exit_code, 0);
+  const auto refused = bosfuse("calibrate");
+  EXPECT_EQ(refused.exit_code, app::kExitRefused) << refused.output;
+  EXPECT_NE(refused.output.find("the thermocouple's reading at the reference frame (the geometry states no "
+                                "ambient_temperature_c)"),
+            std::string::npos)
+      << refused.output;
+  EXPECT_NE(refused.output.find("has the wrong sign"), std::string::npos) << refused.output;
 }
 
 TEST_F(CalibrateCli, AnOffsetTheCentrelineRecordCannotFixIsNotEstimated) {

@@ -1,9 +1,10 @@
-// bosfuse calibrate: fits each thermocouple's rise above its reading at the
-// reference frame against the BOS shift at its image position (°C per px of
-// shift, through the origin, with standard uncertainty) and stores it in the
-// run when it passes its checks; a later `bosfuse process` converts probe
-// shifts with it. A refused calibration exits kExitRefused with its
-// problems; --force stores it with a warning; --clear removes it.
+// bosfuse calibrate: fits each thermocouple's rise above the ambient (the
+// reference image's undisturbed air) against the BOS shift at its image
+// position (°C per px of shift, through the origin, with standard
+// uncertainty) and stores it in the run when it passes its checks; a later
+// `bosfuse process` converts probe shifts with it. A refused calibration
+// exits kExitRefused with its problems; --force stores it with a warning;
+// --clear removes it.
 
 #include <spdlog/spdlog.h>
 

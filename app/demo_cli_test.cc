@@ -17,6 +17,8 @@
 #include <nlohmann/json.hpp>
 
 #include "fitting/fit_json.h"
+#include "fusion/temperature_budget.h"
+#include "pipeline/geometry_config.h"
 #include "storage/processing_store.h"
 #include "storage/run_store.h"
 #include "tests/support/browser.h"
@@ -129,6 +131,40 @@ void expect_report_states(const fs::path& report_dir, const StoredRates& stored)
   EXPECT_NE(json.at("time_basis").get<std::string>().find("experiment seconds since heater off"), std::string::npos);
 }
 
+// The simulated devices run on one clock from the heater-off marker: each
+// frame is stamped at the experiment time of the scene it shows (its
+// device time), to within a frame's own capture (the stamp is taken right
+// after the scene time). Each device's own start put the frames 0.45 to 5
+// experiment seconds late, which read as a T0 difference (issue 29).
+void expect_frames_stamped_at_their_scene_time(const fs::path& run) {
+  const auto store = storage::RunStore::open(run);
+  const auto info = store.run();
+  std::size_t checked = 0;
+  for (const auto& frame : store.frames()) {
+    if (frame.is_reference || !frame.device_t_ns) continue;
+    const double stamped_s = static_cast<double>(frame.t_ns - info.started_ns) * 1e-9 * info.time_scale;
+    const double shown_s = static_cast<double>(*frame.device_t_ns) * 1e-9;
+    EXPECT_NEAR(stamped_s, shown_s, 0.05) << "frame " << frame.id;
+    ++checked;
+  }
+  EXPECT_GT(checked, 10u);
+}
+
+// The demo's experiment file states a well-equipped lab's Type-B
+// uncertainties, each smaller than the defaults' quick set-up.
+void expect_a_labs_uncertainty_stated(const fs::path& run) {
+  const auto config = pipeline::parse_geometry_config(storage::RunStore::open(run).run().config_toml, "run config");
+  ASSERT_TRUE(config.has_value());
+  const fusion::TypeBUncertainties defaults;
+  const auto& u = config->uncertainty;
+  EXPECT_LT(u.depth_relative, defaults.depth_relative);
+  EXPECT_LT(u.z_d_relative, defaults.z_d_relative);
+  EXPECT_LT(u.magnification_relative, defaults.magnification_relative);
+  EXPECT_LT(u.ambient_pressure_pa, defaults.ambient_pressure_pa);
+  EXPECT_LT(u.ambient_temperature_c, defaults.ambient_temperature_c);
+  EXPECT_LT(u.gladstone_dale_relative, defaults.gladstone_dale_relative);
+}
+
 TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
   testing::TempDir dir;
   // One background and noise draw, so that the test checks a reproducible
@@ -152,6 +188,8 @@ TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
   for (const auto& [name, rms] : by_demo.rms_difference_c) EXPECT_LT(rms, 0.5) << name;
   expect_report_states(run / "report", by_demo);
   expect_stated_lag_removed(run);
+  expect_frames_stamped_at_their_scene_time(run);
+  expect_a_labs_uncertainty_stated(run);
   expect_every_number_present(read_text(run / "report/report.html"), run / "report/report.json");
 
   // 2. `process` with no options repeats the demo (its stored settings), `report` states it.

@@ -1,6 +1,7 @@
 #pragma once
 // Calibration of BOS against thermocouples: over a run, the thermocouple's
-// temperature rise above its reading at the reference frame, ΔT_tc, is
+// temperature rise above the anchor (the ambient air the reference image
+// shows; pipeline/calibrate.h), ΔT_tc, is
 // fitted against the BOS quantity at the thermocouple's image position —
 // the displacement magnitude there (giving the paper's "°C per pixel" for
 // that position), or the physical model's ΔT (giving a scale on the model).

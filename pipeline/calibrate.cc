@@ -103,6 +103,24 @@ struct ChannelResult {
   std::vector<std::string> problems;
 };
 
+// The temperature the calibration line starts from, where BOS sees no
+// shift: the reference image's air. The geometry's ambient when it states
+// one (the physics conversion's Poisson boundary, fusion/bos_geometry.h);
+// else, as the physics conversion then does, the thermocouple's own reading
+// at the reference frame, the room taken as still and at ambient.
+struct Anchor {
+  bool from_ambient = false;
+  double value_c = 0;
+  double std_error_c = 0;  // the ambient's σ ([geometry.uncertainty]); 0 for a reading
+  std::string source;
+};
+
+Anchor ambient_anchor(const GeometryConfig& geometry) {
+  if (!geometry.ambient_given) return {};
+  return {true, geometry.geometry.ambient_temperature_c, geometry.uncertainty.ambient_temperature_c,
+          fmt::format("the ambient_temperature_c of the geometry ({})", geometry.source)};
+}
+
 void record_fit(const fusion::LinearCalibration& fit, const fusion::ShiftUncertainty& shift, std::size_t outside,
                 json& record) {
   record["slope_c_per_px"] = fit.slope;
@@ -116,37 +134,83 @@ void record_fit(const fusion::LinearCalibration& fit, const fusion::ShiftUncerta
   record["shift_uncertainty_source"] = shift.source;
 }
 
-// ΔT of the thermocouple above its reading at the reference frame against
-// the shift; fills `record` (ok: usable, checked or forced).
+// The thermocouple at the reference frame against the ambient anchor: a
+// difference beyond the tolerance means the reference image was not taken
+// at ambient, or the thermocouple is not where the image is undisturbed.
+// Not a refusal: BOS measures from the reference image, whatever the
+// thermocouple read then. Empty when within the tolerance.
+std::string check_reference_reading(const ReferenceReading& reading, const Anchor& anchor, double sigmas,
+                                    json& record) {
+  const double tolerance_c = sigmas * anchor.std_error_c;
+  json check = {{"tolerance_c", tolerance_c}, {"tolerance", fmt::format("{:g} x the ambient's sigma", sigmas)}};
+  std::string warning;
+  if (!reading.ok) {
+    check["checked"] = false;
+    check["message"] = "not checked: " + reading.how;
+  } else {
+    const double difference = reading.value_c - anchor.value_c;
+    check["checked"] = true;
+    check["thermocouple_c"] = reading.value_c;
+    check["difference_c"] = difference;
+    check["within_tolerance"] = std::abs(difference) <= tolerance_c;
+    if (std::abs(difference) > tolerance_c) {
+      warning = fmt::format(
+          "the thermocouple read {:.2f} degC at the reference frame, {:+.2f} degC from the ambient {:.2f} degC "
+          "(tolerance {:.2g} degC, {:g} x its sigma): the reference image was not taken at ambient, or the "
+          "thermocouple is not where the image is undisturbed",
+          reading.value_c, difference, anchor.value_c, tolerance_c, sigmas);
+    }
+    check["message"] = warning.empty() ? "within the tolerance" : warning;
+  }
+  record["reference_check"] = check;
+  return warning;
+}
+
+// ΔT of the thermocouple above the anchor against the shift; fills `record`
+// (ok: usable, checked or forced).
 ChannelResult calibrate_channel(const TimeSeries& tc, const ProbeShifts& probe, double reference_t_s, double offset_s,
-                                const CalibrateOptions& options, json& record, std::string& text) {
+                                const Anchor& ambient, const CalibrateOptions& options, json& record,
+                                std::string& text) {
   const std::string name = record["name"].get<std::string>();
   record["camera_offset_s"] = offset_s;
   const ReferenceReading reference = reading_at(tc, reference_t_s + offset_s, options.reference_tolerance_s);
   record["reference_reading"] = reference.how;
+  if (reference.ok) record["reference_temperature_c"] = reference.value_c;
   ChannelResult result;
-  if (!reference.ok) {
+  if (!ambient.from_ambient && !reference.ok) {
     record["ok"] = false;
-    record["message"] = reference.how;
-    result.problems.push_back(reference.how);
-    text += name + ": " + reference.how + "\n";
+    record["message"] = reference.how + " (and the geometry states no ambient_temperature_c to anchor to)";
+    result.problems.push_back(record["message"].get<std::string>());
+    text += name + ": " + record["message"].get<std::string>() + "\n";
     return result;
   }
+  const Anchor anchor =
+      ambient.from_ambient
+          ? ambient
+          : Anchor{false, reference.value_c, 0,
+                   "the thermocouple's reading at the reference frame (the geometry states no ambient_temperature_c)"};
+  record["anchor_c"] = anchor.value_c;
+  record["anchor_std_error_c"] = anchor.std_error_c;
+  record["anchor_source"] = anchor.source;
+  const std::string warning =
+      anchor.from_ambient ? check_reference_reading(reference, anchor, options.ambient_check_sigmas, record) : "";
   const auto aligned = fusion::align_to_frames(tc.t_s, tc.value, probe.frame_t_s, offset_s);
   std::vector<double> rise;
-  for (double v : aligned.value) rise.push_back(v - reference.value_c);  // NaN outside: dropped by the fit
+  for (double v : aligned.value) rise.push_back(v - anchor.value_c);  // NaN outside: dropped by the fit
   const auto fit = fusion::fit_linear_calibration(probe.shift_px, rise);
   const auto shift = fusion::shift_uncertainty(probe.sigma_px, options.checks);
   result.fitted = fit.ok;
   result.problems = fusion::calibration_problems(fit, shift, options.checks);
   record["ok"] = fit.ok && (result.problems.empty() || options.force);
   record["message"] = fit.message;
-  record["reference_temperature_c"] = reference.value_c;
   record_fit(fit, shift, aligned.outside, record);
   record["checks_failed"] = result.problems;
   record["forced"] = fit.ok && !result.problems.empty() && options.force;
-  text += fmt::format("{}: {} (per px of shift; reference {:.2f} degC, {})\n", name, fit.brief_report(),
-                      reference.value_c, reference.how);
+  text += fmt::format(
+      "{}: {} (per px of shift), anchored at {:.2f} ± {:.2g} degC, {}; the reference frame's reading: "
+      "{}\n",
+      name, fit.brief_report(), anchor.value_c, anchor.std_error_c, anchor.source, reference.how);
+  if (!warning.empty()) text += name + ": note: " + warning + "\n";
   return result;
 }
 
@@ -169,6 +233,9 @@ std::string CalibrateOptions::Validate() const {
   if (!(std::isfinite(estimate_offset_max_s) && estimate_offset_max_s >= 0)) {
     return "estimate_offset_max_s must be finite and non-negative";
   }
+  if (!(std::isfinite(ambient_check_sigmas) && ambient_check_sigmas >= 0)) {
+    return "ambient_check_sigmas must be finite and non-negative";
+  }
   return {};
 }
 
@@ -182,8 +249,9 @@ CalibrationOutcome calibrate_run(const fs::path& run_dir, const CalibrateOptions
   const RunFrames frames = split_frames(store.frames());
   SettingsOverrides geometry;
   if (!options.geometry_file.empty()) geometry.geometry_file = options.geometry_file;
-  const double configured_offset_s =
-      options.camera_offset_s.value_or(resolve_settings(run_dir, geometry).geometry.camera_offset_s);
+  const GeometryConfig settings = resolve_settings(run_dir, geometry).geometry;
+  const double configured_offset_s = options.camera_offset_s.value_or(settings.camera_offset_s);
+  const Anchor ambient = ambient_anchor(settings);
   const double reference_t_s = clock.seconds(frames.reference.t_ns);
   json channels = json::array();
   CalibrationOutcome outcome;
@@ -195,7 +263,8 @@ CalibrationOutcome calibrate_run(const fs::path& run_dir, const CalibrateOptions
     const ProbeShifts shifts = valid_shifts(results.probe_samples(probe.id), clock);
     const double offset_s =
         camera_offset_for(tc, shifts, configured_offset_s, options.estimate_offset_max_s, record, outcome.text);
-    const ChannelResult r = calibrate_channel(tc, shifts, reference_t_s, offset_s, options, record, outcome.text);
+    const ChannelResult r =
+        calibrate_channel(tc, shifts, reference_t_s, offset_s, ambient, options, record, outcome.text);
     fitted += r.fitted ? 1 : 0;
     for (const auto& p : r.problems) outcome.problems.push_back(probe.name + ": " + p);
     channels.push_back(record);
@@ -207,12 +276,15 @@ CalibrationOutcome calibrate_run(const fs::path& run_dir, const CalibrateOptions
                                   "its earlier conversion\n";
     return outcome;
   }
-  const json j = {{"kind", "celsius_per_px_shift"},
-                  {"model", "T = T_tc(reference frame) + slope * |shift|, least squares through the origin"},
-                  {"uncertainty", "standard, scaled by the residual variance"},
-                  {"forced", !outcome.problems.empty()},
-                  {"checks", checks_json(options.checks)},
-                  {"channels", channels}};
+  const json j = {
+      {"kind", "celsius_per_px_shift"},
+      {"model",
+       "T = anchor_c + slope * |shift|, least squares through the origin; anchor_c: the geometry's "
+       "ambient, else the thermocouple at the reference frame"},
+      {"uncertainty", "standard: the slope's scaled by the residual variance, the anchor's the ambient's sigma"},
+      {"forced", !outcome.problems.empty()},
+      {"checks", checks_json(options.checks)},
+      {"channels", channels}};
   results.add_calibration({0, acquisition::utc_now_ns(), j.dump()});
   outcome.stored = true;
   outcome.text += fmt::format("stored a {}calibration for {} thermocouple(s); `bosfuse process` now uses it\n",

@@ -19,8 +19,11 @@ std::map<std::int64_t, ChannelCalibration> stored_calibration(const storage::Pro
   const auto j = nlohmann::json::parse(record->json);
   for (const auto& c : j.at("channels")) {
     if (!c.at("ok").get<bool>()) continue;
-    out[c.at("channel_id").get<std::int64_t>()] = {c.at("slope_c_per_px").get<double>(),
-                                                   c.at("reference_temperature_c").get<double>(),
+    // Calibrations before the ambient anchor have none: their line starts at
+    // the thermocouple's reading at the reference frame.
+    const double anchor_c =
+        c.contains("anchor_c") ? c.at("anchor_c").get<double>() : c.at("reference_temperature_c").get<double>();
+    out[c.at("channel_id").get<std::int64_t>()] = {c.at("slope_c_per_px").get<double>(), anchor_c,
                                                    c.value("camera_offset_s", 0.0)};
   }
   return out;

@@ -1,8 +1,8 @@
 #pragma once
 // A probe's temperature from its shift by the run's newest calibration
 // (`bosfuse calibrate`, calibrate.h): per channel, °C per px of shift
-// magnitude around the reference temperature. `process` and the live page
-// convert probe shifts the same way through this one piece.
+// magnitude from the calibration's anchor (the ambient). `process` and the
+// live page convert probe shifts the same way through this one piece.
 //
 // The calibrations table is a history: a new calibration is a new row, and
 // `calibrate --clear` adds a row of kind "cleared", after which the run has
@@ -23,7 +23,7 @@ inline constexpr const char* kClearedCalibration = "cleared";
 
 struct ChannelCalibration {
   double slope_c_per_px = 0;
-  double reference_temperature_c = 0;
+  double reference_temperature_c = 0;  // the line's anchor, where the shift is 0 (calibrate.h: the ambient)
   double camera_offset_s = 0;  // the offset the calibration was made with
 };
 

@@ -182,6 +182,19 @@ cv::Point2d ConvectionScene::displacement_px(double x_px, double y_px, double t_
   return {-scale * gradient.x, scale * gradient.y};
 }
 
+double ConvectionScene::window_mean_temperature_c(double x_px, double y_px, double window_px, double t_s) const {
+  constexpr int kSteps = 32;  // midpoint rule: 1e-4 relative on the demo's plume
+  double sum = 0;
+  for (int i = 0; i < kSteps; ++i) {
+    for (int j = 0; j < kSteps; ++j) {
+      const cv::Point2d at =
+          flow_position_m(x_px + window_px * ((i + 0.5) / kSteps - 0.5), y_px + window_px * ((j + 0.5) / kSteps - 0.5));
+      sum += temperature_c(at.x, at.y, t_s);
+    }
+  }
+  return sum / (kSteps * kSteps);
+}
+
 cv::Mat ConvectionScene::holder_mask() const {
   cv::Mat mask(options_.height_px, options_.width_px, CV_8U, cv::Scalar(0));
   const double radius_px = options_.diameter_m / 2 * options_.px_per_mm * 1e3;

@@ -113,6 +113,12 @@ class ConvectionScene {
   cv::Point2d flow_position_m(double x_px, double y_px) const;  // (x, z)
   cv::Point2d image_position_px(double x_m, double z_m) const;
   cv::Point2d displacement_px(double x_px, double y_px, double t_s) const;  // (u, v), DESIGN.md convention
+  // The temperature's mean over a square window of `window_px` centred at
+  // (x, y) in the image: the budget's window-average term, below a point
+  // sensor's reading where the profile is curved (by about (w²/24)·|∇²T| on
+  // the plume's centreline). A BOS probe from deformed multi-pass windows
+  // averages over less than this box (issue 29: about 0.6 of its deficit).
+  double window_mean_temperature_c(double x_px, double y_px, double window_px, double t_s) const;
   cv::Mat holder_mask() const;  // CV_8U, 255 where the cylinder and its holder hide the background
   // The camera's frame at t; `with_flow` false gives the no-flow reference.
   cv::Mat render_frame(const BackgroundPattern& pattern, const CameraModel& camera, double t_s, bool with_flow,

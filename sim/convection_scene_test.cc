@@ -124,6 +124,34 @@ TEST(ConvectionScene, ThermocouplesLagTheAirTheySit) {
 
 // Render a reference and a frame through the plume and read the displacement
 // back with the cross-correlation evaluator at a thermocouple's position.
+// On the plume's centreline the profile is curved, so a window's mean lies
+// below the point by the budget's window-average term (w²/24)·|∇²T|, to
+// leading order in w/δ; a vanishing window is the point.
+TEST(ConvectionScene, AWindowsMeanOnTheCentrelineIsThePointLessTheCurvatureTerm) {
+  SceneOptions o;
+  o.pure_exponential = true;
+  o.px_per_mm = 8;
+  o.width_px = 480;
+  o.height_px = 440;
+  o.cylinder_x_px = 240;
+  o.cylinder_y_px = 420;
+  const ConvectionScene scene(o);
+  const cv::Point2d at = scene.image_position_px(0, 0.035);
+  const double t_s = 5;
+  const double h_px = 0.5, h_m = h_px * 1e-3 / o.px_per_mm;
+  const auto t = [&](double dx_px, double dy_px) {
+    const cv::Point2d m = scene.flow_position_m(at.x + dx_px, at.y + dy_px);
+    return scene.temperature_c(m.x, m.y, t_s);
+  };
+  const double laplacian_per_m2 = (t(h_px, 0) + t(-h_px, 0) + t(0, h_px) + t(0, -h_px) - 4 * t(0, 0)) / (h_m * h_m);
+  const double w_px = 16, w_m = w_px * 1e-3 / o.px_per_mm;
+  const double expected_c = w_m * w_m / 24 * laplacian_per_m2;  // negative: a peak
+  const double deficit_c = scene.window_mean_temperature_c(at.x, at.y, w_px, t_s) - t(0, 0);
+  EXPECT_LT(expected_c, -0.2) << "the demo's plume is curved enough to matter";
+  EXPECT_NEAR(deficit_c, expected_c, 0.1 * std::abs(expected_c));
+  EXPECT_NEAR(scene.window_mean_temperature_c(at.x, at.y, 0.01, t_s), t(0, 0), 1e-6);
+}
+
 TEST(ConvectionScene, RenderedFramesCarryTheForwardDisplacement) {
   SceneOptions options;
   options.width_px = 320;

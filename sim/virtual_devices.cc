@@ -36,26 +36,33 @@ double SceneThermocoupleTable::temperature_c(int channel, double t_s, std::uint6
 }
 
 ModbusSimServer::Options scene_module_options(std::shared_ptr<const SceneThermocoupleTable> table,
-                                              const std::string& profile, double ambient_c, int port) {
+                                              const std::string& profile, double ambient_c, int port,
+                                              std::optional<std::chrono::steady_clock::time_point> scene_start) {
   ModbusSimServer::Options options;
   options.endpoint.host = "127.0.0.1";
   options.endpoint.port = port;
   options.channels = module_channels(profile, static_cast<int>(table->size()), "K");
   use_profile_register_map(options, profile);
   const auto inputs = static_cast<int>(table->size());
-  options.temperature_c = [table, inputs, ambient_c](int channel, double t_s, std::uint64_t draw) {
-    return channel < inputs ? table->temperature_c(channel, t_s, draw) : ambient_c;
+  options.temperature_c = [table, inputs, ambient_c, scene_start](int channel, double t_s, std::uint64_t draw) {
+    if (channel >= inputs) return ambient_c;
+    // The server's t_s counts from its own start(); the scene's from scene_start.
+    const double since_start_s =
+        scene_start ? std::chrono::duration<double>(std::chrono::steady_clock::now() - *scene_start).count() : t_s;
+    return table->temperature_c(channel, since_start_s, draw);
   };
   return options;
 }
 
 SceneCamera::SceneCamera(std::shared_ptr<const ConvectionScene> scene, BackgroundPattern pattern, CameraModel camera,
-                         double speed, int reference_frames)
+                         double speed, int reference_frames,
+                         std::optional<std::chrono::steady_clock::time_point> scene_start)
     : scene_(std::move(scene)),
       pattern_(std::move(pattern)),
       camera_(camera),
       speed_(speed),
-      reference_frames_(reference_frames) {
+      reference_frames_(reference_frames),
+      started_(scene_start) {
   if (!(speed_ > 0)) throw std::invalid_argument("speed-up must be positive");
 }
 

@@ -4,9 +4,19 @@
 // the scene's thermocouples, and a camera that renders the scene's frames.
 // Both run on scene time = time since start × speed-up, so a few minutes of
 // cooling can be recorded in seconds.
+//
+// The start is one instant shared by both devices, the scene's t = 0 (the
+// demo's "heater off" marker): each device's own start (the server's
+// start(), the camera's open(), tens to hundreds of ms apart on a loaded
+// machine) would put the frames' and the readings' time stamps that far
+// behind the scene they show, a clock error of 16× as many experiment
+// seconds at the demo's speed-up (issue 29: T0 of BOS and thermocouple
+// differed by −0.37..+0.12 °C with it). Without a start given, each device
+// starts its clock when it starts.
 
 #include <chrono>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "acquisition/frame_source.h"
@@ -34,8 +44,10 @@ class SceneThermocoupleTable {
 
 // An ADAM-6018-like module on loopback serving the table; its cold junction
 // (when the profile has one) reads the ambient temperature.
-ModbusSimServer::Options scene_module_options(std::shared_ptr<const SceneThermocoupleTable> table,
-                                              const std::string& profile, double ambient_c, int port);
+// `scene_start`: the instant of the scene's t = 0; none: the server's start.
+ModbusSimServer::Options scene_module_options(
+    std::shared_ptr<const SceneThermocoupleTable> table, const std::string& profile, double ambient_c, int port,
+    std::optional<std::chrono::steady_clock::time_point> scene_start = std::nullopt);
 
 // A camera looking at the scene's background through the plume. The first
 // `reference_frames` frames show the background without flow (taken before
@@ -43,8 +55,9 @@ ModbusSimServer::Options scene_module_options(std::shared_ptr<const SceneThermoc
 // moment it is taken. Ends when the scene's duration is reached.
 class SceneCamera : public acquisition::FrameSource {
  public:
+  // `scene_start`: the instant of the scene's t = 0; none: open().
   SceneCamera(std::shared_ptr<const ConvectionScene> scene, BackgroundPattern pattern, CameraModel camera, double speed,
-              int reference_frames);
+              int reference_frames, std::optional<std::chrono::steady_clock::time_point> scene_start = std::nullopt);
 
   std::string kind() const override { return "virtual"; }
   std::string describe() const override { return "virtual camera"; }
