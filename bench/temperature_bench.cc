@@ -11,6 +11,12 @@
 //                                      field, new every frame, as an evaluator's are), unmeasured nodes the same:
 //                                      weighted, so refactorised every frame; e = 1: also σ of T at every node
 //                                      (64 noise draws solved in blocks of 16)
+//   BM_TemperatureFieldSigmaDrift/j/t  σ as a run's are: one log-normal pattern across the field, each frame's
+//                                      σ that pattern times a log-normal jitter of j % (new every frame), the
+//                                      first frame the pattern itself; t > 0: frames solved by conjugate gradients
+//                                      on the kept factor to a relative residual 1e-t where the weights moved
+//                                      little enough (the default, t = 10), t = 0: refactorised every frame;
+//                                      max_dT_c: the largest |ΔT| of any node from the exact weighted solve
 // Run: build/bench/temperature_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 // Figures go into docs/BENCHMARKS.md.
 
@@ -133,9 +139,65 @@ void BM_TemperatureFieldWeighted(benchmark::State& state) {
   state.SetLabel(options.estimate_uncertainty ? "weighted, sigma of T (K = 64)" : "weighted");
 }
 
+void BM_TemperatureFieldSigmaDrift(benchmark::State& state) {
+  const BosGeometry g = geometry();
+  constexpr int kFrames = 6;
+  const double jitter = static_cast<double>(state.range(0)) / 100;
+  std::mt19937_64 random(29);
+  std::normal_distribution<double> normal;
+  DisplacementField pattern = frame_field(0, true);
+  for (auto& v : pattern.vectors) {
+    v.sigma_u_px = 0.02 * std::exp(0.5 * normal(random));
+    v.sigma_v_px = 0.02 * std::exp(0.5 * normal(random));
+  }
+  std::vector<DisplacementField> frames;
+  for (int f = 0; f < kFrames; ++f) {
+    frames.push_back(frame_field(f, true));
+    for (std::size_t i = 0; i < frames[f].size(); ++i) {
+      DisplacementVector& v = frames[f].vectors[i];
+      v.flag = pattern.vectors[i].flag;
+      v.sigma_u_px = pattern.vectors[i].sigma_u_px * std::exp(jitter * normal(random));
+      v.sigma_v_px = pattern.vectors[i].sigma_v_px * std::exp(jitter * normal(random));
+    }
+  }
+  TemperatureFieldOptions options = options_for(0);
+  options.iterative_tolerance = state.range(1) == 0 ? 0 : std::pow(10.0, -static_cast<double>(state.range(1)));
+  TemperatureFieldSolver solver(g, options);
+  solver.recover(pattern);  // the run's first frame, analysed and factorised outside the timing
+  int f = 0;
+  double iterations = 0, condition = 0;
+  for (auto _ : state) {
+    const auto result = solver.recover(frames[f++ % kFrames]);
+    iterations += result.summary.solver_iterations;
+    condition = std::max(condition, result.summary.kept_factor_condition);
+    benchmark::DoNotOptimize(result);
+  }
+  state.counters["factorisations"] = solver.factorisations() - 1;
+  state.counters["iterative_solves"] = solver.iterative_solves();
+  state.counters["iterations"] = iterations / static_cast<double>(state.iterations());
+  state.counters["condition_bound"] = condition;
+  // How far the frames lie from the exact weighted solution (each frame factorised for its own σ).
+  if (state.range(1) != 0) {
+    TemperatureFieldSolver iterating(g, options), exact(g, options_for(0));
+    iterating.recover(pattern);
+    double largest_c = 0;
+    for (const auto& frame : frames) {
+      const auto a = iterating.recover(frame).field, b = exact.recover(frame).field;
+      for (std::size_t i = 0; i < a.temperature_c.size(); ++i)
+        largest_c = std::max(largest_c, std::abs(a.temperature_c[i] - b.temperature_c[i]));
+    }
+    state.counters["max_dT_c"] = largest_c;
+  }
+  state.SetLabel(state.range(1) != 0 ? "iterated on the kept factor" : "refactorised");
+}
+
 BENCHMARK(BM_TemperatureFieldOneShot)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_TemperatureFieldPerFrame)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_TemperatureFieldWeighted)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_TemperatureFieldSigmaDrift)
+    ->ArgsProduct({{2, 5, 10, 20}, {0, 6, 8, 10}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

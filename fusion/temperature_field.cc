@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <Eigen/CholmodSupport>
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
@@ -166,6 +167,63 @@ std::unique_ptr<Factorisation> make_factorisation(PoissonSolver solver, bool nes
       return std::make_unique<EigenFactorisation<Eigen::SimplicialLDLT<Matrix>>>(nested_dissection);
   }
   throw std::invalid_argument("temperature field: unknown Poisson solver");
+}
+
+// An earlier frame's factor as the preconditioner of a conjugate-gradient
+// solve (Eigen's preconditioner interface): the factor of M = AᵀW₀A serves
+// a frame whose matrix AᵀWA has the same edges and other weights.
+class KeptFactorPreconditioner {
+ public:
+  void use(const Factorisation* factorisation) { factorisation_ = factorisation; }
+  template <typename Matrix>
+  KeptFactorPreconditioner& analyzePattern(const Matrix&) { return *this; }
+  template <typename Matrix>
+  KeptFactorPreconditioner& factorize(const Matrix&) { return *this; }
+  template <typename Matrix>
+  KeptFactorPreconditioner& compute(const Matrix&) { return *this; }
+  Eigen::VectorXd solve(const Eigen::VectorXd& residual) const { return factorisation_->solve(residual); }
+  Eigen::ComputationInfo info() const { return factorisation_ ? Eigen::Success : Eigen::InvalidInput; }
+
+ private:
+  const Factorisation* factorisation_ = nullptr;
+};
+
+// For A = Σ wₑ aₑaₑᵀ and M = Σ w₀ₑ aₑaₑᵀ over the same edges, every
+// Rayleigh quotient xᵀAx / xᵀMx is a weighted mean of the ratios wₑ/w₀ₑ, so
+// the eigenvalues of M⁻¹A lie between the smallest and the largest ratio:
+// their quotient bounds the preconditioned system's condition number.
+double condition_bound(const std::vector<double>& weights, const std::vector<double>& kept_weights) {
+  double smallest = std::numeric_limits<double>::infinity(), largest = 0;
+  for (std::size_t e = 0; e < weights.size(); ++e) {
+    const double ratio = weights[e] / kept_weights[e];
+    smallest = std::min(smallest, ratio);
+    largest = std::max(largest, ratio);
+  }
+  return largest / smallest;
+}
+
+// Conjugate gradients on `a` preconditioned by the kept factor; nullopt when
+// it has not reached `tolerance` (relative residual) in `max_iterations`.
+struct IterativeSolution {
+  Eigen::VectorXd x;
+  int iterations = 0;
+  double relative_residual = 0;
+};
+
+std::optional<IterativeSolution> solve_preconditioned(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& rhs,
+                                                      const Factorisation& kept, double tolerance,
+                                                      int max_iterations) {
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper, KeptFactorPreconditioner> cg;
+  cg.preconditioner().use(&kept);
+  cg.setTolerance(tolerance);
+  cg.setMaxIterations(max_iterations);
+  cg.compute(a);
+  IterativeSolution solution{cg.solve(rhs), 0, 0};
+  solution.iterations = static_cast<int>(cg.iterations());
+  solution.relative_residual = cg.error();
+  if (cg.info() != Eigen::Success || !(solution.relative_residual <= tolerance) || !solution.x.allFinite())
+    return std::nullopt;
+  return solution;
 }
 
 // What decides the sparsity pattern: a new grid needs a new analysis.
@@ -377,6 +435,8 @@ std::string TemperatureFieldOptions::Validate() const {
     return "solver must be kCholmodSupernodal or kEigenSimplicial";
   }
   if (uncertainty_samples < 8 || uncertainty_samples > 100'000) return "uncertainty_samples must lie in [8, 100000]";
+  if (!(iterative_tolerance == 0 || (iterative_tolerance >= 1e-14 && iterative_tolerance <= 1e-6)))
+    return "iterative_tolerance must be 0 (refactorise) or lie in [1e-14, 1e-6]";
   return {};
 }
 
@@ -410,14 +470,46 @@ std::optional<double> TemperatureField::sigma_at(double x_px, double y_px) const
 std::string TemperatureFieldSummary::brief_report() const {
   return fmt::format(
       "temperature field: {} nodes ({} on the ambient border, {} unmeasured filled, {} unphysical), {:.2f} .. {:.2f} "
-      "degC, {}, {}, {:.3f} s",
+      "degC, {}, {}, {}, {:.3f} s",
       nodes, boundary_nodes, unmeasured_nodes, unphysical_nodes, min_c, max_c,
       weighted ? fmt::format("weighted by sigma ({} nodes given the median sigma)", median_sigma_nodes) : "unweighted",
       uncertainty_estimated
           ? fmt::format("sigma of T from {} samples ({:.3f} s)", uncertainty_samples, uncertainty_seconds)
           : "no sigma of T",
+      solver_iterations > 0 ? fmt::format("{} conjugate-gradient iterations on the kept factor (residual {:.1e})",
+                                          solver_iterations, relative_residual)
+                            : "solved directly",
       seconds);
 }
+
+namespace {
+
+// δn of one frame, and how it was solved: iterations 0 when directly by a
+// factor of its own weights.
+struct FrameSolution {
+  Eigen::VectorXd delta_n;
+  int iterations = 0;
+  double relative_residual = 0;
+  double condition_bound = 0;  // of the kept factor for this frame's matrix; 0: not computed
+};
+
+// A conjugate-gradient iteration costs a solve with the factor and a
+// product with the matrix; on the 16 MP grid a numeric factorisation costs
+// about as much as 15 of them (temperature_bench), so more would cost more
+// than refactorising.
+constexpr int kMaxIterations = 15;
+
+// Iterations that conjugate gradients needs at most to reduce the error (in
+// the matrix's norm) by `tolerance` when the preconditioned condition number
+// is at most `condition`: 2·ρᵏ ≤ tolerance, ρ = (√κ − 1)/(√κ + 1).
+double iterations_bound(double condition, double tolerance) {
+  const double root = std::sqrt(std::max(condition, 1.0));
+  const double rate = (root - 1) / (root + 1);
+  if (rate <= 0) return 1;
+  return std::ceil(std::log(2 / tolerance) / -std::log(rate));
+}
+
+}  // namespace
 
 // What a solver keeps between frames of one grid.
 struct TemperatureFieldSolver::State {
@@ -432,6 +524,7 @@ struct TemperatureFieldSolver::State {
   int fields = 0;
   int analyses = 0;
   int factorisations = 0;
+  int iterative_solves = 0;
   bool one_shot = false;  // recover_temperature_field's: the cheaper analysis
 
   void start_grid(const GridKey& key, const DisplacementField& displacement, const TemperatureFieldOptions& options) {
@@ -468,6 +561,32 @@ struct TemperatureFieldSolver::State {
     analysed = true;
     ++analyses;
   }
+
+  // δn of a frame whose matrix is not the kept factor's. With `may_iterate`
+  // (the same unmeasured nodes, only σ changed) by conjugate gradients on
+  // the kept factor when the weights moved little enough for it to converge
+  // in fewer solves than a factorisation costs; else, or when it did not
+  // converge, factorised anew, and that factor kept for the next frames.
+  FrameSolution solve_new_weights(const EdgeSystem& system, const std::vector<std::uint8_t>& measured,
+                                  const std::vector<double>& weights, bool may_iterate, double tolerance) {
+    const Eigen::SparseMatrix<double> a = system.matrix();
+    const double condition = may_iterate ? condition_bound(weights, factorised_weights) : 0;
+    if (may_iterate && iterations_bound(condition, tolerance) <= kMaxIterations) {
+      if (auto iterated = solve_preconditioned(a, system.rhs(), *factorisation, tolerance, kMaxIterations)) {
+        ++iterative_solves;
+        return {std::move(iterated->x), iterated->iterations, iterated->relative_residual, condition};
+      }
+    }
+    // Dropped first, so that a failed factorisation is not taken for a good one next frame.
+    factorised_for.clear();
+    factorised_weights.clear();
+    if (!analysed) analyse(a);
+    factorisation->factorise(a);
+    ++factorisations;
+    factorised_for = measured;
+    factorised_weights = weights;
+    return {factorisation->solve(system.rhs()), 0, 0, condition};
+  }
 };
 
 TemperatureFieldSolver::TemperatureFieldSolver(const BosGeometry& geometry, const TemperatureFieldOptions& options)
@@ -492,6 +611,11 @@ int TemperatureFieldSolver::factorisations() const {
   return state_->factorisations;
 }
 
+int TemperatureFieldSolver::iterative_solves() const {
+  std::lock_guard lock(state_->mutex);
+  return state_->iterative_solves;
+}
+
 void TemperatureFieldSolver::prepare(const GridGeometry& grid) {
   const DisplacementField field = field_on_grid(grid);
   const GridLayout layout = grid_layout(field);
@@ -510,15 +634,16 @@ TemperatureFieldResult TemperatureFieldSolver::recover(const DisplacementField& 
   std::lock_guard lock(state_->mutex);
   State& state = *state_;
   state.use_grid(displacement, layout, options_);
-  std::vector<std::uint8_t> measured = measured_nodes(displacement, options_);
+  const std::vector<std::uint8_t> measured = measured_nodes(displacement, options_);
   const NodeSigmas sigmas = node_sigmas(displacement, measured);
   const bool weighted = options_.weight_by_sigma && sigmas.any();
-  std::vector<double> weights =
+  const std::vector<double> weights =
       edge_weights(displacement.rows, displacement.cols, measured, weighted ? &sigmas : nullptr, options_.fill_weight);
-  const bool refactorise = measured != state.factorised_for || weights != state.factorised_weights;
+  const bool same_nodes = measured == state.factorised_for;
+  const bool same_weights = same_nodes && weights == state.factorised_weights;
 
   const double target_per_px = geometry_.gradient_per_m(1.0) * layout.step_px / geometry_.px_per_m_flow();
-  EdgeSystem system(state.unknown, state.unknowns, refactorise);
+  EdgeSystem system(state.unknown, state.unknowns, !same_weights);
   // Trapezoid target along an edge from the displacement component along it;
   // a weak zero target (harmonic fill) when either end is not a measurement.
   std::size_t edge = 0;
@@ -530,27 +655,23 @@ TemperatureFieldResult TemperatureFieldSolver::recover(const DisplacementField& 
     system.add_edge(i, j, target_per_px * mean_shift_px, weight);
   };
   for_each_edge(displacement.rows, displacement.cols, add_edge);
-  if (refactorise) {
-    const Eigen::SparseMatrix<double> a = system.matrix();
-    // Dropped first, so that a failed factorisation is not taken for a good one next frame.
-    state.factorised_for.clear();
-    state.factorised_weights.clear();
-    if (!state.analysed) state.analyse(a);
-    state.factorisation->factorise(a);
-    ++state.factorisations;
-    state.factorised_for = std::move(measured);
-    state.factorised_weights = std::move(weights);
-  }
-  const Eigen::VectorXd delta_n = state.factorisation->solve(system.rhs());
+  // The σ estimate solves with the factor itself, so it needs the frame's own.
+  const bool may_iterate = same_nodes && !options_.estimate_uncertainty && options_.iterative_tolerance > 0;
+  const FrameSolution solution =
+      same_weights ? FrameSolution{state.factorisation->solve(system.rhs()), 0, 0, 1}
+                   : state.solve_new_weights(system, measured, weights, may_iterate, options_.iterative_tolerance);
   TemperatureFieldResult result =
-      field_from_solution(displacement, layout, geometry_, state.unknown, state.factorised_for, delta_n);
+      field_from_solution(displacement, layout, geometry_, state.unknown, measured, solution.delta_n);
   result.summary.weighted = weighted;
   result.summary.median_sigma_nodes = sigmas.median_filled;
+  result.summary.solver_iterations = solution.iterations;
+  result.summary.relative_residual = solution.relative_residual;
+  result.summary.kept_factor_condition = solution.condition_bound;
   if (options_.estimate_uncertainty && sigmas.any()) {
     const auto sampling_start = std::chrono::steady_clock::now();
-    const Eigen::VectorXd variance = propagated_variance(
-        *state.factorisation, state.unknown, state.unknowns, displacement, state.factorised_for,
-        state.factorised_weights, sigmas, target_per_px, options_.uncertainty_samples, options_.uncertainty_seed);
+    const Eigen::VectorXd variance =
+        propagated_variance(*state.factorisation, state.unknown, state.unknowns, displacement, measured, weights,
+                            sigmas, target_per_px, options_.uncertainty_samples, options_.uncertainty_seed);
     set_uncertainty(result.field, state.unknown, variance);
     result.summary.uncertainty_estimated = true;
     result.summary.uncertainty_samples = options_.uncertainty_samples;

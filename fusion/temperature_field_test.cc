@@ -660,13 +660,16 @@ TEST(TemperatureFieldWeighted, NodesWithoutSigmaGetTheMedian) {
   EXPECT_EQ(filled.field.temperature_c, reference.field.temperature_c);
 }
 
-// The kept factor serves only the weights it was made with: a frame whose σ
-// changed is refactorised, one with the last frame's σ only solved.
+// The kept factor solves directly only the weights it was made with: with
+// the iteration off (iterative_tolerance 0) a frame whose σ changed is
+// refactorised, one with the last frame's σ only solved.
 TEST(TemperatureFieldSolver, ANewSigmaRefactorisesAndTheSameSigmaDoesNot) {
   const BosGeometry g(paper_like_setup());
   NoisyField field = half_and_half(g);
   std::mt19937_64 random(3);
-  TemperatureFieldSolver solver(g);
+  TemperatureFieldOptions refactorising;
+  refactorising.iterative_tolerance = 0;
+  TemperatureFieldSolver solver(g, refactorising);
   const DisplacementField first = field.draw(random), same_sigma = field.draw(random);
   DisplacementField new_sigma = field.draw(random);
   new_sigma.at(20, 20).sigma_u_px *= 2;
@@ -674,8 +677,87 @@ TEST(TemperatureFieldSolver, ANewSigmaRefactorisesAndTheSameSigmaDoesNot) {
     const auto kept = solver.recover(*frame);
     const auto fresh = recover_temperature_field(*frame, g);
     EXPECT_LT(relative_difference(kept.field, fresh.field, g), 1e-10);
+    EXPECT_EQ(kept.summary.solver_iterations, 0);
   }
   EXPECT_EQ(solver.factorisations(), 2) << "the second frame's σ are the first's";
+  EXPECT_EQ(solver.iterative_solves(), 0);
+}
+
+// σ as a run's frames carry them: one pattern across the field (log-normal,
+// e^±0.5), each frame's that pattern times a few % of its own.
+DisplacementField with_jittered_sigma(DisplacementField field, double jitter, std::mt19937_64& random) {
+  std::normal_distribution<double> normal;
+  for (auto& v : field.vectors) {
+    v.sigma_u_px *= std::exp(jitter * normal(random));
+    v.sigma_v_px *= std::exp(jitter * normal(random));
+  }
+  return field;
+}
+
+// A frame whose σ alone moved a little is solved by conjugate gradients on
+// the kept factor of an earlier frame's σ, not refactorised, and comes out
+// the exact weighted solution of its own σ (a fresh factorisation's): the
+// default tolerance, 1e-8 of the residual, keeps every node within 1e-6 of
+// the largest δn and 1e-6 °C. A frame whose σ moved far and one solved with
+// its σ of T are refactorised.
+TEST(TemperatureFieldSolver, ANewSigmaIsIteratedOnTheKeptFactorToTheExactWeightedSolution) {
+  const BosGeometry g(paper_like_setup());
+  std::mt19937_64 random(11);
+  NoisyField pattern = half_and_half(g);
+  for (auto& v : pattern.exact.vectors) {
+    v.sigma_u_px *= std::exp(0.5 * std::normal_distribution<double>()(random));
+    v.sigma_v_px *= std::exp(0.5 * std::normal_distribution<double>()(random));
+  }
+  TemperatureFieldSolver solver(g);
+  solver.recover(pattern.draw(random));
+  for (int frame = 0; frame < 3; ++frame) {
+    const DisplacementField jittered = with_jittered_sigma(pattern.draw(random), 0.02, random);
+    const auto kept = solver.recover(jittered);
+    const auto fresh = recover_temperature_field(jittered, g);
+    const double difference = relative_difference(kept.field, fresh.field, g);
+    std::printf("frame %d: %d iterations, residual %.2g, condition bound %.3g, difference %.3g of the largest dn\n",
+                frame, kept.summary.solver_iterations, kept.summary.relative_residual,
+                kept.summary.kept_factor_condition, difference);
+    EXPECT_GT(kept.summary.solver_iterations, 0);
+    EXPECT_LE(kept.summary.relative_residual, TemperatureFieldOptions{}.iterative_tolerance);
+    EXPECT_LT(difference, 1e-6);
+    double largest_c = 0;
+    for (std::size_t i = 0; i < fresh.field.temperature_c.size(); ++i)
+      largest_c = std::max(largest_c, std::abs(kept.field.temperature_c[i] - fresh.field.temperature_c[i]));
+    std::printf("  largest |dT| %.3g degC\n", largest_c);
+    EXPECT_LT(largest_c, 1e-6);
+    EXPECT_EQ(kept.field.measured, fresh.field.measured);
+  }
+  EXPECT_EQ(solver.factorisations(), 1);
+  EXPECT_EQ(solver.iterative_solves(), 3);
+  EXPECT_NE(solver.recover(pattern.draw(random)).summary.brief_report().find("solved directly"), std::string::npos)
+      << "the kept factor's own σ: solved directly";
+
+  // σ an e^±1 apart from the kept factor's: the bound on the iterations exceeds what a factorisation costs.
+  const DisplacementField far = with_jittered_sigma(pattern.draw(random), 1.0, random);
+  const auto refactorised = solver.recover(far);
+  EXPECT_EQ(refactorised.summary.solver_iterations, 0);
+  EXPECT_EQ(solver.factorisations(), 2);
+  EXPECT_LT(relative_difference(refactorised.field, recover_temperature_field(far, g).field, g), 1e-10);
+
+  // The σ of T solves its noise draws with the factor itself: the frame's own.
+  TemperatureFieldOptions with_sigma;
+  with_sigma.estimate_uncertainty = true;
+  TemperatureFieldSolver estimating(g, with_sigma);
+  estimating.recover(pattern.draw(random));
+  const DisplacementField jittered = with_jittered_sigma(pattern.draw(random), 0.02, random);
+  const auto estimated = estimating.recover(jittered);
+  EXPECT_EQ(estimating.factorisations(), 2);
+  EXPECT_EQ(estimating.iterative_solves(), 0);
+  const auto fresh_sigma = recover_temperature_field(jittered, g, with_sigma).field.sigma_c;
+  ASSERT_EQ(estimated.field.sigma_c.size(), fresh_sigma.size());
+  for (std::size_t i = 0; i < fresh_sigma.size(); ++i) {
+    if (std::isnan(fresh_sigma[i])) {
+      EXPECT_TRUE(std::isnan(estimated.field.sigma_c[i])) << i;
+    } else {
+      EXPECT_NEAR(estimated.field.sigma_c[i], fresh_sigma[i], 1e-9 * fresh_sigma[i] + 1e-15) << i;
+    }
+  }
 }
 
 }  // namespace

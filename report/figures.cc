@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "fitting/sensor_lag.h"
 #include "report/html.h"
 #include "storage/partial_file.h"
 
@@ -468,22 +469,39 @@ FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const 
   return files;
 }
 
+AgreementPairs agreement_pairs(const CurveSeries& a, const CurveSeries& b, const fitting::Agreement& agreement) {
+  AgreementPairs pairs;
+  pairs.time_constant_s = agreement.lag.time_constant_s;
+  auto sa = fitting::clean_series(a.time_s, a.temperature_c, 0.0);
+  if (pairs.time_constant_s > 0) {
+    if (!fitted(a)) return pairs;  // no slope to de-lag with: lagged pairs would not be the agreement's
+    sa = fitting::delagged(sa, *a.fit, pairs.time_constant_s);
+  }
+  const auto sb = fitting::clean_series(b.time_s, b.temperature_c, 0.0);
+  for (std::size_t i = 0; i < sb.size(); ++i) {
+    const auto reading = fitting::interpolate(sa, sb.time_s[i]);
+    if (!reading) continue;
+    pairs.time_s.push_back(sb.time_s[i]);
+    pairs.mean_c.push_back(0.5 * (*reading + sb.temperature_c[i]));
+    pairs.difference_c.push_back(*reading - sb.temperature_c[i]);
+  }
+  return pairs;
+}
+
 FigureFiles write_agreement_figure(const CurveSeries& a, const CurveSeries& b, const fitting::Agreement& agreement,
                                    const FigureSize& size, const fs::path& base) {
-  const auto sa = fitting::clean_series(a.time_s, a.temperature_c, 0.0);
-  const auto sb = fitting::clean_series(b.time_s, b.temperature_c, 0.0);
+  const AgreementPairs pairs = agreement_pairs(a, b, agreement);
+  if (pairs.mean_c.size() < 2) {
+    throw std::invalid_argument(a.name + " and " + b.name + " share fewer than two times: nothing to compare");
+  }
+  // Thinned for drawing only: the caption's n and the statistics are of every pair.
   std::vector<PLFLT> mean, difference;
   Range mr, dr;
-  for (std::size_t i = 0; i < sa.size() && mean.size() < kMaxPlottedPoints; ++i) {
-    const auto other = fitting::interpolate(sb, sa.time_s[i]);
-    if (!other) continue;
-    mean.push_back(0.5 * (sa.temperature_c[i] + *other));
-    difference.push_back(sa.temperature_c[i] - *other);
+  for (const std::size_t i : plotted_indices(pairs.mean_c.size())) {
+    mean.push_back(pairs.mean_c[i]);
+    difference.push_back(pairs.difference_c[i]);
     mr.add(mean.back());
     dr.add(difference.back());
-  }
-  if (mean.size() < 2) {
-    throw std::invalid_argument(a.name + " and " + b.name + " share fewer than two times: nothing to compare");
   }
   const auto& stats = agreement.series;
   if (stats) {
@@ -493,8 +511,11 @@ FigureFiles write_agreement_figure(const CurveSeries& a, const CurveSeries& b, c
   dr.add(0);
   FigureFiles files = files_for(base);
   files.title = fmt::format("Agreement of {} and {}", a.name, b.name);
-  files.caption = fmt::format("Bland–Altman plot: {} − {} against their mean at {} common times ({} interpolated)",
-                              a.name, b.name, mean.size(), b.name);
+  files.caption = fmt::format("Bland–Altman plot: {} − {} against their mean at the {} times of {} (n = {}; {} interpolated there{})",
+                              a.name, b.name, pairs.mean_c.size(), b.name, pairs.mean_c.size(), a.name,
+                              pairs.time_constant_s > 0
+                                  ? fmt::format(", de-lagged by τ = {} s", display_number(pairs.time_constant_s, "{:.3g}"))
+                                  : std::string());
   if (stats) {
     files.caption +=
         fmt::format("; red: bias {} °C, dashed: limits of agreement [{}, {}] °C",

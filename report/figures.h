@@ -46,11 +46,25 @@ FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size
 FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const FigureSize& size,
                                   const std::filesystem::path& base, const std::string& time_basis = kDefaultTimeBasis);
 
+// The pairs of a thermocouple (a) and its BOS probe (b) that the agreement
+// compares (fitting/agreement.h): one at each of b's times — the BOS frames —
+// within a's record, a interpolated there and de-lagged by the agreement's
+// τ (with a's own fit, as the agreement does; a τ > 0 without a fit of a
+// leaves no pairs rather than lagged ones). So their count is the
+// agreement's common_points, and their differences give its bias and RMS.
+struct AgreementPairs {
+  std::vector<double> time_s;        // b's
+  std::vector<double> mean_c;        // (a + b) / 2
+  std::vector<double> difference_c;  // a − b
+  double time_constant_s = 0;        // the τ removed from a
+};
+AgreementPairs agreement_pairs(const CurveSeries& a, const CurveSeries& b, const fitting::Agreement& agreement);
+
 // Bland–Altman plot of a thermocouple (a) against its BOS probe (b): the
-// difference a − b against the mean of the two, on a's times where both
-// exist (b interpolated linearly), with the bias and the limits of agreement
-// of `agreement` when it has series statistics. Throws
-// std::invalid_argument when the two share fewer than two times.
+// difference a − b against the mean of the two at agreement_pairs' pairs,
+// with the bias and the limits of agreement of `agreement` when it has
+// series statistics. Throws std::invalid_argument when there are fewer
+// than two pairs.
 FigureFiles write_agreement_figure(const CurveSeries& a, const CurveSeries& b, const fitting::Agreement& agreement,
                                    const FigureSize& size, const std::filesystem::path& base);
 

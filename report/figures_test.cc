@@ -2,11 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
+#include <random>
 #include <sstream>
 #include <vector>
 
@@ -421,6 +423,64 @@ TEST(Figures, AgreementFigureIsABlandAltmanPlot) {
   auto later = b;
   for (auto& t : later.time_s) t += 10000;
   EXPECT_THROW(write_agreement_figure(a, later, agreement, size, dir / "none"), std::invalid_argument);
+}
+
+// Issue 29: the Bland–Altman plot shows the agreement's own pairs — one at
+// each BOS frame (24, between the thermocouple's 200 readings), the
+// thermocouple interpolated there and de-lagged by the agreement's τ — so
+// its n is the frame count, and its points' mean and RMS are the
+// agreement's bias and RMS difference, which fitting/ computed on its own.
+TEST(Figures, AgreementFigurePlotsTheAgreementsPairsAtTheFramesDelagged) {
+  testing::TempDir dir;
+  constexpr double kK = 0.01, kTau = 3.0, kAmbient = 22, kRise = 58;
+  CurveSeries a, b;
+  a.name = "tc0";
+  b.name = "tc0_probe";
+  b.kind = SeriesKind::kBosProbe;
+  std::mt19937 random(4);
+  std::normal_distribution<double> noise(0, 0.05);
+  for (int i = 0; i < 200; ++i) {  // a lagged sensor's reading: the amplitude over (1 − kτ)
+    a.time_s.push_back(2.0 * i);
+    a.temperature_c.push_back(kAmbient + kRise / (1 - kK * kTau) * std::exp(-kK * 2.0 * i) + noise(random));
+  }
+  for (int f = 0; f < 24; ++f) {  // the frames, between the readings
+    b.time_s.push_back(5.3 + 15.0 * f);
+    b.temperature_c.push_back(kAmbient + kRise * std::exp(-kK * b.time_s.back()) + 2 * noise(random));
+  }
+  fitting::NewtonFitOptions from_zero;
+  from_zero.origin_s = 0.0;
+  a.fit = fitting::fit_newton(a.time_s, a.temperature_c, from_zero);
+  b.fit = fitting::fit_newton(b.time_s, b.temperature_c, from_zero);
+  fitting::AgreementOptions given;
+  given.a_time_constant_s = kTau;
+  const auto agreement = fitting::compare_fits(*a.fit, *b.fit, fitting::clean_series(a.time_s, a.temperature_c, 0.0),
+                                               fitting::clean_series(b.time_s, b.temperature_c, 0.0), given);
+  ASSERT_TRUE(agreement.series);
+  ASSERT_EQ(agreement.series->common_points, 24u);
+
+  const AgreementPairs pairs = agreement_pairs(a, b, agreement);
+  ASSERT_EQ(pairs.difference_c.size(), agreement.series->common_points) << "n is the BOS frames, not a's readings";
+  EXPECT_EQ(pairs.time_s, b.time_s);
+  EXPECT_EQ(pairs.time_constant_s, kTau);
+  double sum = 0, sum_squares = 0;
+  for (double d : pairs.difference_c) sum += d, sum_squares += d * d;
+  EXPECT_NEAR(sum / 24, agreement.series->bias_c, 1e-12);
+  EXPECT_NEAR(std::sqrt(sum_squares / 24), agreement.series->rms_difference_c, 1e-12);
+  EXPECT_LT(std::abs(agreement.series->bias_c), 0.1) << "de-lagged, the lag is no bias";
+  EXPECT_GT(std::abs(agreement.series->bias_as_read_c), 0.5) << "as read it would have been";
+  for (std::size_t i = 0; i < pairs.mean_c.size(); ++i)
+    EXPECT_NEAR(pairs.mean_c[i], b.temperature_c[i] + 0.5 * pairs.difference_c[i], 1e-12);
+
+  const auto files = write_agreement_figure(a, b, agreement, {800, 500}, dir / "agreement");
+  expect_png(files.png, {800, 500});
+  EXPECT_NE(files.caption.find("n = 24"), std::string::npos) << files.caption;
+  EXPECT_NE(files.caption.find("de-lagged by τ = 3 s"), std::string::npos) << files.caption;
+
+  // A τ to remove but no fit of a to remove it with: no lagged pairs drawn in its place.
+  CurveSeries unfitted = a;
+  unfitted.fit.reset();
+  EXPECT_TRUE(agreement_pairs(unfitted, b, agreement).mean_c.empty());
+  EXPECT_THROW(write_agreement_figure(unfitted, b, agreement, {800, 500}, dir / "none"), std::invalid_argument);
 }
 
 TEST(Figures, ALongRecordIsThinnedForDrawingOnly) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -80,7 +81,10 @@ std::string number(double value) {
   return out.str();
 }
 
-toml::table channel_table(const storage::ChannelInfo& channel, std::size_t index) {
+// `time_constants`: the recorded file's time_constant_s by channel_name_key
+// (processing de-lags a thermocouple by it, so a replay must keep it).
+toml::table channel_table(const storage::ChannelInfo& channel, std::size_t index,
+                          const std::map<std::string, double>& time_constants) {
   toml::table t{{"name", channel.name},
                 {"kind", channel.kind},
                 {"unit", channel.unit},
@@ -93,17 +97,20 @@ toml::table channel_table(const storage::ChannelInfo& channel, std::size_t index
   if (channel.image_x_px && channel.image_y_px) {
     t.insert("position_px", toml::array{*channel.image_x_px, *channel.image_y_px});
   }
+  if (const auto tau = time_constants.find(acquisition::channel_name_key(channel.name)); tau != time_constants.end())
+    t.insert("time_constant_s", tau->second);
   return t;
 }
 
-toml::table device_table(const ReplayDevice& device, int port, double speed) {
+toml::table device_table(const ReplayDevice& device, int port, double speed,
+                         const std::map<std::string, double>& time_constants) {
   // Within the periods the logger accepts: a replay serves sample k at poll
   // k whatever the period, and a record whose samples lie years apart (a
   // damaged clock) still replays, at a poll a year.
   const double period_s = std::clamp(std::chrono::duration<double>(device.period).count() / speed,
                                      acquisition::kShortestPollPeriodS, acquisition::TomlReader::kLongestSeconds);
   toml::array channels;
-  for (std::size_t c = 0; c < device.channels.size(); ++c) channels.push_back(channel_table(device.channels[c], c));
+  for (std::size_t c = 0; c < device.channels.size(); ++c) channels.push_back(channel_table(device.channels[c], c, time_constants));
   return toml::table{{"name", device.name},
                      {"profile", "generic"},
                      {"transport", "tcp"},
@@ -198,9 +205,10 @@ ModbusSimServer::Options replay_module_options(const ReplayDevice& device, int p
 
 namespace {
 
-// The recorded experiment file's optical set-up and clock alignment, so the
-// replayed run processes like the recorded one. A file that does not parse
-// (a damaged run) gives nothing to copy; the replay still runs.
+// The recorded experiment file's tables that processing reads — the optical
+// set-up, the clock alignment and the agreement's margins — so the replayed
+// run processes like the recorded one. A file that does not parse (a
+// damaged run) gives nothing to copy; the replay still runs.
 void copy_processing_tables(const std::string& recorded_toml, toml::table& document) {
   toml::table recorded;
   try {
@@ -208,8 +216,18 @@ void copy_processing_tables(const std::string& recorded_toml, toml::table& docum
   } catch (const toml::parse_error&) {
     return;
   }
-  for (const char* name : {"geometry", "alignment"}) {
+  for (const char* name : {"geometry", "alignment", "agreement"}) {
     if (const toml::table* table = recorded[name].as_table()) document.insert(name, *table);
+  }
+}
+
+// Each recorded channel's time_constant_s (channel_time_constants); none
+// from a file that does not parse.
+std::map<std::string, double> recorded_time_constants(const std::string& recorded_toml) {
+  try {
+    return acquisition::channel_time_constants(acquisition::parse_experiment(recorded_toml, "recorded experiment"));
+  } catch (const acquisition::ConfigError&) {
+    return {};
   }
 }
 
@@ -219,9 +237,10 @@ std::string replay_experiment_toml(const RecordedRun& run, const std::vector<int
   // Built as a toml++ table, not by hand: names come from a recorded run and
   // may hold any character (control characters, quotes, non-ASCII), which
   // toml++ escapes so the logger reads back exactly the same string.
+  const std::map<std::string, double> time_constants = recorded_time_constants(run.run.config_toml);
   toml::array devices;
   for (std::size_t d = 0; d < run.devices.size(); ++d)
-    devices.push_back(device_table(run.devices[d], ports.at(d), speed));
+    devices.push_back(device_table(run.devices[d], ports.at(d), speed, time_constants));
   toml::array cameras;
   for (const std::string& camera : run.cameras) {
     cameras.push_back(toml::table{{"name", camera},

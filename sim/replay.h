@@ -49,9 +49,10 @@ ModbusSimServer::Options replay_module_options(const ReplayDevice& device, int p
 
 // The experiment file of a replay at `speed` with the devices' modules on
 // `ports` (same order as run.devices). It keeps what makes the replay the
-// same experiment: the recorded run's [geometry] and [alignment], its
-// declared origin, and its time scale times `speed` (a run recorded at 16×
-// replayed at 10× is 160 experiment seconds per recorded second).
+// same experiment: what processing reads of the recorded run's file (its
+// [geometry], [alignment] and [agreement], each channel's time_constant_s),
+// its declared origin, and its time scale times `speed` (a run recorded at
+// 16× replayed at 10× is 160 experiment seconds per recorded second).
 std::string replay_experiment_toml(const RecordedRun& run, const std::vector<int>& ports, double speed);
 
 }  // namespace bosfuse::sim

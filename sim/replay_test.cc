@@ -54,6 +54,70 @@ TEST(ReplayExperiment, AnyNameRoundTripsThroughTheExperimentFile) {
   EXPECT_EQ(config.cameras[0].replay_camera, run.cameras[0]);
 }
 
+// What processing reads of the recorded experiment file goes into the
+// replay's: the agreement's margins and each thermocouple's time constant
+// (keyed by the channel's name, whatever its letter case there), besides
+// the geometry and alignment; a channel without one stays without.
+TEST(ReplayExperiment, KeepsTheAgreementMarginsAndEachChannelsTimeConstant) {
+  RecordedRun run;
+  run.dir = "/runs/recorded";
+  run.run.name = "cooling";
+  ReplayDevice device;
+  device.name = "adam";
+  for (const char* name : {"TC_near", "tc_far", "tc_none"}) {
+    storage::ChannelInfo channel;
+    channel.name = name;
+    channel.kind = "thermocouple";
+    channel.unit = "degC";
+    device.channels.push_back(channel);
+    device.samples.push_back({storage::Sample{}});
+  }
+  run.devices.push_back(device);
+  run.run.config_toml = R"([run]
+name = "cooling"
+[geometry]
+z_d_m = 0.5
+[agreement]
+margin_c = 0.25
+margin_k_relative = 0.02
+[[devices]]
+name = "adam"
+profile = "generic"
+transport = "tcp"
+host = "127.0.0.1"
+port = 502
+channels = [
+  { name = "tc_near", register = "holding", address = 0, type = "float32", time_constant_s = 1.75 },
+  { name = "tc_far", register = "holding", address = 2, type = "float32", time_constant_s = 0.5 },
+  { name = "tc_none", register = "holding", address = 4, type = "float32" },
+]
+)";
+  const auto recorded = acquisition::parse_experiment(run.run.config_toml, "recorded.toml");
+  ASSERT_EQ(acquisition::channel_time_constants(recorded).size(), 2u) << "the recorded file states two";
+  const auto replayed = acquisition::parse_experiment(replay_experiment_toml(run, {5020}, 4.0), "replay.toml");
+  EXPECT_EQ(replayed.agreement.margin_c, 0.25);
+  EXPECT_EQ(replayed.agreement.margin_k_relative, 0.02);
+  const auto time_constants = acquisition::channel_time_constants(replayed);
+  EXPECT_EQ(time_constants, acquisition::channel_time_constants(recorded));
+  ASSERT_EQ(replayed.modbus_devices.size(), 1u);
+  const auto& channels = replayed.modbus_devices[0].channels;
+  ASSERT_EQ(channels.size(), 3u);
+  EXPECT_EQ(channels[0].time_constant_s, 1.75);
+  EXPECT_EQ(channels[1].time_constant_s, 0.5);
+  EXPECT_FALSE(channels[2].time_constant_s.has_value());
+}
+
+// A recorded file that does not parse gives the replay nothing to copy,
+// and the replay still has its devices.
+TEST(ReplayExperiment, ARecordedFileThatDoesNotParseGivesNothingToCopy) {
+  RecordedRun run = awkward_run();
+  run.run.config_toml = "[agreement\nmargin_c = 0.25";
+  const auto replayed = acquisition::parse_experiment(replay_experiment_toml(run, {5020}, 1.0), "replay.toml");
+  EXPECT_EQ(replayed.agreement.margin_c, acquisition::AgreementMargins{}.margin_c);
+  ASSERT_EQ(replayed.modbus_devices.size(), 1u);
+  EXPECT_EQ(replayed.modbus_devices[0].channels.size(), kAwkwardNames.size());
+}
+
 // Found by fuzzing: a damaged store whose times lie centuries apart made
 // the replay's offsets overflow. It is refused, saying why.
 TEST(InspectRecordedRun, TimesCenturiesApartAreRefusedAsDamaged) {
