@@ -21,7 +21,8 @@ std::map<std::int64_t, ChannelCalibration> stored_calibration(const storage::Pro
     if (!c.at("ok").get<bool>()) continue;
     out[c.at("channel_id").get<std::int64_t>()] = {c.at("slope_c_per_px").get<double>(),
                                                    c.at("reference_temperature_c").get<double>(),
-                                                   c.value("camera_offset_s", 0.0)};
+                                                   c.value("camera_offset_s", 0.0),
+                                                   c.value("slope_std_error_c_per_px", 0.0)};
   }
   return out;
 }
