@@ -1,4 +1,6 @@
-// bosfuse export: a run's samples as CSV, one column per channel (--csv), or
+// bosfuse export: a run's samples as CSV, one column per channel (--csv), its
+// stored BOS probe samples with their standard uncertainties (--probes,
+// report/probe_csv.h), or
 // the displacement and temperature fields `bosfuse process` stored, as HDF5
 // with an XDMF sidecar (--fields OUT.h5, report/field_export.h). The image
 // scale for the fields' mm coordinates is --px-per-mm, else the [geometry]
@@ -18,6 +20,7 @@
 #include "app/output_stream.h"
 #include "pipeline/processing_settings.h"
 #include "report/field_export.h"
+#include "report/probe_csv.h"
 #include "report/sample_csv.h"
 #include "storage/experiment_clock.h"
 #include "storage/run_store.h"
@@ -29,6 +32,7 @@ struct ExportArgs {
   std::string run;
   std::string out = "-";
   bool csv = false;
+  bool probes = false;
   std::string fields;
   double px_per_mm = 0;
 };
@@ -65,6 +69,9 @@ void add_export(CLI::App& root) {
   cmd->add_option("run", args->run, "Run folder")->required();
   auto* format = cmd->add_option_group("format", "What to export (one of)");
   auto* csv = format->add_flag("--csv", args->csv, "The samples as CSV, one column per channel");
+  auto* probes = format->add_flag("--probes", args->probes,
+                                  "The BOS probe samples `bosfuse process` stored as CSV, one row per probe and frame, "
+                                  "with their standard uncertainties (empty where not estimated)");
   auto* fields = format->add_option(
       "--fields", args->fields,
       "The displacement and temperature fields `bosfuse process` stored, as this HDF5 file (e.g. fields.h5) plus "
@@ -76,7 +83,8 @@ void add_export(CLI::App& root) {
                   "Image scale for --fields, px per mm: grid coordinates in mm too (default: the run config's "
                   "[geometry], else px only)")
       ->check(CLI::PositiveNumber)
-      ->excludes(csv);
+      ->excludes(csv)
+      ->excludes(probes);
   cmd->callback([args] {
     // Both outputs are checked before the run is read: none is one of a run's own files.
     if (!args->fields.empty()) {
@@ -88,7 +96,11 @@ void add_export(CLI::App& root) {
     const auto store = storage::RunStore::open(args->run);
     if (!args->fields.empty()) return export_fields(*args, store);
     OutputStream out(args->out, "--out");
-    report::write_samples_csv(store, out.stream());
+    if (args->probes) {
+      report::write_probe_samples_csv(store, out.stream());
+    } else {
+      report::write_samples_csv(store, out.stream());
+    }
     out.close();
   });
 }

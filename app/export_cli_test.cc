@@ -16,7 +16,9 @@
 #include "report/test_readers.h"
 #include "tests/support/file_bytes.h"
 #include "tests/support/synthetic_run.h"
+#include "storage/database.h"
 #include "storage/processing_store.h"
+#include "storage/run_store.h"
 #include "tests/support/subprocess.h"
 #include "tests/support/temp_dir.h"
 
@@ -137,7 +139,7 @@ TEST_F(ExportCli, ARunWithoutStoredFieldsIsToldToProcessFirst) {
 TEST_F(ExportCli, CsvAndFieldsAreAlternatives) {
   const auto neither = bosfuse("export " + sh_quoted(run()));
   EXPECT_NE(neither.exit_code, 0);
-  EXPECT_NE(neither.output.find("--csv,--fields"), std::string::npos) << neither.output;
+  EXPECT_NE(neither.output.find("--csv,--probes,--fields"), std::string::npos) << neither.output;
   const auto both = bosfuse("export " + sh_quoted(run()) + " --csv --fields " + sh_quoted(dir_ / "f.h5"));
   EXPECT_NE(both.exit_code, 0);
   const auto output_with_fields =
@@ -147,6 +149,37 @@ TEST_F(ExportCli, CsvAndFieldsAreAlternatives) {
   const auto csv = bosfuse("export " + sh_quoted(run()) + " --csv -o " + sh_quoted(dir_ / "s.csv"));
   ASSERT_EQ(csv.exit_code, 0) << csv.output;
   EXPECT_TRUE(fs::exists(dir_ / "s.csv"));
+}
+
+// --probes: the stored probe samples with their σ columns, read back with
+// Python's csv module (no bosfuse code): every valid sample of a processed
+// run has its σ, and a cell the store holds as NULL is empty.
+TEST_F(ExportCli, ProbeSamplesCarryTheirUncertaintyColumns) {
+  ASSERT_EQ(bosfuse("process " + sh_quoted(run())).exit_code, 0);
+  const auto exported = bosfuse("export " + sh_quoted(run()) + " --probes -o " + sh_quoted(dir_ / "p.csv"));
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  const std::string script =
+      "import csv,sys\n"
+      "rows=list(csv.DictReader(open(sys.argv[1])))\n"
+      "cols=['sigma_u_px','sigma_v_px','sigma_shift_px','sigma_random_c','sigma_systematic_c']\n"
+      "assert all(c in rows[0] for c in cols), rows[0].keys()\n"
+      "valid=[r for r in rows if r['valid']=='1']\n"
+      "assert valid and all(float(r[c])>0 for r in valid for c in cols), valid\n"
+      "print(len(rows), len(valid))\n";
+  std::ofstream(dir_ / "check.py") << script;
+  const auto checked = testing::run_command("python3 " + sh_quoted(dir_ / "check.py") + " " + sh_quoted(dir_ / "p.csv"), 60);
+  ASSERT_EQ(checked.exit_code, 0) << checked.output;
+  EXPECT_EQ(checked.output, "4 4\n") << "two probes, two frames";
+  {
+    storage::Database db((run() / storage::RunStore::kDatabaseFileName).string(), storage::Database::Mode::kReadWrite);
+    db.execute("UPDATE probe_samples SET sigma_random_c = NULL");
+  }
+  ASSERT_EQ(bosfuse("export " + sh_quoted(run()) + " --probes -o " + sh_quoted(dir_ / "q.csv")).exit_code, 0);
+  std::ifstream q(dir_ / "q.csv");
+  std::string header, row;
+  std::getline(q, header);
+  std::getline(q, row);
+  EXPECT_NE(row.find(",,"), std::string::npos) << "NULL is an empty cell, never 0: " << row;
 }
 
 // Command-line conventions (issue 11): `-o -` is standard output, which

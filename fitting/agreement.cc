@@ -39,35 +39,43 @@ double variance_dof(const NewtonFit& fit) {
   return fit.summary.absolute_sigma || !(fit.summary.dof > 0) ? INFINITY : fit.summary.dof;
 }
 
-// Welch–Satterthwaite: the dof of va + vb, each with its own dof.
-double critical_of_sum(double va, double dof_a, double vb, double dof_b, double confidence) {
+// Welch–Satterthwaite: the dof of va + vb + vs, each with its own dof (vs,
+// a Type-B variance, with infinite dof).
+double critical_of_sum(double va, double dof_a, double vb, double dof_b, double vs, double confidence) {
   const double denominator =
       (std::isfinite(dof_a) ? va * va / dof_a : 0.0) + (std::isfinite(dof_b) ? vb * vb / dof_b : 0.0);
   if (!(denominator > 0)) return normal_critical(confidence);
-  return student_t_critical((va + vb) * (va + vb) / denominator, confidence);
+  return student_t_critical((va + vb + vs) * (va + vb + vs) / denominator, confidence);
 }
 
-ParameterAgreement test_parameter(std::string name, double a, double se_a, double b, double se_b, double margin,
-                                  double dof_a, double dof_b, double confidence) {
+// One parameter of a and b, its value and random standard error from each fit.
+struct Measured {
+  double value, std_error, dof;
+};
+
+Verdict equivalence(double low, double high, double margin) {
+  if (!(std::isfinite(low) && std::isfinite(high))) return Verdict::kInconclusive;
+  if (low >= -margin && high <= margin) return Verdict::kAgree;
+  if (low > margin || high < -margin) return Verdict::kDiffer;
+  return Verdict::kInconclusive;
+}
+
+ParameterAgreement test_parameter(std::string name, Measured a, Measured b, double systematic, double margin,
+                                  double confidence) {
   ParameterAgreement p;
   p.name = std::move(name);
-  p.difference = a - b;
-  p.std_error = std::hypot(se_a, se_b);
+  p.difference = a.value - b.value;
+  p.random_std_error = std::hypot(a.std_error, b.std_error);
+  p.systematic_std_error = systematic;
+  p.std_error = std::hypot(p.random_std_error, systematic);
   p.margin = margin;
   p.z =
       p.std_error > 0 ? p.difference / p.std_error : (p.difference == 0 ? 0.0 : std::copysign(INFINITY, p.difference));
-  p.critical = critical_of_sum(se_a * se_a, dof_a, se_b * se_b, dof_b, confidence);
+  p.critical = critical_of_sum(a.std_error * a.std_error, a.dof, b.std_error * b.std_error, b.dof,
+                               systematic * systematic, confidence);
   p.interval_low = p.difference - p.critical * p.std_error;
   p.interval_high = p.difference + p.critical * p.std_error;
-  if (!(std::isfinite(p.interval_low) && std::isfinite(p.interval_high))) {
-    p.verdict = Verdict::kInconclusive;
-  } else if (p.interval_low >= -margin && p.interval_high <= margin) {
-    p.verdict = Verdict::kAgree;
-  } else if (p.interval_low > margin || p.interval_high < -margin) {
-    p.verdict = Verdict::kDiffer;
-  } else {
-    p.verdict = Verdict::kInconclusive;
-  }
+  p.verdict = equivalence(p.interval_low, p.interval_high, margin);
   return p;
 }
 
@@ -88,16 +96,21 @@ double reach(const ParameterAgreement& p) {
 CurveAgreement compare_curves(const NewtonFit& a, const NewtonFit& b, const AgreementOptions& o, bool lag_estimated) {
   CurveAgreement curve;
   const double dof_a = variance_dof(a), dof_b = variance_dof(b);
+  const ParameterShifts &sa = o.a_systematic, &sb = o.b_systematic;
   const double k_margin = o.margin_k_relative * std::abs(0.5 * (a.k_per_s.value + b.k_per_s.value));
-  curve.parameters.push_back(test_parameter("k_per_s", a.k_per_s.value, a.k_per_s.std_error, b.k_per_s.value,
-                                            b.k_per_s.std_error, k_margin, dof_a, dof_b, o.confidence));
+  curve.parameters.push_back(test_parameter("k_per_s", {a.k_per_s.value, a.k_per_s.std_error, dof_a},
+                                            {b.k_per_s.value, b.k_per_s.std_error, dof_b},
+                                            std::hypot(sa.k_per_s, sb.k_per_s), k_margin, o.confidence));
   if (o.b_is_temperature) {
+    // b's T0 systematic is its fit's at its own T0 time, which is a's when
+    // both are fitted from one origin (as `process` fits them).
     const auto [b_t0, b_t0_se] = t0_at(b, a.origin_s + a.t0_reference_s);
-    curve.parameters.push_back(
-        test_parameter("T0_c", a.t0_c.value, a.t0_c.std_error, b_t0, b_t0_se, o.margin_c, dof_a, dof_b, o.confidence));
+    curve.parameters.push_back(test_parameter("T0_c", {a.t0_c.value, a.t0_c.std_error, dof_a}, {b_t0, b_t0_se, dof_b},
+                                              std::hypot(sa.t0_c, sb.t0_c), o.margin_c, o.confidence));
     curve.parameters.back().in_verdict = !lag_estimated;
-    curve.parameters.push_back(test_parameter("T_amb_c", a.ambient_c.value, a.ambient_c.std_error, b.ambient_c.value,
-                                              b.ambient_c.std_error, o.margin_c, dof_a, dof_b, o.confidence));
+    curve.parameters.push_back(test_parameter("T_amb_c", {a.ambient_c.value, a.ambient_c.std_error, dof_a},
+                                              {b.ambient_c.value, b.ambient_c.std_error, dof_b},
+                                              std::hypot(sa.t_amb_c, sb.t_amb_c), o.margin_c, o.confidence));
   }
   curve.verdict = Verdict::kAgree;
   for (const auto& p : curve.parameters) {
@@ -129,8 +142,22 @@ std::string parameter_clause(const ParameterAgreement& p) {
   const Wording w = wording(p.name);
   std::string text = std::string(w.name) + " " + to_string(p.verdict) +
                      format_number(" (Δ = %.3g ± %.2g ", p.difference, p.std_error) + w.unit +
-                     format_number(", z = %.2f, margin ±%.2g ", p.z, p.margin) + w.unit + ")";
+                     format_number(", z = %.2f, margin ±%.2g ", p.z, p.margin) + w.unit +
+                     (p.systematic_std_error > 0
+                          ? format_number("; random ± %.2g, systematic ± %.2g", p.random_std_error,
+                                          p.systematic_std_error)
+                          : std::string()) +
+                     ")";
   return p.in_verdict ? text : text + " [not in the verdict: the lag was estimated from it]";
+}
+
+// Which part of the deciding parameter's uncertainty is the larger, when a
+// systematic part was stated: more frames reduce only the random one.
+std::string dominant_part(const ParameterAgreement* d) {
+  if (!d || !(d->systematic_std_error > 0)) return {};
+  return d->systematic_std_error > d->random_std_error
+             ? "; the systematic part (the set-up's Type-B budget) dominates, which more frames do not reduce"
+             : "; the random part dominates, which more frames reduce";
 }
 
 std::string curve_sentence(const CurveAgreement& curve, const AgreementOptions& o) {
@@ -150,7 +177,7 @@ std::string curve_sentence(const CurveAgreement& curve, const AgreementOptions& 
     case Verdict::kInconclusive:
       text = "Inconclusive: the uncertainty of " + std::string(d ? wording(d->name).name : "the curve") +
              " is too large to tell whether " + o.label_a + " and " + o.label_b + " agree (its " + confidence +
-             " interval reaches past ±margin).";
+             " interval reaches past ±margin)" + dominant_part(d) + ".";
       break;
   }
   text += " ";
@@ -253,6 +280,11 @@ std::string AgreementOptions::invalid_reason() const {
   }
   if (a_time_constant_s && !(*a_time_constant_s >= 0.0 && std::isfinite(*a_time_constant_s))) {
     return "the thermocouple's time constant must be finite and not negative";
+  }
+  for (const ParameterShifts* u : {&a_systematic, &b_systematic}) {
+    for (double value : {u->k_per_s, u->t0_c, u->t_amb_c}) {
+      if (!(value >= 0.0 && std::isfinite(value))) return "a systematic uncertainty must be finite and not negative";
+    }
   }
   return {};
 }

@@ -14,7 +14,11 @@
 // (at a's T0 time) and T_amb the difference a − b gets its confidence
 // interval from the two fits' standard errors (the fits are independent:
 // different sensors, different noise; within each fit the parameters'
-// correlations are in its marginal standard errors), and is
+// correlations are in its marginal standard errors) and, when given, each
+// series' systematic standard uncertainty of that parameter (a Type-B
+// budget propagated through its fit, fit_systematics.h: common to the
+// whole series, so more frames do not reduce it; infinite degrees of
+// freedom), added in squares, and is
 //   agree         when the interval lies inside ±margin,
 //   differ        when it lies wholly outside ±margin,
 //   inconclusive  otherwise (the uncertainty or the difference straddles the
@@ -26,13 +30,16 @@
 // estimated τ the T0 difference is what τ was estimated from, so T0 is shown
 // but left out of the verdict. When b is not a temperature (a shift in px)
 // only k is tested. Times of both series are in one time base; each series
-// keeps its own origin, which compare_fits() accounts for.
+// keeps its own origin, which compare_fits() accounts for. A systematic
+// part that cannot be excluded therefore reads inconclusive, not differ,
+// and the sentence says whether the random or the systematic part decided.
 
 #include <cstddef>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "fitting/fit_systematics.h"
 #include "fitting/newton_fit.h"
 #include "fitting/series.h"
 
@@ -55,6 +62,9 @@ struct AgreementOptions {
   // no lag is modelled.
   std::optional<double> a_time_constant_s;
   bool estimate_lag = true;
+  // Systematic standard uncertainties (≥ 0) of each series' k, T0 and T_amb
+  // (FitSystematics::combined); zero: none stated.
+  ParameterShifts a_systematic, b_systematic;
 
   // Empty when usable, else the reason.
   std::string invalid_reason() const;
@@ -87,7 +97,9 @@ struct KAgreement {
 struct ParameterAgreement {
   std::string name;           // "k_per_s", "T0_c", "T_amb_c"
   double difference = 0.0;    // a − b
-  double std_error = 0.0;     // sqrt(se_a² + se_b²)
+  double std_error = 0.0;     // sqrt(random² + systematic²)
+  double random_std_error = 0.0;      // sqrt(se_a² + se_b²), the fits' standard errors
+  double systematic_std_error = 0.0;  // sqrt(sys_a² + sys_b²), the stated systematic parts
   double z = 0.0;             // difference / std_error
   double margin = 0.0;        // ± this is "the same"
   double critical = 0.0;      // normal, or Student t with the Welch–Satterthwaite dof of two scaled fits

@@ -298,6 +298,35 @@ TEST(Agreement, TheCurveTakesTheWorstOfItsParameters) {
       << result.verdict;
 }
 
+// T0 3 °C apart with random σ 0.1 each differs; a stated systematic σ of
+// 2 °C on the BOS T0 (its set-up's budget through the fit) cannot be
+// excluded, so the same curves read inconclusive, and the sentence says the
+// systematic part dominates. A small systematic part leaves the verdict.
+TEST(Agreement, ALargeSystematicUncertaintyIsInconclusiveNotDiffer) {
+  NewtonFit a = fit_with_k(0.010, 0.0001), b = fit_with_k(0.010, 0.0001);
+  a.t0_c = {83.0, 0.1, 0, 0, false};
+  b.t0_c = {80.0, 0.1, 0, 0, false};
+  AgreementOptions options;
+  EXPECT_EQ(compare_fits(a, b, {}, {}, options).curve->verdict, Verdict::kDiffer);
+  options.b_systematic = {0.0, 2.0, 2.0};
+  const auto result = compare_fits(a, b, {}, {}, options);
+  ASSERT_TRUE(result.curve);
+  const ParameterAgreement& t0 = result.curve->parameters[1];
+  EXPECT_NEAR(t0.random_std_error, 0.1 * std::sqrt(2.0), 1e-12);
+  EXPECT_DOUBLE_EQ(t0.systematic_std_error, 2.0);
+  EXPECT_NEAR(t0.std_error, std::hypot(0.1 * std::sqrt(2.0), 2.0), 1e-12);
+  EXPECT_EQ(t0.verdict, Verdict::kInconclusive);
+  EXPECT_EQ(result.curve->verdict, Verdict::kInconclusive) << result.verdict;
+  EXPECT_EQ(result.curve->deciding_parameter, "T0_c");
+  EXPECT_NE(result.verdict.find("the systematic part (the set-up's Type-B budget) dominates"), std::string::npos)
+      << result.verdict;
+  EXPECT_NE(result.verdict.find("random ± 0.14, systematic ± 2"), std::string::npos) << result.verdict;
+  options.b_systematic = {0.0, 0.2, 0.2};
+  EXPECT_EQ(compare_fits(a, b, {}, {}, options).curve->verdict, Verdict::kDiffer) << "3 °C is beyond 0.25 °C";
+  options.b_systematic.t0_c = -1;
+  EXPECT_THROW(compare_fits(a, b, {}, {}, options), std::invalid_argument);
+}
+
 TEST(Agreement, AProbeInPixelsIsJudgedOnKAlone) {
   NewtonFit a = fit_with_k(0.010, 0.0001), b = fit_with_k(0.010, 0.0001);
   a.t0_c = {83.0, 0.1, 0, 0, false};

@@ -150,6 +150,9 @@ CurveAgreement curve_from_json(const json& j) {
     pa.name = p.at("name").get<std::string>();
     pa.difference = number_or_nan(p, "difference");
     pa.std_error = number_or_nan(p, "std_error");
+    // Stored before the systematic part existed: all of it was random.
+    pa.random_std_error = p.contains("random_std_error") ? number_or_nan(p, "random_std_error") : pa.std_error;
+    pa.systematic_std_error = p.contains("systematic_std_error") ? number_or_nan(p, "systematic_std_error") : 0.0;
     pa.z = number_or_nan(p, "z");
     pa.margin = number_or_nan(p, "margin");
     pa.critical = number_or_nan(p, "critical");
@@ -168,6 +171,8 @@ ordered_json to_json(const CurveAgreement& c, double confidence) {
     parameters.push_back({{"name", p.name},
                           {"difference", number_or_null(p.difference)},
                           {"std_error", number_or_null(p.std_error)},
+                          {"random_std_error", number_or_null(p.random_std_error)},
+                          {"systematic_std_error", number_or_null(p.systematic_std_error)},
                           {"z", number_or_null(p.z)},
                           {"margin", number_or_null(p.margin)},
                           {"critical", number_or_null(p.critical)},

@@ -184,6 +184,31 @@ TEST(FitJson, AnAgreementComesBackWithItsLimitsAndOverlap) {
   EXPECT_TRUE(std::isfinite(r.limits_of_agreement_low_c));
 }
 
+// The random and systematic parts of each parameter's σ come back; an
+// agreement stored without them reads as all random.
+TEST(FitJson, AnAgreementKeepsTheRandomAndSystematicParts) {
+  AgreementOptions options;
+  options.b_systematic = {1e-5, 1.5, 0.7};
+  const Agreement written = compare_fits(a_fit(1), a_fit(2), {}, {}, options);
+  ASSERT_TRUE(written.curve);
+  nlohmann::json j = nlohmann::json::parse(to_json(written).dump());
+  const Agreement read = agreement_from_json(j);
+  ASSERT_TRUE(read.curve);
+  for (std::size_t i = 0; i < written.curve->parameters.size(); ++i) {
+    EXPECT_DOUBLE_EQ(read.curve->parameters[i].random_std_error, written.curve->parameters[i].random_std_error);
+    EXPECT_DOUBLE_EQ(read.curve->parameters[i].systematic_std_error,
+                     written.curve->parameters[i].systematic_std_error);
+  }
+  EXPECT_DOUBLE_EQ(read.curve->parameters[1].systematic_std_error, 1.5);
+  for (auto& p : j.at("equivalence").at("parameters")) {
+    p.erase("random_std_error");
+    p.erase("systematic_std_error");
+  }
+  const Agreement old = agreement_from_json(j);
+  EXPECT_DOUBLE_EQ(old.curve->parameters[1].random_std_error, old.curve->parameters[1].std_error);
+  EXPECT_EQ(old.curve->parameters[1].systematic_std_error, 0.0);
+}
+
 TEST(FitJson, AnAgreementKeepsItsOldKeysAndAddsTheEquivalenceTestAndTheLag) {
   const NewtonFit a = a_fit(1);
   const NewtonFit b = a_fit(2);

@@ -689,6 +689,95 @@ TemperatureFieldResult recover_temperature_field(const DisplacementField& displa
   return solver.recover(displacement);
 }
 
+namespace {
+
+// c of average_sigma_c: the averaging weights times |dT/dn| at each node, on
+// the unknowns (an ambient border node's δn is fixed, so it adds nothing);
+// nullopt where a node of the average has no σ to give.
+std::optional<Eigen::VectorXd> averaging_vector(const TemperatureField& field, const std::vector<int>& unknown,
+                                                int unknowns, const std::vector<std::size_t>& nodes,
+                                                const std::vector<double>& weights) {
+  if (nodes.size() != weights.size()) throw std::invalid_argument("average_sigma_c: a weight per node");
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(unknowns);
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    const std::size_t i = nodes[k];
+    if (i >= field.temperature_c.size() || i >= unknown.size()) {
+      throw std::invalid_argument("average_sigma_c: a node off the grid");
+    }
+    if (weights[k] == 0) continue;
+    if (!field.measured[i] || !field.physical[i]) return std::nullopt;
+    if (unknown[i] < 0) continue;
+    c[unknown[i]] += weights[k] * (field.temperature_c[i] + kZeroCelsiusK) / (field.refractive_index[i] - 1);
+  }
+  return c;
+}
+
+// Σ_k σ_k² y_k², y = Bᵀ z: the derivative of zᵀ·rhs with respect to each
+// measured node's u and v, the right-hand side assembled as recover()'s.
+double noise_variance_along(const Eigen::VectorXd& z, const std::vector<int>& unknown, int rows, int cols,
+                            const std::vector<std::uint8_t>& measured, const std::vector<double>& weights,
+                            const NodeSigmas& sigmas, double target_per_px) {
+  std::vector<double> du(measured.size(), 0.0), dv(measured.size(), 0.0);
+  std::size_t edge = 0;
+  for_each_edge(rows, cols, [&](std::size_t i, std::size_t j, bool along_x) {
+    const double w = weights[edge++];
+    if (!measured[i] || !measured[j]) return;
+    const double zi = unknown[i] >= 0 ? z[unknown[i]] : 0.0, zj = unknown[j] >= 0 ? z[unknown[j]] : 0.0;
+    const double d = w * target_per_px * 0.5 * (zj - zi);  // each end's share of the trapezoid target
+    std::vector<double>& component = along_x ? du : dv;
+    component[i] += d;
+    component[j] += d;
+  });
+  double variance = 0;
+  for (std::size_t k = 0; k < measured.size(); ++k) {
+    if (!measured[k]) continue;
+    variance += sigmas.u[k] * sigmas.u[k] * du[k] * du[k] + sigmas.v[k] * sigmas.v[k] * dv[k] * dv[k];
+  }
+  return variance;
+}
+
+}  // namespace
+
+std::optional<double> TemperatureFieldSolver::average_sigma_c(const DisplacementField& displacement,
+                                                              const TemperatureField& field,
+                                                              const std::vector<std::size_t>& nodes,
+                                                              const std::vector<double>& weights) {
+  const GridLayout layout = grid_layout(displacement);
+  if (field.temperature_c.size() != displacement.size()) {
+    throw std::invalid_argument("average_sigma_c: the temperature field is not the displacement field's");
+  }
+  std::lock_guard lock(state_->mutex);
+  State& state = *state_;
+  state.use_grid(displacement, layout, options_);
+  std::vector<std::uint8_t> measured = measured_nodes(displacement, options_);
+  const NodeSigmas sigmas = node_sigmas(displacement, measured);
+  if (!sigmas.any()) return std::nullopt;
+  const auto c = averaging_vector(field, state.unknown, state.unknowns, nodes, weights);
+  if (!c) return std::nullopt;
+  const bool weighted = options_.weight_by_sigma;
+  std::vector<double> edge_weight =
+      edge_weights(displacement.rows, displacement.cols, measured, weighted ? &sigmas : nullptr, options_.fill_weight);
+  if (measured != state.factorised_for || edge_weight != state.factorised_weights) {
+    EdgeSystem system(state.unknown, state.unknowns, true);
+    std::size_t edge = 0;
+    for_each_edge(displacement.rows, displacement.cols,
+                  [&](std::size_t i, std::size_t j, bool) { system.add_edge(i, j, 0.0, edge_weight[edge++]); });
+    const Eigen::SparseMatrix<double> a = system.matrix();
+    state.factorised_for.clear();
+    state.factorised_weights.clear();
+    if (!state.analysed) state.analyse(a);
+    state.factorisation->factorise(a);
+    ++state.factorisations;
+    state.factorised_for = std::move(measured);
+    state.factorised_weights = std::move(edge_weight);
+  }
+  const double target_per_px = geometry_.gradient_per_m(1.0) * layout.step_px / geometry_.px_per_m_flow();
+  const Eigen::VectorXd z = state.factorisation->solve(*c);
+  const double variance = noise_variance_along(z, state.unknown, displacement.rows, displacement.cols,
+                                               state.factorised_for, state.factorised_weights, sigmas, target_per_px);
+  return std::sqrt(std::max(variance, 0.0));
+}
+
 void write_csv(const TemperatureField& field, const std::filesystem::path& path) {
   FieldCsvWriter csv(kTemperatureColumns, static_cast<std::size_t>(field.rows) * field.cols);
   for (int r = 0; r < field.rows; ++r) {

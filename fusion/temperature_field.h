@@ -215,6 +215,22 @@ class TemperatureFieldSolver {
   int factorisations() const;
   int iterative_solves() const;  // frames solved by conjugate gradients on an earlier frame's factor
 
+  // The random σ of T (°C) of a weighted average Σ wᵢ Tᵢ of nodes of
+  // `field`, the field recover() gave for `displacement` (a probe's
+  // bilinear interpolation, a window's mean): exactly, not by draws. The
+  // solve is linear, δn = A⁻¹ B d for the vectors' noise d (covariance
+  // Σ = diag(σ²), as recover()'s draws take it), so with c the averaging
+  // weights times dT/dn at each node, Var = Σ_k σ_k² ((Bᵀ A⁻¹ c)_k)²: one
+  // solve with the kept factor and one pass over the edges, whatever the
+  // weights. The neighbours' correlation through the solve is in it (their
+  // errors are nearly equal), which the bilinear σ of sigma_at() bounds
+  // from above. Refactorises when the factor held is another field's.
+  // nullopt when the field has no σ, or a node of the average is not
+  // measured or not physical; throws std::invalid_argument for nodes off
+  // the grid or sizes that differ.
+  std::optional<double> average_sigma_c(const DisplacementField& displacement, const TemperatureField& field,
+                                        const std::vector<std::size_t>& nodes, const std::vector<double>& weights);
+
  private:
   friend TemperatureFieldResult recover_temperature_field(const DisplacementField&, const BosGeometry&,
                                                           const TemperatureFieldOptions&);

@@ -762,3 +762,106 @@ TEST(TemperatureFieldSolver, ANewSigmaIsIteratedOnTheKeptFactorToTheExactWeighte
 
 }  // namespace
 }  // namespace bosfuse::fusion
+
+namespace bosfuse::fusion {
+namespace {
+
+// The bilinear weights of the four nodes around (x_px, y_px), inside the grid.
+std::pair<std::vector<std::size_t>, std::vector<double>> bilinear_weights(const TemperatureField& f, double x_px,
+                                                                          double y_px) {
+  const double fx = (x_px - f.x0_px) / f.step_px, fy = (y_px - f.y0_px) / f.step_px;
+  const int c0 = static_cast<int>(fx), r0 = static_cast<int>(fy);
+  const double ax = fx - c0, ay = fy - r0;
+  return {{f.index(r0, c0), f.index(r0, c0 + 1), f.index(r0 + 1, c0), f.index(r0 + 1, c0 + 1)},
+          {(1 - ay) * (1 - ax), (1 - ay) * ax, ay * (1 - ax), ay * ax}};
+}
+
+// One node's exact σ equals the draws' node σ: 4096 draws (their own error
+// ~1/√(2·4096) = 1.1 %), every interior node within 6 %, the median within 2 %.
+TEST(TemperatureFieldAverageSigma, ANodesSigmaIsTheDrawsNodeSigma) {
+  const BosGeometry g(paper_like_setup());
+  std::mt19937_64 random(71);
+  const DisplacementField noisy = half_and_half(g).draw(random);
+  TemperatureFieldOptions options;
+  options.estimate_uncertainty = true;
+  options.uncertainty_samples = 4096;
+  TemperatureFieldSolver solver(g, options);
+  const auto result = solver.recover(noisy);
+  std::vector<double> ratios;
+  for (int r = 1; r + 1 < result.field.rows; ++r) {
+    for (int c = 1; c + 1 < result.field.cols; ++c) {
+      const std::size_t i = result.field.index(r, c);
+      const auto exact = solver.average_sigma_c(noisy, result.field, {i}, {1.0});
+      ASSERT_TRUE(exact.has_value());
+      ratios.push_back(*exact / result.field.sigma_c[i]);
+      EXPECT_NEAR(ratios.back(), 1.0, 0.06) << "node " << r << "," << c;
+    }
+  }
+  std::nth_element(ratios.begin(), ratios.begin() + ratios.size() / 2, ratios.end());
+  const double median = ratios[ratios.size() / 2];
+  std::printf("exact node sigma / 4096-draw node sigma: median %.4f over %zu nodes\n", median, ratios.size());
+  EXPECT_NEAR(median, 1.0, 0.02);
+  EXPECT_EQ(solver.factorisations(), 1) << "the frame's own factor served";
+}
+
+// A probe's bilinear average between four nodes: its exact σ against a
+// Monte-Carlo over the vectors' noise (1000 noisy fields each solved, the
+// spread of the interpolated T; its own relative error ~1/√2000 = 2.2 %,
+// tolerance 8 %), and below the bilinear of the node σ (sigma_at, which
+// takes the neighbours as fully correlated).
+TEST(TemperatureFieldAverageSigma, AProbesAverageMatchesAMonteCarloOverTheNoise) {
+  const BosGeometry g(paper_like_setup());
+  NoisyField field = half_and_half(g);
+  std::mt19937_64 pick(5), random(72);
+  std::normal_distribution<double> normal;
+  for (auto& v : field.exact.vectors) v.sigma_u_px = v.sigma_v_px = 0.01 * std::exp(0.5 * normal(pick));
+  TemperatureFieldOptions options;
+  options.estimate_uncertainty = true;
+  TemperatureFieldSolver solver(g, options);
+  const auto noise_free = solver.recover(field.exact);
+  const double x = noise_free.field.x0_px + 30.4 * noise_free.field.step_px;
+  const double y = noise_free.field.y0_px + 21.7 * noise_free.field.step_px;
+  const auto [nodes, weights] = bilinear_weights(noise_free.field, x, y);
+  const auto exact = solver.average_sigma_c(field.exact, noise_free.field, nodes, weights);
+  ASSERT_TRUE(exact.has_value());
+  const TemperatureFieldOptions plain;  // no draws: only the solve
+  TemperatureFieldSolver monte_carlo(g, plain);
+  constexpr int kDraws = 1000;
+  double sum = 0, sum_of_squares = 0;
+  for (int draw = 0; draw < kDraws; ++draw) {
+    const auto t = monte_carlo.recover(field.draw(random)).field.temperature_at(x, y);
+    ASSERT_TRUE(t.has_value());
+    sum += *t;
+    sum_of_squares += *t * *t;
+  }
+  const double mean = sum / kDraws;
+  const double spread = std::sqrt((sum_of_squares - kDraws * mean * mean) / (kDraws - 1));
+  const double upper = *noise_free.field.sigma_at(x, y);
+  std::printf("probe average: exact sigma %.5f, Monte-Carlo %.5f degC (ratio %.3f), bilinear node sigma %.5f\n", *exact,
+              spread, *exact / spread, upper);
+  RecordProperty("exact_to_monte_carlo", std::to_string(*exact / spread));
+  EXPECT_NEAR(*exact / spread, 1.0, 0.08);
+  EXPECT_LE(*exact, upper * 1.1) << "the bilinear node sigma bounds it (its draws' own 9 % aside)";
+}
+
+// Not measured, no σ in the field, or bad arguments: no number.
+TEST(TemperatureFieldAverageSigma, NoSigmaWhereNoneCanBeGiven) {
+  const BosGeometry g(paper_like_setup());
+  std::mt19937_64 random(73);
+  DisplacementField noisy = half_and_half(g).draw(random);
+  noisy.vectors[noisy.cols * 10 + 10].flag = VectorFlag::kMasked;
+  TemperatureFieldSolver solver(g);
+  const auto result = solver.recover(noisy);
+  EXPECT_FALSE(solver.average_sigma_c(noisy, result.field, {std::size_t(noisy.cols * 10 + 10)}, {1.0}))
+      << "a masked node";
+  EXPECT_TRUE(solver.average_sigma_c(noisy, result.field, {std::size_t(noisy.cols * 12 + 12)}, {1.0}));
+  EXPECT_THROW(solver.average_sigma_c(noisy, result.field, {noisy.size()}, {1.0}), std::invalid_argument);
+  EXPECT_THROW(solver.average_sigma_c(noisy, result.field, {0, 1}, {1.0}), std::invalid_argument);
+  DisplacementField without = noisy;
+  for (auto& v : without.vectors) v.sigma_u_px = v.sigma_v_px = 0;
+  const auto unweighted = solver.recover(without);
+  EXPECT_FALSE(solver.average_sigma_c(without, unweighted.field, {std::size_t(noisy.cols * 12 + 12)}, {1.0}));
+}
+
+}  // namespace
+}  // namespace bosfuse::fusion

@@ -97,8 +97,8 @@ LiveFrame LiveProbes::evaluate(const storage::FrameRecord& frame) const {
   const auto samples = probe_samples(ctx.frame, frame, ctx.frame.evaluate(measurement));
   for (std::size_t p = 0; p < channels_.size(); ++p) {
     const auto& s = samples[p];
-    out.probes.push_back(
-        {channels_[p].id, channels_[p].name, ctx.frame.points[p], s.u_px, s.v_px, s.shift_px, s.valid, s.temperature_c});
+    out.probes.push_back({channels_[p].id, channels_[p].name, ctx.frame.points[p], s.u_px, s.v_px, s.shift_px, s.valid,
+                          s.temperature_c, s.sigma_shift_px, s.sigma_random_c, s.sigma_systematic_c});
   }
   out.quality = fusion::modified_quality_index(fusion::grey_moments(measurement, "frame"), ctx.reference_moments);
   out.thumbnail = thumbnail(measurement, ctx.options.thumbnail_width_px);

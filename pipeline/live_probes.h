@@ -38,6 +38,9 @@ struct LiveProbe {
   double u_px = 0, v_px = 0, shift_px = 0;
   bool valid = false;
   std::optional<double> temperature_c;  // none: not valid, no calibration nor geometry, or no temperature field
+  // The sample's standard uncertainties as `process` stores them
+  // (process_frame.h's probe_samples): none where not estimated.
+  std::optional<double> sigma_shift_px, sigma_random_c, sigma_systematic_c;
 };
 
 struct LiveFrame {

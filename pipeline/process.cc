@@ -22,6 +22,7 @@
 #include "pipeline/frame_prefetch.h"
 #include "pipeline/frame_threads.h"
 #include "pipeline/probe_calibration.h"
+#include "pipeline/probe_fit.h"
 #include "pipeline/process_frame.h"
 #include "pipeline/quality_json.h"
 #include "pipeline/run_selection.h"
@@ -100,29 +101,6 @@ class FinishingFrame {
   std::future<FinishedFrame> finishing_;  // a std::async future: its destructor waits for the thread
 };
 
-// The probe series a Newton fit sees: temperatures when every valid sample
-// has one, else the shift; experiment seconds on the host clock (frame time
-// + the camera offset).
-struct ProbeSeries {
-  fitting::CleanSeries series;
-  std::string quantity;  // temperature_c or shift_px
-};
-
-ProbeSeries probe_fit_series(const std::vector<storage::ProbeSampleRecord>& samples,
-                             const storage::ExperimentClock& clock, double offset_s) {
-  bool all_have_temperature = true;
-  for (const auto& s : samples) {
-    if (s.valid) all_have_temperature = all_have_temperature && s.temperature_c.has_value();
-  }
-  std::vector<double> t, y;
-  for (const auto& s : samples) {
-    if (!s.valid) continue;
-    t.push_back(clock.seconds(s.t_ns) + offset_s);
-    y.push_back(all_have_temperature ? *s.temperature_c : s.shift_px);
-  }
-  return {fitting::clean_series(t, y, 0.0), all_have_temperature ? "temperature_c" : "shift_px"};
-}
-
 fitting::NewtonFit fit_at_origin(const fitting::CleanSeries& series) {
   fitting::NewtonFitOptions options;
   options.origin_s = 0.0;
@@ -145,8 +123,10 @@ AgreementSettings agreement_settings(const storage::RunStore& store) {
 
 // A shift series is not a temperature: then only the two k are compared.
 // A channel without a stated time constant has its lag estimated.
+// The probe's systematic part, propagated through its fit, widens the
+// comparison (agreement.h): what cannot be excluded is inconclusive.
 fitting::Agreement agree(const fitting::NewtonFit& tc_fit, const fitting::CleanSeries& tc_series,
-                         const fitting::NewtonFit& probe_fit, const ProbeSeries& probe, const std::string& name,
+                         const ProbeFit& probe_fit, const ProbeSeries& probe, const std::string& name,
                          const AgreementSettings& settings) {
   fitting::AgreementOptions options;
   options.label_a = "thermocouple " + name;
@@ -154,11 +134,12 @@ fitting::Agreement agree(const fitting::NewtonFit& tc_fit, const fitting::CleanS
   options.margin_c = settings.margins.margin_c;
   options.margin_k_relative = settings.margins.margin_k_relative;
   options.b_is_temperature = probe.quantity != "shift_px";
+  if (probe_fit.systematics.ok) options.b_systematic = probe_fit.systematics.combined;
   if (const auto it = settings.time_constants_s.find(acquisition::channel_name_key(name));
       it != settings.time_constants_s.end()) {
     options.a_time_constant_s = it->second;
   }
-  return fitting::compare_fits(tc_fit, probe_fit, tc_series,
+  return fitting::compare_fits(tc_fit, probe_fit.fit, tc_series,
                                options.b_is_temperature ? probe.series : fitting::CleanSeries{}, options);
 }
 
@@ -232,18 +213,22 @@ FitsAndAgreements fit_everything(const storage::RunStore& store, const storage::
     const auto cal = ctx.calibration.find(c.id);
     const double offset_s =
         cal != ctx.calibration.end() ? cal->second.camera_offset_s : ctx.settings.geometry.camera_offset_s;
-    const ProbeSeries probe = probe_fit_series(results.staged_probe_samples(probes[p].id), clock, offset_s);
-    const auto probe_fit = fit_at_origin(probe.series);
+    const ProbeConversion conversion{cal == ctx.calibration.end() ? &*ctx.geometry : nullptr,
+                                     ctx.settings.geometry.uncertainty, cal != ctx.calibration.end()};
+    const ProbeSeries probe =
+        probe_fit_series(results.staged_probe_samples(probes[p].id), clock, offset_s, conversion);
+    const ProbeFit probe_fit = fit_probe(probe);
+    json probe_json = fit_json(probe_fit.fit, probe.quantity, probe.quantity == "shift_px" ? "px" : "degC", clock);
+    add_uncertainty_json(probe_fit, probe, probe_json);
     out.fits.push_back(
-        {0, storage::FitSubject::kProbe, probes[p].id, clock.origin_ns, probe_fit.ok(),
-         fit_json(probe_fit, probe.quantity, probe.quantity == "shift_px" ? "px" : "degC", clock).dump()});
+        {0, storage::FitSubject::kProbe, probes[p].id, clock.origin_ns, probe_fit.fit.ok(), probe_json.dump()});
     const auto& [tc_fit, tc_series] = tc_fits.at(c.id);
     const auto agreement = agree(tc_fit, tc_series, probe_fit, probe, c.name, agreement_options);
     json j = fitting::to_json(agreement);
     j["probe_quantity"] = probe.quantity;
     out.agreements.push_back({0, c.id, probes[p].id, j.dump()});
     out.text += fmt::format("{}: thermocouple k = {:.4g} 1/s, BOS probe ({}) k = {:.4g} 1/s\n", c.name,
-                            tc_fit.k_per_s.value, probe.quantity, probe_fit.k_per_s.value) +
+                            tc_fit.k_per_s.value, probe.quantity, probe_fit.fit.k_per_s.value) +
                 agreement.brief_report();
   }
   return out;

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "fitting/fit_json.h"
+#include "fusion/temperature_budget.h"
 #include "pipeline/run_selection.h"
 
 namespace bosfuse::pipeline {
@@ -15,14 +16,14 @@ using json = nlohmann::ordered_json;
 using storage::ChannelInfo;
 using storage::FrameRecord;
 
-// The displacement grid interpolated bilinearly at a point; valid only when
-// every node it uses is.
-struct PointShift {
-  double u_px = 0, v_px = 0;
-  bool valid = false;
+// The nodes of a grid around a point and their bilinear weights (those
+// above rounding); empty outside the grid.
+struct BilinearNodes {
+  std::vector<std::size_t> nodes;
+  std::vector<double> weights;
 };
 
-PointShift shift_at(const fusion::DisplacementField& field, cv::Point2d p) {
+BilinearNodes bilinear_nodes(const fusion::DisplacementField& field, cv::Point2d p) {
   const auto& origin = field.at(0, 0);
   const double step = field.cols > 1 ? field.at(0, 1).x_px - origin.x_px : 1.0;
   const double fx = (p.x - origin.x_px) / step, fy = (p.y - origin.y_px) / step;
@@ -30,18 +31,62 @@ PointShift shift_at(const fusion::DisplacementField& field, cv::Point2d p) {
   const int c0 = std::min(static_cast<int>(fx), std::max(field.cols - 2, 0));
   const int r0 = std::min(static_cast<int>(fy), std::max(field.rows - 2, 0));
   const double ax = fx - c0, ay = fy - r0;
-  PointShift out{0, 0, true};
+  BilinearNodes out;
   for (int dr = 0; dr <= 1; ++dr) {
     for (int dc = 0; dc <= 1; ++dc) {
       const double w = (dr ? ay : 1 - ay) * (dc ? ax : 1 - ax);
       if (w <= 1e-12) continue;
-      const auto& v = field.at(std::min(r0 + dr, field.rows - 1), std::min(c0 + dc, field.cols - 1));
-      out.u_px += w * v.u_px;
-      out.v_px += w * v.v_px;
-      out.valid = out.valid && v.valid();
+      const int r = std::min(r0 + dr, field.rows - 1), c = std::min(c0 + dc, field.cols - 1);
+      out.nodes.push_back(static_cast<std::size_t>(r) * field.cols + c);
+      out.weights.push_back(w);
     }
   }
   return out;
+}
+
+bool has_sigma(double sigma_px) { return std::isfinite(sigma_px) && sigma_px > 0; }
+
+// The shift at a probe and its σ (0: not estimated); valid only when every
+// node it uses is.
+struct PointShift {
+  double u_px = 0, v_px = 0;
+  bool valid = false;
+  double sigma_u_px = 0, sigma_v_px = 0;
+};
+
+// The displacement grid interpolated bilinearly at a point. Its σ is the
+// same weights applied to the nodes' σ: the σ of the average if the nodes'
+// errors were fully correlated, an upper bound whatever they are (|ρ| ≤ 1).
+// Chosen because neighbouring windows overlap (50 % at the default step),
+// so their errors share pixels and are not independent, and their actual
+// correlation is not known; the independent-node value, √Σ wᵢ²σᵢ², would be
+// up to half this at a cell's centre and could understate it.
+PointShift shift_at(const fusion::DisplacementField& field, const BilinearNodes& around) {
+  if (around.nodes.empty()) return {};
+  PointShift out{0, 0, true};
+  bool every_sigma = true;
+  for (std::size_t k = 0; k < around.nodes.size(); ++k) {
+    const double w = around.weights[k];
+    const auto& v = field.vectors[around.nodes[k]];
+    out.u_px += w * v.u_px;
+    out.v_px += w * v.v_px;
+    out.valid = out.valid && v.valid();
+    every_sigma = every_sigma && has_sigma(v.sigma_u_px) && has_sigma(v.sigma_v_px);
+    out.sigma_u_px += w * v.sigma_u_px;
+    out.sigma_v_px += w * v.sigma_v_px;
+  }
+  if (!every_sigma) out.sigma_u_px = out.sigma_v_px = 0;
+  return out;
+}
+
+// σ of |(u, v)| to first order, u and v's errors taken as independent;
+// at a zero shift (no direction) the mean of the two variances.
+std::optional<double> magnitude_sigma_px(const PointShift& s) {
+  if (!has_sigma(s.sigma_u_px) || !has_sigma(s.sigma_v_px)) return std::nullopt;
+  const double shift = std::hypot(s.u_px, s.v_px);
+  const double su2 = s.sigma_u_px * s.sigma_u_px, sv2 = s.sigma_v_px * s.sigma_v_px;
+  if (!(shift > 1e-12)) return std::sqrt(0.5 * (su2 + sv2));
+  return std::sqrt(s.u_px * s.u_px * su2 + s.v_px * s.v_px * sv2) / shift;
 }
 
 json evaluation_json(const fusion::EvaluationSummary& s) {
@@ -65,13 +110,39 @@ std::string boundary_text(const fusion::TemperatureFieldOptions& o) {
   return open.empty() ? "ambient air on the field's border" : "ambient air on the border except the open " + open;
 }
 
+// A probe's temperature by the physical model and its uncertainties.
+struct ModelTemperature {
+  std::optional<double> t_c, sigma_random_c, sigma_systematic_c;
+};
+
 // Everything measured at the probes of one frame, and the temperature field
 // behind the full field's probes.
 struct FrameResult {
   std::vector<PointShift> shifts;
-  std::vector<std::optional<double>> model_temperature_c;
+  std::vector<ModelTemperature> model;
   std::optional<fusion::TemperatureFieldResult> temperature;
 };
+
+std::optional<double> finite_or_none(double value) {
+  return std::isfinite(value) ? std::optional<double>(value) : std::nullopt;
+}
+
+// The physical model's temperature at a probe, the bilinear interpolation of
+// the field's nodes, with the random σ of that interpolation (exact, through
+// the solve: average_sigma_c) and its Type-B budget with the run's
+// [geometry.uncertainty], the window-against-point term included.
+ModelTemperature model_temperature(const FrameContext& ctx, const fusion::EvaluationResult& evaluated,
+                                   const fusion::TemperatureField& field, cv::Point2d p, const BilinearNodes& around) {
+  ModelTemperature out;
+  out.t_c = field.temperature_at(p.x, p.y);
+  if (!out.t_c || around.nodes.empty()) return out;
+  out.sigma_random_c = ctx.temperature_solver->average_sigma_c(evaluated.field, field, around.nodes, around.weights);
+  if (out.sigma_random_c) out.sigma_random_c = finite_or_none(*out.sigma_random_c);
+  const auto window = fusion::window_average_uncertainty_c(field, p.x, p.y, ctx.settings.evaluator.xcorr.window_px);
+  const auto budget = fusion::temperature_budget(*ctx.geometry, ctx.settings.geometry.uncertainty, *out.t_c, window);
+  out.sigma_systematic_c = finite_or_none(budget.combined_c);
+  return out;
+}
 
 FrameResult measure_full(const FrameContext& ctx, const fusion::EvaluationResult& evaluated, ProcessTimes& times) {
   FrameResult out;
@@ -79,9 +150,14 @@ FrameResult measure_full(const FrameContext& ctx, const fusion::EvaluationResult
     out.temperature = timed(times.temperature_field_s, [&] { return ctx.temperature_solver->recover(evaluated.field); });
   }
   for (const auto& p : ctx.points) {
-    out.shifts.push_back(shift_at(evaluated.field, p));
-    out.model_temperature_c.push_back(out.temperature ? out.temperature->field.temperature_at(p.x, p.y)
-                                                      : std::nullopt);
+    const BilinearNodes around = bilinear_nodes(evaluated.field, p);
+    out.shifts.push_back(shift_at(evaluated.field, around));
+    out.model.push_back(out.temperature ? timed(times.temperature_field_s,
+                                                [&] {
+                                                  return model_temperature(ctx, evaluated, out.temperature->field, p,
+                                                                           around);
+                                                })
+                                        : ModelTemperature{});
   }
   return out;
 }
@@ -89,8 +165,9 @@ FrameResult measure_full(const FrameContext& ctx, const fusion::EvaluationResult
 FrameResult measure_probes(const fusion::EvaluationResult& evaluated) {
   FrameResult out;
   for (const auto& v : evaluated.field.vectors) {
-    out.shifts.push_back({v.u_px, v.v_px, v.valid()});
-    out.model_temperature_c.push_back(std::nullopt);
+    const bool sigma = has_sigma(v.sigma_u_px) && has_sigma(v.sigma_v_px);
+    out.shifts.push_back({v.u_px, v.v_px, v.valid(), sigma ? v.sigma_u_px : 0, sigma ? v.sigma_v_px : 0});
+    out.model.emplace_back();
   }
   return out;
 }
@@ -120,18 +197,41 @@ std::vector<storage::FieldRecord> write_fields(const FrameContext& ctx, const Fr
   return fields;
 }
 
+std::optional<double> positive_or_none(double sigma) { return has_sigma(sigma) ? std::optional(sigma) : std::nullopt; }
+
 // Each probe's sample: its shift, and its temperature by the calibration,
-// else by the physical model.
+// else by the physical model, each with its σ. Under a calibration
+// T = T_ref + slope · shift: the random σ is |slope| · σ of the shift, and
+// the systematic one |shift| · σ of the slope (the calibration's standard
+// error, common to every sample of the series); the reference reading's own
+// error is the thermocouple's and is not in it.
 std::vector<storage::ProbeSampleRecord> samples_of(const FrameContext& ctx, const FrameRecord& frame,
                                                    const FrameResult& result) {
   std::vector<storage::ProbeSampleRecord> samples;
   for (std::size_t p = 0; p < ctx.channels.size(); ++p) {
     const PointShift& s = result.shifts[p];
     const double shift = std::hypot(s.u_px, s.v_px);
-    auto t_c = calibrated_temperature_c(ctx.calibration, ctx.channels[p].id, shift);
-    if (!t_c) t_c = result.model_temperature_c[p];
-    samples.push_back(
-        {ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift, s.valid ? t_c : std::nullopt, s.valid});
+    storage::ProbeSampleRecord sample{ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift, std::nullopt,
+                                      s.valid};
+    if (s.valid) {
+      sample.sigma_u_px = positive_or_none(s.sigma_u_px);
+      sample.sigma_v_px = positive_or_none(s.sigma_v_px);
+      sample.sigma_shift_px = magnitude_sigma_px(s);
+      const auto cal = ctx.calibration.find(ctx.channels[p].id);
+      if (cal != ctx.calibration.end()) {
+        sample.temperature_c = calibrated_temperature_c(ctx.calibration, ctx.channels[p].id, shift);
+        if (sample.sigma_shift_px) sample.sigma_random_c = std::abs(cal->second.slope_c_per_px) * *sample.sigma_shift_px;
+        if (cal->second.slope_std_error_c_per_px > 0) {
+          sample.sigma_systematic_c = shift * cal->second.slope_std_error_c_per_px;
+        }
+      } else {
+        const ModelTemperature& m = result.model[p];
+        sample.temperature_c = m.t_c;
+        sample.sigma_random_c = m.sigma_random_c;
+        sample.sigma_systematic_c = m.sigma_systematic_c;
+      }
+    }
+    samples.push_back(sample);
   }
   return samples;
 }
@@ -181,6 +281,12 @@ FrameRecord frame_from_json(const json& j) {
   return f;
 }
 
+json optional_json(const std::optional<double>& value) { return value ? json(*value) : json(nullptr); }
+
+std::optional<double> optional_from_json(const json& j) {
+  return j.is_null() ? std::nullopt : std::optional<double>(j.get<double>());
+}
+
 json sample_json(const storage::ProbeSampleRecord& s) {
   return {s.probe_id,
           s.frame_id,
@@ -188,20 +294,29 @@ json sample_json(const storage::ProbeSampleRecord& s) {
           s.u_px,
           s.v_px,
           s.shift_px,
-          s.temperature_c ? json(*s.temperature_c) : json(nullptr),
-          s.valid};
+          optional_json(s.temperature_c),
+          s.valid,
+          optional_json(s.sigma_u_px),
+          optional_json(s.sigma_v_px),
+          optional_json(s.sigma_shift_px),
+          optional_json(s.sigma_random_c),
+          optional_json(s.sigma_systematic_c)};
 }
 
 storage::ProbeSampleRecord sample_from_json(const json& j) {
-  const json& t = j.at(6);
   return {j.at(0).get<std::int64_t>(),
           j.at(1).get<std::int64_t>(),
           j.at(2).get<std::int64_t>(),
           j.at(3).get<double>(),
           j.at(4).get<double>(),
           j.at(5).get<double>(),
-          t.is_null() ? std::nullopt : std::optional<double>(t.get<double>()),
-          j.at(7).get<bool>()};
+          optional_from_json(j.at(6)),
+          j.at(7).get<bool>(),
+          optional_from_json(j.at(8)),
+          optional_from_json(j.at(9)),
+          optional_from_json(j.at(10)),
+          optional_from_json(j.at(11)),
+          optional_from_json(j.at(12))};
 }
 
 }  // namespace
@@ -273,7 +388,8 @@ Bytes plan_bytes(const FrameContext& ctx, const std::vector<FrameRecord>& frames
     channels.push_back({ctx.channels[p].id, ctx.channels[p].name, ctx.points[p].x, ctx.points[p].y, ctx.probe_ids[p]});
   }
   for (const auto& [channel, c] : ctx.calibration) {
-    calibration.push_back({channel, c.slope_c_per_px, c.reference_temperature_c, c.camera_offset_s});
+    calibration.push_back(
+        {channel, c.slope_c_per_px, c.reference_temperature_c, c.camera_offset_s, c.slope_std_error_c_per_px});
   }
   for (const auto& f : frames) todo.push_back(frame_json(f));
   return json::to_cbor(json{{"run_dir", fs::absolute(ctx.run_dir).string()},
@@ -303,7 +419,7 @@ std::pair<FrameContext, std::vector<FrameRecord>> context_from_plan(const Bytes&
   }
   for (const auto& c : j.at("calibration")) {
     ctx.calibration[c.at(0).get<std::int64_t>()] = {c.at(1).get<double>(), c.at(2).get<double>(),
-                                                    c.at(3).get<double>()};
+                                                    c.at(3).get<double>(), c.at(4).get<double>()};
   }
   std::vector<FrameRecord> frames;
   for (const auto& f : j.at("frames")) frames.push_back(frame_from_json(f));

@@ -104,7 +104,16 @@ FinishedFrame finish_frame(const FrameContext& ctx, const storage::FrameRecord& 
 // nothing written: the shift at each probe (the full field interpolated
 // there, or the probe's own window) and its temperature, by the calibration
 // or else the physical model's temperature field. The live page shows these,
-// so what it shows is what `process` will store.
+// so what it shows is what `process` will store. Each sample carries the
+// σ of what it holds (nullopt where not estimated), of the probe's value —
+// the bilinear interpolation of the four nodes around it — not of one node:
+// the shift's σ the same weights on the nodes' σ (neighbouring windows
+// overlap, so their errors are taken as fully correlated: an upper bound);
+// the random σ of T under the physical model exactly through the solve
+// (TemperatureFieldSolver::average_sigma_c, one solve per probe), under a
+// calibration |slope| · σ of the shift; the systematic σ the Type-B budget
+// (temperature_budget.h) with the run's [geometry.uncertainty] and the
+// window-against-point term, under a calibration |shift| · σ of the slope.
 std::vector<storage::ProbeSampleRecord> probe_samples(const FrameContext& ctx, const storage::FrameRecord& frame,
                                                       const fusion::EvaluationResult& evaluated);
 

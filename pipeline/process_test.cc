@@ -3,13 +3,17 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 
+#include "fusion/temperature_budget.h"
+#include "pipeline/run_selection.h"
 #include "sim/synthetic_pair.h"
+#include "storage/experiment_clock.h"
 #include "storage/processing_store.h"
 #include "storage/run_lock.h"
 #include "storage/run_store.h"
@@ -107,6 +111,11 @@ void expect_equal(const Results& a, const Results& b) {
       EXPECT_EQ(x.shift_px, y.shift_px);
       EXPECT_EQ(x.temperature_c, y.temperature_c);
       EXPECT_EQ(x.valid, y.valid);
+      EXPECT_EQ(x.sigma_u_px, y.sigma_u_px);
+      EXPECT_EQ(x.sigma_v_px, y.sigma_v_px);
+      EXPECT_EQ(x.sigma_shift_px, y.sigma_shift_px);
+      EXPECT_EQ(x.sigma_random_c, y.sigma_random_c);
+      EXPECT_EQ(x.sigma_systematic_c, y.sigma_systematic_c);
     }
   }
   EXPECT_EQ(a.fits, b.fits);
@@ -153,6 +162,44 @@ TEST_F(Process, StoresItsSettingsReusesThemWithoutOptionsAndOptionsOverrideThem)
   EXPECT_EQ(fs::directory_iterator(run() / "fields")->path().filename(),
             "p" + std::to_string(storage::ProcessingStore(run()).current_processing()->id))
       << "only the current processing's field files are kept";
+}
+
+// Every valid sample of a processed run carries its σ: the shift's (px)
+// and, under the physical model, the random and systematic σ of its
+// temperature; the systematic one is the Type-B budget of that temperature
+// with the window term, so at least the budget without it, and a sample
+// without a measurement carries none.
+TEST_F(Process, StoredSamplesCarryTheirUncertainty) {
+  ASSERT_TRUE(process(run()).complete);
+  const storage::ProcessingStore results(run());
+  auto settings = settings_from_json(json::parse(results.current_processing()->settings_json));
+  const auto store = storage::RunStore::open(run());
+  resolve_ambient(settings.geometry, store, positioned_channels(store.channels()), storage::experiment_clock(store),
+                  split_frames(store.frames()).reference);
+  const fusion::BosGeometry geometry(settings.geometry.geometry);
+  std::size_t with_temperature = 0;
+  for (const auto& probe : results.probes()) {
+    for (const auto& s : results.probe_samples(probe.id)) {
+      if (!s.valid) {
+        EXPECT_FALSE(s.sigma_shift_px || s.sigma_random_c || s.sigma_systematic_c);
+        continue;
+      }
+      ASSERT_TRUE(s.sigma_u_px && s.sigma_v_px && s.sigma_shift_px) << probe.name << " frame " << s.frame_id;
+      EXPECT_GT(*s.sigma_shift_px, 0);
+      EXPECT_LT(*s.sigma_shift_px, 0.2) << "a bounded σ for a textured synthetic frame";
+      EXPECT_LE(*s.sigma_shift_px, std::max(*s.sigma_u_px, *s.sigma_v_px) + 1e-12);
+      if (!s.temperature_c) continue;
+      ++with_temperature;
+      ASSERT_TRUE(s.sigma_random_c && s.sigma_systematic_c);
+      EXPECT_TRUE(std::isfinite(*s.sigma_random_c) && *s.sigma_random_c > 0);
+      const auto budget = fusion::temperature_budget(geometry, settings.geometry.uncertainty, *s.temperature_c);
+      EXPECT_GE(*s.sigma_systematic_c, budget.combined_c - 1e-12) << "the budget, and the window term besides";
+      std::printf("%s t=%lld: T %.3f degC, sigma random %.4f, systematic %.4f (budget without window %.4f)\n",
+                  probe.name.c_str(), static_cast<long long>(s.t_ns), *s.temperature_c, *s.sigma_random_c,
+                  *s.sigma_systematic_c, budget.combined_c);
+    }
+  }
+  EXPECT_GT(with_temperature, 0u) << "the physical model gave temperatures";
 }
 
 TEST_F(Process, AdaptiveRefinementIsASettingAndEachFieldStoresTheFractionRefined) {

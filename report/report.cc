@@ -248,6 +248,12 @@ std::string agreement_section(const ReportInput& input, const Figures& f, const 
   return h;
 }
 
+std::string uncertainty_section(const ReportInput& input) {
+  const auto& u = input.uncertainty;
+  if (!u.budget && u.probes.empty() && u.fits.empty() && u.notes.empty()) return {};
+  return uncertainty_html(u);
+}
+
 std::string maps_sections(const ReportInput& input, const Figures& f, const ReportOptions& options) {
   std::string h = "<h2 id=\"displacement\">Displacement maps</h2>\n";
   if (f.displacement_maps.empty()) {
@@ -304,7 +310,8 @@ ReportFiles write_report(const ReportInput& input, const ReportOptions& options,
                              "<h2 id=\"quality\">Image "
                              "quality index</h2>\n" +
                              quality_html(input) + curves_section(input, figures, options) +
-                             agreement_section(input, figures, options) + maps_sections(input, figures, options) +
+                             agreement_section(input, figures, options) + uncertainty_section(input) +
+                             maps_sections(input, figures, options) +
                              files_section(files) + "</body>\n</html>\n");
   folder.commit();
   return moved_to(std::move(files), out_dir);

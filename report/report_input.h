@@ -21,6 +21,7 @@
 #include "fitting/agreement.h"
 #include "fitting/newton_fit.h"
 #include "fusion/image_quality.h"
+#include "report/uncertainty_section.h"
 
 namespace bosfuse::report {
 
@@ -91,6 +92,7 @@ struct ReportInput {
   // Why there are no displacement maps when there are none (e.g. "the run has no frames").
   std::string displacement_maps_note;
   std::vector<std::string> notes;  // anything else a reader should know, shown near the top
+  UncertaintySummary uncertainty;  // the budget, the probes' σ and the fits' intervals (empty: not processed)
 
   bool has_probes() const;
 };

@@ -13,6 +13,7 @@
 #include "fusion/field_csv.h"
 #include "pipeline/processing_settings.h"
 #include "pipeline/quality_json.h"
+#include "report/run_uncertainty.h"
 #include "storage/experiment_clock.h"
 #include "storage/processing_store.h"
 #include "storage/run_paths.h"
@@ -315,6 +316,11 @@ ReportInput build_report_input(const storage::RunStore& store, const RunReportOp
         "A later processing ({}) was interrupted; its partial results are not shown. `bosfuse process {} --resume` "
         "completes it.",
         unfinished->id, store.dir().string()));
+  }
+  try {
+    input.uncertainty = stored_uncertainty(store, *results, clock);
+  } catch (const std::exception& e) {
+    input.notes.push_back(std::string("The stored uncertainties could not be read: ") + e.what());
   }
   reader.maps("temperature", input.temperature_maps);
   reader.maps("displacement", input.displacement_maps);

@@ -102,6 +102,45 @@ TEST(RunInput, AProcessedRunIsReadFromWhatProcessStoredWithoutItsFrames) {
   EXPECT_NE(all_notes(input).find("full fields, cross-correlation, window 16 px, step 8 px"), std::string::npos);
 }
 
+// The uncertainty section from what `process` stored: every probe's
+// samples carry σ, the budget is the processing's at the hottest sample;
+// the same run with its σ gone (as processed before schema version 5)
+// says so instead of showing numbers.
+TEST(RunInput, TheUncertaintySectionIsWhatProcessStored) {
+  testing::TempDir dir;
+  testrun::create_run(dir / "run", true);
+  ASSERT_TRUE(process(dir / "run").complete);
+  const auto input = build_report_input(storage::RunStore::open(dir / "run"));
+  const auto& u = input.uncertainty;
+  ASSERT_EQ(u.probes.size(), 2u);
+  for (const auto& p : u.probes) {
+    EXPECT_EQ(p.samples, 2u) << p.probe;
+    EXPECT_EQ(p.samples_with_sigma, 2u) << p.probe;
+    EXPECT_GT(p.median_random_c, 0) << p.probe;
+    EXPECT_TRUE(p.median_systematic_c) << p.probe;
+  }
+  ASSERT_TRUE(u.budget);
+  EXPECT_EQ(u.budget->components.size(), 6u);
+  EXPECT_NE(u.budget_basis.find("the hottest BOS probe sample"), std::string::npos) << u.budget_basis;
+  EXPECT_TRUE(u.notes.empty());
+  const auto files = write_report(input, {}, dir / "out");
+  std::ifstream page(files.html);
+  const std::string html((std::istreambuf_iterator<char>(page)), std::istreambuf_iterator<char>());
+  EXPECT_NE(html.find("<h2 id=\"uncertainty\">Uncertainty of the BOS temperatures</h2>"), std::string::npos);
+  EXPECT_NE(html.find("<h3>Type-B budget of a BOS temperature</h3>"), std::string::npos);
+  EXPECT_NE(html.find("<h3>Random uncertainty of each probe</h3>"), std::string::npos);
+  {
+    storage::Database db((dir / "run" / storage::RunStore::kDatabaseFileName).string(),
+                         storage::Database::Mode::kReadWrite);
+    db.execute("UPDATE probe_samples SET sigma_u_px = NULL, sigma_v_px = NULL, sigma_shift_px = NULL, "
+               "sigma_random_c = NULL, sigma_systematic_c = NULL");
+  }
+  const auto old = build_report_input(storage::RunStore::open(dir / "run")).uncertainty;
+  EXPECT_FALSE(old.budget);
+  ASSERT_EQ(old.notes.size(), 1u);
+  EXPECT_NE(old.notes[0].find("carry no uncertainty"), std::string::npos);
+}
+
 // The synthetic run, processed with its holder under the mask.
 void process_with_the_holder_masked(const std::filesystem::path& run, const testrun::Truth& truth) {
   testrun::create_run(run, true, truth);

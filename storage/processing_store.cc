@@ -1,5 +1,6 @@
 #include "storage/processing_store.h"
 
+#include <string>
 #include <string_view>
 
 #include "storage/record_rows.h"
@@ -25,9 +26,34 @@ std::vector<ProbeSampleRecord> read_probe_samples(Statement& stmt) {
   while (stmt.step()) {
     out.push_back({stmt.column_int64(0), stmt.column_int64(1), stmt.column_int64(2), stmt.column_double(3),
                    stmt.column_double(4), stmt.column_double(5), stmt.column_optional_double(6),
-                   stmt.column_int64(7) != 0});
+                   stmt.column_int64(7) != 0, stmt.column_optional_double(8), stmt.column_optional_double(9),
+                   stmt.column_optional_double(10), stmt.column_optional_double(11),
+                   stmt.column_optional_double(12)});
   }
   return out;
+}
+
+// The columns read_probe_samples reads, from `table`: a store opened read-only
+// before version 5 has no σ columns, which read as NULL.
+std::string probe_sample_select(const char* table, bool with_sigmas) {
+  return std::string("SELECT probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid, ") +
+         (with_sigmas ? "sigma_u_px, sigma_v_px, sigma_shift_px, sigma_random_c, sigma_systematic_c"
+                      : "NULL, NULL, NULL, NULL, NULL") +
+         " FROM " + table + " WHERE probe_id = ? ORDER BY t_ns, frame_id";
+}
+
+constexpr const char* kSampleColumns =
+    "(probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid, sigma_u_px, sigma_v_px, sigma_shift_px, "
+    "sigma_random_c, sigma_systematic_c)";
+
+void insert_probe_samples(Database& db, const char* table, std::span<const ProbeSampleRecord> samples) {
+  auto stmt = db.prepare(std::string("INSERT INTO ") + table + " " + kSampleColumns +
+                         " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  for (const ProbeSampleRecord& s : samples) {
+    stmt.bind_all(s.probe_id, s.frame_id, s.t_ns, s.u_px, s.v_px, s.shift_px, s.temperature_c, s.valid ? 1 : 0,
+                  s.sigma_u_px, s.sigma_v_px, s.sigma_shift_px, s.sigma_random_c, s.sigma_systematic_c);
+    stmt.run();
+  }
 }
 
 std::vector<FieldRecord> read_fields(Statement& stmt) {
@@ -85,13 +111,7 @@ std::int64_t ProcessingStore::add_probe(const ProbeSeriesRecord& p) {
 }
 
 void ProcessingStore::write_probe_samples(std::span<const ProbeSampleRecord> samples) {
-  auto stmt = db_.prepare(
-      "INSERT INTO probe_samples (probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid) "
-      "VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
-  for (const ProbeSampleRecord& s : samples) {
-    stmt.bind_all(s.probe_id, s.frame_id, s.t_ns, s.u_px, s.v_px, s.shift_px, s.temperature_c, s.valid ? 1 : 0);
-    stmt.run();
-  }
+  insert_probe_samples(db_, "probe_samples", samples);
 }
 
 std::int64_t ProcessingStore::add_fit(const FitRecord& f) {
@@ -191,9 +211,7 @@ std::vector<ProbeSeriesRecord> ProcessingStore::staged_probes(std::int64_t proce
 
 
 std::vector<ProbeSampleRecord> ProcessingStore::staged_probe_samples(std::int64_t probe_id) const {
-  auto stmt = db_.prepare(
-      "SELECT probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid FROM staged_probe_samples "
-      "WHERE probe_id = ? ORDER BY t_ns, frame_id");
+  auto stmt = db_.prepare(probe_sample_select("staged_probe_samples", has_sample_sigmas()));
   stmt.bind(1, probe_id);
   return read_probe_samples(stmt);
 }
@@ -208,13 +226,7 @@ std::vector<FieldRecord> ProcessingStore::staged_fields(std::int64_t processing_
 void ProcessingStore::stage_frame(std::int64_t processing_id, std::int64_t frame_id, const std::string& json,
                                   std::span<const ProbeSampleRecord> samples, std::span<const FieldRecord> fields) {
   Transaction transaction(db_);
-  auto sample = db_.prepare(
-      "INSERT INTO staged_probe_samples (probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid) "
-      "VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
-  for (const ProbeSampleRecord& s : samples) {
-    sample.bind_all(s.probe_id, s.frame_id, s.t_ns, s.u_px, s.v_px, s.shift_px, s.temperature_c, s.valid ? 1 : 0);
-    sample.run();
-  }
+  insert_probe_samples(db_, "staged_probe_samples", samples);
   auto field = db_.prepare(
       "INSERT INTO staged_fields (processing_id, frame_id, kind, path, json) VALUES (?, ?, ?, ?, ?)");
   for (const FieldRecord& f : fields) {
@@ -243,8 +255,10 @@ void ProcessingStore::complete_processing(std::int64_t processing_id, std::span<
   for (const char* sql :
        {"INSERT INTO probe_series (id, run_id, channel_id, name, x_px, y_px) "
         "SELECT id, ?2, channel_id, name, x_px, y_px FROM staged_probe_series WHERE processing_id = ?1",
-        "INSERT INTO probe_samples (probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid) "
-        "SELECT s.probe_id, s.frame_id, s.t_ns, s.u_px, s.v_px, s.shift_px, s.temperature_c, s.valid "
+        "INSERT INTO probe_samples (probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid, "
+        "sigma_u_px, sigma_v_px, sigma_shift_px, sigma_random_c, sigma_systematic_c) "
+        "SELECT s.probe_id, s.frame_id, s.t_ns, s.u_px, s.v_px, s.shift_px, s.temperature_c, s.valid, "
+        "s.sigma_u_px, s.sigma_v_px, s.sigma_shift_px, s.sigma_random_c, s.sigma_systematic_c "
         "FROM staged_probe_samples s JOIN staged_probe_series p ON p.id = s.probe_id WHERE p.processing_id = ?1",
         "INSERT INTO fields (run_id, frame_id, kind, path, json) "
         "SELECT ?2, frame_id, kind, path, json FROM staged_fields WHERE processing_id = ?1"}) {
@@ -271,9 +285,7 @@ std::vector<ProbeSeriesRecord> ProcessingStore::probes() const {
 
 std::vector<ProbeSampleRecord> ProcessingStore::probe_samples(std::int64_t probe_id) const {
   if (!has_results_tables()) return {};
-  auto stmt = db_.prepare(
-      "SELECT probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid FROM probe_samples "
-      "WHERE probe_id = ? ORDER BY t_ns, frame_id");
+  auto stmt = db_.prepare(probe_sample_select("probe_samples", has_sample_sigmas()));
   stmt.bind(1, probe_id);
   return read_probe_samples(stmt);
 }

@@ -40,6 +40,15 @@ struct ProbeSampleRecord {
   double shift_px = 0;                  // |(u, v)|
   std::optional<double> temperature_c;  // when a calibration or the physical model gave one
   bool valid = false;
+  // Standard uncertainties (k = 1) of this sample, nullopt where not
+  // estimated: of the shift's components and magnitude (px), and of the
+  // temperature, random (the vectors' noise through the conversion) and
+  // systematic (the Type-B budget, GUM root sum of squares).
+  std::optional<double> sigma_u_px;
+  std::optional<double> sigma_v_px;
+  std::optional<double> sigma_shift_px;
+  std::optional<double> sigma_random_c;
+  std::optional<double> sigma_systematic_c;
 };
 
 enum class FitSubject { kChannel, kProbe };
@@ -141,6 +150,7 @@ class ProcessingStore {
  private:
   bool has_results_tables() const { return version_ >= 2; }
   bool has_processings() const { return version_ >= 4; }
+  bool has_sample_sigmas() const { return version_ >= 5; }
   std::optional<ProcessingRecord> processing_where(const char* condition) const;
 
   mutable Database db_;

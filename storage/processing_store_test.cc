@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <string>
+
 #include "storage/run_store.h"
 #include "storage/schema.h"
 #include "tests/support/temp_dir.h"
@@ -96,6 +99,79 @@ TEST(ProcessingStore, AVersionOneStoreReadsAsEmptyAndIsMigratedWhenWritten) {
   ProcessingStore writer(f.run_dir, true);
   EXPECT_NO_THROW(writer.add_probe({0, std::nullopt, "p", 1, 2}));
   EXPECT_THROW(ProcessingStore(f.dir.path() / "nothing"), StorageError);
+}
+
+constexpr std::array<const char*, 5> kSigmaColumns = {"sigma_u_px", "sigma_v_px", "sigma_shift_px", "sigma_random_c",
+                                                     "sigma_systematic_c"};
+
+TEST(ProcessingStore, SampleUncertaintiesRoundTripThroughTheStagedCopy) {
+  Fixture f;
+  ProcessingStore results(f.run_dir, true);
+  const auto processing = results.begin_processing("{}", 1'000);
+  const auto probe = results.stage_probe(processing, {0, f.channel, "tc0", 120.5, 80.0});
+  ProbeSampleRecord with{probe, f.frame, 2'000, 0.3, -0.4, 0.5, 31.5, true, 0.01, 0.02, 0.018, 0.4, 2.6};
+  ProbeSampleRecord without{probe, f.reference, 1'000, 0, 0, 0, std::nullopt, false};
+  const std::vector<ProbeSampleRecord> samples{with, without};
+  results.stage_frame(processing, f.frame, "{}", samples, {});
+  const auto staged = results.staged_probe_samples(probe);
+  ASSERT_EQ(staged.size(), 2u);
+  EXPECT_DOUBLE_EQ(*staged[1].sigma_systematic_c, 2.6);
+  results.complete_processing(processing, {}, {}, "{}", 3'000);
+  const auto stored = ProcessingStore(f.run_dir).probe_samples(probe);
+  ASSERT_EQ(stored.size(), 2u);
+  EXPECT_FALSE(stored[0].sigma_u_px || stored[0].sigma_v_px || stored[0].sigma_shift_px || stored[0].sigma_random_c ||
+               stored[0].sigma_systematic_c)
+      << "not estimated reads as NULL, not 0";
+  EXPECT_DOUBLE_EQ(*stored[1].sigma_u_px, 0.01);
+  EXPECT_DOUBLE_EQ(*stored[1].sigma_v_px, 0.02);
+  EXPECT_DOUBLE_EQ(*stored[1].sigma_shift_px, 0.018);
+  EXPECT_DOUBLE_EQ(*stored[1].sigma_random_c, 0.4);
+  EXPECT_DOUBLE_EQ(*stored[1].sigma_systematic_c, 2.6);
+}
+
+// A run processed by a bosfuse of schema version 4: its samples have no σ
+// columns. Read-only it reads with every σ absent; opened for writing it is
+// migrated, the old samples' σ NULL, and new samples carry theirs.
+TEST(ProcessingStore, AVersionFourRunReadsWithoutSigmasAndMigratesWhenWritten) {
+  Fixture f;
+  std::int64_t probe = 0;
+  {
+    ProcessingStore results(f.run_dir, true);
+    probe = results.add_probe({0, f.channel, "tc0", 120.5, 80.0});
+  }
+  {
+    Database db((f.run_dir / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
+    for (const char* table : {"probe_samples", "staged_probe_samples"}) {
+      for (const char* column : kSigmaColumns) {
+        db.execute(std::string("ALTER TABLE ") + table + " DROP COLUMN " + column);
+      }
+    }
+    db.execute("DELETE FROM schema_version WHERE version >= 5");
+    db.prepare(
+          "INSERT INTO probe_samples (probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid) "
+          "VALUES (?, ?, 2000, 0.3, -0.4, 0.5, 31.5, 1)")
+        .bind_all(probe, f.frame)
+        .run();
+    ASSERT_EQ(schema_version(db), 4);
+  }
+  const auto old = ProcessingStore(f.run_dir).probe_samples(probe);
+  ASSERT_EQ(old.size(), 1u);
+  EXPECT_DOUBLE_EQ(*old[0].temperature_c, 31.5);
+  EXPECT_FALSE(old[0].sigma_shift_px.has_value());
+  EXPECT_FALSE(old[0].sigma_random_c.has_value());
+  {
+    Database db((f.run_dir / RunStore::kDatabaseFileName).string(), Database::Mode::kReadOnly);
+    EXPECT_EQ(schema_version(db), 4) << "reading changed nothing";
+  }
+  ProcessingStore writer(f.run_dir, true);
+  const std::vector<ProbeSampleRecord> added{
+      {probe, f.reference, 1'000, 0, 0, 0, 20.0, true, 0.01, 0.01, 0.01, 0.2, 0.5}};
+  writer.write_probe_samples(added);
+  const auto both = writer.probe_samples(probe);
+  ASSERT_EQ(both.size(), 2u);
+  EXPECT_DOUBLE_EQ(*both[0].sigma_random_c, 0.2);
+  EXPECT_FALSE(both[1].sigma_random_c.has_value()) << "the migrated sample's σ is NULL";
+  EXPECT_DOUBLE_EQ(*both[1].temperature_c, 31.5);
 }
 
 }  // namespace

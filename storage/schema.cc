@@ -196,8 +196,25 @@ CREATE TABLE staged_fields (
 );
 )sql";
 
-constexpr std::array<Migration, 4> kMigrations = {
-    {{1, kSchemaV1}, {2, kSchemaV2}, {3, kSchemaV3}, {4, kSchemaV4}}};
+// Version 5: each probe sample carries its uncertainty, NULL where it was
+// not estimated (an older run's samples, a field without σ): the σ of the
+// probe's shift components and of its magnitude (px), and the random and the
+// systematic (Type-B) standard uncertainty of its temperature (°C).
+constexpr std::string_view kSchemaV5 = R"sql(
+ALTER TABLE probe_samples ADD COLUMN sigma_u_px REAL;
+ALTER TABLE probe_samples ADD COLUMN sigma_v_px REAL;
+ALTER TABLE probe_samples ADD COLUMN sigma_shift_px REAL;
+ALTER TABLE probe_samples ADD COLUMN sigma_random_c REAL;
+ALTER TABLE probe_samples ADD COLUMN sigma_systematic_c REAL;
+ALTER TABLE staged_probe_samples ADD COLUMN sigma_u_px REAL;
+ALTER TABLE staged_probe_samples ADD COLUMN sigma_v_px REAL;
+ALTER TABLE staged_probe_samples ADD COLUMN sigma_shift_px REAL;
+ALTER TABLE staged_probe_samples ADD COLUMN sigma_random_c REAL;
+ALTER TABLE staged_probe_samples ADD COLUMN sigma_systematic_c REAL;
+)sql";
+
+constexpr std::array<Migration, 5> kMigrations = {
+    {{1, kSchemaV1}, {2, kSchemaV2}, {3, kSchemaV3}, {4, kSchemaV4}, {5, kSchemaV5}}};
 static_assert(kMigrations.back().version == kSchemaVersion);
 static_assert(kSampleStatusCount == 7, "update the sample_status rows of the schema");
 

@@ -20,7 +20,7 @@ struct Migration {
 // The migrations of this bosfuse build, oldest first.
 std::span<const Migration> schema_migrations();
 
-inline constexpr int kSchemaVersion = 4;
+inline constexpr int kSchemaVersion = 5;
 
 // 0 for a file with no schema yet.
 int schema_version(Database& db);

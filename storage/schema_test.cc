@@ -4,6 +4,7 @@
 
 #include <array>
 #include <fstream>
+#include <vector>
 
 #include "storage/records.h"
 #include "tests/support/temp_dir.h"
@@ -60,13 +61,10 @@ TEST(Schema, ForwardMigrationAppliesOnlyNewerSteps) {
   testing::TempDir dir;
   Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
   migrate(db);
-  const std::array<Migration, 5> future = {{schema_migrations()[0],
-                                            schema_migrations()[1],
-                                            schema_migrations()[2],
-                                            schema_migrations()[3],
-                                            {5, "ALTER TABLE runs ADD COLUMN operator TEXT NOT NULL DEFAULT ''"}}};
-  EXPECT_EQ(migrate(db, future), 4);
-  EXPECT_EQ(schema_version(db), 5);
+  std::vector<Migration> future(schema_migrations().begin(), schema_migrations().end());
+  future.push_back({kSchemaVersion + 1, "ALTER TABLE runs ADD COLUMN operator TEXT NOT NULL DEFAULT ''"});
+  EXPECT_EQ(migrate(db, future), kSchemaVersion);
+  EXPECT_EQ(schema_version(db), kSchemaVersion + 1);
   EXPECT_NO_THROW(db.execute("SELECT operator FROM runs"));
 }
 
@@ -87,13 +85,10 @@ TEST(Schema, FailedMigrationLeavesTheStoreAsItWas) {
   testing::TempDir dir;
   Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
   migrate(db);
-  const std::array<Migration, 5> broken = {{schema_migrations()[0],
-                                            schema_migrations()[1],
-                                            schema_migrations()[2],
-                                            schema_migrations()[3],
-                                            {5, "CREATE TABLE extra (x); THIS IS NOT SQL"}}};
+  std::vector<Migration> broken(schema_migrations().begin(), schema_migrations().end());
+  broken.push_back({kSchemaVersion + 1, "CREATE TABLE extra (x); THIS IS NOT SQL"});
   EXPECT_THROW(migrate(db, broken), StorageError);
-  EXPECT_EQ(schema_version(db), 4);
+  EXPECT_EQ(schema_version(db), kSchemaVersion);
   auto stmt = db.prepare("SELECT 1 FROM sqlite_master WHERE name = 'extra'");
   EXPECT_FALSE(stmt.step()) << "a failed migration left a table behind";
 }

@@ -14,6 +14,7 @@
 #include "tests/support/synthetic_run.h"
 #include "tests/support/temp_dir.h"
 #include "view/live_stream.h"
+#include "view/page.h"
 #include "view/test_sse.h"
 
 namespace bosfuse::view {
@@ -114,6 +115,21 @@ TEST(LiveBos, TheStreamSendsEveryResultWithTheStateAfterIt) {
   const auto data = nlohmann::json::parse(messages[bos_at - types.begin()].data);
   EXPECT_EQ(data.at("probes").size(), 2u);
   EXPECT_TRUE(data.at("probes")[0].contains("t_c"));
+  // Each probe's σ, as `process` stores them: the random and systematic σ
+  // of its temperature and the σ of its shift, those of the evaluated frame.
+  const auto evaluated = bos.results_from(0).at(0).frame.probes;
+  for (std::size_t p = 0; p < evaluated.size(); ++p) {
+    const auto& message = data.at("probes")[p];
+    ASSERT_TRUE(evaluated[p].sigma_random_c && evaluated[p].sigma_systematic_c && evaluated[p].sigma_shift_px);
+    EXPECT_DOUBLE_EQ(message.at("sigma_random_c").get<double>(), *evaluated[p].sigma_random_c);
+    EXPECT_DOUBLE_EQ(message.at("sigma_systematic_c").get<double>(), *evaluated[p].sigma_systematic_c);
+    EXPECT_DOUBLE_EQ(message.at("sigma_shift_px").get<double>(), *evaluated[p].sigma_shift_px);
+    EXPECT_GT(*evaluated[p].sigma_random_c, 0);
+  }
+  // The page shows them as "± x °C" beside the BOS temperature.
+  const std::string_view page = live_page_html();
+  EXPECT_NE(page.find("' ± ' + sig(p.sigma_random_c) + ' °C (random)'"), std::string_view::npos);
+  EXPECT_NE(page.find("' ± ' + sig(p.sigma_systematic_c) + ' °C (systematic)'"), std::string_view::npos);
   EXPECT_GT(data.at("quality").at("q_mod").get<double>(), 0.5);
   // Synthetic frames are at 10 and 60 s; the newest is the one evaluated.
   EXPECT_NEAR(data.at("t_s").get<double>(), 60.003, 1e-6);

@@ -80,6 +80,12 @@ nlohmann::json bos_json(const LiveBosResult& r, const storage::ExperimentClock& 
                          {"u_px", finite_or_null(p.u_px)}, {"v_px", finite_or_null(p.v_px)},
                          {"shift_px", finite_or_null(p.shift_px)}, {"valid", p.valid}};
     if (p.temperature_c && std::isfinite(*p.temperature_c)) probe["t_c"] = *p.temperature_c;
+    // Each σ only when estimated (as t_c): the page shows "± x °C" beside the temperature.
+    for (const auto& [key, sigma] : {std::pair{"sigma_shift_px", p.sigma_shift_px},
+                                     {"sigma_random_c", p.sigma_random_c},
+                                     {"sigma_systematic_c", p.sigma_systematic_c}}) {
+      if (sigma && std::isfinite(*sigma)) probe[key] = *sigma;
+    }
     probes.push_back(std::move(probe));
   }
   return {{"frame_id", r.frame.frame.id},

@@ -40,7 +40,7 @@ table{border-collapse:collapse;font-size:.9em}td,th{padding:.1em .5em;text-align
 </div>
 <section><h2>Live BOS at the thermocouples</h2>
 <div id="bos-state" class="small">waiting for frames</div>
-<table id="bos-table"><thead><tr><th>probe</th><th>|d| / px</th><th>u / px</th><th>v / px</th><th>BOS / °C</th>
+<table id="bos-table"><thead><tr><th>probe</th><th>|d| / px</th><th>u / px</th><th>v / px</th><th>BOS temperature</th>
 <th>thermocouple / °C</th></tr></thead><tbody id="bos-rows"></tbody></table>
 <div class="small">BOS temperatures are drawn dashed on the chart, with the thermocouple they sit at. They are the
 viewer's own quick evaluation (probe mode, newest frame first); <code>bosfuse process</code> makes the stored ones.</div>
@@ -180,11 +180,21 @@ function lastValue(channel) {
 }
 function cell(text) { const td = document.createElement('td'); td.textContent = text; return td; }
 const num = (v, digits) => v === undefined || v === null ? '—' : v.toFixed(digits);
+// The BOS temperature with its standard uncertainties: random (the frame's
+// noise), then systematic (the set-up's Type-B budget), when estimated.
+const sig = v => v < 0.1 ? v.toPrecision(1) : v.toFixed(1);
+function withSigma(p) {
+  if (p.t_c === undefined || p.t_c === null) return '—';
+  let text = p.t_c.toFixed(1);
+  if (p.sigma_random_c !== undefined) text += ' ± ' + sig(p.sigma_random_c) + ' °C (random)';
+  if (p.sigma_systematic_c !== undefined) text += ' ± ' + sig(p.sigma_systematic_c) + ' °C (systematic)';
+  return text;
+}
 function showBos(b) {
   $('bos-rows').replaceChildren(...b.probes.map(p => {
     const tr = document.createElement('tr'), tc = lastValue(p.channel);
     tr.append(cell(p.name), cell(p.valid ? num(p.shift_px, 3) : 'invalid'), cell(num(p.u_px, 3)), cell(num(p.v_px, 3)),
-              cell(num(p.t_c, 1)), cell(num(tc, 1)));
+              cell(withSigma(p)), cell(num(tc, 1)));
     return tr;
   }));
   const q = b.quality;
