@@ -62,6 +62,28 @@ if(BOSFUSE_FUZZ)
   message(STATUS "bosfuse: libFuzzer targets (fuzz/), libraries with fuzzer-no-link,address,undefined")
 endif()
 
+# Highway (fusion/simd_kernels.cc) compiles every kernel once per x86 target
+# and picks one at run time; instrumented, that one file took 69 CPU-s with
+# all five targets against 36 s with two. The instrumented builds compile
+# only the target this machine's CPU runs (what the sanitizers then check,
+# the path a release build takes here by default) and the portable baseline
+# (BOSFUSE_SIMD=portable); the release build and its suite keep them all.
+if(_bosfuse_san_flags OR BOSFUSE_FUZZ)
+  try_run(_bosfuse_hwy_run _bosfuse_hwy_built
+          SOURCES ${CMAKE_CURRENT_LIST_DIR}/probes/hwy_disabled_targets.cc
+          LINK_LIBRARIES PkgConfig::HWY
+          CXX_STANDARD 20
+          COMPILE_OUTPUT_VARIABLE _bosfuse_hwy_log
+          RUN_OUTPUT_VARIABLE _bosfuse_hwy_disabled)
+  if(NOT _bosfuse_hwy_built OR NOT _bosfuse_hwy_run EQUAL 0 OR NOT _bosfuse_hwy_disabled MATCHES "^[0-9]+$")
+    message(FATAL_ERROR "cmake/probes/hwy_disabled_targets.cc failed (${_bosfuse_hwy_run}): ${_bosfuse_hwy_log}")
+  endif()
+  # Set on the two files that include Highway (the top CMakeLists.txt), not
+  # on every unit, whose commands and so ccache entries stay as they were.
+  set(BOSFUSE_HWY_DISABLED_TARGETS ${_bosfuse_hwy_disabled})
+  message(STATUS "bosfuse: instrumented Highway kernels for this CPU's best target and the baseline only (HWY_DISABLED_TARGETS=${_bosfuse_hwy_disabled})")
+endif()
+
 # Benchmarks of instrumented code measure nothing useful and cost build time.
 if(BOSFUSE_SANITIZE OR BOSFUSE_FUZZ)
   set(_bosfuse_bench_default OFF)
