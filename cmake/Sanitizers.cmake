@@ -4,7 +4,9 @@
 #   -DBOSFUSE_SANITIZE=thread              TSan (scripts/check-sanitizers builds only
 #                                          the threaded storage/acquisition tests)
 #   -DBOSFUSE_FUZZ=ON                      clang-14 only: the libFuzzer targets in fuzz/,
-#                                          the libraries instrumented for coverage + ASan/UBSan
+#                                          the libraries instrumented for coverage + ASan/UBSan;
+#                                          with BOSFUSE_SANITIZE=address,undefined the same build
+#                                          also runs the ASan+UBSan suite (BOSFUSE_ASAN_FUZZ=1)
 #
 # The flags are added with add_compile_options/add_link_options before any
 # bosfuse folder is added, so they reach every library, test and the
