@@ -233,6 +233,23 @@ cv::Mat reference_window_of(const PreparedPair& pair, const PassInput& in, cv::R
   return in.warped_reference.empty() ? view(pair.reference, window) : view(in.warped_reference, window - in.region.tl());
 }
 
+// σu, σv of a node from its reference window and the measurement window at
+// its integer peak (dx, dy). A window whose deformed samples reach past the
+// image read replicated border pixels there: a mismatch that is no
+// independent pixel noise, so its statistics are not corrected for noise
+// shared by neighbouring contributions (vector_uncertainty.h).
+VectorUncertainty node_uncertainty(const PreparedPair& pair, const PassInput& in, const NodeWindows& w, int dx,
+                                   int dy) {
+  const int n = in.window_px, r = in.radius_px;
+  const cv::Rect at_peak(w.search.x + r + dx, w.search.y + r + dy, n, n);
+  // The interpolator's half-width (Lanczos4: 4 px) and the deformation's reach.
+  const int reach = 4 + static_cast<int>(std::ceil(std::max(std::abs(w.base_u), std::abs(w.base_v))));
+  const cv::Rect image(0, 0, pair.reference.cols, pair.reference.rows);
+  const cv::Rect read(w.window.x - reach, w.window.y - reach, n + 2 * reach, n + 2 * reach);
+  const bool inside_image = (read & image) == read;
+  return correlation_statistics(reference_window_of(pair, in, w.window), view(in.warped, at_peak), inside_image);
+}
+
 void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, int row, int col,
                    std::size_t node, WindowCorrelator& correlator, CorrelationPlane& plane, DisplacementVector& vec) {
   const int r = in.radius_px;
@@ -272,9 +289,7 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
     in.peak_dy[node] = static_cast<std::int8_t>(peak.dy);
   }
   if (in.uncertainty_now) {
-    const cv::Rect at_peak(w.search.x + r + peak.dx, w.search.y + r + peak.dy, in.window_px, in.window_px);
-    const VectorUncertainty sigma =
-        correlation_statistics(reference_window_of(pair, in, w.window), view(in.warped, at_peak));
+    const VectorUncertainty sigma = node_uncertainty(pair, in, w, peak.dx, peak.dy);
     vec.sigma_u_px = sigma.sigma_u_px;
     vec.sigma_v_px = sigma.sigma_v_px;
   }
@@ -404,10 +419,12 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
 
 // σu, σv of the vectors the final pass `in` measured (kOk, and under
 // adaptive refinement the selected ones), from the windows it correlated
+// and, at the grid's outermost nodes, what their deformation left
 // (vector_uncertainty.h); then the outliers it replaced get their
 // neighbours' spread (outlier_filter.h).
 void estimate_uncertainty(const PreparedPair& pair, const PassInput& in, DisplacementField& field) {
   if (in.uncertainty_now) {  // estimated as the pass measured
+    add_held_deformation_uncertainty(*in.predictor, field, in.refine);
     estimate_replaced_uncertainty(field, in.refine);
     return;
   }
@@ -418,10 +435,7 @@ void estimate_uncertainty(const PreparedPair& pair, const PassInput& in, Displac
       auto& vec = field.vectors[static_cast<std::size_t>(i)];
       if (vec.flag != VectorFlag::kOk) continue;
       const NodeWindows w = node_windows(pair, in, i / field.cols, i % field.cols, vec);
-      const cv::Rect at_peak(w.search.x + in.radius_px + in.peak_dx[i], w.search.y + in.radius_px + in.peak_dy[i],
-                             in.window_px, in.window_px);
-      const VectorUncertainty sigma =
-          correlation_statistics(reference_window_of(pair, in, w.window), view(in.warped, at_peak));
+      const VectorUncertainty sigma = node_uncertainty(pair, in, w, in.peak_dx[i], in.peak_dy[i]);
       vec.sigma_u_px = sigma.sigma_u_px;
       vec.sigma_v_px = sigma.sigma_v_px;
     }
@@ -431,6 +445,7 @@ void estimate_uncertainty(const PreparedPair& pair, const PassInput& in, Displac
   } else {
     cv::parallel_for_(cv::Range(0, node_count), estimate_range, std::max(1.0, node_count / 256.0));
   }
+  add_held_deformation_uncertainty(*in.predictor, field, in.refine);
   estimate_replaced_uncertainty(field, in.refine);
 }
 

@@ -1,6 +1,7 @@
 #include "fusion/vector_uncertainty.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <stdexcept>
 
@@ -65,6 +66,37 @@ void add_row(Sums& s, const float* a, const float* b, const float* a_below, cons
   add_pixel<false, kBelow>(s, 0, a, b, a_below, b_below, n - 1, mean_a, mean_b);
 }
 
+// The factor by which the per-pixel sum Σ ΔC_i² over-states the variance of
+// Σ ΔC_i, along x (`along_x`) or y, from the reference window's texture.
+// Noise in pixel k of b enters two neighbouring contributions, ΔC_(k−1)
+// with a'(k−1) and ΔC_k with −a'(k+1) (noise in a likewise, signs swapped):
+// per unit noise variance Σ ΔC has variance Σ_k (a(k−1) − a(k+1))², while
+// the per-pixel sum counts Σ_i a'(i)² + a'(i+1)². Their ratio is
+// 1 − ρ(2 px) of the pattern's autocorrelation; 1 for white texture.
+double neighbour_noise_factor(const cv::Mat& a, double mean_a, bool along_x) {
+  const int n = a.rows;
+  double shared = 0, counted = 0;
+  for (int y = 0; y < n; ++y) {
+    const float* row = a.ptr<float>(y);
+    if (along_x) {
+      for (int x = 0; x + 1 < n; ++x) {
+        counted += (row[x] - mean_a) * (row[x] - mean_a) + (row[x + 1] - mean_a) * (row[x + 1] - mean_a);
+      }
+      for (int x = 0; x + 2 < n; ++x) shared += (row[x] - row[x + 2]) * (row[x] - row[x + 2]);
+      continue;
+    }
+    if (y + 1 < n) {
+      const float* below = a.ptr<float>(y + 1);
+      for (int x = 0; x < n; ++x) counted += (row[x] - mean_a) * (row[x] - mean_a) + (below[x] - mean_a) * (below[x] - mean_a);
+    }
+    if (y + 2 < n) {
+      const float* two_below = a.ptr<float>(y + 2);
+      for (int x = 0; x < n; ++x) shared += (row[x] - two_below[x]) * (row[x] - two_below[x]);
+    }
+  }
+  return counted > 0 ? std::clamp(shared / counted, 0.0, 2.0) : 1.0;
+}
+
 }  // namespace
 
 double gaussian_peak_uncertainty(double c0, double c_pm, double sigma_delta) {
@@ -76,7 +108,8 @@ double gaussian_peak_uncertainty(double c0, double c_pm, double sigma_delta) {
   return std::clamp(std::abs(sigma), kFloorPx, kUnresolvedPx);
 }
 
-VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window) {
+VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window,
+                                          bool independent_noise) {
   const int n = reference_window.rows;
   if (n < 4 || reference_window.cols != n || measurement_window.size() != reference_window.size() ||
       reference_window.type() != CV_32FC1 || measurement_window.type() != CV_32FC1) {
@@ -92,16 +125,34 @@ VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const 
                  mean_a, mean_b);
   // ΔC has n(n − 1) terms along each axis; its variance as their spread.
   const double terms = static_cast<double>(n) * (n - 1);
-  const auto spread = [&](Sums::Index sum, Sums::Index sum_sq) {
+  const auto spread = [&](Sums::Index sum, Sums::Index sum_sq, bool along_x) {
     const double total = s.total(sum);
-    return std::sqrt(std::max(s.total(sum_sq) - total * total / terms, 0.0));
+    const double per_pixel = std::max(s.total(sum_sq) - total * total / terms, 0.0);
+    return std::sqrt(independent_noise ? per_pixel * neighbour_noise_factor(reference_window, mean_a, along_x) : per_pixel);
   };
   // C± sum over n − 1 of the n columns (rows): C0 on as many pixels.
   const double c0_part = s.total(Sums::kC0) * (n - 1) / n;
   return {gaussian_peak_uncertainty(c0_part, (s.total(Sums::kPlusX) + s.total(Sums::kMinusX)) / 2,
-                                    spread(Sums::kDx, Sums::kDx2)),
+                                    spread(Sums::kDx, Sums::kDx2, true)),
           gaussian_peak_uncertainty(c0_part, (s.total(Sums::kPlusY) + s.total(Sums::kMinusY)) / 2,
-                                    spread(Sums::kDy, Sums::kDy2))};
+                                    spread(Sums::kDy, Sums::kDy2, false))};
+}
+
+void add_held_deformation_uncertainty(const GridField& predictor, DisplacementField& field, const cv::Mat* only) {
+  if (field.rows != predictor.u_px.rows || field.cols != predictor.u_px.cols) {
+    throw std::invalid_argument("the deformation's grid is not the field's");
+  }
+  for (int row = 0; row < field.rows; ++row) {
+    const bool outer_row = row == 0 || row == field.rows - 1;
+    for (int col = 0; col < field.cols; ++col) {
+      if (!outer_row && col != 0 && col != field.cols - 1) continue;
+      if (only && !only->at<std::uint8_t>(row, col)) continue;
+      DisplacementVector& vec = field.at(row, col);
+      if (!vec.valid() || vec.sigma_u_px <= 0) continue;  // only measured vectors with a σ
+      vec.sigma_u_px = std::hypot(vec.sigma_u_px, vec.u_px - predictor.u_px.at<double>(row, col));
+      vec.sigma_v_px = std::hypot(vec.sigma_v_px, vec.v_px - predictor.v_px.at<double>(row, col));
+    }
+  }
 }
 
 }  // namespace bosfuse::fusion
