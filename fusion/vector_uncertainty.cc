@@ -66,35 +66,64 @@ void add_row(Sums& s, const float* a, const float* b, const float* a_below, cons
   add_pixel<false, kBelow>(s, 0, a, b, a_below, b_below, n - 1, mean_a, mean_b);
 }
 
-// The factor by which the per-pixel sum Σ ΔC_i² over-states the variance of
-// Σ ΔC_i, along x (`along_x`) or y, from the reference window's texture.
+// The factors by which the per-pixel sum Σ ΔC_i² over-states the variance
+// of Σ ΔC_i along x and y, from the reference window's texture a.
 // Noise in pixel k of b enters two neighbouring contributions, ΔC_(k−1)
 // with a'(k−1) and ΔC_k with −a'(k+1) (noise in a likewise, signs swapped):
 // per unit noise variance Σ ΔC has variance Σ_k (a(k−1) − a(k+1))², while
-// the per-pixel sum counts Σ_i a'(i)² + a'(i+1)². Their ratio is
-// 1 − ρ(2 px) of the pattern's autocorrelation; 1 for white texture.
-double neighbour_noise_factor(const cv::Mat& a, double mean_a, bool along_x) {
+// the per-pixel sum counts Σ_i a'(i)² + a'(i+1)² = 2·Σ a'² less the first
+// and last column's (row's). Their ratio is 1 − ρ(2 px) of the pattern's
+// autocorrelation; 1 for white texture.
+struct NoiseFactors {
+  double along_x = 1, along_y = 1;
+};
+
+NoiseFactors neighbour_noise_factors(const cv::Mat& a, double mean_a) {
+  // Sums of squares only, no differences of large sums: float lanes (eight,
+  // which the compiler vectorises) hold them to 1e-6, each row's total then
+  // added in double.
+  constexpr int kLanes = 8;
   const int n = a.rows;
-  double shared = 0, counted = 0;
+  const float mean = static_cast<float>(mean_a);
+  double energy = 0, shared_x = 0, shared_y = 0, edge_columns = 0, edge_rows = 0;
+  const auto total = [](const float* lanes) {
+    double sum = 0;
+    for (int k = 0; k < kLanes; ++k) sum += lanes[k];
+    return sum;
+  };
   for (int y = 0; y < n; ++y) {
     const float* row = a.ptr<float>(y);
-    if (along_x) {
-      for (int x = 0; x + 1 < n; ++x) {
-        counted += (row[x] - mean_a) * (row[x] - mean_a) + (row[x + 1] - mean_a) * (row[x + 1] - mean_a);
+    float e[kLanes] = {}, sx[kLanes] = {}, sy[kLanes] = {};
+    int x = 0;
+    for (; x + kLanes + 2 <= n; x += kLanes) {
+      for (int k = 0; k < kLanes; ++k) {
+        const float centred = row[x + k] - mean, across = row[x + k] - row[x + k + 2];
+        e[k] += centred * centred;
+        sx[k] += across * across;
       }
-      for (int x = 0; x + 2 < n; ++x) shared += (row[x] - row[x + 2]) * (row[x] - row[x + 2]);
-      continue;
     }
-    if (y + 1 < n) {
-      const float* below = a.ptr<float>(y + 1);
-      for (int x = 0; x < n; ++x) counted += (row[x] - mean_a) * (row[x] - mean_a) + (below[x] - mean_a) * (below[x] - mean_a);
+    for (; x < n; ++x) {
+      e[0] += (row[x] - mean) * (row[x] - mean);
+      if (x + 2 < n) sx[0] += (row[x] - row[x + 2]) * (row[x] - row[x + 2]);
     }
     if (y + 2 < n) {
       const float* two_below = a.ptr<float>(y + 2);
-      for (int x = 0; x < n; ++x) shared += (row[x] - two_below[x]) * (row[x] - two_below[x]);
+      for (x = 0; x + kLanes <= n; x += kLanes) {
+        for (int k = 0; k < kLanes; ++k) sy[k] += (row[x + k] - two_below[x + k]) * (row[x + k] - two_below[x + k]);
+      }
+      for (; x < n; ++x) sy[0] += (row[x] - two_below[x]) * (row[x] - two_below[x]);
     }
+    const double row_energy = total(e);
+    energy += row_energy;
+    shared_x += total(sx);
+    shared_y += total(sy);
+    edge_columns += (row[0] - mean_a) * (row[0] - mean_a) + (row[n - 1] - mean_a) * (row[n - 1] - mean_a);
+    if (y == 0 || y == n - 1) edge_rows += row_energy;
   }
-  return counted > 0 ? std::clamp(shared / counted, 0.0, 2.0) : 1.0;
+  const auto ratio = [](double shared, double counted) {
+    return counted > 0 ? std::clamp(shared / counted, 0.0, 2.0) : 1.0;
+  };
+  return {ratio(shared_x, 2 * energy - edge_columns), ratio(shared_y, 2 * energy - edge_rows)};
 }
 
 }  // namespace
@@ -125,17 +154,17 @@ VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const 
                  mean_a, mean_b);
   // ΔC has n(n − 1) terms along each axis; its variance as their spread.
   const double terms = static_cast<double>(n) * (n - 1);
-  const auto spread = [&](Sums::Index sum, Sums::Index sum_sq, bool along_x) {
+  const NoiseFactors shared = independent_noise ? neighbour_noise_factors(reference_window, mean_a) : NoiseFactors{};
+  const auto spread = [&](Sums::Index sum, Sums::Index sum_sq, double factor) {
     const double total = s.total(sum);
-    const double per_pixel = std::max(s.total(sum_sq) - total * total / terms, 0.0);
-    return std::sqrt(independent_noise ? per_pixel * neighbour_noise_factor(reference_window, mean_a, along_x) : per_pixel);
+    return std::sqrt(std::max(s.total(sum_sq) - total * total / terms, 0.0) * factor);
   };
   // C± sum over n − 1 of the n columns (rows): C0 on as many pixels.
   const double c0_part = s.total(Sums::kC0) * (n - 1) / n;
   return {gaussian_peak_uncertainty(c0_part, (s.total(Sums::kPlusX) + s.total(Sums::kMinusX)) / 2,
-                                    spread(Sums::kDx, Sums::kDx2, true)),
+                                    spread(Sums::kDx, Sums::kDx2, shared.along_x)),
           gaussian_peak_uncertainty(c0_part, (s.total(Sums::kPlusY) + s.total(Sums::kMinusY)) / 2,
-                                    spread(Sums::kDy, Sums::kDy2, false))};
+                                    spread(Sums::kDy, Sums::kDy2, shared.along_y))};
 }
 
 void add_held_deformation_uncertainty(const GridField& predictor, DisplacementField& field, const cv::Mat* only) {
