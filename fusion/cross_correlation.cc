@@ -186,10 +186,15 @@ struct PassInput {
   const WindowStats* reference_stats = nullptr;
   int stats_row0 = 0, stats_col0 = 0, stats_stride = 1, stats_cols = 0;
 
+  // Each reference window's neighbour-noise factors for its σ, when cached
+  // (the final pass's, indexed as the statistics are).
+  const NeighbourNoiseFactors* noise_factors = nullptr;
+
+  std::size_t stats_index(int row, int col) const {
+    return static_cast<std::size_t>(stats_row0 + stats_stride * row) * stats_cols + stats_col0 + stats_stride * col;
+  }
   const WindowStats* stats_at(int row, int col) const {
-    if (!reference_stats) return nullptr;
-    return reference_stats + static_cast<std::size_t>(stats_row0 + stats_stride * row) * stats_cols + stats_col0 +
-           stats_stride * col;
+    return reference_stats ? reference_stats + stats_index(row, col) : nullptr;
   }
   const cv::Mat* refine = nullptr;  // adaptive refinement: only nodes marked 1 here are evaluated
   // Where each node's integer peak is kept (the field's size), for the
@@ -238,8 +243,8 @@ cv::Mat reference_window_of(const PreparedPair& pair, const PassInput& in, cv::R
 // image read replicated border pixels there: a mismatch that is no
 // independent pixel noise, so its statistics are not corrected for noise
 // shared by neighbouring contributions (vector_uncertainty.h).
-VectorUncertainty node_uncertainty(const PreparedPair& pair, const PassInput& in, const NodeWindows& w, int dx,
-                                   int dy) {
+VectorUncertainty node_uncertainty(const PreparedPair& pair, const PassInput& in, const NodeWindows& w, int row,
+                                   int col, int dx, int dy) {
   const int n = in.window_px, r = in.radius_px;
   const cv::Rect at_peak(w.search.x + r + dx, w.search.y + r + dy, n, n);
   // The interpolator's half-width (Lanczos4: 4 px) and the deformation's reach.
@@ -247,7 +252,10 @@ VectorUncertainty node_uncertainty(const PreparedPair& pair, const PassInput& in
   const cv::Rect image(0, 0, pair.reference.cols, pair.reference.rows);
   const cv::Rect read(w.window.x - reach, w.window.y - reach, n + 2 * reach, n + 2 * reach);
   const bool inside_image = (read & image) == read;
-  return correlation_statistics(reference_window_of(pair, in, w.window), view(in.warped, at_peak), inside_image);
+  const cv::Mat reference_window = reference_window_of(pair, in, w.window);
+  if (!in.noise_factors) return correlation_statistics(reference_window, view(in.warped, at_peak), inside_image);
+  const NeighbourNoiseFactors factors = inside_image ? in.noise_factors[in.stats_index(row, col)] : NeighbourNoiseFactors{};
+  return correlation_statistics(reference_window, view(in.warped, at_peak), factors);
 }
 
 void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, int row, int col,
@@ -289,7 +297,7 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
     in.peak_dy[node] = static_cast<std::int8_t>(peak.dy);
   }
   if (in.uncertainty_now) {
-    const VectorUncertainty sigma = node_uncertainty(pair, in, w, peak.dx, peak.dy);
+    const VectorUncertainty sigma = node_uncertainty(pair, in, w, row, col, peak.dx, peak.dy);
     vec.sigma_u_px = sigma.sigma_u_px;
     vec.sigma_v_px = sigma.sigma_v_px;
   }
@@ -435,7 +443,8 @@ void estimate_uncertainty(const PreparedPair& pair, const PassInput& in, Displac
       auto& vec = field.vectors[static_cast<std::size_t>(i)];
       if (vec.flag != VectorFlag::kOk) continue;
       const NodeWindows w = node_windows(pair, in, i / field.cols, i % field.cols, vec);
-      const VectorUncertainty sigma = node_uncertainty(pair, in, w, in.peak_dx[i], in.peak_dy[i]);
+      const VectorUncertainty sigma =
+          node_uncertainty(pair, in, w, i / field.cols, i % field.cols, in.peak_dx[i], in.peak_dy[i]);
       vec.sigma_u_px = sigma.sigma_u_px;
       vec.sigma_v_px = sigma.sigma_v_px;
     }
@@ -469,6 +478,7 @@ struct PassWorkspace {
   cv::Mat warped_storage, warped_reference_storage;
   bool cache_reference_stats = false;
   std::map<int, std::vector<WindowStats>> reference_stats;  // by window size
+  std::map<int, std::vector<NeighbourNoiseFactors>> noise_factors;  // likewise, for the σ of the final pass
   std::vector<std::int8_t> peak_dx, peak_dy;                 // the last pass's integer peaks, for its uncertainty
   DisplacementField previous_field;                         // the field before a pass, for its change
   GridField predictor;                                      // a refinement pass's, and its smoothing's scratch
@@ -518,6 +528,25 @@ const std::vector<WindowStats>& reference_stats_for(const PreparedPair& pair, co
     }
   });
   return stats;
+}
+
+// The neighbour-noise factors of the windows of `window_px` at every node
+// of `field` (vector_uncertainty.h), which depend on the reference window
+// alone: computed at an evaluator's first frame, as reference_stats_for.
+const std::vector<NeighbourNoiseFactors>& noise_factors_for(const PreparedPair& pair, const DisplacementField& field,
+                                                            int window_px, PassWorkspace& workspace) {
+  std::vector<NeighbourNoiseFactors>& factors = workspace.noise_factors[window_px];
+  if (factors.size() == field.vectors.size()) return factors;
+  factors.assign(field.vectors.size(), NeighbourNoiseFactors{});
+  cv::parallel_for_(cv::Range(0, static_cast<int>(factors.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      const auto& vec = field.vectors[static_cast<std::size_t>(i)];
+      const cv::Point origin = window_origin(vec.x_px, vec.y_px, window_px, pair.roi);
+      factors[static_cast<std::size_t>(i)] =
+          neighbour_noise_factors(view(pair.reference, cv::Rect(origin, cv::Size(window_px, window_px))));
+    }
+  });
+  return factors;
 }
 
 // A pass's measured vectors on their own grid.
@@ -794,6 +823,9 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     const bool last = pass + 1 == static_cast<int>(windows.size()) || finish_now;
     const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
     in.uncertainty_now = options.estimate_uncertainty && last && warp;
+    if (options.estimate_uncertainty && last && in.reference_stats) {
+      in.noise_factors = noise_factors_for(pair, field, in.window_px, workspace).data();
+    }
     auto warp_pass = [&](const cv::Mat& image, const GridField& by, cv::Mat& out) {
       if (in.refine) {
         warp_tiles(image, by, in.region, tiles, interpolator, out);

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "fusion/simd_kernels.h"
+
 namespace bosfuse::fusion {
 namespace {
 
@@ -17,55 +19,6 @@ double mean_of(const cv::Mat& window) {
   return sum / (static_cast<double>(window.rows) * window.cols);
 }
 
-// The sums the estimator needs, each in four lanes that the compiler keeps
-// in one vector register (a single double accumulator would serialise the
-// loop on its additions): C0, C± along x and y, and Σ ΔC, Σ ΔC² along each.
-struct Sums {
-  static constexpr int kLanes = 4;
-  enum Index { kC0, kPlusX, kMinusX, kPlusY, kMinusY, kDx, kDx2, kDy, kDy2, kCount };
-  double lane[kCount][kLanes] = {};
-
-  double total(Index i) const { return lane[i][0] + lane[i][1] + lane[i][2] + lane[i][3]; }
-};
-
-// One pixel's contributions at (x, y) into lane k: to C0, and with `kRight`
-// and `kBelow` (known when compiled, so the lanes' loop has no branch) to
-// C± and ΔC along x and y, `below` being the next row's pixels.
-template <bool kRight, bool kBelow>
-inline void add_pixel(Sums& s, int k, const float* a, const float* b, const float* a_below, const float* b_below,
-                      int x, double mean_a, double mean_b) {
-  const double a0 = a[x] - mean_a, b0 = b[x] - mean_b;
-  s.lane[Sums::kC0][k] += a0 * b0;
-  if constexpr (kRight) {
-    const double a1 = a[x + 1] - mean_a, b1 = b[x + 1] - mean_b;
-    const double plus = a0 * b1, minus = a1 * b0;
-    s.lane[Sums::kPlusX][k] += plus;
-    s.lane[Sums::kMinusX][k] += minus;
-    s.lane[Sums::kDx][k] += plus - minus;
-    s.lane[Sums::kDx2][k] += (plus - minus) * (plus - minus);
-  }
-  if constexpr (kBelow) {
-    const double a1 = a_below[x] - mean_a, b1 = b_below[x] - mean_b;
-    const double plus = a0 * b1, minus = a1 * b0;
-    s.lane[Sums::kPlusY][k] += plus;
-    s.lane[Sums::kMinusY][k] += minus;
-    s.lane[Sums::kDy][k] += plus - minus;
-    s.lane[Sums::kDy2][k] += (plus - minus) * (plus - minus);
-  }
-}
-
-// A row's pixels: all but the last have a right neighbour.
-template <bool kBelow>
-void add_row(Sums& s, const float* a, const float* b, const float* a_below, const float* b_below, int n,
-             double mean_a, double mean_b) {
-  int x = 0;
-  for (; x + Sums::kLanes < n; x += Sums::kLanes) {
-    for (int k = 0; k < Sums::kLanes; ++k) add_pixel<true, kBelow>(s, k, a, b, a_below, b_below, x + k, mean_a, mean_b);
-  }
-  for (; x + 1 < n; ++x) add_pixel<true, kBelow>(s, 0, a, b, a_below, b_below, x, mean_a, mean_b);
-  add_pixel<false, kBelow>(s, 0, a, b, a_below, b_below, n - 1, mean_a, mean_b);
-}
-
 // The factors by which the per-pixel sum Σ ΔC_i² over-states the variance
 // of Σ ΔC_i along x and y, from the reference window's texture a.
 // Noise in pixel k of b enters two neighbouring contributions, ΔC_(k−1)
@@ -74,11 +27,7 @@ void add_row(Sums& s, const float* a, const float* b, const float* a_below, cons
 // the per-pixel sum counts Σ_i a'(i)² + a'(i+1)² = 2·Σ a'² less the first
 // and last column's (row's). Their ratio is 1 − ρ(2 px) of the pattern's
 // autocorrelation; 1 for white texture.
-struct NoiseFactors {
-  double along_x = 1, along_y = 1;
-};
-
-NoiseFactors neighbour_noise_factors(const cv::Mat& a, double mean_a) {
+NeighbourNoiseFactors noise_factors_about(const cv::Mat& a, double mean_a) {
   // Sums of squares only, no differences of large sums: float lanes (eight,
   // which the compiler vectorises) hold them to 1e-6, each row's total then
   // added in double.
@@ -126,7 +75,18 @@ NoiseFactors neighbour_noise_factors(const cv::Mat& a, double mean_a) {
   return {ratio(shared_x, 2 * energy - edge_columns), ratio(shared_y, 2 * energy - edge_rows)};
 }
 
+void check_window(const cv::Mat& window) {
+  if (window.rows < 4 || window.cols != window.rows || window.type() != CV_32FC1) {
+    throw std::invalid_argument("correlation statistics need two equal square float windows of at least 4 px");
+  }
+}
+
 }  // namespace
+
+NeighbourNoiseFactors neighbour_noise_factors(const cv::Mat& reference_window) {
+  check_window(reference_window);
+  return noise_factors_about(reference_window, mean_of(reference_window));
+}
 
 double gaussian_peak_uncertainty(double c0, double c_pm, double sigma_delta) {
   const double high = c_pm + sigma_delta / 2, low = c_pm - sigma_delta / 2;
@@ -139,32 +99,33 @@ double gaussian_peak_uncertainty(double c0, double c_pm, double sigma_delta) {
 
 VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window,
                                           bool independent_noise) {
+  check_window(reference_window);
+  return correlation_statistics(reference_window, measurement_window,
+                                independent_noise ? neighbour_noise_factors(reference_window) : NeighbourNoiseFactors{});
+}
+
+VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window,
+                                          const NeighbourNoiseFactors& shared) {
   const int n = reference_window.rows;
-  if (n < 4 || reference_window.cols != n || measurement_window.size() != reference_window.size() ||
-      reference_window.type() != CV_32FC1 || measurement_window.type() != CV_32FC1) {
+  check_window(reference_window);
+  check_window(measurement_window);
+  if (measurement_window.size() != reference_window.size()) {
     throw std::invalid_argument("correlation statistics need two equal square float windows of at least 4 px");
   }
-  const double mean_a = mean_of(reference_window), mean_b = mean_of(measurement_window);
-  Sums s;
-  for (int y = 0; y + 1 < n; ++y) {
-    add_row<true>(s, reference_window.ptr<float>(y), measurement_window.ptr<float>(y),
-                  reference_window.ptr<float>(y + 1), measurement_window.ptr<float>(y + 1), n, mean_a, mean_b);
-  }
-  add_row<false>(s, reference_window.ptr<float>(n - 1), measurement_window.ptr<float>(n - 1), nullptr, nullptr, n,
-                 mean_a, mean_b);
+  double sums[kCorrelationSumCount];
+  correlation_statistics_sums(reference_window.ptr<float>(), reference_window.step1(), measurement_window.ptr<float>(),
+                              measurement_window.step1(), n, sums);
   // ΔC has n(n − 1) terms along each axis; its variance as their spread.
   const double terms = static_cast<double>(n) * (n - 1);
-  const NoiseFactors shared = independent_noise ? neighbour_noise_factors(reference_window, mean_a) : NoiseFactors{};
-  const auto spread = [&](Sums::Index sum, Sums::Index sum_sq, double factor) {
-    const double total = s.total(sum);
-    return std::sqrt(std::max(s.total(sum_sq) - total * total / terms, 0.0) * factor);
+  const auto spread = [&](CorrelationSum sum, CorrelationSum sum_sq, double factor) {
+    return std::sqrt(std::max(sums[sum_sq] - sums[sum] * sums[sum] / terms, 0.0) * factor);
   };
   // C± sum over n − 1 of the n columns (rows): C0 on as many pixels.
-  const double c0_part = s.total(Sums::kC0) * (n - 1) / n;
-  return {gaussian_peak_uncertainty(c0_part, (s.total(Sums::kPlusX) + s.total(Sums::kMinusX)) / 2,
-                                    spread(Sums::kDx, Sums::kDx2, shared.along_x)),
-          gaussian_peak_uncertainty(c0_part, (s.total(Sums::kPlusY) + s.total(Sums::kMinusY)) / 2,
-                                    spread(Sums::kDy, Sums::kDy2, shared.along_y))};
+  const double c0_part = sums[kC0] * (n - 1) / n;
+  return {gaussian_peak_uncertainty(c0_part, (sums[kPlusX] + sums[kMinusX]) / 2,
+                                    spread(kDeltaX, kDeltaX2, shared.along_x)),
+          gaussian_peak_uncertainty(c0_part, (sums[kPlusY] + sums[kMinusY]) / 2,
+                                    spread(kDeltaY, kDeltaY2, shared.along_y))};
 }
 
 void add_held_deformation_uncertainty(const GridField& predictor, DisplacementField& field, const cv::Mat* only) {

@@ -18,7 +18,8 @@
 //
 // with C± = (C+ + C−)/2 and C0 = Σ a'·b' (C± sum over n − 1 of the n
 // columns, C0 is scaled to as many), and σ_ΔC² the variance of Σ ΔC_i.
-// Likewise along y. Sums over a window's pixels run in double.
+// Likewise along y. The sums are simd_kernels.h's
+// correlation_statistics_sums: float lanes per column, added in double.
 //
 // The paper takes σ_ΔC² = Σ (ΔC_i − mean ΔC)², as if the contributions were
 // independent. They are not: noise in pixel k of b enters ΔC_(k−1) with
@@ -69,12 +70,29 @@ inline constexpr double kUnresolvedPx = 1.0;
 // DisplacementVector keeps for "not estimated".
 inline constexpr double kFloorPx = 1e-4;
 
+// The ratios 1 − ρ(2 px) along x and y by which the per-pixel sum is
+// scaled for independent pixel noise (see above); {1, 1} keeps the sum as
+// it is. They depend on the reference window alone, so an evaluator that
+// correlates the same reference windows frame after frame computes them
+// once.
+struct NeighbourNoiseFactors {
+  double along_x = 1, along_y = 1;
+};
+
+// The factors of an n×n CV_32FC1 reference window, n ≥ 4.
+NeighbourNoiseFactors neighbour_noise_factors(const cv::Mat& reference_window);
+
 // `reference_window` and `measurement_window` are n×n CV_32FC1 (views into
 // larger images are fine), n ≥ 4; the measurement window is the one at the
 // correlation's integer peak. `independent_noise` false: the per-pixel sum
 // as it is (a mismatch that is not independent pixel noise, see above).
 VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window,
                                           bool independent_noise = true);
+
+// The same with the reference window's factors given (computed before, by
+// neighbour_noise_factors of the same window, or {1, 1}).
+VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window,
+                                          const NeighbourNoiseFactors& factors);
 
 // The 3-point Gaussian fit's standard uncertainty along one axis, from the
 // correlation at the peak (c0), the mean of its two neighbours (c_pm) and

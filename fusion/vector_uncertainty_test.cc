@@ -449,5 +449,28 @@ TEST(VectorUncertaintyInFields, AProbeHasTheFullFieldsSigma) {
   EXPECT_NEAR(probe.field.vectors[0].sigma_v_px, node.sigma_v_px, 1e-9);
 }
 
+// The neighbour-noise factors are the reference windows' alone, kept from
+// an evaluator's first frame: a later frame's σ is what a fresh evaluator
+// gives that frame.
+TEST(VectorUncertaintyInFields, AnEvaluatorsLaterFrameHasTheSigmaOfAFreshEvaluation) {
+  const auto first = dot_pair(sim::DisplacementModel::uniform(0.4, 0.2));
+  const auto second = dot_pair(sim::DisplacementModel::sinusoid(0.8, 96));
+  const XcorrOptions options;
+  XcorrEvaluator frames(first.reference, options);
+  frames.evaluate(first.measurement);
+  const auto later = frames.evaluate(second.measurement);
+  const auto fresh = evaluate_xcorr(first.reference, second.measurement, options);
+  ASSERT_EQ(later.field.size(), fresh.field.size());
+  std::size_t with_sigma = 0;
+  for (std::size_t i = 0; i < fresh.field.size(); ++i) {
+    const auto &l = later.field.vectors[i], &f = fresh.field.vectors[i];
+    ASSERT_EQ(l.flag, f.flag) << "node " << i;
+    EXPECT_NEAR(l.sigma_u_px, f.sigma_u_px, 1e-12) << "node " << i;
+    EXPECT_NEAR(l.sigma_v_px, f.sigma_v_px, 1e-12) << "node " << i;
+    with_sigma += f.sigma_u_px > 0;
+  }
+  EXPECT_GT(with_sigma, fresh.field.size() / 2);
+}
+
 }  // namespace
 }  // namespace bosfuse::fusion
