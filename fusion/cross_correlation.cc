@@ -186,10 +186,15 @@ struct PassInput {
   const WindowStats* reference_stats = nullptr;
   int stats_row0 = 0, stats_col0 = 0, stats_stride = 1, stats_cols = 0;
 
+  // Each reference window's neighbour-noise factors for its σ, when cached
+  // (the final pass's, indexed as the statistics are).
+  const NeighbourNoiseFactors* noise_factors = nullptr;
+
+  std::size_t stats_index(int row, int col) const {
+    return static_cast<std::size_t>(stats_row0 + stats_stride * row) * stats_cols + stats_col0 + stats_stride * col;
+  }
   const WindowStats* stats_at(int row, int col) const {
-    if (!reference_stats) return nullptr;
-    return reference_stats + static_cast<std::size_t>(stats_row0 + stats_stride * row) * stats_cols + stats_col0 +
-           stats_stride * col;
+    return reference_stats ? reference_stats + stats_index(row, col) : nullptr;
   }
   const cv::Mat* refine = nullptr;  // adaptive refinement: only nodes marked 1 here are evaluated
   // Where each node's integer peak is kept (the field's size), for the
@@ -233,6 +238,26 @@ cv::Mat reference_window_of(const PreparedPair& pair, const PassInput& in, cv::R
   return in.warped_reference.empty() ? view(pair.reference, window) : view(in.warped_reference, window - in.region.tl());
 }
 
+// σu, σv of a node from its reference window and the measurement window at
+// its integer peak (dx, dy). A window whose deformed samples reach past the
+// image read replicated border pixels there: a mismatch that is no
+// independent pixel noise, so its statistics are not corrected for noise
+// shared by neighbouring contributions (vector_uncertainty.h).
+VectorUncertainty node_uncertainty(const PreparedPair& pair, const PassInput& in, const NodeWindows& w, int row,
+                                   int col, int dx, int dy) {
+  const int n = in.window_px, r = in.radius_px;
+  const cv::Rect at_peak(w.search.x + r + dx, w.search.y + r + dy, n, n);
+  // The interpolator's half-width (Lanczos4: 4 px) and the deformation's reach.
+  const int reach = 4 + static_cast<int>(std::ceil(std::max(std::abs(w.base_u), std::abs(w.base_v))));
+  const cv::Rect image(0, 0, pair.reference.cols, pair.reference.rows);
+  const cv::Rect read(w.window.x - reach, w.window.y - reach, n + 2 * reach, n + 2 * reach);
+  const bool inside_image = (read & image) == read;
+  const cv::Mat reference_window = reference_window_of(pair, in, w.window);
+  if (!in.noise_factors) return correlation_statistics(reference_window, view(in.warped, at_peak), inside_image);
+  const NeighbourNoiseFactors factors = inside_image ? in.noise_factors[in.stats_index(row, col)] : NeighbourNoiseFactors{};
+  return correlation_statistics(reference_window, view(in.warped, at_peak), factors);
+}
+
 void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, int row, int col,
                    std::size_t node, WindowCorrelator& correlator, CorrelationPlane& plane, DisplacementVector& vec) {
   const int r = in.radius_px;
@@ -272,9 +297,7 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
     in.peak_dy[node] = static_cast<std::int8_t>(peak.dy);
   }
   if (in.uncertainty_now) {
-    const cv::Rect at_peak(w.search.x + r + peak.dx, w.search.y + r + peak.dy, in.window_px, in.window_px);
-    const VectorUncertainty sigma =
-        correlation_statistics(reference_window_of(pair, in, w.window), view(in.warped, at_peak));
+    const VectorUncertainty sigma = node_uncertainty(pair, in, w, row, col, peak.dx, peak.dy);
     vec.sigma_u_px = sigma.sigma_u_px;
     vec.sigma_v_px = sigma.sigma_v_px;
   }
@@ -404,10 +427,12 @@ void run_pass(const PreparedPair& pair, const PassInput& in, const XcorrOptions&
 
 // σu, σv of the vectors the final pass `in` measured (kOk, and under
 // adaptive refinement the selected ones), from the windows it correlated
+// and, at the grid's outermost nodes, what their deformation left
 // (vector_uncertainty.h); then the outliers it replaced get their
 // neighbours' spread (outlier_filter.h).
 void estimate_uncertainty(const PreparedPair& pair, const PassInput& in, DisplacementField& field) {
   if (in.uncertainty_now) {  // estimated as the pass measured
+    add_held_deformation_uncertainty(*in.predictor, field, in.refine);
     estimate_replaced_uncertainty(field, in.refine);
     return;
   }
@@ -418,10 +443,8 @@ void estimate_uncertainty(const PreparedPair& pair, const PassInput& in, Displac
       auto& vec = field.vectors[static_cast<std::size_t>(i)];
       if (vec.flag != VectorFlag::kOk) continue;
       const NodeWindows w = node_windows(pair, in, i / field.cols, i % field.cols, vec);
-      const cv::Rect at_peak(w.search.x + in.radius_px + in.peak_dx[i], w.search.y + in.radius_px + in.peak_dy[i],
-                             in.window_px, in.window_px);
       const VectorUncertainty sigma =
-          correlation_statistics(reference_window_of(pair, in, w.window), view(in.warped, at_peak));
+          node_uncertainty(pair, in, w, i / field.cols, i % field.cols, in.peak_dx[i], in.peak_dy[i]);
       vec.sigma_u_px = sigma.sigma_u_px;
       vec.sigma_v_px = sigma.sigma_v_px;
     }
@@ -431,6 +454,7 @@ void estimate_uncertainty(const PreparedPair& pair, const PassInput& in, Displac
   } else {
     cv::parallel_for_(cv::Range(0, node_count), estimate_range, std::max(1.0, node_count / 256.0));
   }
+  add_held_deformation_uncertainty(*in.predictor, field, in.refine);
   estimate_replaced_uncertainty(field, in.refine);
 }
 
@@ -454,6 +478,7 @@ struct PassWorkspace {
   cv::Mat warped_storage, warped_reference_storage;
   bool cache_reference_stats = false;
   std::map<int, std::vector<WindowStats>> reference_stats;  // by window size
+  std::map<int, std::vector<NeighbourNoiseFactors>> noise_factors;  // likewise, for the σ of the final pass
   std::vector<std::int8_t> peak_dx, peak_dy;                 // the last pass's integer peaks, for its uncertainty
   DisplacementField previous_field;                         // the field before a pass, for its change
   GridField predictor;                                      // a refinement pass's, and its smoothing's scratch
@@ -503,6 +528,25 @@ const std::vector<WindowStats>& reference_stats_for(const PreparedPair& pair, co
     }
   });
   return stats;
+}
+
+// The neighbour-noise factors of the windows of `window_px` at every node
+// of `field` (vector_uncertainty.h), which depend on the reference window
+// alone: computed at an evaluator's first frame, as reference_stats_for.
+const std::vector<NeighbourNoiseFactors>& noise_factors_for(const PreparedPair& pair, const DisplacementField& field,
+                                                            int window_px, PassWorkspace& workspace) {
+  std::vector<NeighbourNoiseFactors>& factors = workspace.noise_factors[window_px];
+  if (factors.size() == field.vectors.size()) return factors;
+  factors.assign(field.vectors.size(), NeighbourNoiseFactors{});
+  cv::parallel_for_(cv::Range(0, static_cast<int>(factors.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      const auto& vec = field.vectors[static_cast<std::size_t>(i)];
+      const cv::Point origin = window_origin(vec.x_px, vec.y_px, window_px, pair.roi);
+      factors[static_cast<std::size_t>(i)] =
+          neighbour_noise_factors(view(pair.reference, cv::Rect(origin, cv::Size(window_px, window_px))));
+    }
+  });
+  return factors;
 }
 
 // A pass's measured vectors on their own grid.
@@ -779,6 +823,9 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     const bool last = pass + 1 == static_cast<int>(windows.size()) || finish_now;
     const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
     in.uncertainty_now = options.estimate_uncertainty && last && warp;
+    if (options.estimate_uncertainty && last && in.reference_stats) {
+      in.noise_factors = noise_factors_for(pair, field, in.window_px, workspace).data();
+    }
     auto warp_pass = [&](const cv::Mat& image, const GridField& by, cv::Mat& out) {
       if (in.refine) {
         warp_tiles(image, by, in.region, tiles, interpolator, out);

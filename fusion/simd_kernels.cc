@@ -892,6 +892,65 @@ void SampleSeparablePoints(const float* image, std::size_t stride, int cols, int
   }
 }
 
+// The correlation statistics' sums: columns in chunks of eight lanes at
+// most (a 16 px window's right neighbours need n − 1 ≥ lanes), the last
+// chunk moved back to end at the window's last column (n − 1 for the right
+// neighbours) with the lanes of columns already counted masked off, so no
+// load leaves the window. Every chunk adds into the same nine vectors.
+void CorrelationStatisticsSums(const float* a, std::size_t a_stride, const float* b, std::size_t b_stride, int n,
+                               double* sums) {
+  const hn::CappedTag<float, 8> d;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  if (n - 1 < lanes) {
+    scalar_correlation_statistics_sums(a, a_stride, b, b_stride, n, sums);
+    return;
+  }
+  const double pixels = double(n) * n;
+  const auto ma = hn::Set(d, static_cast<float>(WindowSum<false>(a, a_stride, n, 0.0) / pixels));
+  const auto mb = hn::Set(d, static_cast<float>(WindowSum<false>(b, b_stride, n, 0.0) / pixels));
+  const auto iota = hn::Iota(d, 0.f);
+  auto c0 = hn::Zero(d), plus_x = c0, minus_x = c0, plus_y = c0, minus_y = c0, dx = c0, dx2 = c0, dy = c0, dy2 = c0;
+  for (int x = 0; x < n; x += lanes) {
+    const int s0 = std::min(x, n - lanes), s1 = std::min(x, n - 1 - lanes);
+    const auto new0 = hn::Ge(iota, hn::Set(d, static_cast<float>(x - s0)));
+    const auto new1 = hn::Ge(iota, hn::Set(d, static_cast<float>(x - s1)));
+    for (int y = 0; y < n; ++y) {
+      const float* ra = a + y * a_stride;
+      const float* rb = b + y * b_stride;
+      const auto a0 = hn::IfThenElseZero(new0, hn::Sub(hn::LoadU(d, ra + s0), ma));
+      const auto b0 = hn::IfThenElseZero(new0, hn::Sub(hn::LoadU(d, rb + s0), mb));
+      c0 = hn::MulAdd(a0, b0, c0);
+      if (y + 1 < n) {
+        const auto plus = hn::Mul(a0, hn::Sub(hn::LoadU(d, rb + b_stride + s0), mb));
+        const auto minus = hn::Mul(hn::Sub(hn::LoadU(d, ra + a_stride + s0), ma), b0);
+        const auto delta = hn::Sub(plus, minus);
+        plus_y = hn::Add(plus_y, plus);
+        minus_y = hn::Add(minus_y, minus);
+        dy = hn::Add(dy, delta);
+        dy2 = hn::MulAdd(delta, delta, dy2);
+      }
+      const auto ax = hn::IfThenElseZero(new1, hn::Sub(hn::LoadU(d, ra + s1), ma));
+      const auto bx = hn::IfThenElseZero(new1, hn::Sub(hn::LoadU(d, rb + s1), mb));
+      const auto plus = hn::Mul(ax, hn::Sub(hn::LoadU(d, rb + s1 + 1), mb));
+      const auto minus = hn::Mul(hn::Sub(hn::LoadU(d, ra + s1 + 1), ma), bx);
+      const auto delta = hn::Sub(plus, minus);
+      plus_x = hn::Add(plus_x, plus);
+      minus_x = hn::Add(minus_x, minus);
+      dx = hn::Add(dx, delta);
+      dx2 = hn::MulAdd(delta, delta, dx2);
+    }
+  }
+  sums[kC0] = AddLanes(d, c0, 0.0);
+  sums[kPlusX] = AddLanes(d, plus_x, 0.0);
+  sums[kMinusX] = AddLanes(d, minus_x, 0.0);
+  sums[kPlusY] = AddLanes(d, plus_y, 0.0);
+  sums[kMinusY] = AddLanes(d, minus_y, 0.0);
+  sums[kDeltaX] = AddLanes(d, dx, 0.0);
+  sums[kDeltaX2] = AddLanes(d, dx2, 0.0);
+  sums[kDeltaY] = AddLanes(d, dy, 0.0);
+  sums[kDeltaY2] = AddLanes(d, dy2, 0.0);
+}
+
 // The target this code was compiled for, as dispatch sees it.
 const char* TargetName() { return hwy::TargetName(HWY_TARGET); }
 
@@ -923,6 +982,7 @@ HWY_EXPORT(NormaliseByEnergies);
 HWY_EXPORT(MediansOfEight);
 HWY_EXPORT(NormalisedResidualsOfEight);
 HWY_EXPORT(WeightedSum);
+HWY_EXPORT(CorrelationStatisticsSums);
 
 namespace {
 
@@ -1106,6 +1166,46 @@ void normalised_residuals_of_eight(const double* values, std::size_t stride, std
                                    double epsilon, double* residuals) {
   apply_environment_once();
   HWY_DYNAMIC_DISPATCH(NormalisedResidualsOfEight)(values, stride, count, centres, epsilon, residuals);
+}
+
+void correlation_statistics_sums(const float* a, std::size_t a_stride, const float* b, std::size_t b_stride, int n,
+                                 double* sums) {
+  apply_environment_once();
+  HWY_DYNAMIC_DISPATCH(CorrelationStatisticsSums)(a, a_stride, b, b_stride, n, sums);
+}
+
+void scalar_correlation_statistics_sums(const float* a, std::size_t a_stride, const float* b, std::size_t b_stride,
+                                        int n, double* sums) {
+  const auto mean_of = [n](const float* w, std::size_t stride) {
+    double sum = 0;
+    for (int y = 0; y < n; ++y) {
+      for (int x = 0; x < n; ++x) sum += w[y * stride + x];
+    }
+    return sum / (double(n) * n);
+  };
+  const double mean_a = mean_of(a, a_stride), mean_b = mean_of(b, b_stride);
+  const auto ca = [&](int y, int x) { return a[y * a_stride + x] - mean_a; };
+  const auto cb = [&](int y, int x) { return b[y * b_stride + x] - mean_b; };
+  for (int k = 0; k < kCorrelationSumCount; ++k) sums[k] = 0;
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      sums[kC0] += ca(y, x) * cb(y, x);
+      if (x + 1 < n) {
+        const double plus = ca(y, x) * cb(y, x + 1), minus = ca(y, x + 1) * cb(y, x);
+        sums[kPlusX] += plus;
+        sums[kMinusX] += minus;
+        sums[kDeltaX] += plus - minus;
+        sums[kDeltaX2] += (plus - minus) * (plus - minus);
+      }
+      if (y + 1 < n) {
+        const double plus = ca(y, x) * cb(y + 1, x), minus = ca(y + 1, x) * cb(y, x);
+        sums[kPlusY] += plus;
+        sums[kMinusY] += minus;
+        sums[kDeltaY] += plus - minus;
+        sums[kDeltaY2] += (plus - minus) * (plus - minus);
+      }
+    }
+  }
 }
 
 void weighted_sum(const double* const* inputs, int taps, const double* weights, std::size_t count, double* out) {

@@ -195,6 +195,28 @@ void sample_separable(const float* image, std::size_t stride, int cols, int rows
 void scalar_sample_separable(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
                              const double* x, const double* y, int count, float* out);
 
+// The sums the per-vector uncertainty's correlation statistics
+// (vector_uncertainty.h) need of two n×n windows a and b (rows `a_stride`,
+// `b_stride` floats apart), each less its own mean a', b':
+//   sums[kC0]     = Σ a'(y, x)·b'(y, x) over every pixel,
+//   sums[kPlusX]  = Σ a'(y, x)·b'(y, x + 1), sums[kMinusX] = Σ a'(y, x + 1)·b'(y, x)
+//                   over x < n − 1, and over the same pixels of ΔC = plus − minus
+//   sums[kDeltaX] = Σ ΔC, sums[kDeltaX2] = Σ ΔC²;
+//   likewise along y (kPlusY, kMinusY, kDeltaY, kDeltaY2) over y < n − 1.
+// The scalar reference computes them in double; the SIMD kernel centres
+// and multiplies in float, accumulates each column's values in float lanes
+// over the rows and adds the lanes in double (means in double), so the two
+// agree to float rounding of sums of n values (the terms are the products
+// of a centred window's values; each sum is relative to Σ |term|).
+// The kernel reads no pixel outside either window. Any n ≥ 2.
+enum CorrelationSum { kC0, kPlusX, kMinusX, kPlusY, kMinusY, kDeltaX, kDeltaX2, kDeltaY, kDeltaY2, kCorrelationSumCount };
+void correlation_statistics_sums(const float* a, std::size_t a_stride, const float* b, std::size_t b_stride, int n,
+                                 double* sums);
+
+// The reference for correlation_statistics_sums: plain loops in double.
+void scalar_correlation_statistics_sums(const float* a, std::size_t a_stride, const float* b, std::size_t b_stride,
+                                        int n, double* sums);
+
 // The most capable target the kernels may use (see BOSFUSE_SIMD above).
 enum class SimdLimit { kAuto, kAvx2, kSse4, kPortable };
 

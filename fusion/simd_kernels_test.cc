@@ -497,6 +497,69 @@ void expect_warp_matches_reference() {
   }
 }
 
+// Two n×n windows inside wider buffers, ending at a buffer's last float
+// and surrounded by NaN, so a read past either window shows (as NaN here,
+// under ASan as an overflow); the sums against the reference, each within
+// 1e-5 of the magnitude of its terms (Σ |term|; for the squares, Σ of the
+// squared sum of |plus| and |minus|, the scale of ΔC's float rounding).
+void expect_correlation_sums_match(int n, unsigned seed) {
+  SCOPED_TRACE(testing::Message() << "n=" << n << " target=" << simd_target_name());
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> grey(0.f, 1.f);
+  const std::size_t stride = static_cast<std::size_t>(n) + 5;
+  const auto window_in = [&](std::vector<float>& buffer, float offset) {
+    buffer.assign(stride * (n + 2), std::nanf(""));
+    float* window = buffer.data() + buffer.size() - (static_cast<std::size_t>(n - 1) * stride + n);
+    for (int y = 0; y < n; ++y) {
+      for (int x = 0; x < n; ++x) window[y * stride + x] = offset + grey(rng);
+    }
+    return window;
+  };
+  std::vector<float> buffer_a, buffer_b;
+  const float* a = window_in(buffer_a, 0.4f);
+  const float* b = window_in(buffer_b, 0.6f);
+  double simd[kCorrelationSumCount], reference[kCorrelationSumCount];
+  correlation_statistics_sums(a, stride, b, stride, n, simd);
+  scalar_correlation_statistics_sums(a, stride, b, stride, n, reference);
+  double magnitude[kCorrelationSumCount] = {};
+  const auto centred = [&](const float* w, int y, int x, double mean) { return w[y * stride + x] - mean; };
+  double mean_a = 0, mean_b = 0;
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      mean_a += a[y * stride + x] / (double(n) * n);
+      mean_b += b[y * stride + x] / (double(n) * n);
+    }
+  }
+  const auto add = [&](CorrelationSum plus_i, CorrelationSum minus_i, CorrelationSum delta_i, CorrelationSum square_i,
+                       double plus, double minus) {
+    magnitude[plus_i] += std::abs(plus);
+    magnitude[minus_i] += std::abs(minus);
+    magnitude[delta_i] += std::abs(plus) + std::abs(minus);
+    magnitude[square_i] += (std::abs(plus) + std::abs(minus)) * (std::abs(plus) + std::abs(minus));
+  };
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      const double a0 = centred(a, y, x, mean_a), b0 = centred(b, y, x, mean_b);
+      magnitude[kC0] += std::abs(a0 * b0);
+      if (x + 1 < n) {
+        add(kPlusX, kMinusX, kDeltaX, kDeltaX2, a0 * centred(b, y, x + 1, mean_b), centred(a, y, x + 1, mean_a) * b0);
+      }
+      if (y + 1 < n) {
+        add(kPlusY, kMinusY, kDeltaY, kDeltaY2, a0 * centred(b, y + 1, x, mean_b), centred(a, y + 1, x, mean_a) * b0);
+      }
+    }
+  }
+  for (int k = 0; k < kCorrelationSumCount; ++k) {
+    ASSERT_TRUE(std::isfinite(simd[k])) << "sum " << k;
+    ASSERT_NEAR(simd[k], reference[k], 1e-5 * magnitude[k]) << "sum " << k;
+  }
+}
+
+void expect_all_correlation_sums_match() {
+  unsigned seed = 300;
+  for (const int n : {2, 3, 4, 5, 8, 9, 12, 13, 16, 17, 24, 31, 32, 48, 64}) expect_correlation_sums_match(n, seed++);
+}
+
 // Every test leaves the dispatch as it found it: no cap, no mock.
 class SimdKernels : public testing::Test {
  protected:
@@ -514,6 +577,7 @@ TEST_F(SimdKernels, MatchTheScalarReference) {
   expect_all_normalisations_match();
   expect_medians_of_eight_match();
   expect_weighted_sums_match();
+  expect_all_correlation_sums_match();
 }
 
 TEST_F(SimdKernels, SamplingMatchesTheScalarReference) {
@@ -543,6 +607,7 @@ TEST_F(SimdKernels, MatchTheScalarReferenceOnEveryTargetOfThisCpu) {
     expect_all_normalisations_match();
     expect_medians_of_eight_match();
     expect_weighted_sums_match();
+    expect_all_correlation_sums_match();
   }
 }
 

@@ -17,22 +17,32 @@
 //   σx = ln((C± + σ_ΔC/2) / (C± − σ_ΔC/2)) / (2·ln(C0² / ((C± + σ_ΔC/2)(C± − σ_ΔC/2))))
 //
 // with C± = (C+ + C−)/2 and C0 = Σ a'·b' (C± sum over n − 1 of the n
-// columns, C0 is scaled to as many), and σ_ΔC² = Σ (ΔC_i − mean ΔC)², the
-// paper's estimate. Likewise along y. Sums over a window's pixels run in
-// double.
+// columns, C0 is scaled to as many), and σ_ΔC² the variance of Σ ΔC_i.
+// Likewise along y. The sums are simd_kernels.h's
+// correlation_statistics_sums: float lanes per column, added in double.
 //
-// What it covers: on two windows with independent noise the fit's scatter
-// (a Monte Carlo of 400 noise draws in the test
-// MatchesTheScatterOfNoisyWindows: σ within 7 % of it, 95–96 % coverage). Over a whole
-// multipass field it sees only what the final windows show: the error the
-// earlier passes leave in the predictor, and the spatial-response bias of a
-// curved field, are not in them. The per-pixel sum neglects the correlation
-// of neighbouring contributions (noise in one pixel of b enters two of
-// them), which overstates σ by 1/(1 − ρ(2 px)) of the pattern's
-// autocorrelation ρ, and on the multipass fields measured here that about
-// offsets what the final windows do not show (docs/BENCHMARKS.md,
-// "Per-vector uncertainty"); the lag-corrected sum, exact for the windows
-// alone, gave 0.8× the fields' errors.
+// The paper takes σ_ΔC² = Σ (ΔC_i − mean ΔC)², as if the contributions were
+// independent. They are not: noise in pixel k of b enters ΔC_(k−1) with
+// a'(k−1) and ΔC_k with −a'(k+1), so per unit of noise variance Σ ΔC varies
+// by Σ_k (a(k−1) − a(k+1))² where the per-pixel sum counts Σ a'(i)² +
+// a'(i+1)²: it over-states the variance by 1/(1 − ρ(2 px)) of the pattern's
+// autocorrelation ρ (on 3 px dots σ came out 6–7 % too large on two windows
+// with independent noise). σ_ΔC² here is the per-pixel sum times
+// that ratio, read from the reference window; exact for independent pixel
+// noise (MatchesTheScatterOfNoisyWindows: σ within 1 % of the fit's scatter).
+// A mismatch that is no such noise — a window whose deformed samples reach
+// past the image, where the warp replicates its border pixels — keeps the
+// per-pixel sum (`independent_noise` false), which is the larger.
+//
+// What it covers: what the final windows show. Not in them: what the
+// deformation did not follow. At the grid's outermost nodes the predictor
+// was smoothed over a one-sided neighbourhood and the deformation is held
+// constant beyond the node, and in a displacement gradient the vector there
+// keeps part of that offset (0.037 px at 1 px over λ 128 px, against
+// 0.01 px inside): add_held_deformation_uncertainty adds, in quadrature, the
+// size of the correction the final pass made to that node's predictor. The
+// evaluator's spatial response to strong curvature inside the field is not
+// modelled (docs/UNCERTAINTY.md, the misses).
 //
 // The moment-of-correlation method (Bhattacharya et al. 2018) is the other
 // established estimator; it reads the correlation plane's peak shape and
@@ -44,6 +54,9 @@
 // width the sub-pixel fit is bounded to; none gets less than kFloorPx.
 
 #include <opencv2/core.hpp>
+
+#include "fusion/displacement_field.h"
+#include "fusion/field_warp.h"
 
 namespace bosfuse::fusion {
 
@@ -57,15 +70,43 @@ inline constexpr double kUnresolvedPx = 1.0;
 // DisplacementVector keeps for "not estimated".
 inline constexpr double kFloorPx = 1e-4;
 
+// The ratios 1 − ρ(2 px) along x and y by which the per-pixel sum is
+// scaled for independent pixel noise (see above); {1, 1} keeps the sum as
+// it is. They depend on the reference window alone, so an evaluator that
+// correlates the same reference windows frame after frame computes them
+// once.
+struct NeighbourNoiseFactors {
+  double along_x = 1, along_y = 1;
+};
+
+// The factors of an n×n CV_32FC1 reference window, n ≥ 4.
+NeighbourNoiseFactors neighbour_noise_factors(const cv::Mat& reference_window);
+
 // `reference_window` and `measurement_window` are n×n CV_32FC1 (views into
 // larger images are fine), n ≥ 4; the measurement window is the one at the
-// correlation's integer peak.
-VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window);
+// correlation's integer peak. `independent_noise` false: the per-pixel sum
+// as it is (a mismatch that is not independent pixel noise, see above).
+VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window,
+                                          bool independent_noise = true);
+
+// The same with the reference window's factors given (computed before, by
+// neighbour_noise_factors of the same window, or {1, 1}).
+VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window,
+                                          const NeighbourNoiseFactors& factors);
 
 // The 3-point Gaussian fit's standard uncertainty along one axis, from the
 // correlation at the peak (c0), the mean of its two neighbours (c_pm) and
 // the standard uncertainty of their difference (sigma_delta): Wieneke's
 // formula above; kUnresolvedPx where it has no answer.
 double gaussian_peak_uncertainty(double c0, double c_pm, double sigma_delta);
+
+// At the outermost rows and columns of `field` (measured vectors with a σ
+// only, and under `only` the nodes marked non-zero there, CV_8U of the
+// field's shape), σu² += (u − predictor u)², likewise v: the correction the
+// final pass made to a deformation that was held constant beyond the node
+// and smoothed one-sidedly, of the size of what it left (see above).
+// `predictor` is the final pass's deformation on the field's grid.
+void add_held_deformation_uncertainty(const GridField& predictor, DisplacementField& field,
+                                      const cv::Mat* only = nullptr);
 
 }  // namespace bosfuse::fusion

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 #include <vector>
 
 #include "fusion/cross_correlation.h"
@@ -68,6 +69,30 @@ TEST(VectorUncertainty, RejectsMismatchedWindows) {
   EXPECT_THROW(correlation_statistics(random_window(16, 1), random_window(8, 1)), std::invalid_argument);
 }
 
+// Noise in one pixel enters two neighbouring contributions to C+ − C−: on a
+// smooth texture (neighbours alike) the per-pixel sum counts it about twice,
+// on white texture hardly; the estimate corrects by the texture's own ratio.
+TEST(VectorUncertainty, NoiseSharedByNeighbouringContributionsIsCountedOnce) {
+  cv::Mat white(32, 32, CV_32F), noise(32, 32, CV_32F);
+  cv::RNG(7).fill(white, cv::RNG::UNIFORM, 0.0, 1.0);
+  cv::RNG(8).fill(noise, cv::RNG::NORMAL, 0.0, 0.01);
+  cv::Mat smooth;
+  cv::GaussianBlur(white, smooth, cv::Size(0, 0), 1.5);
+  smooth = (smooth - cv::mean(smooth)[0]) * 4 + 0.5;  // the contrast blurring took
+  const auto ratio = [&](const cv::Mat& a) {
+    const cv::Mat b = a + noise;
+    const VectorUncertainty corrected = correlation_statistics(a, b), per_pixel = correlation_statistics(a, b, false);
+    return std::pair{corrected.sigma_u_px / per_pixel.sigma_u_px, corrected.sigma_v_px / per_pixel.sigma_v_px};
+  };
+  const auto [white_u, white_v] = ratio(white);
+  EXPECT_NEAR(white_u, 1.0, 0.1);
+  EXPECT_NEAR(white_v, 1.0, 0.1);
+  const auto [smooth_u, smooth_v] = ratio(smooth);
+  EXPECT_LT(smooth_u, 0.75);
+  EXPECT_LT(smooth_v, 0.75);
+  EXPECT_GT(smooth_u, 0.2);
+}
+
 // The periodic equal-window correlation the final pass computes, at shift (sx, sy).
 double periodic_correlation(const cv::Mat& a, const cv::Mat& b, int sx, int sy) {
   const int n = a.rows;
@@ -107,7 +132,8 @@ TEST(VectorUncertainty, MatchesTheScatterOfNoisyWindows) {
       covered += std::abs(dx) <= 1.96 * sigma;
     }
     const double scatter = std::sqrt(sum_sq / kDraws - (sum / kDraws) * (sum / kDraws));
-    EXPECT_NEAR(sigma_sum / kDraws / scatter, 1.0, 0.1) << "noise " << noise;
+    // 0.04: the per-pixel sum without the neighbours' shared noise gave 1.07.
+    EXPECT_NEAR(sigma_sum / kDraws / scatter, 1.0, 0.04) << "noise " << noise;
     EXPECT_GE(covered / kDraws, 0.93) << "noise " << noise;
     EXPECT_LE(covered / kDraws, 0.97) << "noise " << noise;
   }
@@ -127,10 +153,14 @@ struct Camera {
   int bits = 8;
 };
 
-cv::Mat expose(cv::Mat image, const Camera& camera, double gain, std::uint64_t noise_seed) {
+// `margin_px` of the scene on each side lies beyond the sensor: the blur
+// brings it in, as a lens does (a blur that mirrors the frame's own border
+// would move it against the scene), and the frame is then cut out of it.
+cv::Mat expose(cv::Mat image, const Camera& camera, double gain, std::uint64_t noise_seed, int margin_px = 0) {
   image = 0.5 + camera.contrast * (image - 0.5);
   if (camera.vignetting > 0) {
-    const double cx = (image.cols - 1) / 2.0, cy = (image.rows - 1) / 2.0, r2_max = cx * cx + cy * cy;
+    const double cx = (image.cols - 1) / 2.0, cy = (image.rows - 1) / 2.0;
+    const double fx = cx - margin_px, fy = cy - margin_px, r2_max = fx * fx + fy * fy;
     for (int y = 0; y < image.rows; ++y) {
       double* row = image.ptr<double>(y);
       for (int x = 0; x < image.cols; ++x) {
@@ -140,6 +170,7 @@ cv::Mat expose(cv::Mat image, const Camera& camera, double gain, std::uint64_t n
   }
   image *= gain;
   if (camera.blur_sigma_px > 0) cv::GaussianBlur(image, image, cv::Size(0, 0), camera.blur_sigma_px);
+  image = image(cv::Rect(margin_px, margin_px, image.cols - 2 * margin_px, image.rows - 2 * margin_px)).clone();
   cv::Mat noise(image.size(), CV_64F);
   cv::RNG(noise_seed).fill(noise, cv::RNG::NORMAL, 0.0, camera.noise_std);
   image += noise;
@@ -162,19 +193,25 @@ struct Coverage {
 };
 
 // Errors against the window-mean truth of every valid vector of `seeds`
-// renderings of `field` through `camera`.
-Coverage coverage(const sim::DisplacementModel& field, const Camera& camera, int seeds, int size_px = 256) {
+// renderings of each of `fields` through `camera`.
+Coverage coverage(const std::vector<sim::DisplacementModel>& fields, const Camera& camera, int seeds,
+                  int size_px = 256) {
   XcorrOptions options;  // the evaluator's defaults: IW 16, step 8, 3 passes
   std::vector<double> sigma, error;
-  for (int seed = 0; seed < seeds; ++seed) {
+  for (int run = 0; run < seeds * static_cast<int>(fields.size()); ++run) {
+    const int seed = run % seeds;
+    const sim::DisplacementModel& field = fields[static_cast<std::size_t>(run / seeds)];
+    // A blurring camera sees the scene around the frame too (see expose).
+    const int margin_px = camera.blur_sigma_px > 0 ? 8 : 0;
     sim::PatternOptions pattern;
-    pattern.width_px = pattern.height_px = size_px;
+    pattern.width_px = pattern.height_px = size_px + 2 * margin_px;
     pattern.dot_diameter_px = 3;
     pattern.seed = 11 + seed;
     const sim::BackgroundPattern dots = sim::generate_pattern(pattern);
-    const cv::Mat reference = expose(sim::render_dots(dots, nullptr), camera, 1.0, 100 + 2 * seed);
+    const auto in_frame = [&](double x_px, double y_px) { return field.at(x_px - margin_px, y_px - margin_px); };
+    const cv::Mat reference = expose(sim::render_dots(dots, nullptr), camera, 1.0, 100 + 2 * seed, margin_px);
     const cv::Mat measurement =
-        expose(sim::render_dots(dots, &field), camera, camera.gain_measurement, 101 + 2 * seed);
+        expose(sim::render_dots(dots, in_frame), camera, camera.gain_measurement, 101 + 2 * seed, margin_px);
     const EvaluationResult result = evaluate_xcorr(reference, measurement, options);
     for (const auto& vec : result.field.vectors) {
       if (!vec.valid()) continue;
@@ -200,18 +237,29 @@ Coverage coverage(const sim::DisplacementModel& field, const Camera& camera, int
   return c;
 }
 
+Coverage coverage(const sim::DisplacementModel& field, const Camera& camera, int seeds, int size_px = 256) {
+  return coverage(std::vector{field}, camera, seeds, size_px);
+}
+
+// The shifts of docs/BENCHMARKS.md's table: sub-pixel, either sign, either axis.
+std::vector<sim::DisplacementModel> sub_pixel_shifts() {
+  return {sim::DisplacementModel::uniform(0.2, 0.7), sim::DisplacementModel::uniform(0.45, -0.3),
+          sim::DisplacementModel::uniform(-0.65, 0.1)};
+}
+
 void expect_honest(const Coverage& c) {
   EXPECT_GT(c.components, 1000u);
   EXPECT_GE(c.within, 0.93) << "coverage " << c.within << ", median σ / RMS error " << c.sigma_over_rms;
   EXPECT_LE(c.within, 0.97) << "coverage " << c.within << ", median σ / RMS error " << c.sigma_over_rms;
   EXPECT_GE(c.sigma_over_rms, 0.8) << "coverage " << c.within;
   EXPECT_LE(c.sigma_over_rms, 1.25) << "coverage " << c.within;
-  std::printf("coverage %.3f, median sigma / rms error %.3f over %zu components\n", c.within, c.sigma_over_rms,
+  std::printf("coverage %.4f, median sigma / rms error %.4f over %zu components\n", c.within, c.sigma_over_rms,
               c.components);
 }
 
-// A gentle sinusoid: where the field curves more (1 px over 128 px), the
-// evaluator's spatial response leaves a bias the final windows cannot show
+// A gentle sinusoid: its gradient at the grid's outermost columns is what
+// the held deformation there does not follow. Steeper ones (1 px over 256 or
+// 128 px) still miss, by the evaluator's response inside the field
 // (docs/BENCHMARKS.md, "Per-vector uncertainty").
 TEST(VectorUncertaintyCoverage, SinusoidalField) {
   expect_honest(coverage(sim::DisplacementModel::sinusoid(0.5, 256), Camera{}, 2));
@@ -232,6 +280,14 @@ TEST(VectorUncertaintyCoverage, LowContrastTenBitCamera) {
   camera.noise_std = 0.004;
   camera.bits = 10;
   expect_honest(coverage(sim::DisplacementModel::uniform(-0.4, 0.25), camera, 2));
+}
+
+// The measurement exposed at 0.8 × the reference. (The same shifts at equal
+// exposure still miss, 97.3 %: docs/BENCHMARKS.md.)
+TEST(VectorUncertaintyCoverage, BrightnessChangeBetweenExposures) {
+  Camera camera;
+  camera.gain_measurement = 0.8;
+  expect_honest(coverage(sub_pixel_shifts(), camera, 1));
 }
 
 // ---- σ in the evaluator's fields ----
@@ -308,6 +364,49 @@ TEST(VectorUncertaintyInFields, AReplacedOutlierGetsItsNeighboursSpread) {
   EXPECT_EQ(field.at(0, 2).sigma_u_px, 0);  // unmeasured vectors keep none
 }
 
+// At the grid's outermost nodes the deformation was held and smoothed
+// one-sidedly: the final pass's correction of it is added in quadrature
+// there, and nowhere else.
+TEST(VectorUncertaintyInFields, AnOutermostNodeGetsTheCorrectionOfItsDeformation) {
+  DisplacementField field;
+  field.rows = field.cols = 4;
+  field.vectors.resize(16);
+  GridField predictor;
+  predictor.grid = {8, 8, 8, 4, 4};
+  predictor.u_px = cv::Mat(4, 4, CV_64F);
+  predictor.v_px = cv::Mat(4, 4, CV_64F);
+  for (int i = 0; i < 16; ++i) {
+    auto& vec = field.vectors[i];
+    vec.u_px = 0.1 * i;
+    vec.v_px = -0.05 * i;
+    vec.sigma_u_px = vec.sigma_v_px = 0.01;
+    predictor.u_px.at<double>(i / 4, i % 4) = 0.1 * i + 0.03;
+    predictor.v_px.at<double>(i / 4, i % 4) = -0.05 * i - 0.04;
+  }
+  field.at(0, 2).flag = VectorFlag::kNoPeak;
+  field.at(0, 2).sigma_u_px = field.at(0, 2).sigma_v_px = 0;
+  add_held_deformation_uncertainty(predictor, field);
+  for (int row = 0; row < 4; ++row) {
+    for (int col = 0; col < 4; ++col) {
+      const auto& vec = field.at(row, col);
+      if (!vec.valid()) {
+        EXPECT_EQ(vec.sigma_u_px, 0);
+        continue;
+      }
+      const bool outermost = row == 0 || col == 0 || row == 3 || col == 3;
+      EXPECT_NEAR(vec.sigma_u_px, outermost ? std::hypot(0.01, 0.03) : 0.01, 1e-12) << row << "," << col;
+      EXPECT_NEAR(vec.sigma_v_px, outermost ? std::hypot(0.01, 0.04) : 0.01, 1e-12) << row << "," << col;
+    }
+  }
+  cv::Mat only = cv::Mat::zeros(4, 4, CV_8U);
+  only.at<std::uint8_t>(3, 3) = 1;
+  add_held_deformation_uncertainty(predictor, field, &only);
+  EXPECT_NEAR(field.at(3, 3).sigma_u_px, std::hypot(0.01, 0.03, 0.03), 1e-12);
+  EXPECT_NEAR(field.at(0, 0).sigma_u_px, std::hypot(0.01, 0.03), 1e-12);
+  predictor.u_px = cv::Mat(3, 4, CV_64F, 0.0);
+  EXPECT_THROW(add_held_deformation_uncertainty(predictor, field), std::invalid_argument);
+}
+
 // Refinement that stops on convergence did not know its pass was the last:
 // σ then comes from a sweep over that pass's windows, the same as if it had.
 TEST(VectorUncertaintyInFields, RefinementStoppedByConvergenceStillGivesSigma) {
@@ -348,6 +447,29 @@ TEST(VectorUncertaintyInFields, AProbeHasTheFullFieldsSigma) {
   EXPECT_GT(probe.field.vectors[0].sigma_u_px, 0);
   EXPECT_NEAR(probe.field.vectors[0].sigma_u_px, node.sigma_u_px, 1e-9);
   EXPECT_NEAR(probe.field.vectors[0].sigma_v_px, node.sigma_v_px, 1e-9);
+}
+
+// The neighbour-noise factors are the reference windows' alone, kept from
+// an evaluator's first frame: a later frame's σ is what a fresh evaluator
+// gives that frame.
+TEST(VectorUncertaintyInFields, AnEvaluatorsLaterFrameHasTheSigmaOfAFreshEvaluation) {
+  const auto first = dot_pair(sim::DisplacementModel::uniform(0.4, 0.2));
+  const auto second = dot_pair(sim::DisplacementModel::sinusoid(0.8, 96));
+  const XcorrOptions options;
+  XcorrEvaluator frames(first.reference, options);
+  frames.evaluate(first.measurement);
+  const auto later = frames.evaluate(second.measurement);
+  const auto fresh = evaluate_xcorr(first.reference, second.measurement, options);
+  ASSERT_EQ(later.field.size(), fresh.field.size());
+  std::size_t with_sigma = 0;
+  for (std::size_t i = 0; i < fresh.field.size(); ++i) {
+    const auto &l = later.field.vectors[i], &f = fresh.field.vectors[i];
+    ASSERT_EQ(l.flag, f.flag) << "node " << i;
+    EXPECT_NEAR(l.sigma_u_px, f.sigma_u_px, 1e-12) << "node " << i;
+    EXPECT_NEAR(l.sigma_v_px, f.sigma_v_px, 1e-12) << "node " << i;
+    with_sigma += f.sigma_u_px > 0;
+  }
+  EXPECT_GT(with_sigma, fresh.field.size() / 2);
 }
 
 }  // namespace
