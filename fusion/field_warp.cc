@@ -96,11 +96,12 @@ struct RegionColumns {
 
 // How far past the outermost node the deformation continues linearly, in
 // node steps. A window centred on the outermost node reaches half a window
-// past it, one step at the evaluator's default (IW 16, step 8): held there,
-// the window's outer half sees the field's gradient as a residual, which
-// biased the outermost vectors by ~0.06 px on a 1 px sinusoid of λ 128 px
-// (docs/BENCHMARKS.md). Beyond one step nothing supports a trend: held.
-constexpr double kContinuedSteps = 1.0;
+// past it: one step at the evaluator's default (IW 16, step 8), two at 75 %
+// overlap. Held there, the window's outer half sees the field's gradient as
+// a residual, which biased the outermost vectors by ~0.06 px on a 1 px
+// sinusoid of λ 128 px (notes: edge.md). Beyond that nothing supports a
+// trend: held.
+constexpr double kContinuedSteps = 2.0;
 
 RegionColumns region_columns(cv::Rect region, const GridGeometry& g) {
   RegionColumns columns;

@@ -1,7 +1,7 @@
 #pragma once
 // Window deformation for multipass evaluation. A field known at grid nodes
 // is interpolated to every pixel (bilinear between nodes, continued
-// linearly for one node step beyond the outermost nodes and held beyond
+// linearly for two node steps beyond the outermost nodes and held beyond
 // that), and the measurement image is resampled at
 // (x + U(x,y), y + V(x,y)) so that, where the field is right, the warped
 // measurement matches the reference and the next pass only measures the
