@@ -719,12 +719,12 @@ void warp_tiles(const cv::Mat& image, const GridField& field, cv::Rect region, c
 
 // The nodes a deforming pass reads its predictor at — the selected ones
 // and those the warp's tiles lie between — into `read`, and into `around`
-// those grown by the node on each side the predictor's smoothing reads.
+// those grown by the nodes the predictor's smoothing reads.
 void nodes_read(const std::vector<cv::Rect>& tiles, const GridGeometry& grid, const cv::Mat& selected, cv::Mat& read,
                 cv::Mat& around) {
   selected.copyTo(read);
   for (const cv::Rect& tile : tiles) read(nodes_under(tile, grid)).setTo(1);
-  cv::dilate(read, around, cv::Mat::ones(3, 3, CV_8U));
+  mark_smoothing_taps(read, around);
 }
 
 // ---- end of adaptive refinement ----

@@ -94,13 +94,22 @@ struct RegionColumns {
   std::vector<ColumnRun> runs;
 };
 
+// How far past the outermost node the deformation continues linearly, in
+// node steps. A window centred on the outermost node reaches half a window
+// past it: one step at the evaluator's default (IW 16, step 8), two at 75 %
+// overlap. Held there, the window's outer half sees the field's gradient as
+// a residual, which biased the outermost vectors by ~0.06 px on a 1 px
+// sinusoid of λ 128 px (notes: edge.md). Beyond that nothing supports a
+// trend: held.
+constexpr double kContinuedSteps = 2.0;
+
 RegionColumns region_columns(cv::Rect region, const GridGeometry& g) {
   RegionColumns columns;
   const auto width = static_cast<std::size_t>(region.width);
   columns.x_px.resize(width);
   columns.t.resize(width);
   for (int x = 0; x < region.width; ++x) {
-    const AxisWeight w = axis_weight(region.x + x, g.x0_px, g.step_px, g.cols);
+    const AxisWeight w = continued_axis_weight(region.x + x, g.x0_px, g.step_px, g.cols, kContinuedSteps);
     columns.x_px[x] = region.x + x;
     columns.t[x] = w.t;
     if (columns.runs.empty() || columns.runs.back().i0 != w.i0 || columns.runs.back().i1 != w.i1) {
@@ -132,7 +141,7 @@ void warp_rows(const cv::Mat& image, const TabulatedKernel& kernel, bool simd, c
   const auto sample = simd ? sample_separable : scalar_sample_separable;
   for (int y = rows.start; y < rows.end; ++y) {
     const double image_y = region.y + y;
-    const AxisWeight wy = axis_weight(image_y, g.y0_px, g.step_px, g.rows);
+    const AxisWeight wy = continued_axis_weight(image_y, g.y0_px, g.step_px, g.rows, kContinuedSteps);
     const auto lerp_rows = [&](const cv::Mat& values, std::vector<double>& row) {
       const double* r0 = values.ptr<double>(wy.i0);
       const double* r1 = values.ptr<double>(wy.i1);
@@ -170,10 +179,10 @@ void copy_with_replicated_border(const cv::Mat& image, cv::Rect region, cv::Rang
 }  // namespace
 
 cv::Rect nodes_under(cv::Rect region, const GridGeometry& g) {
-  const AxisWeight left = axis_weight(region.x, g.x0_px, g.step_px, g.cols);
-  const AxisWeight right = axis_weight(region.x + region.width - 1, g.x0_px, g.step_px, g.cols);
-  const AxisWeight top = axis_weight(region.y, g.y0_px, g.step_px, g.rows);
-  const AxisWeight bottom = axis_weight(region.y + region.height - 1, g.y0_px, g.step_px, g.rows);
+  const auto along_x = [&](int x) { return continued_axis_weight(x, g.x0_px, g.step_px, g.cols, kContinuedSteps); };
+  const auto along_y = [&](int y) { return continued_axis_weight(y, g.y0_px, g.step_px, g.rows, kContinuedSteps); };
+  const AxisWeight left = along_x(region.x), right = along_x(region.x + region.width - 1);
+  const AxisWeight top = along_y(region.y), bottom = along_y(region.y + region.height - 1);
   return {left.i0, top.i0, right.i1 - left.i0 + 1, bottom.i1 - top.i0 + 1};
 }
 

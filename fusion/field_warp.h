@@ -1,7 +1,8 @@
 #pragma once
 // Window deformation for multipass evaluation. A field known at grid nodes
-// is interpolated to every pixel (bilinear between nodes, held constant
-// beyond the outermost nodes), and the measurement image is resampled at
+// is interpolated to every pixel (bilinear between nodes, continued
+// linearly for two node steps beyond the outermost nodes and held beyond
+// that), and the measurement image is resampled at
 // (x + U(x,y), y + V(x,y)) so that, where the field is right, the warped
 // measurement matches the reference and the next pass only measures the
 // remaining (sub-pixel) error.
@@ -42,7 +43,9 @@ struct GridField {
 };
 
 // Where a point lies between the nodes along one axis: nodes i0 and i1,
-// at fraction t from i0 (held at the outermost node beyond it).
+// at fraction t from i0 (axis_weight: held at the outermost node beyond it,
+// as interpolate_field and GridSampler use it; the warp continues the
+// outermost piece, continued_axis_weight).
 struct AxisWeight {
   int i0 = 0;
   int i1 = 0;
@@ -54,6 +57,19 @@ inline AxisWeight axis_weight(double position_px, double origin_px, double step_
   AxisWeight w;
   w.i0 = std::min(static_cast<int>(g), nodes - 1);
   w.i1 = std::min(w.i0 + 1, nodes - 1);
+  w.t = g - w.i0;
+  return w;
+}
+
+// The same, but up to `reach_steps` node steps beyond the outermost node
+// the outermost piece continues linearly (t < 0 or t > 1), held beyond.
+inline AxisWeight continued_axis_weight(double position_px, double origin_px, double step_px, int nodes,
+                                        double reach_steps) {
+  if (nodes < 2) return axis_weight(position_px, origin_px, step_px, nodes);
+  const double g = std::clamp((position_px - origin_px) / step_px, -reach_steps, nodes - 1 + reach_steps);
+  AxisWeight w;
+  w.i0 = std::clamp(static_cast<int>(std::floor(g)), 0, nodes - 2);
+  w.i1 = w.i0 + 1;
   w.t = g - w.i0;
   return w;
 }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace bosfuse::fusion {
@@ -64,6 +65,24 @@ TEST(FieldWarp, InterpolatesTheFieldBilinearlyBetweenNodes) {
   EXPECT_NEAR(interpolate_field(field, 7.5, 3.5).x, 0.5, 1e-12);
   EXPECT_NEAR(interpolate_field(field, 7.5, 7.5).x, 1.5, 1e-12);
   EXPECT_NEAR(interpolate_field(field, -50, -50).x, 0.0, 1e-12) << "held constant outside the grid";
+}
+
+// Beyond the outermost nodes the warp continues the field's outermost piece
+// for two node steps, then holds it: a window on the outermost node reaches
+// past it, and a held field there biased its vector by the field's gradient.
+TEST(FieldWarp, ContinuesTheFieldLinearlyForTwoNodeStepsPastTheGrid) {
+  const cv::Mat image = smooth_image(64);
+  // u = 0.1 (x − 25), v = 0.05 (y − 25) at nodes x = 25, 30, 35 and y = 25, 30.
+  GridField field{{25, 25, 5, 2, 3}, (cv::Mat_<double>(2, 3) << 0, 0.5, 1, 0, 0.5, 1),
+                  (cv::Mat_<double>(2, 3) << 0, 0, 0, 0.25, 0.25, 0.25)};
+  const cv::Mat warped = warp_region(image, field, cv::Rect(0, 0, 60, 60), Interpolator::kLanczos3);
+  for (const int y : {4, 12, 18, 25, 33, 38, 45}) {
+    for (const int x : {4, 12, 15, 20, 33, 45, 50, 55}) {
+      const double u = 0.1 * (std::clamp(x, 15, 45) - 25), v = 0.05 * (std::clamp(y, 15, 40) - 25);
+      EXPECT_NEAR(warped.at<float>(y, x), smooth(x + u, y + v), 2e-3) << x << ", " << y;
+    }
+  }
+  EXPECT_EQ(nodes_under(cv::Rect(52, 45, 5, 5), field.grid), cv::Rect(1, 0, 2, 2)) << "the outermost piece's nodes";
 }
 
 }  // namespace

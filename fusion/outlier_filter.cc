@@ -285,6 +285,44 @@ bool predictor_at(const DisplacementField& field, const GridGeometry& grid, Grid
   return !gap;
 }
 
+namespace {
+
+// The binomial kernel's taps along one axis at node `i` of `n`. Inside,
+// 1-2-1. At the outermost node the kernel is one-sided: (3, 2, −1)/4 over
+// the node and its two inner neighbours reproduces a linear field (a
+// truncated 1-2-1, (2, 1)/3, pulls the edge node a third of a node step's
+// gradient inwards, which the deformed passes do not undo) and, like 1-2-1,
+// removes the grid's Nyquist component (3 − 2 − 1 = 0).
+struct AxisTaps {
+  int count = 0;
+  int index[3] = {};
+  double weight[3] = {};
+};
+
+AxisTaps axis_taps(int i, int n) {
+  if (n == 1) return {1, {i}, {1.0}};
+  if (i > 0 && i + 1 < n) return {3, {i - 1, i, i + 1}, {0.25, 0.5, 0.25}};
+  const int inward = i == 0 ? 1 : -1;
+  if (n == 2) return {1, {i}, {1.0}};  // too few nodes for a linear one-sided kernel
+  return {3, {i, i + inward, i + 2 * inward}, {0.75, 0.5, -0.25}};
+}
+
+}  // namespace
+
+void mark_smoothing_taps(const cv::Mat& nodes, cv::Mat& taps) {
+  CV_Assert(nodes.type() == CV_8U);
+  taps = cv::Mat::zeros(nodes.size(), CV_8U);
+  for (int row = 0; row < nodes.rows; ++row) {
+    for (int col = 0; col < nodes.cols; ++col) {
+      if (!nodes.at<std::uint8_t>(row, col)) continue;
+      const AxisTaps along_rows = axis_taps(row, nodes.rows), along_cols = axis_taps(col, nodes.cols);
+      for (int i = 0; i < along_rows.count; ++i) {
+        for (int j = 0; j < along_cols.count; ++j) taps.at<std::uint8_t>(along_rows.index[i], along_cols.index[j]) = 1;
+      }
+    }
+  }
+}
+
 void smooth_predictor(GridField& predictor) {
   cv::Mat scratch;
   smooth_predictor(predictor, scratch);
@@ -298,17 +336,15 @@ void smooth_predictor(GridField& predictor, cv::Mat& scratch, const cv::Mat* onl
     if (scratch.data == source.data) scratch.release();
     scratch.create(source.rows, source.cols, CV_64F);
     const auto at_edge = [&](int row, int col) {
-      double sum = 0, weight = 0;
-      for (int dr = -1; dr <= 1; ++dr) {
-        for (int dc = -1; dc <= 1; ++dc) {
-          const int r = row + dr, c = col + dc;
-          if (r < 0 || c < 0 || r >= source.rows || c >= source.cols) continue;
-          const double w = (dr == 0 ? 2 : 1) * (dc == 0 ? 2 : 1);
-          sum += w * source.at<double>(r, c);
-          weight += w;
-        }
+      const AxisTaps along_rows = axis_taps(row, source.rows), along_cols = axis_taps(col, source.cols);
+      double sum = 0;
+      for (int i = 0; i < along_rows.count; ++i) {
+        const double* values_row = source.ptr<double>(along_rows.index[i]);
+        double row_sum = 0;
+        for (int j = 0; j < along_cols.count; ++j) row_sum += along_cols.weight[j] * values_row[along_cols.index[j]];
+        sum += along_rows.weight[i] * row_sum;
       }
-      return sum / weight;
+      return sum;
     };
     // Inside the grid every tap is there: the same sums in the same order,
     // without the tests, and the weights add up to 16.

@@ -87,15 +87,20 @@ void predictor_from(const DisplacementField& field, const GridGeometry& grid, Gr
 // takes predictor_from (one pass over them, not a test and then a copy).
 bool predictor_at(const DisplacementField& field, const GridGeometry& grid, GridField& predictor, const cv::Mat& only);
 
-// Smooths a predictor with the 3×3 binomial kernel (weights 1-2-1 in x and y,
-// renormalised at the grid's edge). Iterated window deformation is unstable
+// Smooths a predictor with the 3×3 binomial kernel (weights 1-2-1 in x and y;
+// at the grid's outermost nodes the one-sided (3, 2, −1)/4 along the edge's
+// normal, which keeps a linear field as it is). Iterated window deformation is unstable
 // for errors at the grid's Nyquist wavelength — each pass would amplify them
 // (Schrijer & Scarano 2008) — and this kernel removes exactly that component.
 void smooth_predictor(GridField& predictor);
 // The same, working in `scratch` (reused when it has the predictor's size),
 // which afterwards holds a buffer of the predictor's old values; with
-// `only`, at the nodes it marks alone (their 3×3 neighbours must hold the
-// predictor), the others left as `scratch` held them.
+// `only`, at the nodes it marks alone (the nodes mark_smoothing_taps gives
+// for them must hold the predictor), the others left as `scratch` held them.
 void smooth_predictor(GridField& predictor, cv::Mat& scratch, const cv::Mat* only = nullptr);
+
+// The nodes smooth_predictor reads for the nodes `nodes` marks (CV_8U):
+// their 3×3 neighbours, and at the grid's edge the second node inwards.
+void mark_smoothing_taps(const cv::Mat& nodes, cv::Mat& taps);
 
 }  // namespace bosfuse::fusion

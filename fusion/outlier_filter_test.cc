@@ -256,7 +256,7 @@ TEST(OutlierFilter, APredictorAtMarkedNodesIsTheWholePredictorThere) {
     marked(run).setTo(1);
   }
   cv::Mat around;
-  cv::dilate(marked, around, cv::Mat::ones(3, 3, CV_8U));
+  mark_smoothing_taps(marked, around);
 
   GridField whole = predictor_from(field, grid);
   constexpr double kUntouched = -777;
@@ -296,23 +296,39 @@ TEST(OutlierFilter, NothingMeasuredGivesAZeroPredictor) {
   EXPECT_EQ(cv::countNonZero(predictor.u_px), 0);
 }
 
+// At every node, the outermost ones included: a truncated 1-2-1 at the edge
+// pulled a linear field a third of its node-to-node change inwards there.
 TEST(OutlierFilter, SmoothingKeepsALinearFieldAndRemovesACheckerboard) {
-  GridField field{{0, 0, 1, 6, 6}, cv::Mat(6, 6, CV_64F), cv::Mat(6, 6, CV_64F)};
+  GridField field{{0, 0, 1, 6, 7}, cv::Mat(6, 7, CV_64F), cv::Mat(6, 7, CV_64F)};
   for (int r = 0; r < 6; ++r) {
-    for (int c = 0; c < 6; ++c) {
-      field.u_px.at<double>(r, c) = 0.1 * c;
+    for (int c = 0; c < 7; ++c) {
+      field.u_px.at<double>(r, c) = 0.1 * c - 0.07 * r + 0.3;
       field.v_px.at<double>(r, c) = (r + c) % 2 ? 0.05 : -0.05;
     }
   }
   smooth_predictor(field);
-  EXPECT_NEAR(field.u_px.at<double>(3, 2), 0.2, 1e-12);
-  EXPECT_NEAR(field.v_px.at<double>(3, 2), 0.0, 1e-12);
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 7; ++c) {
+      EXPECT_NEAR(field.u_px.at<double>(r, c), 0.1 * c - 0.07 * r + 0.3, 1e-12) << r << ", " << c;
+      EXPECT_NEAR(field.v_px.at<double>(r, c), 0.0, 1e-12) << r << ", " << c;
+    }
+  }
 }
 
-// Every node, edge or not, is the (1 2 1)² weighted mean of the nodes of its
-// 3×3 neighbourhood inside the grid, summed in row order: the same value to
-// the bit as this plain loop, on grids too thin to have an inside as well.
-TEST(OutlierFilter, SmoothingIsTheWeightedMeanOfTheNeighboursInsideTheGrid) {
+// The kernel along one axis at node i of n, written out: 1-2-1 inside,
+// (3, 2, −1)/4 towards the inside at the edge, the node alone on grids of
+// one or two nodes.
+std::vector<std::pair<int, double>> expected_taps(int i, int n) {
+  if (n <= 2) return {{i, 1.0}};
+  if (i == 0) return {{0, 0.75}, {1, 0.5}, {2, -0.25}};
+  if (i == n - 1) return {{n - 1, 0.75}, {n - 2, 0.5}, {n - 3, -0.25}};
+  return {{i - 1, 0.25}, {i, 0.5}, {i + 1, 0.25}};
+}
+
+// Every node, edge or not, is the product kernel of expected_taps over its
+// neighbourhood, on grids too thin to have an inside as well; the nodes
+// mark_smoothing_taps gives are the ones it reads.
+TEST(OutlierFilter, SmoothingIsTheSeparableKernelAtEveryNode) {
   std::mt19937 rng(17);
   std::uniform_real_distribution<double> value(-3, 3);
   for (const cv::Size size : {cv::Size(1, 1), cv::Size(5, 1), cv::Size(1, 4), cv::Size(2, 2), cv::Size(7, 2),
@@ -325,18 +341,20 @@ TEST(OutlierFilter, SmoothingIsTheWeightedMeanOfTheNeighboursInsideTheGrid) {
     smooth_predictor(field);
     for (int r = 0; r < size.height; ++r) {
       for (int c = 0; c < size.width; ++c) {
-        double u = 0, v = 0, weight = 0;
-        for (int dr = -1; dr <= 1; ++dr) {
-          for (int dc = -1; dc <= 1; ++dc) {
-            if (r + dr < 0 || c + dc < 0 || r + dr >= size.height || c + dc >= size.width) continue;
-            const double w = (dr == 0 ? 2 : 1) * (dc == 0 ? 2 : 1);
-            u += w * before.u_px.at<double>(r + dr, c + dc);
-            v += w * before.v_px.at<double>(r + dr, c + dc);
-            weight += w;
+        double u = 0, v = 0;
+        cv::Mat node = cv::Mat::zeros(size, CV_8U), read = cv::Mat::zeros(size, CV_8U), taps;
+        node.at<std::uint8_t>(r, c) = 1;
+        for (const auto& [row, wr] : expected_taps(r, size.height)) {
+          for (const auto& [col, wc] : expected_taps(c, size.width)) {
+            u += wr * wc * before.u_px.at<double>(row, col);
+            v += wr * wc * before.v_px.at<double>(row, col);
+            read.at<std::uint8_t>(row, col) = 1;
           }
         }
-        ASSERT_EQ(field.u_px.at<double>(r, c), u / weight) << size << " at " << r << ", " << c;
-        ASSERT_EQ(field.v_px.at<double>(r, c), v / weight) << size << " at " << r << ", " << c;
+        ASSERT_NEAR(field.u_px.at<double>(r, c), u, 1e-12) << size << " at " << r << ", " << c;
+        ASSERT_NEAR(field.v_px.at<double>(r, c), v, 1e-12) << size << " at " << r << ", " << c;
+        mark_smoothing_taps(node, taps);
+        ASSERT_EQ(cv::countNonZero(taps != read), 0) << size << " at " << r << ", " << c;
       }
     }
   }
