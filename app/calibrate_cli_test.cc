@@ -64,7 +64,7 @@ TEST_F(CalibrateCli, TheCentrelineCaseIsRefusedNamingItsSlopeResidualAndShiftRan
   for (const char* text :
        {"calibration refused, nothing stored", "tc1: the slope -", "has the wrong sign", "a slope > 0 is expected",
         "residual RMS", "r2 = ", "tc1: BOS sees no shift where this thermocouple is: the shift ranges over",
-        "uncertainty 0.05 px (the default noise floor"}) {
+        "(the probe's median sigma over 8 samples)"}) {
     EXPECT_NE(refused.output.find(text), std::string::npos) << text << "\n" << refused.output;
   }
   EXPECT_FALSE(storage::ProcessingStore(run_dir()).latest_calibration().has_value()) << "nothing stored";

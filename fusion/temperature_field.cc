@@ -567,12 +567,12 @@ struct TemperatureFieldSolver::State {
   // the kept factor when the weights moved little enough for it to converge
   // in fewer solves than a factorisation costs; else, or when it did not
   // converge, factorised anew, and that factor kept for the next frames.
-  FrameSolution solve_new_weights(const EdgeSystem& system, const std::vector<std::uint8_t>& measured,
-                                  const std::vector<double>& weights, bool may_iterate, double tolerance) {
-    const Eigen::SparseMatrix<double> a = system.matrix();
+  FrameSolution solve_new_weights(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& rhs,
+                                  const std::vector<std::uint8_t>& measured, const std::vector<double>& weights,
+                                  bool may_iterate, double tolerance) {
     const double condition = may_iterate ? condition_bound(weights, factorised_weights) : 0;
     if (may_iterate && iterations_bound(condition, tolerance) <= kMaxIterations) {
-      if (auto iterated = solve_preconditioned(a, system.rhs(), *factorisation, tolerance, kMaxIterations)) {
+      if (auto iterated = solve_preconditioned(a, rhs, *factorisation, tolerance, kMaxIterations)) {
         ++iterative_solves;
         return {std::move(iterated->x), iterated->iterations, iterated->relative_residual, condition};
       }
@@ -585,7 +585,7 @@ struct TemperatureFieldSolver::State {
     ++factorisations;
     factorised_for = measured;
     factorised_weights = weights;
-    return {factorisation->solve(system.rhs()), 0, 0, condition};
+    return {factorisation->solve(rhs), 0, 0, condition};
   }
 };
 
@@ -659,7 +659,8 @@ TemperatureFieldResult TemperatureFieldSolver::recover(const DisplacementField& 
   const bool may_iterate = same_nodes && !options_.estimate_uncertainty && options_.iterative_tolerance > 0;
   const FrameSolution solution =
       same_weights ? FrameSolution{state.factorisation->solve(system.rhs()), 0, 0, 1}
-                   : state.solve_new_weights(system, measured, weights, may_iterate, options_.iterative_tolerance);
+                   : state.solve_new_weights(system.matrix(), system.rhs(), measured, weights, may_iterate,
+                                             options_.iterative_tolerance);
   TemperatureFieldResult result =
       field_from_solution(displacement, layout, geometry_, state.unknown, measured, solution.delta_n);
   result.summary.weighted = weighted;
@@ -757,24 +758,24 @@ std::optional<double> TemperatureFieldSolver::average_sigma_c(const Displacement
   const bool weighted = options_.weight_by_sigma;
   std::vector<double> edge_weight =
       edge_weights(displacement.rows, displacement.cols, measured, weighted ? &sigmas : nullptr, options_.fill_weight);
-  if (measured != state.factorised_for || edge_weight != state.factorised_weights) {
+  // A's inverse times c: with the kept factor when it is this matrix's, by
+  // conjugate gradients on it when only σ moved (exact to the tolerance, as
+  // the frame's own solve), else factorised anew.
+  Eigen::VectorXd z;
+  if (measured == state.factorised_for && edge_weight == state.factorised_weights) {
+    z = state.factorisation->solve(*c);
+  } else {
     EdgeSystem system(state.unknown, state.unknowns, true);
     std::size_t edge = 0;
     for_each_edge(displacement.rows, displacement.cols,
                   [&](std::size_t i, std::size_t j, bool) { system.add_edge(i, j, 0.0, edge_weight[edge++]); });
-    const Eigen::SparseMatrix<double> a = system.matrix();
-    state.factorised_for.clear();
-    state.factorised_weights.clear();
-    if (!state.analysed) state.analyse(a);
-    state.factorisation->factorise(a);
-    ++state.factorisations;
-    state.factorised_for = std::move(measured);
-    state.factorised_weights = std::move(edge_weight);
+    const bool may_iterate = measured == state.factorised_for && state.analysed && options_.iterative_tolerance > 0;
+    z = state.solve_new_weights(system.matrix(), *c, measured, edge_weight, may_iterate, options_.iterative_tolerance)
+            .delta_n;
   }
   const double target_per_px = geometry_.gradient_per_m(1.0) * layout.step_px / geometry_.px_per_m_flow();
-  const Eigen::VectorXd z = state.factorisation->solve(*c);
-  const double variance = noise_variance_along(z, state.unknown, displacement.rows, displacement.cols,
-                                               state.factorised_for, state.factorised_weights, sigmas, target_per_px);
+  const double variance = noise_variance_along(z, state.unknown, displacement.rows, displacement.cols, measured,
+                                               edge_weight, sigmas, target_per_px);
   return std::sqrt(std::max(variance, 0.0));
 }
 

@@ -213,7 +213,7 @@ class TemperatureFieldSolver {
   int fields() const;
   int analyses() const;
   int factorisations() const;
-  int iterative_solves() const;  // frames solved by conjugate gradients on an earlier frame's factor
+  int iterative_solves() const;  // solves (frames, probe σ) by conjugate gradients on an earlier frame's factor
 
   // The random σ of T (°C) of a weighted average Σ wᵢ Tᵢ of nodes of
   // `field`, the field recover() gave for `displacement` (a probe's
@@ -224,7 +224,9 @@ class TemperatureFieldSolver {
   // solve with the kept factor and one pass over the edges, whatever the
   // weights. The neighbours' correlation through the solve is in it (their
   // errors are nearly equal), which the bilinear σ of sigma_at() bounds
-  // from above. Refactorises when the factor held is another field's.
+  // from above. With the kept factor when it is this field's matrix, by
+  // conjugate gradients on it when only σ moved (as the frame's own solve),
+  // else factorised anew.
   // nullopt when the field has no σ, or a node of the average is not
   // measured or not physical; throws std::invalid_argument for nodes off
   // the grid or sizes that differ.

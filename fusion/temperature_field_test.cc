@@ -776,6 +776,30 @@ std::pair<std::vector<std::size_t>, std::vector<double>> bilinear_weights(const 
           {(1 - ay) * (1 - ax), (1 - ay) * ax, ay * (1 - ax), ay * ax}};
 }
 
+// On a frame solved by conjugate gradients on an earlier frame's factor, a
+// probe's σ is iterated on it too: the fresh solver's σ to 1e-6, with no
+// factorisation for it (a probe's σ would otherwise cost every frame one).
+TEST(TemperatureFieldAverageSigma, OnAnIteratedFrameIsIteratedToTheFreshSolversSigma) {
+  const BosGeometry g(paper_like_setup());
+  std::mt19937_64 random(29);
+  const NoisyField pattern = half_and_half(g);
+  TemperatureFieldSolver solver(g);
+  solver.recover(pattern.draw(random));
+  const DisplacementField jittered = with_jittered_sigma(pattern.draw(random), 0.02, random);
+  const auto kept = solver.recover(jittered);
+  ASSERT_GT(kept.summary.solver_iterations, 0) << "the frame itself was not iterated";
+  TemperatureFieldSolver fresh(g);
+  const auto fresh_result = fresh.recover(jittered);
+  const auto [nodes, weights] = bilinear_weights(kept.field, kept.field.x0_px + 10.4 * kept.field.step_px,
+                                                 kept.field.y0_px + 7.7 * kept.field.step_px);
+  const auto iterated = solver.average_sigma_c(jittered, kept.field, nodes, weights);
+  const auto exact = fresh.average_sigma_c(jittered, fresh_result.field, nodes, weights);
+  ASSERT_TRUE(iterated && exact);
+  EXPECT_NEAR(*iterated, *exact, 1e-6 * *exact);
+  EXPECT_EQ(solver.factorisations(), 1);
+  EXPECT_EQ(solver.iterative_solves(), 2) << "the frame and the probe's σ";
+}
+
 // One node's exact σ equals the draws' node σ: 4096 draws (their own error
 // ~1/√(2·4096) = 1.1 %), every interior node within 6 %, the median within 2 %.
 TEST(TemperatureFieldAverageSigma, ANodesSigmaIsTheDrawsNodeSigma) {

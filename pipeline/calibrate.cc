@@ -32,11 +32,17 @@ struct ProbeShifts {
 ProbeShifts valid_shifts(const std::vector<storage::ProbeSampleRecord>& samples,
                          const storage::ExperimentClock& clock) {
   ProbeShifts out;
+  bool every_sigma = true;
   for (const auto& s : samples) {
     if (!s.valid) continue;
     out.frame_t_s.push_back(clock.seconds(s.t_ns));
     out.shift_px.push_back(s.shift_px);
+    every_sigma = every_sigma && s.sigma_shift_px.has_value();
+    if (s.sigma_shift_px) out.sigma_px.push_back(*s.sigma_shift_px);
   }
+  // A series partly without σ (samples stored before σ, or not estimated)
+  // says nothing per sample: the checks' floor stands for all of it.
+  if (!every_sigma) out.sigma_px.clear();
   return out;
 }
 

@@ -25,7 +25,8 @@ std::map<std::int64_t, ChannelCalibration> stored_calibration(const storage::Pro
         c.contains("anchor_c") ? c.at("anchor_c").get<double>() : c.at("reference_temperature_c").get<double>();
     out[c.at("channel_id").get<std::int64_t>()] = {c.at("slope_c_per_px").get<double>(), anchor_c,
                                                    c.value("camera_offset_s", 0.0),
-                                                   c.value("slope_std_error_c_per_px", 0.0)};
+                                                   c.value("slope_std_error_c_per_px", 0.0),
+                                                   c.value("anchor_std_error_c", 0.0)};
   }
   return out;
 }

@@ -26,6 +26,7 @@ struct ChannelCalibration {
   double reference_temperature_c = 0;  // the line's anchor, where the shift is 0 (calibrate.h: the ambient)
   double camera_offset_s = 0;  // the offset the calibration was made with
   double slope_std_error_c_per_px = 0;  // its standard uncertainty; 0: not stated
+  double anchor_std_error_c = 0;        // the anchor's standard uncertainty (the ambient's); 0: not stated
 };
 
 // Whether the record is a `calibrate --clear` marker.

@@ -201,10 +201,10 @@ std::optional<double> positive_or_none(double sigma) { return has_sigma(sigma) ?
 
 // Each probe's sample: its shift, and its temperature by the calibration,
 // else by the physical model, each with its σ. Under a calibration
-// T = T_ref + slope · shift: the random σ is |slope| · σ of the shift, and
-// the systematic one |shift| · σ of the slope (the calibration's standard
-// error, common to every sample of the series); the reference reading's own
-// error is the thermocouple's and is not in it.
+// T = T_anchor + slope · shift: the random σ is |slope| · σ of the shift,
+// and the systematic one combines |shift| · σ of the slope (the
+// calibration's standard error) with the anchor's σ (the ambient's), both
+// common to every sample of the series.
 std::vector<storage::ProbeSampleRecord> samples_of(const FrameContext& ctx, const FrameRecord& frame,
                                                    const FrameResult& result) {
   std::vector<storage::ProbeSampleRecord> samples;
@@ -221,9 +221,9 @@ std::vector<storage::ProbeSampleRecord> samples_of(const FrameContext& ctx, cons
       if (cal != ctx.calibration.end()) {
         sample.temperature_c = calibrated_temperature_c(ctx.calibration, ctx.channels[p].id, shift);
         if (sample.sigma_shift_px) sample.sigma_random_c = std::abs(cal->second.slope_c_per_px) * *sample.sigma_shift_px;
-        if (cal->second.slope_std_error_c_per_px > 0) {
-          sample.sigma_systematic_c = shift * cal->second.slope_std_error_c_per_px;
-        }
+        const double systematic_c = std::hypot(shift * cal->second.slope_std_error_c_per_px,
+                                               cal->second.anchor_std_error_c);
+        if (systematic_c > 0) sample.sigma_systematic_c = systematic_c;
       } else {
         const ModelTemperature& m = result.model[p];
         sample.temperature_c = m.t_c;
@@ -389,7 +389,8 @@ Bytes plan_bytes(const FrameContext& ctx, const std::vector<FrameRecord>& frames
   }
   for (const auto& [channel, c] : ctx.calibration) {
     calibration.push_back(
-        {channel, c.slope_c_per_px, c.reference_temperature_c, c.camera_offset_s, c.slope_std_error_c_per_px});
+        {channel, c.slope_c_per_px, c.reference_temperature_c, c.camera_offset_s, c.slope_std_error_c_per_px,
+         c.anchor_std_error_c});
   }
   for (const auto& f : frames) todo.push_back(frame_json(f));
   return json::to_cbor(json{{"run_dir", fs::absolute(ctx.run_dir).string()},
@@ -419,7 +420,8 @@ std::pair<FrameContext, std::vector<FrameRecord>> context_from_plan(const Bytes&
   }
   for (const auto& c : j.at("calibration")) {
     ctx.calibration[c.at(0).get<std::int64_t>()] = {c.at(1).get<double>(), c.at(2).get<double>(),
-                                                    c.at(3).get<double>(), c.at(4).get<double>()};
+                                                    c.at(3).get<double>(), c.at(4).get<double>(),
+                                                    c.at(5).get<double>()};
   }
   std::vector<FrameRecord> frames;
   for (const auto& f : j.at("frames")) frames.push_back(frame_from_json(f));
