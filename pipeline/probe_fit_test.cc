@@ -25,9 +25,15 @@ std::vector<storage::ProbeSampleRecord> probe_samples(const testing::CoolingCurv
   std::vector<storage::ProbeSampleRecord> samples;
   for (int i = 0; i < 40; ++i) {
     const double t = 10.0 * i;
-    storage::ProbeSampleRecord s{1, i + 1, static_cast<std::int64_t>(t * 1e9), 0.1, 0.2, 0.22, curve.at(t) +
-                                                                                               noise_c * unit(random),
-                                 true};
+    storage::ProbeSampleRecord s;
+    s.probe_id = 1;
+    s.frame_id = i + 1;
+    s.t_ns = static_cast<std::int64_t>(t * 1e9);
+    s.u_px = 0.1;
+    s.v_px = 0.2;
+    s.shift_px = 0.22;
+    s.temperature_c = curve.at(t) + noise_c * unit(random);
+    s.valid = true;
     s.sigma_random_c = sigma_c;
     s.sigma_systematic_c = 1.0;
     samples.push_back(s);

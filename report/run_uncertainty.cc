@@ -23,7 +23,8 @@ double median(std::vector<double> v) {
 
 ProbeUncertainty probe_uncertainty(const std::string& name, const std::vector<storage::ProbeSampleRecord>& samples,
                                    std::optional<double>& hottest_c) {
-  ProbeUncertainty p{name};
+  ProbeUncertainty p;
+  p.probe = name;
   std::vector<double> random, systematic;
   for (const auto& s : samples) {
     if (!s.valid || !s.temperature_c) continue;
@@ -52,7 +53,10 @@ void fit_intervals(const std::string& series, const json& fit, std::vector<FitIn
        {std::tuple{"k_per_s", "k", "systematic_per_s"}, {"T0_c", "T0", "systematic_c"}, {"T_amb_c", "T_amb", "systematic_c"}}) {
     const json& p = fit.at("parameters").value(key, json());
     if (!p.is_object() || !p.contains("value") || !p.at("value").is_number()) continue;
-    FitInterval f{series, label, std::string(key) == "k_per_s" ? "1/s" : (in_px ? "px" : "°C")};
+    FitInterval f;
+    f.series = series;
+    f.parameter = label;
+    f.unit = std::string(key) == "k_per_s" ? "1/s" : (in_px ? "px" : "°C");
     f.value = p.at("value").get<double>();
     f.std_error = p.value("std_error", json()).is_number() ? p.at("std_error").get<double>() : 0.0;
     if (p.contains(systematic_key) && p.at(systematic_key).is_number()) f.systematic = p.at(systematic_key).get<double>();
