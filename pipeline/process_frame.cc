@@ -147,17 +147,16 @@ ModelTemperature model_temperature(const FrameContext& ctx, const fusion::Evalua
 FrameResult measure_full(const FrameContext& ctx, const fusion::EvaluationResult& evaluated, ProcessTimes& times) {
   FrameResult out;
   if (evaluated.field.rows >= 3 && evaluated.field.cols >= 3) {
-    out.temperature = timed(times.temperature_field_s, [&] { return ctx.temperature_solver->recover(evaluated.field); });
+    out.temperature =
+        timed(times.temperature_field_s, [&] { return ctx.temperature_solver->recover(evaluated.field); });
   }
   for (const auto& p : ctx.points) {
     const BilinearNodes around = bilinear_nodes(evaluated.field, p);
     out.shifts.push_back(shift_at(evaluated.field, around));
-    out.model.push_back(out.temperature ? timed(times.temperature_field_s,
-                                                [&] {
-                                                  return model_temperature(ctx, evaluated, out.temperature->field, p,
-                                                                           around);
-                                                })
-                                        : ModelTemperature{});
+    out.model.push_back(
+        out.temperature ? timed(times.temperature_field_s,
+                                [&] { return model_temperature(ctx, evaluated, out.temperature->field, p, around); })
+                        : ModelTemperature{});
   }
   return out;
 }
@@ -211,8 +210,14 @@ std::vector<storage::ProbeSampleRecord> samples_of(const FrameContext& ctx, cons
   for (std::size_t p = 0; p < ctx.channels.size(); ++p) {
     const PointShift& s = result.shifts[p];
     const double shift = std::hypot(s.u_px, s.v_px);
-    storage::ProbeSampleRecord sample{ctx.probe_ids[p], frame.id, frame.t_ns, s.u_px, s.v_px, shift, std::nullopt,
-                                      s.valid};
+    storage::ProbeSampleRecord sample;
+    sample.probe_id = ctx.probe_ids[p];
+    sample.frame_id = frame.id;
+    sample.t_ns = frame.t_ns;
+    sample.u_px = s.u_px;
+    sample.v_px = s.v_px;
+    sample.shift_px = shift;
+    sample.valid = s.valid;
     if (s.valid) {
       sample.sigma_u_px = positive_or_none(s.sigma_u_px);
       sample.sigma_v_px = positive_or_none(s.sigma_v_px);
@@ -220,9 +225,10 @@ std::vector<storage::ProbeSampleRecord> samples_of(const FrameContext& ctx, cons
       const auto cal = ctx.calibration.find(ctx.channels[p].id);
       if (cal != ctx.calibration.end()) {
         sample.temperature_c = calibrated_temperature_c(ctx.calibration, ctx.channels[p].id, shift);
-        if (sample.sigma_shift_px) sample.sigma_random_c = std::abs(cal->second.slope_c_per_px) * *sample.sigma_shift_px;
-        const double systematic_c = std::hypot(shift * cal->second.slope_std_error_c_per_px,
-                                               cal->second.anchor_std_error_c);
+        if (sample.sigma_shift_px)
+          sample.sigma_random_c = std::abs(cal->second.slope_c_per_px) * *sample.sigma_shift_px;
+        const double systematic_c =
+            std::hypot(shift * cal->second.slope_std_error_c_per_px, cal->second.anchor_std_error_c);
         if (systematic_c > 0) sample.sigma_systematic_c = systematic_c;
       } else {
         const ModelTemperature& m = result.model[p];
@@ -304,18 +310,10 @@ json sample_json(const storage::ProbeSampleRecord& s) {
 }
 
 storage::ProbeSampleRecord sample_from_json(const json& j) {
-  return {j.at(0).get<std::int64_t>(),
-          j.at(1).get<std::int64_t>(),
-          j.at(2).get<std::int64_t>(),
-          j.at(3).get<double>(),
-          j.at(4).get<double>(),
-          j.at(5).get<double>(),
-          optional_from_json(j.at(6)),
-          j.at(7).get<bool>(),
-          optional_from_json(j.at(8)),
-          optional_from_json(j.at(9)),
-          optional_from_json(j.at(10)),
-          optional_from_json(j.at(11)),
+  return {j.at(0).get<std::int64_t>(), j.at(1).get<std::int64_t>(),  j.at(2).get<std::int64_t>(),
+          j.at(3).get<double>(),       j.at(4).get<double>(),        j.at(5).get<double>(),
+          optional_from_json(j.at(6)), j.at(7).get<bool>(),          optional_from_json(j.at(8)),
+          optional_from_json(j.at(9)), optional_from_json(j.at(10)), optional_from_json(j.at(11)),
           optional_from_json(j.at(12))};
 }
 
@@ -388,9 +386,8 @@ Bytes plan_bytes(const FrameContext& ctx, const std::vector<FrameRecord>& frames
     channels.push_back({ctx.channels[p].id, ctx.channels[p].name, ctx.points[p].x, ctx.points[p].y, ctx.probe_ids[p]});
   }
   for (const auto& [channel, c] : ctx.calibration) {
-    calibration.push_back(
-        {channel, c.slope_c_per_px, c.reference_temperature_c, c.camera_offset_s, c.slope_std_error_c_per_px,
-         c.anchor_std_error_c});
+    calibration.push_back({channel, c.slope_c_per_px, c.reference_temperature_c, c.camera_offset_s,
+                           c.slope_std_error_c_per_px, c.anchor_std_error_c});
   }
   for (const auto& f : frames) todo.push_back(frame_json(f));
   return json::to_cbor(json{{"run_dir", fs::absolute(ctx.run_dir).string()},
@@ -419,9 +416,8 @@ std::pair<FrameContext, std::vector<FrameRecord>> context_from_plan(const Bytes&
     ctx.probe_ids.push_back(c.at(4).get<std::int64_t>());
   }
   for (const auto& c : j.at("calibration")) {
-    ctx.calibration[c.at(0).get<std::int64_t>()] = {c.at(1).get<double>(), c.at(2).get<double>(),
-                                                    c.at(3).get<double>(), c.at(4).get<double>(),
-                                                    c.at(5).get<double>()};
+    ctx.calibration[c.at(0).get<std::int64_t>()] = {c.at(1).get<double>(), c.at(2).get<double>(), c.at(3).get<double>(),
+                                                    c.at(4).get<double>(), c.at(5).get<double>()};
   }
   std::vector<FrameRecord> frames;
   for (const auto& f : j.at("frames")) frames.push_back(frame_from_json(f));

@@ -49,8 +49,9 @@ ProbeUncertainty probe_uncertainty(const std::string& name, const std::vector<st
 void fit_intervals(const std::string& series, const json& fit, std::vector<FitInterval>& out) {
   if (!fit.value("ok", false) || !fit.contains("parameters")) return;
   const bool in_px = fit.value("unit", "degC") == "px";
-  for (const auto& [key, label, systematic_key] :
-       {std::tuple{"k_per_s", "k", "systematic_per_s"}, {"T0_c", "T0", "systematic_c"}, {"T_amb_c", "T_amb", "systematic_c"}}) {
+  for (const auto& [key, label, systematic_key] : {std::tuple{"k_per_s", "k", "systematic_per_s"},
+                                                   {"T0_c", "T0", "systematic_c"},
+                                                   {"T_amb_c", "T_amb", "systematic_c"}}) {
     const json& p = fit.at("parameters").value(key, json());
     if (!p.is_object() || !p.contains("value") || !p.at("value").is_number()) continue;
     FitInterval f;
@@ -59,7 +60,8 @@ void fit_intervals(const std::string& series, const json& fit, std::vector<FitIn
     f.unit = std::string(key) == "k_per_s" ? "1/s" : (in_px ? "px" : "°C");
     f.value = p.at("value").get<double>();
     f.std_error = p.value("std_error", json()).is_number() ? p.at("std_error").get<double>() : 0.0;
-    if (p.contains(systematic_key) && p.at(systematic_key).is_number()) f.systematic = p.at(systematic_key).get<double>();
+    if (p.contains(systematic_key) && p.at(systematic_key).is_number())
+      f.systematic = p.at(systematic_key).get<double>();
     const json& interval = p.contains("combined_interval") ? p.at("combined_interval") : p.value("interval", json());
     if (!interval.is_object() || !interval.value("low", json()).is_number()) continue;
     f.low = interval.at("low").get<double>();

@@ -15,9 +15,8 @@ namespace {
 struct Fixture {
   testing::TempDir dir;
   std::filesystem::path run_dir = dir.path() / "run";
-  RunStore store =
-      RunStore::create(run_dir, {0, "r", 1'000, std::nullopt, "", RunStatus::kRunning, 1.0, std::nullopt},
-                       RunStore::CreateMode::kNew);
+  RunStore store = RunStore::create(run_dir, {0, "r", 1'000, std::nullopt, "", RunStatus::kRunning, 1.0, std::nullopt},
+                                    RunStore::CreateMode::kNew);
   std::int64_t device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", "127.0.0.1:502"});
   std::int64_t channel = store.add_channel({0, device, "tc0", "thermocouple", "degC", "K", 120.5, 80.0});
   std::int64_t reference = store.add_frame({0, std::nullopt, 1'000, std::nullopt, "frames/0.png", 64, 48, 8, true});
@@ -30,8 +29,9 @@ TEST(ProcessingStore, WritesAndReadsEveryKindOfResult) {
   std::int64_t probe = 0;
   results.in_transaction([&] {
     probe = results.add_probe({0, f.channel, "tc0", 120.5, 80.0});
-    const std::vector<ProbeSampleRecord> samples{{probe, f.frame, 2'000, 0.3, -0.4, 0.5, 31.5, true},
-                                                 {probe, f.reference, 1'000, 0, 0, 0, std::nullopt, false}};
+    const std::vector<ProbeSampleRecord> samples{
+        {probe, f.frame, 2'000, 0.3, -0.4, 0.5, 31.5, true, {}, {}, {}, {}, {}},
+        {probe, f.reference, 1'000, 0, 0, 0, std::nullopt, false, {}, {}, {}, {}, {}}};
     results.write_probe_samples(samples);
     results.add_fit({0, FitSubject::kProbe, probe, 1'000, true, R"({"k_per_s":0.01})"});
     results.add_fit({0, FitSubject::kChannel, f.channel, 1'000, false, "{}"});
@@ -62,7 +62,8 @@ TEST(ProcessingStore, ClearingKeepsCalibrationsAndAFailedTransactionStoresNothin
   Fixture f;
   ProcessingStore results(f.run_dir, true);
   const auto probe = results.add_probe({0, std::nullopt, "p", 1, 2});
-  const std::vector<ProbeSampleRecord> samples{{probe, f.frame, 2'000, 0, 0, 0, std::nullopt, true}};
+  const std::vector<ProbeSampleRecord> samples{
+      {probe, f.frame, 2'000, 0, 0, 0, std::nullopt, true, {}, {}, {}, {}, {}}};
   results.write_probe_samples(samples);
   results.add_calibration({0, 5, "{}"});
   results.clear_results();
@@ -81,9 +82,9 @@ TEST(ProcessingStore, AVersionOneStoreReadsAsEmptyAndIsMigratedWhenWritten) {
   Fixture f;
   {
     Database db((f.run_dir / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
-    for (const char* table : {"staged_probe_samples", "staged_probe_series", "staged_fields", "staged_frames",
-                              "processings", "probe_samples", "agreements", "fits", "probe_series", "calibrations",
-                              "fields"}) {
+    for (const char* table :
+         {"staged_probe_samples", "staged_probe_series", "staged_fields", "staged_frames", "processings",
+          "probe_samples", "agreements", "fits", "probe_series", "calibrations", "fields"}) {
       db.execute(std::string("DROP TABLE ") + table);
     }
     db.execute("ALTER TABLE runs DROP COLUMN time_scale");
@@ -102,7 +103,7 @@ TEST(ProcessingStore, AVersionOneStoreReadsAsEmptyAndIsMigratedWhenWritten) {
 }
 
 constexpr std::array<const char*, 5> kSigmaColumns = {"sigma_u_px", "sigma_v_px", "sigma_shift_px", "sigma_random_c",
-                                                     "sigma_systematic_c"};
+                                                      "sigma_systematic_c"};
 
 TEST(ProcessingStore, SampleUncertaintiesRoundTripThroughTheStagedCopy) {
   Fixture f;
@@ -110,7 +111,7 @@ TEST(ProcessingStore, SampleUncertaintiesRoundTripThroughTheStagedCopy) {
   const auto processing = results.begin_processing("{}", 1'000);
   const auto probe = results.stage_probe(processing, {0, f.channel, "tc0", 120.5, 80.0});
   ProbeSampleRecord with{probe, f.frame, 2'000, 0.3, -0.4, 0.5, 31.5, true, 0.01, 0.02, 0.018, 0.4, 2.6};
-  ProbeSampleRecord without{probe, f.reference, 1'000, 0, 0, 0, std::nullopt, false};
+  ProbeSampleRecord without{probe, f.reference, 1'000, 0, 0, 0, std::nullopt, false, {}, {}, {}, {}, {}};
   const std::vector<ProbeSampleRecord> samples{with, without};
   results.stage_frame(processing, f.frame, "{}", samples, {});
   const auto staged = results.staged_probe_samples(probe);
