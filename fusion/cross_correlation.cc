@@ -235,7 +235,8 @@ NodeWindows node_windows(const PreparedPair& pair, const PassInput& in, int row,
 }
 
 cv::Mat reference_window_of(const PreparedPair& pair, const PassInput& in, cv::Rect window) {
-  return in.warped_reference.empty() ? view(pair.reference, window) : view(in.warped_reference, window - in.region.tl());
+  return in.warped_reference.empty() ? view(pair.reference, window)
+                                     : view(in.warped_reference, window - in.region.tl());
 }
 
 // σu, σv of a node from its reference window and the measurement window at
@@ -254,7 +255,8 @@ VectorUncertainty node_uncertainty(const PreparedPair& pair, const PassInput& in
   const bool inside_image = (read & image) == read;
   const cv::Mat reference_window = reference_window_of(pair, in, w.window);
   if (!in.noise_factors) return correlation_statistics(reference_window, view(in.warped, at_peak), inside_image);
-  const NeighbourNoiseFactors factors = inside_image ? in.noise_factors[in.stats_index(row, col)] : NeighbourNoiseFactors{};
+  const NeighbourNoiseFactors factors =
+      inside_image ? in.noise_factors[in.stats_index(row, col)] : NeighbourNoiseFactors{};
   return correlation_statistics(reference_window, view(in.warped, at_peak), factors);
 }
 
@@ -477,11 +479,11 @@ struct AdaptivePasses {
 struct PassWorkspace {
   cv::Mat warped_storage, warped_reference_storage;
   bool cache_reference_stats = false;
-  std::map<int, std::vector<WindowStats>> reference_stats;  // by window size
+  std::map<int, std::vector<WindowStats>> reference_stats;          // by window size
   std::map<int, std::vector<NeighbourNoiseFactors>> noise_factors;  // likewise, for the σ of the final pass
-  std::vector<std::int8_t> peak_dx, peak_dy;                 // the last pass's integer peaks, for its uncertainty
-  DisplacementField previous_field;                         // the field before a pass, for its change
-  GridField predictor;                                      // a refinement pass's, and its smoothing's scratch
+  std::vector<std::int8_t> peak_dx, peak_dy;  // the last pass's integer peaks, for its uncertainty
+  DisplacementField previous_field;           // the field before a pass, for its change
+  GridField predictor;                        // a refinement pass's, and its smoothing's scratch
   cv::Mat predictor_scratch;
   // Under adaptive refinement, the nodes a pass reads its predictor at, and
   // those grown by one node, which its smoothing reads.
@@ -512,41 +514,38 @@ cv::Mat undeformed_measurement(const PreparedPair& pair, cv::Rect region, Interp
   return out;
 }
 
-// Windows of `window_px` at every node of `field`, whose node positions
-// never change for an evaluator: computed at its first frame.
-const std::vector<WindowStats>& reference_stats_for(const PreparedPair& pair, const DisplacementField& field,
-                                                    int window_px, PassWorkspace& workspace) {
-  std::vector<WindowStats>& stats = workspace.reference_stats[window_px];
-  if (stats.size() == field.vectors.size()) return stats;
-  stats.assign(field.vectors.size(), WindowStats{});
-  cv::parallel_for_(cv::Range(0, static_cast<int>(stats.size())), [&](const cv::Range& range) {
+// `of_window` of the reference's window of `window_px` at every node of
+// `field`, kept in `cache` (by window size): the node positions never change
+// for an evaluator, so this runs at its first frame only.
+template <typename T, typename OfWindow>
+const std::vector<T>& per_reference_window(const PreparedPair& pair, const DisplacementField& field, int window_px,
+                                           std::map<int, std::vector<T>>& cache, OfWindow of_window) {
+  std::vector<T>& values = cache[window_px];
+  if (values.size() == field.vectors.size()) return values;
+  values.assign(field.vectors.size(), T{});
+  cv::parallel_for_(cv::Range(0, static_cast<int>(values.size())), [&](const cv::Range& range) {
     for (int i = range.start; i < range.end; ++i) {
       const auto& vec = field.vectors[static_cast<std::size_t>(i)];
       const cv::Point origin = window_origin(vec.x_px, vec.y_px, window_px, pair.roi);
-      stats[static_cast<std::size_t>(i)] =
-          window_stats(view(pair.reference, cv::Rect(origin, cv::Size(window_px, window_px))));
+      values[static_cast<std::size_t>(i)] =
+          of_window(view(pair.reference, cv::Rect(origin, cv::Size(window_px, window_px))));
     }
   });
-  return stats;
+  return values;
 }
 
-// The neighbour-noise factors of the windows of `window_px` at every node
-// of `field` (vector_uncertainty.h), which depend on the reference window
-// alone: computed at an evaluator's first frame, as reference_stats_for.
+const std::vector<WindowStats>& reference_stats_for(const PreparedPair& pair, const DisplacementField& field,
+                                                    int window_px, PassWorkspace& workspace) {
+  return per_reference_window(pair, field, window_px, workspace.reference_stats,
+                              [](const cv::Mat& window) { return window_stats(window); });
+}
+
+// The neighbour-noise factors (vector_uncertainty.h), which depend on the
+// reference window alone.
 const std::vector<NeighbourNoiseFactors>& noise_factors_for(const PreparedPair& pair, const DisplacementField& field,
                                                             int window_px, PassWorkspace& workspace) {
-  std::vector<NeighbourNoiseFactors>& factors = workspace.noise_factors[window_px];
-  if (factors.size() == field.vectors.size()) return factors;
-  factors.assign(field.vectors.size(), NeighbourNoiseFactors{});
-  cv::parallel_for_(cv::Range(0, static_cast<int>(factors.size())), [&](const cv::Range& range) {
-    for (int i = range.start; i < range.end; ++i) {
-      const auto& vec = field.vectors[static_cast<std::size_t>(i)];
-      const cv::Point origin = window_origin(vec.x_px, vec.y_px, window_px, pair.roi);
-      factors[static_cast<std::size_t>(i)] =
-          neighbour_noise_factors(view(pair.reference, cv::Rect(origin, cv::Size(window_px, window_px))));
-    }
-  });
-  return factors;
+  return per_reference_window(pair, field, window_px, workspace.noise_factors,
+                              [](const cv::Mat& window) { return neighbour_noise_factors(window); });
 }
 
 // A pass's measured vectors on their own grid.
