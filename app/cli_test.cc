@@ -66,7 +66,7 @@ TEST_F(Cli, AcquireThenSummariseAndExport) {
 
   const auto csv = bosfuse("export " + run_dir() + " --csv");
   ASSERT_EQ(csv.exit_code, 0) << csv.output;
-  EXPECT_EQ(csv.output.substr(0, csv.output.find('\n')), "time_utc,t_s,tc0 [degC],tc1 [degC]");
+  EXPECT_EQ(csv.output.substr(0, csv.output.find('\n')), "time_utc,t_s,time_scale,tc0 [degC],tc1 [degC]");
   const auto rows = std::count(csv.output.begin(), csv.output.end(), '\n') - 1;
   const auto store = storage::RunStore::open(run_dir());
   EXPECT_EQ(rows, static_cast<long>(store.read_samples(store.channels()[0].id).size()));
@@ -157,11 +157,34 @@ TEST_F(Cli, DataGoesToStdoutAndMessagesToStderr) {
   };
   const auto exported = stdout_to("export " + run_dir() + " --csv", "out.csv");
   ASSERT_EQ(exported.exit_code, 0) << exported.output;
-  EXPECT_EQ(first_line("out.csv"), "time_utc,t_s,tc0 [degC],tc1 [degC]") << "something other than data on stdout";
+  EXPECT_EQ(first_line("out.csv"), "time_utc,t_s,time_scale,tc0 [degC],tc1 [degC]") << "something other than data on stdout";
   const auto failed = stdout_to("runs " + (dir_ / "nothing-here").string(), "none.txt");
   EXPECT_NE(failed.exit_code, 0);
-  EXPECT_NE(failed.output.find("holds no bosfuse run"), std::string::npos) << "the error is not on stderr";
+  EXPECT_NE(failed.output.find("no such folder"), std::string::npos) << "the error is not on stderr";
   EXPECT_EQ(first_line("none.txt"), "") << "the error went to stdout";
+}
+
+// Every command that reads a run tells a missing folder from a folder
+// that holds no run, and reads `RUN/run.sqlite` as RUN.
+TEST_F(Cli, AMissingFolderIsNamedAndAFileInsideARunIsItsRun) {
+  ASSERT_EQ(bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 300ms").exit_code, 0);
+  const std::string missing = (dir_ / "no-such-run").string();
+  for (const char* command : {"runs", "export", "process", "report", "calibrate", "view", "replay", "mark"}) {
+    const std::string extra = std::string(command) == "mark" ? " 'heater off' --at +0.1s" : "";
+    const auto result = bosfuse(std::string(command) + " " + missing + extra);
+    EXPECT_EQ(result.exit_code, 105) << command << ": " << result.output;
+    EXPECT_NE(result.output.find("no such folder: '" + missing + "'"), std::string::npos) << command << ": " << result.output;
+  }
+  const auto listed = bosfuse("runs " + run_dir() + "/run.sqlite");
+  ASSERT_EQ(listed.exit_code, 0) << listed.output;
+  EXPECT_NE(listed.output.find("tc1"), std::string::npos) << "the run of its file is described: " << listed.output;
+  const auto exported = bosfuse("export " + run_dir() + "/run.sqlite --csv");
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  EXPECT_EQ(exported.output.substr(0, exported.output.find('\n')), "time_utc,t_s,time_scale,tc0 [degC],tc1 [degC]");
+  write((dir_ / "notes.txt").string(), "x");
+  const auto file = bosfuse("runs " + (dir_ / "notes.txt").string());
+  EXPECT_EQ(file.exit_code, 105) << file.output;
+  EXPECT_NE(file.output.find("is a file, not a run folder"), std::string::npos) << file.output;
 }
 
 TEST_F(Cli, AnUnknownSubcommandIsNamed) {

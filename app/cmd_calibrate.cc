@@ -11,6 +11,7 @@
 #include <iostream>
 
 #include "app/command.h"
+#include "app/run_argument.h"
 #include "app/run_control.h"
 #include "pipeline/calibrate.h"
 
@@ -88,7 +89,8 @@ void add_calibrate(CLI::App& root) {
   CLI::App* cmd = root.add_subcommand(
       "calibrate", "Fit °C per px of shift at each thermocouple from a processed run and store it in the run");
   cmd->add_option("run", args->run, "Run folder (processed: `bosfuse process RUN --mode probes` is enough)")
-      ->required();
+      ->required()
+      ->transform(run_folder_argument());
   cmd->add_option("--geometry", args->geometry, "TOML file whose [alignment] camera_offset_s is used");
   cmd->add_option("--camera-offset", args->camera_offset_s,
                   "Camera clock offset, experiment s: a frame stamped t happened at t + offset");

@@ -18,6 +18,7 @@
 #include "acquisition/clock.h"
 #include "app/command.h"
 #include "app/output_stream.h"
+#include "app/run_argument.h"
 #include "pipeline/processing_settings.h"
 #include "report/field_export.h"
 #include "report/probe_csv.h"
@@ -66,7 +67,7 @@ void add_export(CLI::App& root) {
       "export",
       "Export a run: its samples as CSV (one column per channel, ISO-8601 UTC time), or its processed fields as "
       "HDF5 with an XDMF sidecar");
-  cmd->add_option("run", args->run, "Run folder")->required();
+  cmd->add_option("run", args->run, "Run folder")->required()->transform(run_folder_argument());
   auto* format = cmd->add_option_group("format", "What to export (one of)");
   auto* csv = format->add_flag("--csv", args->csv, "The samples as CSV, one column per channel");
   auto* probes = format->add_flag("--probes", args->probes,

@@ -63,6 +63,7 @@ RobustLoss parse_loss(const std::string& text) {
 nlohmann::ordered_json fit_json(const NewtonFit& fit, const CsvSeries& series, const std::string& file) {
   nlohmann::ordered_json j = fitting::to_json(fit);
   j["input"] = {{"file", file}, {"time_column", series.time_name}, {"temperature_column", series.temperature_name}};
+  if (series.time_scale) j["input"]["time_scale"] = *series.time_scale;
   if (series.iso_origin_ns) j["origin_time_utc"] = acquisition::format_iso8601_utc(*series.iso_origin_ns, 6);
   j["diagnostics"]["empty_rows_skipped"] = series.empty_rows;
   return j;
@@ -93,7 +94,11 @@ void print_header(std::ostream& out, const CsvSeries& series, const std::string&
   out << (file == "-" ? "standard input" : file) << ": '" << series.temperature_name << "' against '"
       << series.time_name << "'";
   if (series.iso_origin_ns) {
-    out << " (t = 0 at " << acquisition::format_iso8601_utc(*series.iso_origin_ns, 6) << ")";
+    out << " (t = 0 at " << acquisition::format_iso8601_utc(*series.iso_origin_ns, 6);
+    if (series.time_scale && *series.time_scale != 1) {
+      out << "; experiment seconds: the recorded times × " << *series.time_scale << ", the file's time_scale";
+    }
+    out << ")";
   } else if (origin_s != 0.0) {
     out << " (t = 0 at " << series.time_name << " = " << std::setprecision(15) << origin_s << std::setprecision(6)
         << ")";

@@ -11,6 +11,7 @@
 
 #include "acquisition/clock.h"
 #include "app/command.h"
+#include "app/run_argument.h"
 #include "app/time_argument.h"
 #include "storage/experiment_clock.h"
 #include "storage/run_store.h"
@@ -89,7 +90,7 @@ void add_mark(CLI::App& root) {
   CLI::App* cmd = root.add_subcommand(
       "mark",
       "Record a marker event (e.g. \"heater off\") in a run: now while a logger records it, or --at a past time");
-  cmd->add_option("run", args->run, "Run folder")->required();
+  cmd->add_option("run", args->run, "Run folder")->required()->transform(run_folder_argument());
   cmd->add_option("message", args->message, "What happened; the run's [run] origin names the marker that is t = 0")
       ->required();
   cmd->add_option("--at", args->at,

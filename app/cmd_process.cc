@@ -12,6 +12,7 @@
 #include "app/command.h"
 #include "app/progress_display.h"
 #include "app/ranks.h"
+#include "app/run_argument.h"
 #include "app/run_control.h"
 #include "pipeline/process.h"
 #include "pipeline/process_frame.h"
@@ -77,7 +78,7 @@ void add_process(CLI::App& root) {
       "process",
       "Evaluate a run's frames against its reference: probes, fields, temperatures, fits, agreement. Without "
       "options the run's stored settings are used again; options change them and are stored with the results");
-  cmd->add_option("run", args->run, "Run folder")->required();
+  cmd->add_option("run", args->run, "Run folder")->required()->transform(run_folder_argument());
   cmd->add_flag("--resume", args->resume,
                 "Continue the run's interrupted processing with its own settings from the first frame it had not "
                 "finished");

@@ -11,6 +11,7 @@
 #include "acquisition/logger.h"
 #include "app/command.h"
 #include "app/output_stream.h"
+#include "app/run_argument.h"
 #include "app/run_control.h"
 #include "pipeline/processing_settings.h"
 #include "sim/replay.h"
@@ -113,7 +114,7 @@ void add_replay(CLI::App& root) {
   auto args = std::make_shared<ReplayArgs>();
   CLI::App* cmd = root.add_subcommand(
       "replay", "Record a recorded run again through simulated devices (Modbus on loopback, a replayed camera)");
-  cmd->add_option("run", args->run, "Recorded run folder")->required();
+  cmd->add_option("run", args->run, "Recorded run folder")->required()->transform(run_folder_argument());
   cmd->add_option("--out,-o", args->out, "New run folder to create")->required();
   cmd->add_option("--speed", args->speed, "Replay N times faster than recorded (the new run's time scale is the "
                                           "recorded run's times N)")

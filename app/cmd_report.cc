@@ -12,6 +12,7 @@
 
 #include "app/command.h"
 #include "app/output_stream.h"
+#include "app/run_argument.h"
 #include "report/report.h"
 #include "report/run_input.h"
 #include "storage/run_store.h"
@@ -82,7 +83,7 @@ void add_report(CLI::App& root) {
   auto args = std::make_shared<ReportArgs>();
   CLI::App* cmd = root.add_subcommand(
       "report", "Cooling-curve report of a run: self-contained HTML, figures as PNG/SVG, data as CSV/JSON");
-  cmd->add_option("run", args->run, "Run folder (holding run.sqlite)")->required();
+  cmd->add_option("run", args->run, "Run folder (holding run.sqlite)")->required()->transform(run_folder_argument());
   cmd->add_option("--out,-o", args->out, "Folder to write the report into (created if needed)")->required();
   cmd->add_option("--map-times", args->map_times,
                   "Times of the maps, experiment seconds, comma-separated (the nearest frame with a stored field)")

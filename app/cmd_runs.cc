@@ -9,6 +9,7 @@
 
 #include "acquisition/clock.h"
 #include "app/command.h"
+#include "app/run_argument.h"
 #include "storage/experiment_clock.h"
 #include "storage/run_store.h"
 
@@ -129,7 +130,7 @@ void add_runs(CLI::App& root) {
   auto dir = std::make_shared<std::string>();
   CLI::App* cmd = root.add_subcommand(
       "runs", "Summarise a run (channels, sample counts, time span, events), or list the runs under a folder");
-  cmd->add_option("run", *dir, "Run folder, or a folder holding runs")->required();
+  cmd->add_option("run", *dir, "Run folder, or a folder holding runs")->required()->transform(run_folder_argument());
   cmd->callback([dir] {
     if (!storage::RunStore::holds_run(*dir) && std::filesystem::is_directory(*dir)) {
       print_run_list(*dir);

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "app/command.h"
+#include "app/run_argument.h"
 #include "app/run_control.h"
 #include "app/served_view.h"
 
@@ -33,7 +34,7 @@ void add_view(CLI::App& root) {
       "view",
       "Serve a live web page of a run (curves, live BOS temperatures, frames, devices, alarms, events) while it is "
       "recorded or after");
-  cmd->add_option("run", args->run, "Run folder")->required();
+  cmd->add_option("run", args->run, "Run folder")->required()->transform(run_folder_argument());
   cmd->add_option("--listen", args->listen, "HOST:PORT to serve on; loopback unless you say otherwise")
       ->capture_default_str();
   cmd->add_flag("--token", args->token,

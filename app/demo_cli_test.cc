@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+
 #include <signal.h>
 
 #include <cmath>
@@ -15,6 +16,7 @@
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <regex>
 
 #include "fitting/fit_json.h"
 #include "fusion/temperature_budget.h"
@@ -261,6 +263,25 @@ TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
     EXPECT_GT(image.spread, 100);
   }
   EXPECT_EQ(storage::RunStore::open(run).run().status, storage::RunStatus::kComplete);
+}
+
+// A demo too short for a BOS fit says so before it records, and its table
+// keeps the probes' labels with a dash and the reason, never "nan".
+TEST(DemoCli, ADemoTooShortForBosFitsWarnsAndItsTableSaysWhy) {
+  testing::TempDir dir;
+  const auto demo = bosfuse("demo --out " + quoted(dir / "demo") + " --experiment-time 30s --speed 16 --seed 2");
+  ASSERT_EQ(demo.exit_code, 0) << demo.output;
+  EXPECT_NE(demo.output.find("gives 3 frame(s) after the reference, and a BOS fit needs at least 4"),
+            std::string::npos)
+      << demo.output;
+  EXPECT_NE(demo.output.find("--experiment-time 40s or more"), std::string::npos) << demo.output;
+  for (const char* probe : {"BOS tc-35mm", "BOS tc-45mm"}) {
+    const auto line = demo.output.find(std::string("  ") + probe);
+    ASSERT_NE(line, std::string::npos) << "the table lost the label " << probe << ": " << demo.output;
+    const std::string text = demo.output.substr(line, demo.output.find('\n', line) - line);
+    EXPECT_NE(text.find("k = — (no fit: "), std::string::npos) << text;
+  }
+  EXPECT_FALSE(std::regex_search(demo.output, std::regex("\\bnan\\b"))) << demo.output;
 }
 
 TEST(DemoCli, CtrlCStopsTheDemoPromptlyWithTheRunRecordedSoFar) {

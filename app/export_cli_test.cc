@@ -188,7 +188,7 @@ TEST_F(ExportCli, ProbeSamplesCarryTheirUncertaintyColumns) {
 TEST_F(ExportCli, DashIsStandardOutputAndOutIsTheOneSpellingOfTheOutput) {
   const auto dash = streams(kBosfuse + " export " + sh_quoted(run()) + " --csv -o -");
   ASSERT_EQ(dash.exit_code, 0) << dash.err;
-  EXPECT_TRUE(dash.out.starts_with("time_utc,t_s,tc0 [degC],tc1 [degC]\n")) << dash.out.substr(0, 200);
+  EXPECT_TRUE(dash.out.starts_with("time_utc,t_s,time_scale,tc0 [degC],tc1 [degC]\n")) << dash.out.substr(0, 200);
   EXPECT_EQ(std::count(dash.out.begin(), dash.out.end(), '\n'), 1 + 2 * truth_.samples) << "one row per poll";
   EXPECT_EQ(dash.err, "") << "nothing but data was asked for";
   const auto plain = streams(kBosfuse + " export " + sh_quoted(run()) + " --csv");

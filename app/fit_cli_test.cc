@@ -136,7 +136,7 @@ TEST_F(FitCli, AFormulaNamedChannelIsExportedInertAndFitsByItsName) {
   std::string header, first;
   std::getline(in, header);
   std::getline(in, first);
-  EXPECT_EQ(header, "time_utc,t_s,\"'=cmd|' /C calc'!A0 [degC]\",cold [degC]");
+  EXPECT_EQ(header, "time_utc,t_s,time_scale,\"'=cmd|' /C calc'!A0 [degC]\",cold [degC]");
   EXPECT_TRUE(first.ends_with(",-3.5")) << "a negative number is a number, not a formula: " << first;
 
   // Shell-quoted: the name holds single quotes, a pipe and an exclamation mark.
@@ -146,6 +146,46 @@ TEST_F(FitCli, AFormulaNamedChannelIsExportedInertAndFitsByItsName) {
   const auto j = read_json("fit.json");
   EXPECT_EQ(j.at("input").at("temperature_column"), name + " [degC]");
   EXPECT_NEAR(j.at("parameters").at("k_per_s").at("value").get<double>(), curve.k_per_s, 0.002);
+}
+
+// A run recorded 16× faster than the experiment (the demo): its UTC column
+// is the recording's clock, so a fit by it must use the export's time_scale
+// or k comes out 16× too large (issue 31: 0.0963 against 0.00604 1/s).
+TEST_F(FitCli, AScaledRunsExportFitsInExperimentTimeByEitherTimeColumn) {
+  constexpr double kScale = 16;
+  const testing::CoolingCurve curve{21.5, 64.0, 0.006};
+  const auto r = testing::sample_cooling(curve, 300, 1.0, 0.03, 7);
+  const std::int64_t start_ns = 1'795'000'000'000'000'000;
+  {
+    auto store = storage::RunStore::create(
+        dir_ / "run", {0, "demo", start_ns, {}, "", storage::RunStatus::kRunning, kScale, std::nullopt},
+        storage::RunStore::CreateMode::kNew);
+    const auto device = store.add_device({0, "adam", "modbus-tcp", "generic", "127.0.0.1:502"});
+    const auto channel = store.add_channel({0, device, "tc0", "thermocouple", "degC", "K", {}, {}});
+    std::vector<storage::Sample> samples;
+    for (std::size_t i = 0; i < r.time_s.size(); ++i) {
+      const auto t_ns = start_ns + static_cast<std::int64_t>(std::llround(r.time_s[i] / kScale * 1e9));
+      samples.push_back({channel, t_ns, {}, r.temperature_c[i], {}, storage::SampleStatus::kOk});
+    }
+    store.write_samples(samples);
+    store.finish(storage::RunStatus::kComplete, start_ns + 20'000'000'000);
+  }
+  ASSERT_EQ(bosfuse("export " + path("run") + " --csv -o " + path("export.csv")).exit_code, 0);
+  for (const std::string column : {"t_s", "time_utc"}) {
+    const auto fitted = bosfuse("fit " + path("export.csv") + " --time-column " + column + " --json " + path("f.json"));
+    ASSERT_EQ(fitted.exit_code, 0) << fitted.output;
+    const auto k = read_json("f.json").at("parameters").at("k_per_s");
+    EXPECT_NEAR(k.at("value").get<double>(), curve.k_per_s, 4 * k.at("std_error").get<double>()) << column;
+    if (column == "time_utc") {
+      EXPECT_NE(fitted.output.find("the recorded times × 16, the file's time_scale"), std::string::npos)
+          << fitted.output;
+      EXPECT_EQ(read_json("f.json").at("input").at("time_scale").get<double>(), kScale);
+    }
+  }
+  write("mixed.csv", "time_utc,time_scale,T\n2026-11-23T09:00:00Z,16,50\n2026-11-23T09:00:01Z,1,49\n");
+  const auto mixed = bosfuse("fit " + path("mixed.csv") + " --time-column time_utc");
+  EXPECT_NE(mixed.exit_code, 0);
+  EXPECT_NE(mixed.output.find("line 3: time_scale 1 differs from 16"), std::string::npos) << mixed.output;
 }
 
 TEST_F(FitCli, AmbientLossAndSigmaOptionsReachTheFit) {

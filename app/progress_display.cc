@@ -65,7 +65,7 @@ ProgressDisplay::ProgressDisplay(std::ostream& out)
 }
 
 ProgressDisplay::ProgressDisplay(std::ostream& out, bool terminal, Clock clock)
-    : out_(out), terminal_(terminal), clock_(std::move(clock)), started_(clock_()) {}
+    : out_(out), terminal_(terminal), clock_(std::move(clock)), next_phase_origin_(clock_()) {}
 
 ProgressDisplay::~ProgressDisplay() { finish(); }
 
@@ -75,6 +75,8 @@ void ProgressDisplay::step(std::size_t done, std::size_t total, std::string_view
   if (!stepped_ || total != total_ || done < done_) {
     phase_start_ = now;
     phase_start_done_ = done;
+    phase_origin_ = next_phase_origin_.value_or(now);
+    next_phase_origin_.reset();
   }
   stepped_ = true;
   last_time_ = now;
@@ -86,6 +88,10 @@ void ProgressDisplay::step(std::size_t done, std::size_t total, std::string_view
 
 void ProgressDisplay::note(std::string_view line) {
   const std::lock_guard lock(mutex_);
+  // A note between phases announces the next one's work ("processing
+  // ..."): its time is when that phase's elapsed time starts, so time spent
+  // before it (a recording) is not counted in it.
+  if (!(stepped_ && (total_ == 0 || done_ < total_))) next_phase_origin_ = clock_();
   if (silent_) return;
   if (drawn_) out_ << "\r\x1b[K";
   out_ << without_trailing_newlines(line) << "\n";
@@ -122,7 +128,7 @@ std::optional<std::chrono::nanoseconds> ProgressDisplay::eta_locked() const {
 // Counts first, so they keep their columns while `what` changes and a
 // narrow terminal cuts only `what`.
 std::string ProgressDisplay::line_locked() const {
-  const std::string elapsed = format_clock_duration(last_time_ - started_);
+  const std::string elapsed = format_clock_duration(last_time_ - phase_origin_);
   std::string line;
   if (total_ == 0) {
     line = fmt::format("{}  {} elapsed", done_, elapsed);

@@ -11,6 +11,8 @@
 // applied to the items left, so set-up time before the first step does not
 // count against the rate; until two steps have been seen it reads "ETA —".
 // A step whose total differs, or whose count went back, starts a new phase.
+// "elapsed" is the phase's: from the note that announced it (a note while
+// no phase runs), else from the display's creation for the first phase.
 //
 // While a display is on a terminal, messages go through note(), which
 // prints them above the progress line instead of in the middle of it.
@@ -61,8 +63,12 @@ class ProgressDisplay {
   bool silent_ = false;
   std::size_t columns_ = 80;
   Clock clock_;
-  std::chrono::steady_clock::time_point started_;
-  // The current phase: its first step, and the latest one.
+  // Where the next phase's elapsed time starts: the display's creation, or
+  // the note that announced it; none once a phase runs.
+  std::optional<std::chrono::steady_clock::time_point> next_phase_origin_;
+  // The current phase: where its elapsed time starts, its first step, and
+  // the latest one.
+  std::chrono::steady_clock::time_point phase_origin_;
   std::chrono::steady_clock::time_point phase_start_;
   std::size_t phase_start_done_ = 0;
   std::chrono::steady_clock::time_point last_time_;

@@ -85,6 +85,28 @@ TEST(ProgressDisplay, PlainOutputIsOneLinePerStepWithoutControlCharacters) {
   EXPECT_EQ(out.str().find('\r'), std::string::npos);
 }
 
+// The demo records for 15 s and then processes for 1 s: its processing
+// line must not say "0:16 elapsed" (issue 31).
+TEST(ProgressDisplay, ANoteBetweenPhasesStartsTheNextPhasesElapsedTime) {
+  FakeClock clock;
+  std::ostringstream out;
+  {
+    ProgressDisplay progress(out, false, clock.function());
+    clock.now += 15s;
+    progress.note("processing ...");
+    clock.now += 1s;
+    progress.step(1, 2, "frame 1");
+    progress.note("a message while frames run");
+    clock.now += 1s;
+    progress.step(2, 2, "frame 2");
+  }
+  EXPECT_EQ(out.str(),
+            "processing ...\n"
+            "1/2  50%  0:01 elapsed  ETA —  frame 1\n"
+            "a message while frames run\n"
+            "2/2 100%  0:02 elapsed  ETA 0:00  frame 2\n");
+}
+
 TEST(ProgressDisplay, OnATerminalOneLineIsRewrittenInPlace) {
   FakeClock clock;
   std::ostringstream out;

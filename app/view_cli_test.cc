@@ -189,6 +189,7 @@ TEST_F(ViewCli, SaysThePortIsInUse) {
 }
 
 TEST_F(ViewCli, RefusesAFolderThatIsNotARunOrIsDamaged) {
+  std::filesystem::create_directories(dir_ / "nothing");
   const auto empty = testing::run_command(kBosfuse + " view " + (dir_ / "nothing").string());
   EXPECT_EQ(empty.exit_code, 1);
   EXPECT_NE(empty.output.find("holds no bosfuse run"), std::string::npos) << empty.output;

@@ -122,7 +122,7 @@ std::size_t FrameThreads::run(const Bytes& plan, std::size_t count, const FrameW
 std::string FrameThreads::brief_report() const {
   std::string text = fmt::format("{} frames side by side:", threads_);
   for (std::size_t t = 0; t < frames_by_thread_.size(); ++t) {
-    text += fmt::format(" {}{} frames", t ? ", " : "", frames_by_thread_[t]);
+    text += fmt::format("{}{} frames", t ? ", " : " ", frames_by_thread_[t]);
   }
   return text + "\n";
 }

@@ -33,6 +33,11 @@
 namespace bosfuse::pipeline {
 namespace {
 
+// For a person: a failed fit's k is "—" (the agreement's text says why), never "nan".
+std::string rate_text(const fitting::NewtonFit& fit) {
+  return fit.ok() && std::isfinite(fit.k_per_s.value) ? fmt::format("{:.4g} 1/s", fit.k_per_s.value) : "— (no fit)";
+}
+
 namespace fs = std::filesystem;
 using json = nlohmann::ordered_json;
 using storage::ChannelInfo;
@@ -227,8 +232,8 @@ FitsAndAgreements fit_everything(const storage::RunStore& store, const storage::
     json j = fitting::to_json(agreement);
     j["probe_quantity"] = probe.quantity;
     out.agreements.push_back({0, c.id, probes[p].id, j.dump()});
-    out.text += fmt::format("{}: thermocouple k = {:.4g} 1/s, BOS probe ({}) k = {:.4g} 1/s\n", c.name,
-                            tc_fit.k_per_s.value, probe.quantity, probe_fit.fit.k_per_s.value) +
+    out.text += fmt::format("{}: thermocouple k = {}, BOS probe ({}) k = {}\n", c.name, rate_text(tc_fit),
+                            probe.quantity, rate_text(probe_fit.fit)) +
                 agreement.brief_report();
   }
   return out;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <ctime>
 #include <map>
 
@@ -120,7 +121,7 @@ std::size_t choose_temperature_column(const std::vector<std::string>& header, co
   std::vector<std::string> candidates;
   std::size_t chosen = 0;
   for (std::size_t i = 0; i < header.size(); ++i) {
-    if (i == time_column || header[i] == "t_s" || header[i] == "time_utc") continue;
+    if (i == time_column || header[i] == "t_s" || header[i] == "time_utc" || header[i] == kTimeScaleColumn) continue;
     candidates.push_back(header[i]);
     chosen = i;
   }
@@ -128,6 +129,21 @@ std::size_t choose_temperature_column(const std::vector<std::string>& header, co
   if (candidates.empty()) throw std::runtime_error("the file has no temperature column");
   throw std::runtime_error("several temperature columns (" + list_columns(candidates) +
                            "): choose one with --temperature-column");
+}
+
+// The export's time_scale cell of a row: a positive number, the same in
+// every row (one run has one scale).
+double parse_time_scale_cell(const std::string& text, std::size_t line_number, std::optional<double> earlier) {
+  const auto scale = parse_number(text);
+  if (!scale || !(*scale > 0) || !std::isfinite(*scale)) {
+    throw std::runtime_error("line " + std::to_string(line_number) + ": time_scale '" + text +
+                             "' is not a positive number");
+  }
+  if (earlier && *earlier != *scale) {
+    throw std::runtime_error("line " + std::to_string(line_number) + ": time_scale " + text + " differs from " +
+                             fmt::format("{}", *earlier) + " above it; a file holds one run's times");
+  }
+  return *scale;
 }
 
 struct TimeCell {
@@ -148,7 +164,7 @@ void write_samples_csv(const storage::RunStore& store, std::ostream& out) {
   const auto channels = store.channels();
   std::map<std::int64_t, std::size_t> column;
   const storage::ExperimentClock clock = storage::experiment_clock(store);
-  out << "time_utc,t_s";
+  out << "time_utc,t_s,time_scale";
   for (const auto& c : channels) {
     column[c.id] = column.size();
     out << "," << csv_text_cell(c.name + " [" + c.unit + "]");
@@ -158,8 +174,8 @@ void write_samples_csv(const storage::RunStore& store, std::ostream& out) {
   std::optional<std::int64_t> row_t;
   const auto flush_row = [&] {
     if (!row_t) return;
-    out << storage::format_iso8601_utc(*row_t, 6) << ","
-        << fmt::format("{:.6f}", clock.seconds(*row_t));
+    out << storage::format_iso8601_utc(*row_t, 6) << "," << fmt::format("{:.6f}", clock.seconds(*row_t)) << ","
+        << fmt::format("{}", clock.time_scale);
     for (auto& cell : cells) {
       out << "," << cell;
       cell.clear();
@@ -191,6 +207,7 @@ CsvSeries read_csv_series(std::istream& in, const std::string& time_column, cons
   series.temperature_name = header[columns.temperature];
   std::vector<std::int64_t> iso_ns;
   std::optional<bool> iso_times;  // decided by the first row
+  const std::optional<std::size_t> scale_column = find_column(header, kTimeScaleColumn);
   std::size_t line_number = 1;
   for (std::size_t row = 0; row < kMaxRows && std::getline(in, line); ++row) {
     ++line_number;
@@ -220,13 +237,16 @@ CsvSeries read_csv_series(std::istream& in, const std::string& time_column, cons
       throw std::runtime_error("line " + std::to_string(line_number) + ": the time column mixes seconds and ISO-8601");
     }
     if (time.iso_ns) iso_ns.push_back(*time.iso_ns);
+    if (time.iso_ns && scale_column) {
+      series.time_scale = parse_time_scale_cell(cells[*scale_column], line_number, series.time_scale);
+    }
     series.time_s.push_back(time.seconds.value_or(0.0));
     series.temperature_c.push_back(*value);
   }
   if (!iso_ns.empty()) {
     series.iso_origin_ns = *std::min_element(iso_ns.begin(), iso_ns.end());
     for (std::size_t i = 0; i < iso_ns.size(); ++i) {
-      series.time_s[i] = static_cast<double>(iso_ns[i] - *series.iso_origin_ns) * 1e-9;
+      series.time_s[i] = static_cast<double>(iso_ns[i] - *series.iso_origin_ns) * 1e-9 * series.time_scale.value_or(1);
     }
   }
   return series;
