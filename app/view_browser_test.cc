@@ -198,6 +198,7 @@ TEST(ViewBrowser, APageOpenedAtItsTokenedUrlShowsTheRunThroughItsCookie) {
       "(() => { if (typeof series === 'undefined') return null;"
       " const n = [...series.values()].map(d => d.data.length);"
       " return linkState === 'live' && document.getElementById('link').textContent === 'finished: the run is interrupted' &&"
+      " document.getElementById('bos-state').textContent.startsWith('the run has no frames;') &&"
       " document.getElementById('name').textContent === 'tokened' && n.length === 1 && n[0] === 20 ? n : null; })()",
       30);
   ASSERT_TRUE(shown.is_array()) << shown;
@@ -481,7 +482,7 @@ TEST(ViewBrowser, AFinishedRunShowsItsStateCameraEventsMarkerAndTheTimeBeforeIts
       "  rows, events, x_min: chart.scales.x.min, window: document.getElementById('window').value,"
       "  markers: drawnMarkers.filter(m => m.x_px >= a.left && m.x_px <= a.right).map(m => m.label),"
       "  value: r.querySelector('.value').textContent, age: r.querySelector('.age').textContent};"
-      " return events.length === 5 && rows.some(t => t.includes('frames 25')) ? page : null; })()",
+      " return events.length === 5 && frames.count === 25 ? page : null; })()",
       30);
   ASSERT_TRUE(page.is_object()) << page;
   EXPECT_EQ(page["link"], "finished: the run is complete") << page;
