@@ -358,6 +358,8 @@ TEST(ViewBrowser, TheLiveBosTemperatureAppearsAndChangesBesideTheThermocouplesWh
   EXPECT_GT(frame[2].get<double>(), 0.6) << "the virtual camera's frames are as good as the reference";
 }
 
+void expect_curves_drawn(const cv::Mat& image, const nlohmann::json& shown);
+
 // What `chromium --headless --screenshot` sees: the picture taken at the
 // page's load event, while its event stream is open, has the thermocouple
 // curves drawn in the chart (pixels of each series' line colour), not an
@@ -399,11 +401,29 @@ TEST(ViewBrowser, AScreenshotAtLoadShowsTheCurvesWhileTheStreamIsOpen) {
       "(() => { const r = document.getElementById('chart').getBoundingClientRect(),"
       " g = document.createElement('canvas').getContext('2d');"
       " return {rect: [r.left, r.top, r.width, r.height], ratio: window.devicePixelRatio,"
-      "  link: document.getElementById('link').textContent,"
+      "  link: document.getElementById('link').textContent, size: [window.innerWidth, window.innerHeight],"
       "  colours: [...series.values()].map(d => { g.fillStyle = d.borderColor; const h = g.fillStyle;"
       "   return [1, 3, 5].map(i => parseInt(h.slice(i, i + 2), 16)); })}; })()");
   ASSERT_TRUE(shown.is_object()) << shown;
-  const cv::Mat image = cv::imread(png.string(), cv::IMREAD_COLOR);
+  // And `chromium --headless --screenshot` itself, at the same window size
+  // (the DevTools tab's, so the chart is where the page said).
+  const auto cli_png = dir / "cli-shot.png";
+  std::filesystem::create_directories(dir / "cli");
+  const auto cli = testing::chromium(dir / "cli",
+                                     "--window-size=" + std::to_string(shown["size"][0].get<int>()) + "," +
+                                         std::to_string(shown["size"][1].get<int>()) +
+                                         " --screenshot=" + testing::shell_quote(cli_png) + " " + url,
+                                     60);
+  ASSERT_EQ(cli.exit_code, 0) << cli.output;
+  for (const auto& [path, what] : {std::pair{png, "DevTools screenshot"}, std::pair{cli_png, "chromium --screenshot"}}) {
+    SCOPED_TRACE(what);
+    expect_curves_drawn(cv::imread(path.string(), cv::IMREAD_COLOR), shown);
+  }
+}
+
+// The chart area of `image` (where `shown` says the page put it) holds each
+// curve's colour `shown` names.
+void expect_curves_drawn(const cv::Mat& image, const nlohmann::json& shown) {
   ASSERT_FALSE(image.empty()) << "the screenshot is not a PNG OpenCV decodes";
   const double ratio = shown["ratio"].get<double>();
   const cv::Rect chart_area = cv::Rect(static_cast<int>(shown["rect"][0].get<double>() * ratio),
