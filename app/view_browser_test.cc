@@ -168,11 +168,25 @@ TEST(ViewBrowser, APageOpenedAtItsTokenedUrlShowsTheRunThroughItsCookie) {
   ASSERT_TRUE(testing::have_chromium()) << "chromium is not installed (scripts/debian-packages.txt lists it)";
   testing::TempDir dir;
   {
-    auto store = storage::RunStore::create(dir / "run", {.name = "tokened", .started_ns = 1'000'000'000},
+    auto store = storage::RunStore::create(dir / "run",
+                                           {.id = 0,
+                                            .name = "tokened",
+                                            .started_ns = 1'000'000'000,
+                                            .ended_ns = std::nullopt,
+                                            .config_toml = "",
+                                            .status = storage::RunStatus::kRunning,
+                                            .time_scale = 1,
+                                            .origin_event = std::nullopt},
                                            storage::RunStore::CreateMode::kNew);
-    const auto device = store.add_device({.name = "adam", .kind = "modbus-tcp"});
-    const auto channel =
-        store.add_channel({.device_id = device, .name = "tc0", .kind = "thermocouple", .unit = "degC"});
+    const auto device = store.add_device({.id = 0, .name = "adam", .kind = "modbus-tcp", .profile = "", .address = ""});
+    const auto channel = store.add_channel({.id = 0,
+                                            .device_id = device,
+                                            .name = "tc0",
+                                            .kind = "thermocouple",
+                                            .unit = "degC",
+                                            .tc_type = std::nullopt,
+                                            .image_x_px = std::nullopt,
+                                            .image_y_px = std::nullopt});
     std::vector<storage::Sample> samples;
     for (int k = 0; k < 20; ++k)
       samples.push_back({channel, 2'000'000'000LL + k * 100'000'000LL, {}, 20.0 + k, {}, {}});
@@ -461,27 +475,52 @@ TEST(ViewBrowser, AFinishedRunShowsItsStateCameraEventsMarkerAndTheTimeBeforeIts
   const std::int64_t t0 = acquisition::utc_now_ns() - 20'000'000'000LL;  // ages in seconds
   constexpr std::int64_t kSecond = 1'000'000'000LL;
   {
-    auto store = storage::RunStore::create(
-        dir / "run", {.name = "finished", .started_ns = t0, .origin_event = "heater off"},
-        storage::RunStore::CreateMode::kNew);
-    const auto adam = store.add_device({.name = "adam", .kind = "modbus-tcp"});
-    const auto camera = store.add_device({.name = "cam", .kind = "camera", .profile = "virtual"});
-    const auto channel = store.add_channel({.device_id = adam, .name = "tc0", .kind = "thermocouple", .unit = "degC"});
+    auto store = storage::RunStore::create(dir / "run",
+                                           {.id = 0,
+                                            .name = "finished",
+                                            .started_ns = t0,
+                                            .ended_ns = std::nullopt,
+                                            .config_toml = "",
+                                            .status = storage::RunStatus::kRunning,
+                                            .time_scale = 1,
+                                            .origin_event = "heater off"},
+                                           storage::RunStore::CreateMode::kNew);
+    const auto adam = store.add_device({.id = 0, .name = "adam", .kind = "modbus-tcp", .profile = "", .address = ""});
+    const auto camera = store.add_device({.id = 0, .name = "cam", .kind = "camera", .profile = "virtual", .address = ""});
+    const auto channel = store.add_channel({.id = 0,
+                                            .device_id = adam,
+                                            .name = "tc0",
+                                            .kind = "thermocouple",
+                                            .unit = "degC",
+                                            .tc_type = std::nullopt,
+                                            .image_x_px = std::nullopt,
+                                            .image_y_px = std::nullopt});
     std::vector<storage::Sample> samples;
     for (int k = 0; k < 100; ++k) samples.push_back({channel, t0 + k * kSecond / 10, {}, 40.0 + 0.1 * k, {}, {}});
     store.write_samples(samples);
     std::vector<storage::FrameRecord> frames;
-    for (int k = 0; k < 25; ++k)
-      frames.push_back({.device_id = camera, .t_ns = t0 + kSecond / 5 + k * 4 * kSecond / 10,
-                        .path = "frames/" + std::to_string(k) + ".png", .width_px = 64, .height_px = 64});
+    for (int k = 0; k < 25; ++k) {
+      frames.push_back({.id = 0,
+                        .device_id = camera,
+                        .t_ns = t0 + kSecond / 5 + k * 4 * kSecond / 10,
+                        .device_t_ns = std::nullopt,
+                        .path = "frames/" + std::to_string(k) + ".png",
+                        .width_px = 64,
+                        .height_px = 64,
+                        .bit_depth = 8,
+                        .is_reference = false});
+    }
     store.write_frames(frames);
     const std::int64_t origin = t0 + 6 * kSecond;  // t = 0: samples from −6 s
+    const auto event = [](std::optional<std::int64_t> device, std::int64_t t_ns, std::string kind, std::string message) {
+      return storage::Event{.id = 0, .device_id = device, .t_ns = t_ns, .kind = std::move(kind), .message = std::move(message)};
+    };
     store.write_events(std::vector<storage::Event>{
-        {.device_id = adam, .t_ns = origin - kSecond / 50, .kind = "connect", .message = "connected"},
-        {.device_id = adam, .t_ns = origin - kSecond / 250, .kind = "error", .message = "a reply was late"},
-        {.t_ns = origin, .kind = "marker", .message = "heater off"},
-        {.t_ns = origin + 2 * kSecond, .kind = "alarm", .message = "tc0: high 46.0 degC above the limit 45 degC"},
-        {.t_ns = origin + 3 * kSecond, .kind = "alarm-cleared", .message = "tc0: high cleared at 44.9 degC"}});
+        event(adam, origin - kSecond / 50, "connect", "connected"),
+        event(adam, origin - kSecond / 250, "error", "a reply was late"),
+        event(std::nullopt, origin, "marker", "heater off"),
+        event(std::nullopt, origin + 2 * kSecond, "alarm", "tc0: high 46.0 degC above the limit 45 degC"),
+        event(std::nullopt, origin + 3 * kSecond, "alarm-cleared", "tc0: high cleared at 44.9 degC")});
     store.finish(storage::RunStatus::kComplete, t0 + 10 * kSecond);
   }
   const int view_port = testing::unused_loopback_port();
