@@ -191,6 +191,7 @@ struct LiveServer::Impl {
   bool admit(const httplib::Request& request, httplib::Response& response) const;
   std::string token_cookie() const { return "bosfuse_token_" + std::to_string(port); }
   void stream_events(const httplib::Request& request, httplib::Response& response);
+  std::string snapshot_script();
   std::string read_stream(StreamState& state, const RunSnapshot& snapshot);
   bool stream_step(StreamState& state, httplib::DataSink& sink);
 
@@ -270,6 +271,9 @@ void LiveServer::Impl::route() {
     }
     response.set_content(png, "image/png");
   });
+  server.Get("/snapshot.js", [this](const httplib::Request&, httplib::Response& response) {
+    response.set_content(snapshot_script(), "text/javascript; charset=utf-8");
+  });
   server.Get("/events", [this](const httplib::Request& request, httplib::Response& response) {
     stream_events(request, response);
   });
@@ -280,13 +284,39 @@ void LiveServer::Impl::route() {
   server.set_default_headers({{"X-Content-Type-Options", "nosniff"}, {"Cache-Control", "no-store"}});
 }
 
+// The page as it stands, for the page's first paint: a script the page
+// loads before its own, so the chart is drawn with what the run holds before
+// the document's load event (a headless screenshot, taken at that event,
+// then shows the data). It is the first turn of a stream from the start,
+// bounded like any (LiveStream::kRowsPerRead), and the cursor after it,
+// from which the page's event stream goes on (`/events?after=`).
+std::string LiveServer::Impl::snapshot_script() {
+  nlohmann::json snapshot;
+  try {
+    LiveStream stream(watch.run_dir(), {}, &bos);
+    const std::string text = stream.next(watch.snapshot());
+    snapshot = {{"run", nlohmann::json::parse(watch.describe_json())},
+                {"stream", text},
+                {"cursor", format_cursor(stream.cursor())}};
+  } catch (const std::exception& e) {  // the page says why and goes on with its stream
+    snapshot = {{"error", unreadable_run_message(e)}};
+  }
+  return "window.bosfuseSnapshot = " + snapshot.dump() + ";\n";
+}
+
+// Where a stream starts: after the client's Last-Event-ID (a reconnect),
+// else after the cursor its URL names (`?after=`, the page's snapshot),
+// else at the run's beginning.
 void LiveServer::Impl::stream_events(const httplib::Request& request, httplib::Response& response) {
   TailCursor from;
-  if (request.has_header("Last-Event-ID")) {
-    const auto cursor = parse_cursor(request.get_header_value("Last-Event-ID"));
+  const bool reconnect = request.has_header("Last-Event-ID");
+  if (reconnect || request.has_param("after")) {
+    const auto cursor =
+        parse_cursor(reconnect ? request.get_header_value("Last-Event-ID") : request.get_param_value("after"));
     if (!cursor) {
       response.status = 400;
-      response.set_content("Last-Event-ID is not an id this stream sent\n", "text/plain");
+      response.set_content(std::string(reconnect ? "Last-Event-ID" : "after") + " is not an id this stream sent\n",
+                           "text/plain");
       return;
     }
     from = *cursor;

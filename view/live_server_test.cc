@@ -2,6 +2,7 @@
 // at run time, over a run another connection is writing.
 
 #include "view/live_server.h"
+#include "view/live_stream.h"
 
 #include <gtest/gtest.h>
 #include <httplib.h>
@@ -60,14 +61,15 @@ class Viewer : public ::testing::Test {
       writer_->write_samples(batch);
     }
   }
-  // Reads /events until `want` samples arrived (or 10 s); returns the messages.
-  std::vector<testing::SseMessage> read_events(std::size_t want, const std::string& last_event_id = "") {
+  // Reads `path` (the stream) until `want` samples arrived (or 10 s); returns the messages.
+  std::vector<testing::SseMessage> read_events(std::size_t want, const std::string& last_event_id = "",
+                                               const std::string& path = "/events") {
     auto c = client();
     std::string text;
     httplib::Headers headers;
     if (!last_event_id.empty()) headers.emplace("Last-Event-ID", last_event_id);
     const auto deadline = std::chrono::steady_clock::now() + 10s;
-    c.Get("/events", headers, [&](const char* data, std::size_t length) {
+    c.Get(path, headers, [&](const char* data, std::size_t length) {
       text.append(data, length);
       std::size_t samples = 0;
       for (const auto& m : testing::parse_sse(text)) samples += m.type == "sample";
@@ -196,6 +198,37 @@ TEST_F(Viewer, AReconnectWithLastEventIdContinuesWithoutLossOrRepeat) {
   for (std::size_t i = 0; i < values.size(); ++i) ASSERT_EQ(values[i], static_cast<double>(i)) << "at " << i;
 }
 
+// The page's first paint: /snapshot.js holds the run's description and the
+// stream's first turn with the cursor after it, and the stream named by that
+// cursor (`/events?after=`) goes on with nothing lost or repeated.
+TEST_F(Viewer, TheSnapshotHoldsTheRunSoFarAndTheStreamGoesOnAfterItsCursor) {
+  write_samples(0, 50);
+  start();
+  auto c = client();
+  const auto script = c.Get("/snapshot.js");
+  ASSERT_TRUE(script);
+  ASSERT_EQ(script->status, 200);
+  EXPECT_EQ(script->get_header_value("Content-Type"), "text/javascript; charset=utf-8");
+  const std::string prefix = "window.bosfuseSnapshot = ";
+  ASSERT_TRUE(script->body.starts_with(prefix)) << script->body.substr(0, 100);
+  ASSERT_TRUE(script->body.ends_with(";\n"));
+  const auto snapshot =
+      nlohmann::json::parse(script->body.substr(prefix.size(), script->body.size() - prefix.size() - 2));
+  EXPECT_EQ(snapshot.at("run").at("name"), "live");
+  auto values = sample_values(testing::parse_sse(snapshot.at("stream").get<std::string>()));
+  ASSERT_EQ(values.size(), 50u);
+  const std::string cursor = snapshot.at("cursor");
+  EXPECT_EQ(parse_cursor(cursor)->sample_rowid, 50);
+  write_samples(50, 30);
+  const auto after = sample_values(read_events(30, "", "/events?after=" + cursor));
+  values.insert(values.end(), after.begin(), after.end());
+  ASSERT_EQ(values.size(), 80u);
+  for (std::size_t i = 0; i < values.size(); ++i) ASSERT_EQ(values[i], static_cast<double>(i)) << "at " << i;
+  const auto foreign = c.Get("/events?after=50-0");
+  ASSERT_TRUE(foreign);
+  EXPECT_EQ(foreign->status, 400);
+}
+
 TEST_F(Viewer, StreamsEventsAndFrameCounts) {
   const storage::Event lost{0, device_, 2'000'000'000, "disconnect", "no answer"};
   writer_->write_events({&lost, 1});
@@ -210,6 +243,7 @@ TEST_F(Viewer, StreamsEventsAndFrameCounts) {
       const auto data = nlohmann::json::parse(m.data);
       EXPECT_EQ(data.at("count"), 1);
       EXPECT_DOUBLE_EQ(data.at("last_t_s").get<double>(), 0.5);
+      EXPECT_DOUBLE_EQ(data.at("first_t_s").get<double>(), 0.5);  // for the rate over the run
     }
   }
   EXPECT_NE(std::find(kinds.begin(), kinds.end(), "disconnect"), kinds.end());
@@ -264,7 +298,7 @@ TEST_F(Viewer, RefusesARequestThatNamesAnotherHostOnEveryRoute) {
   start();
   auto c = client();
   const std::string port = std::to_string(port_);
-  for (const char* path : {"/", "/chart.js", "/api/run", "/frame.png", "/events", "/nothing"}) {
+  for (const char* path : {"/", "/chart.js", "/api/run", "/snapshot.js", "/frame.png", "/events", "/nothing"}) {
     for (const std::string& host : std::vector<std::string>{
              "evil.example", "evil.example:" + port, "127.0.0.1.evil.example", "localhost.evil.example:" + port,
              "127.0.0.1:" + std::to_string(port_ + 1), "[::2]:" + port, ""}) {
@@ -381,7 +415,7 @@ TEST_F(Viewer, WantsTheTokenOfItsUrlOnEveryRouteAndHandsItToThePageAsACookie) {
   const std::string token = match[1];
   const std::string cookie = "bosfuse_token_" + std::to_string(port_);
   auto c = client();
-  for (const char* path : {"/", "/chart.js", "/api/run", "/frame.png", "/events", "/nothing"}) {
+  for (const char* path : {"/", "/chart.js", "/api/run", "/snapshot.js", "/frame.png", "/events", "/nothing"}) {
     EXPECT_EQ(status_of(c, path, {}), 403) << path;
     EXPECT_EQ(status_of(c, std::string(path) + "?token=" + std::string(32, '0'), {}), 403) << path;
     EXPECT_EQ(status_of(c, path, {{"Cookie", cookie + "=" + token.substr(1) + "0"}}), 403) << path;

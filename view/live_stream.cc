@@ -147,10 +147,15 @@ std::string LiveStream::next(const RunSnapshot& snapshot) {
   const auto frames = tail_.frames_after(cursor_.frame_id, kRowsPerRead);
   if (!frames.empty()) {
     cursor_.frame_id = frames.back().id;
-    const nlohmann::json data{{"count", tail_.frame_count_through(cursor_.frame_id)},
-                              {"last_t_s", clock.seconds(frames.back().t_ns)},
-                              {"width_px", frames.back().width_px},
-                              {"height_px", frames.back().height_px}};
+    nlohmann::json data{{"count", tail_.frame_count_through(cursor_.frame_id)},
+                        {"last_t_s", clock.seconds(frames.back().t_ns)},
+                        {"width_px", frames.back().width_px},
+                        {"height_px", frames.back().height_px}};
+    // The first frame's time, for the rate over the run (read once per stream).
+    if (!first_frame_t_ns_) first_frame_t_ns_ = tail_.frames_after(0, 1).front().t_ns;
+    data["first_t_s"] = clock.seconds(*first_frame_t_ns_);
+    // The camera that took the last one: the page shows frames in its device row.
+    if (frames.back().device_id) data["device_id"] = *frames.back().device_id;
     out += sse_message("frames", format_cursor(cursor_), data.dump());
   }
   return out + live_bos(clock);

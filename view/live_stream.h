@@ -9,6 +9,7 @@
 // `clock` message says so before any record timed by it.
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -52,6 +53,7 @@ class LiveStream {
   const LiveBos* bos_;
   std::size_t bos_sent_ = 0;
   std::string sent_bos_state_;
+  std::optional<std::int64_t> first_frame_t_ns_;
 };
 
 }  // namespace bosfuse::view

@@ -23,11 +23,16 @@ table{border-collapse:collapse;font-size:.9em}td,th{padding:.1em .5em;text-align
 #frame-view{max-width:100%;border:1px solid #ddd;display:block;margin:.3em 0}
 .small{font-size:.85em;color:#555}
 #alarms li{color:#b00}
+.done{color:#ccc}.marker{color:#1f4fa0}
+#readings{display:flex;flex-wrap:wrap;gap:.3em 2em;margin:.2em 0 .5em}
+.reading .name{font-size:.9em;color:#555}.reading .value{font-size:2.2em;font-weight:600;line-height:1.1}
+.reading .age{font-size:.85em;color:#555}.reading .age.bad{color:#b00}
 </style></head><body>
 <header><h1 id="name">bosfuse live</h1><span>status: <b id="status">…</b></span>
 <span id="link" class="warn">connecting…</span></header>
 <main>
 <section><h2>Thermocouples</h2>
+<div id="readings"></div>
 <label>window <select id="window"><option value="60">last 1 min</option><option value="300">last 5 min</option>
 <option value="1800" selected>last 30 min</option><option value="0">whole run</option></select></label>
 <div id="chart-box"><canvas id="chart"></canvas></div>
@@ -39,7 +44,7 @@ table{border-collapse:collapse;font-size:.9em}td,th{padding:.1em .5em;text-align
 <section><h2>Events</h2><ol id="events"></ol></section>
 </div>
 <section><h2>Live BOS at the thermocouples</h2>
-<div id="bos-state" class="small">waiting for frames</div>
+<div id="bos-state" class="small">…</div>
 <table id="bos-table"><thead><tr><th>probe</th><th>|d| / px</th><th>u / px</th><th>v / px</th><th>BOS temperature</th>
 <th>thermocouple / °C</th></tr></thead><tbody id="bos-rows"></tbody></table>
 <div class="small">BOS temperatures are drawn dashed on the chart, with the thermocouple they sit at. They are the
@@ -57,28 +62,66 @@ was usable at 0.33 (Shimadzu HPV-1) and failed at 0.01 (Imacon DSR200). Here: go
 A fall during a run means focus, exposure or lighting changed.</div>
 </section></main>
 <script src="/chart.js"></script>
+<script src="/snapshot.js"></script>
 <script>
 'use strict';
 const $ = id => document.getElementById(id);
-let run = null, chart = null, source = null, clockBasis = null, lastT = 0, redrawPending = false;
+let run = null, chart = null, source = null, clockBasis = null, redrawPending = false;
+let clock = null;               // {originMs, scale}: a t_s back to the time it was recorded
+let runStatus = null, linkState = 'connecting…', runError = '';
+let firstT = null, lastT = null;  // the run's time span so far (samples, BOS, markers)
 const series = new Map();   // channel id -> dataset
+const readings = new Map(); // channel id -> the current value's card
 const devices = new Map();  // device id -> {row, state}
 const bosSeries = new Map();  // channel id -> dataset of the live BOS temperature there
 const bosFrames = new Set();  // frame ids shown (a reconnect sends the series again)
 const alarms = new Map();     // "channel: kind" -> message, while active
-let latestBos = null, drawnBos = null, frameTimes = [];
-const fmt = t => t.toFixed(1) + ' s';
-
-function showRunError(message) { $('link').textContent = message; $('link').className = 'bad'; }
+const markers = [];           // the run's markers: {t, label}
+let drawnMarkers = [];        // the marker lines the chart drew last: {label, x_px}
+let latestBos = null, drawnBos = null, frameTimes = [], frames = {count: 0, t: null, rate: null}, bosState = null;
+// Times to a hundredth of a second near the origin, coarser far from it, and
+// never a signed zero ("−0.0 s" for an event 20 ms before t = 0).
+function fmt(t) {
+  const a = Math.abs(t), digits = a < 10 ? 2 : a < 1000 ? 1 : 0;
+  let text = t.toFixed(digits);
+  if (Number(text) === 0) text = (0).toFixed(digits);
+  return text.replace('-', '−') + ' s';
+}
+// How long ago experiment second `t` was recorded, by the page's clock.
+function ago(t) {
+  if (!clock) return '';
+  const s = Math.max(0, (Date.now() - (clock.originMs + t / clock.scale * 1000)) / 1000);
+  return s < 90 ? s.toFixed(0) + ' s ago' : s < 5400 ? (s / 60).toFixed(0) + ' min ago' : (s / 3600).toFixed(1) + ' h ago';
+}
+function spanTo(t) {
+  if (firstT === null || t < firstT) firstT = t;
+  if (lastT === null || t > lastT) lastT = t;
+}
+function element(tag, className, text) {
+  const e = document.createElement(tag); e.className = className; e.textContent = text; return e;
+}
+function showRunError(message) { runError = message; showLink(); }
+// A finished run is not "live": its status says so in grey, whatever the stream does.
+function showLink() {
+  const finished = runStatus !== null && runStatus !== 'running';
+  const [text, kind] = runError ? [runError, 'bad'] : finished ? ['finished: the run is ' + runStatus, 'done']
+                     : [linkState, linkState === 'live' ? 'ok' : 'warn'];
+  $('link').textContent = text; $('link').className = kind;
+  showBosState();
+}
+function onStatus(s) { runStatus = s.status; $('status').textContent = s.status; showLink(); }
+function applyRun(body) {
+  run = body;
+  $('name').textContent = run.name;
+  if (runStatus === null) onStatus({status: run.status});
+  for (const d of run.devices) deviceRow(d.id, d.name, d.kind);
+  for (const c of run.channels) if (c.kind === 'thermocouple' && !series.has(c.id)) addSeries(c);
+  showLimits();
+}
 async function loadRun() {
   const reply = await fetch('/api/run'), body = await reply.json();
   if (!reply.ok) { showRunError(body.error); throw new Error(body.error); }
-  run = body;
-  $('name').textContent = run.name;
-  $('status').textContent = run.status;
-  for (const d of run.devices) deviceRow(d.id, d.name);
-  for (const c of run.channels) if (c.kind === 'thermocouple' && !series.has(c.id)) addSeries(c);
-  showLimits();
+  applyRun(body);
 }
 function unitText(u) { return u === 'degC' ? '°C' : u; }
 function addSeries(c) {
@@ -89,22 +132,50 @@ function addSeries(c) {
   chart.data.datasets.push(ds);
   const units = new Set(run.channels.filter(x => series.has(x.id)).map(x => unitText(x.unit)));
   chart.options.scales.y.title.text = [...units].join(', ');
+  addReading(c, ds.borderColor);
 }
-function deviceRow(id, name) {
+// The channel's current value in large type with its unit and age, as a
+// logger's main view shows it.
+function addReading(c, colour) {
+  const box = element('div', 'reading', ''), name = element('div', 'name', c.name);
+  const value = element('div', 'value', '—'), age = element('div', 'age', 'no value yet');
+  name.style.borderLeft = '4px solid ' + colour; name.style.paddingLeft = '.3em';
+  box.dataset.channel = c.name; box.append(name, value, age); $('readings').append(box);
+  readings.set(c.id, {value, age, unit: unitText(c.unit), last: null, lastOk: null});
+}
+function showReading(r) {
+  if (!r.last) return;
+  if (r.last.status === 'ok') {
+    r.value.textContent = r.last.value.toFixed(1) + ' ' + r.unit; r.age.textContent = ago(r.last.t); r.age.className = 'age';
+    return;
+  }
+  r.value.textContent = '—';
+  r.age.textContent = r.last.status + ' ' + ago(r.last.t) +
+    (r.lastOk ? '; last value ' + r.lastOk.value.toFixed(1) + ' ' + r.unit + ' ' + ago(r.lastOk.t) : '');
+  r.age.className = 'age bad';
+}
+function deviceRow(id, name, kind) {
   if (devices.has(id)) return devices.get(id);
   const tr = document.createElement('tr'), a = document.createElement('td'), b = document.createElement('td'),
         c = document.createElement('td');
   a.textContent = name; b.textContent = 'ok'; b.className = 'ok';
   tr.append(a, b, c); $('devices').append(tr);
-  const d = {cell: b, counts: c, ok: 0, failed: 0, skipped: 0, pollT: null, pollFailed: false, lastOkMs: null};
-  devices.set(id, d); return d;
+  const d = {cell: b, counts: c, camera: kind === 'camera', ok: 0, failed: 0, skipped: 0, pollT: null, pollFailed: false,
+             lastOkT: null};
+  devices.set(id, d); showCounts(d); return d;
 }
-// Polls that gave every channel a value or at least one a failure status
-// (a poll's samples share its time stamp), polls the logger skipped (its
-// "skipped" events), and how long ago the device last gave a value (wall
-// clock of this page).
+// A module: polls that gave every channel a value or at least one a failure
+// status (a poll's samples share its time stamp), polls the logger skipped
+// (its "skipped" events), and how long ago it last gave a value. A camera:
+// its frames, their rate and the age of the last.
 function showCounts(d) {
-  const age = d.lastOkMs === null ? 'no value yet' : 'last value ' + ((Date.now() - d.lastOkMs) / 1000).toFixed(0) + ' s ago';
+  if (d.camera) {
+    d.counts.textContent = frames.count === 0 ? 'no frames yet'
+      : 'frames ' + frames.count + (frames.rate === null ? '' : ', ' + frames.rate.toFixed(2) + ' per s') +
+        ', last ' + ago(frames.t);
+    return;
+  }
+  const age = d.lastOkT === null ? 'no value yet' : 'last value ' + ago(d.lastOkT);
   d.counts.textContent = 'polls ok ' + d.ok + ', failed ' + d.failed + ', skipped ' + d.skipped + '; ' + age;
 }
 function countReading(s) {
@@ -114,7 +185,7 @@ function countReading(s) {
   const bad = s.status !== 'ok';
   if (d.pollT !== s.t_s) { d.pollT = s.t_s; d.pollFailed = bad; bad ? d.failed++ : d.ok++; }
   else if (bad && !d.pollFailed) { d.pollFailed = true; d.ok--; d.failed++; }
-  if (!bad) d.lastOkMs = Date.now();
+  if (!bad) d.lastOkT = s.t_s;
   showCounts(d);
 }
 function onAlarm(e) {
@@ -136,10 +207,16 @@ function showLimits() {
   }
   $('limits').textContent = parts.length ? 'limits — ' + parts.join('; ') : 'no alarm limits in the experiment file';
 }
+// An event's colour says what it means: trouble red, recovery green, lost
+// polls amber, markers blue, the rest plain.
+const eventColours = {alarm: 'bad', error: 'bad', disconnect: 'bad', interrupted: 'bad', 'alarm-cleared': 'ok',
+                      reconnect: 'ok', connect: 'ok', skipped: 'warn', gap: 'warn', marker: 'marker'};
 function onEvent(e) {
   const li = document.createElement('li');
   li.textContent = fmt(e.t_s) + ' ' + e.kind + (e.device ? ' [' + e.device + ']' : '') + ': ' + e.message;
-  if (e.kind.startsWith('alarm')) { li.className = 'bad'; onAlarm(e); }
+  li.className = eventColours[e.kind] || '';
+  if (e.kind === 'alarm' || e.kind === 'alarm-cleared') onAlarm(e);
+  if (e.kind === 'marker') { markers.push({t: e.t_s, label: e.message}); spanTo(e.t_s); scheduleRedraw(); }
   $('events').prepend(li);
   if (e.device_id === undefined) return;
   if (e.kind === 'skipped') { const d = deviceRow(e.device_id, e.device); d.skipped += parseInt(e.message, 10) || 0; showCounts(d); }
@@ -149,12 +226,27 @@ function onEvent(e) {
   else if (e.kind === 'connect') { d.cell.textContent = 'ok'; d.cell.className = 'ok'; }
 }
 function onSample(s) {
-  if (s.t_s > lastT) lastT = s.t_s;
+  spanTo(s.t_s);
   countReading(s);
   const ds = series.get(s.channel);
   if (!ds) { if (!run.channels.some(c => c.id === s.channel)) loadRun(); return; }
   ds.data.push({x: s.t_s, y: s.status === 'ok' ? s.value : null});
+  const r = readings.get(s.channel), reading = {status: s.status, value: s.value, t: s.t_s};
+  r.last = reading; if (s.status === 'ok') r.lastOk = reading;
+  showReading(r);
   scheduleRedraw();
+}
+function onFrames(f) {
+  $('frame-count').textContent = f.count; $('frame-time').textContent = fmt(f.last_t_s);
+  frameTimes.push({n: f.count, t: f.last_t_s}); frameTimes = frameTimes.slice(-10);
+  const first = frameTimes[0];
+  // Over the last ten batches while they come, else over the whole run (a finished one comes in one batch).
+  const rate = f.last_t_s > first.t ? (f.count - first.n) / (f.last_t_s - first.t)
+             : f.count > 1 && f.last_t_s > f.first_t_s ? (f.count - 1) / (f.last_t_s - f.first_t_s) : null;
+  frames = {count: f.count, t: f.last_t_s, rate};
+  if (frames.rate !== null) $('frame-rate').textContent = frames.rate.toFixed(2) + ' per s';
+  for (const d of devices.values()) if (d.camera) showCounts(d);
+  showBosState();
 }
 function bosDataset(p) {
   if (bosSeries.has(p.channel)) return bosSeries.get(p.channel);
@@ -169,7 +261,7 @@ function onBos(b) {
   if (bosFrames.has(b.frame_id)) return;
   bosFrames.add(b.frame_id);
   for (const p of b.probes) bosDataset(p).data.push({x: b.t_s, y: p.t_c === undefined ? null : p.t_c});
-  if (b.t_s > lastT) lastT = b.t_s;
+  spanTo(b.t_s);
   if (!latestBos || b.frame_id > latestBos.frame_id) latestBos = b;
   scheduleRedraw();
 }
@@ -225,71 +317,112 @@ function drawFrame(img, b) {
     g.fillText(p.name + (p.valid ? ' ' + p.shift_px.toFixed(3) + ' px' : ' invalid'), x + r + 3, y - 3);
   }
 }
-function onBosState(s) {
-  $('bos-state').textContent = s.state + (s.temperature_source ? '; temperatures from ' + s.temperature_source : '') +
+function onBosState(s) { bosState = s; showBosState(); }
+// A finished run without frames says so, rather than waiting for frames that will not come.
+function showBosState() {
+  const s = bosState;
+  if (!s) return;
+  const finished = runStatus !== null && runStatus !== 'running';
+  const state = finished && frames.count === 0 ? 'the run has no frames' : s.state;
+  $('bos-state').textContent = state + (s.temperature_source ? '; temperatures from ' + s.temperature_source : '') +
     '; frames evaluated ' + s.evaluated + ', skipped ' + s.skipped +
     (latestBos ? '; last took ' + (latestBos.decode_ms + latestBos.evaluate_ms).toFixed(0) + ' ms' : '');
+}
+// The run's markers as dashed vertical lines with their label, drawn over the curves.
+const markerLines = {id: 'markerLines', afterDatasetsDraw(c) {
+  const x = c.scales.x, area = c.chartArea, g = c.ctx, drawn = [];
+  g.save(); g.strokeStyle = g.fillStyle = '#1f4fa0'; g.setLineDash([5, 4]); g.lineWidth = 1.5; g.font = '12px sans-serif';
+  markers.forEach((m, i) => {
+    const px = x.getPixelForValue(m.t);
+    if (!(px >= area.left - 0.5 && px <= area.right + 0.5)) return;
+    g.beginPath(); g.moveTo(px, area.top); g.lineTo(px, area.bottom); g.stroke();
+    g.fillText(m.label, px + 4, area.top + 14 + 14 * (i % 3));
+    drawn.push({label: m.label, x_px: px});
+  });
+  g.restore();
+  drawnMarkers = drawn;
+}};
+// The window counts back from the newest time but never past the run's
+// first, which may lie before t = 0 (the origin is a marker made later).
+function redraw() {
+  const w = Number($('window').value);
+  const x = chart.options.scales.x, span = firstT !== null && lastT > firstT;
+  x.min = span ? (w > 0 ? Math.max(lastT - w, firstT) : firstT) : undefined;
+  x.max = span ? lastT : undefined;
+  chart.update('none');
+  if (latestBos && latestBos !== drawnBos) { drawnBos = latestBos; showBos(latestBos); }
 }
 function scheduleRedraw() {
   if (redrawPending) return;
   redrawPending = true;
-  setTimeout(() => {
-    redrawPending = false;
-    const w = Number($('window').value);
-    chart.options.scales.x.min = w > 0 ? Math.max(lastT - w, Math.min(0, lastT)) : undefined;
-    chart.update('none');
-    if (latestBos && latestBos !== drawnBos) { drawnBos = latestBos; showBos(latestBos); }
-  }, 250);
+  setTimeout(() => { redrawPending = false; redraw(); }, 250);
 }
-function connect() {
-  source = new EventSource('/events');
-  source.onopen = () => { $('link').textContent = 'live'; $('link').className = 'ok'; };
-  source.onerror = () => { $('link').textContent = 'reconnecting…'; $('link').className = 'warn'; };
-  source.addEventListener('clock', m => {
-    const c = JSON.parse(m.data);
-    if (clockBasis !== null && clockBasis !== c.basis) { restart(); return; }
-    clockBasis = c.basis;
-    $('basis').textContent = 't: ' + c.basis; $('note').textContent = c.note;
-    chart.options.scales.x.title.text = 'experiment time / s since ' + c.origin;
-  });
-  source.addEventListener('run-error', m => {
-    const e = JSON.parse(m.data).error;
-    e ? showRunError(e) : source.onopen();
-  });
-  source.addEventListener('status', m => { $('status').textContent = JSON.parse(m.data).status; });
-  source.addEventListener('event', m => onEvent(JSON.parse(m.data)));
-  source.addEventListener('sample', m => onSample(JSON.parse(m.data)));
-  source.addEventListener('frames', m => {
-    const f = JSON.parse(m.data);
-    $('frame-count').textContent = f.count; $('frame-time').textContent = fmt(f.last_t_s);
-    frameTimes.push({n: f.count, t: f.last_t_s}); frameTimes = frameTimes.slice(-10);
-    const first = frameTimes[0];
-    if (f.last_t_s > first.t) $('frame-rate').textContent = ((f.count - first.n) / (f.last_t_s - first.t)).toFixed(2) + ' per s';
-  });
-  source.addEventListener('bos', m => onBos(JSON.parse(m.data)));
-  source.addEventListener('bos-state', m => onBosState(JSON.parse(m.data)));
+function onClock(c) {
+  if (clockBasis !== null && clockBasis !== c.basis) { restart(); return; }
+  clockBasis = c.basis;
+  clock = {originMs: Date.parse(c.origin_utc), scale: c.time_scale || 1};
+  $('basis').textContent = 't: ' + c.basis; $('note').textContent = c.note;
+  chart.options.scales.x.title.text = 'experiment time / s since ' + c.origin;
+}
+function onRunError(e) { runError = e.error; showLink(); }
+const handlers = {clock: onClock, status: onStatus, event: onEvent, sample: onSample, frames: onFrames, bos: onBos,
+                  'bos-state': onBosState, 'run-error': onRunError};
+// Server-Sent Events text as the stream sends it (the snapshot's), through the same handlers.
+function feed(text) {
+  for (const block of text.split('\n\n')) {
+    let type = null, data = null;
+    for (const line of block.split('\n')) {
+      if (line.startsWith('event: ')) type = line.slice(7); else if (line.startsWith('data: ')) data = line.slice(6);
+    }
+    if (type !== null && data !== null && handlers[type]) handlers[type](JSON.parse(data));
+  }
+}
+// The stream goes on after `after`, the snapshot's cursor (after a
+// reconnect the browser's Last-Event-ID says where).
+function connect(after) {
+  source = new EventSource('/events' + (after ? '?after=' + encodeURIComponent(after) : ''));
+  source.onopen = () => { linkState = 'live'; showLink(); };
+  source.onerror = () => { linkState = 'reconnecting…'; showLink(); };
+  for (const [type, handle] of Object.entries(handlers)) source.addEventListener(type, m => handle(JSON.parse(m.data)));
 }
 // A new time origin moves every point: start again from the run's beginning.
 function restart() {
-  source.close(); clockBasis = null; lastT = 0;
+  source.close(); clockBasis = null; firstT = lastT = null; markers.length = 0;
   for (const ds of series.values()) ds.data = [];
   for (const ds of bosSeries.values()) ds.data = [];
-  bosFrames.clear(); latestBos = drawnBos = null; frameTimes = []; alarms.clear();
-  for (const d of devices.values()) { d.ok = 0; d.failed = 0; d.skipped = 0; d.pollT = null; d.lastOkMs = null; }
+  for (const r of readings.values()) { r.last = r.lastOk = null; }
+  bosFrames.clear(); latestBos = drawnBos = null; frameTimes = []; alarms.clear(); frames = {count: 0, t: null, rate: null};
+  for (const d of devices.values()) { d.ok = 0; d.failed = 0; d.skipped = 0; d.pollT = null; d.lastOkT = null; }
   $('events').replaceChildren();
   connect();
 }
-async function start() {
-  if (typeof Chart === 'undefined') { $('link').textContent = 'Chart.js did not load'; return; }
-  chart = new Chart($('chart'), {type: 'line', data: {datasets: []},
+function tick() {
+  for (const d of devices.values()) showCounts(d);
+  for (const r of readings.values()) showReading(r);
+}
+// The first paint already holds the run as it stands (the snapshot script
+// loaded before this one), drawn at once without animation; the stream then
+// adds what comes after.
+function start() {
+  if (typeof Chart === 'undefined') { showRunError('Chart.js did not load'); return; }
+  chart = new Chart($('chart'), {type: 'line', data: {datasets: []}, plugins: [markerLines],
     options: {animation: false, responsive: true, maintainAspectRatio: false, normalized: true,
-      scales: {x: {type: 'linear', title: {display: true, text: 'experiment time / s'}},
+      // The window's bounds are exact times (the run's first sample, say): no tick of their own at 484.06.
+      scales: {x: {type: 'linear', ticks: {includeBounds: false}, title: {display: true, text: 'experiment time / s'}},
                y: {title: {display: true, text: '°C'}}},
       plugins: {decimation: {enabled: true, algorithm: 'lttb', samples: 1000}}}});
-  $('window').onchange = scheduleRedraw;
-  setInterval(() => { for (const d of devices.values()) showCounts(d); }, 1000);
-  await loadRun();
-  connect();
+  $('window').onchange = redraw;
+  setInterval(tick, 1000);
+  const snapshot = window.bosfuseSnapshot;
+  if (!snapshot || snapshot.error) {
+    if (snapshot) showRunError(snapshot.error);
+    loadRun().then(() => connect(), () => {});
+    return;
+  }
+  applyRun(snapshot.run);
+  feed(snapshot.stream);
+  redraw();
+  connect(snapshot.cursor);
 }
 start();
 </script></body></html>
