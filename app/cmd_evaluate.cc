@@ -40,6 +40,7 @@ struct EvaluateArgs {
   int window_px = 16, first_window_px = 0, step_px = 8, passes = 3;
   std::optional<int> threads;
   double max_shift_px = 4, contour_px = 0.1, adaptive_threshold = 4;
+  bool arrows = false;
 };
 
 std::vector<int> parse_ints(const std::string& text, std::size_t count, const std::string& what) {
@@ -140,6 +141,7 @@ void evaluate(const EvaluateArgs& args) {
   if (!args.map.empty()) {
     report::MapField map = report::displacement_magnitude_map(result.field, reference.size());
     map.source = args.measurement + " against " + args.reference;
+    map.arrows = args.arrows;
     report::write_map_figure(map, args.contour_px, {}, std::nullopt, {900, 650}, report::figure_base(args.map));
   }
   spdlog::info("{}", result.summary.BriefReport());
@@ -267,7 +269,7 @@ void evaluate_sequence(const EvaluateArgs& args, const CLI::App& cmd) {
   }
   check_output(args.out, "--out");
   check_output(report::xdmf_path_for(args.out).string(), "--out (its .xmf sidecar)");
-  for (const char* pair_only : {"--probe", "--map", "--contour"}) {
+  for (const char* pair_only : {"--probe", "--map", "--contour", "--arrows"}) {
     if (cmd.count(pair_only) > 0) {
       throw CLI::ValidationError(std::string(pair_only) + " is for an image pair, not --sequence");
     }
@@ -354,7 +356,9 @@ void add_evaluate(CLI::App& root) {
   cmd->add_option("--mask", args->mask, "Mask image: non-zero pixels are not evaluated");
   cmd->add_option("--roi", args->roi, "Region of interest x,y,w,h in pixels");
   cmd->add_option("--probe", args->probes, "Evaluate only the window centred at x,y (repeatable)");
-  cmd->add_option("--map", args->map, "Also draw the displacement magnitude map to this PNG");
+  auto* map_option = cmd->add_option("--map", args->map, "Also draw the displacement magnitude map to this PNG");
+  cmd->add_flag("--arrows", args->arrows, "With --map: draw the displacement vectors as arrows over the colours")
+      ->needs(map_option);
   cmd->add_option("--contour", args->contour_px, "Contour spacing of the map, px (0: none)")->capture_default_str();
   cmd->callback([args, cmd] { evaluate_command(*args, *cmd); });
 }

@@ -236,7 +236,7 @@ ordered_json map_json(const MapField& map, std::optional<double> px_per_mm) {
       high = std::max(high, v);
     }
   }
-  ordered_json j = {{"quantity", map.quantity}, {"unit", map.unit},    {"time_s", map.time_s},
+  ordered_json j = {{"quantity", map.quantity}, {"unit", map.unit},    {"time_s", map.time_s ? ordered_json(*map.time_s) : ordered_json()},
                     {"source", map.source},     {"rows", values.rows}, {"cols", values.cols},
                     {"x0_px", map.x0_px},       {"y0_px", map.y0_px},  {"step_px", map.step_px}};
   if (px_per_mm) j["px_per_mm"] = *px_per_mm;

@@ -52,6 +52,44 @@ constexpr int kMaxDrawnCells = 250;  // per map side; finer grids are block-aver
 
 int series_colour(std::size_t i) { return kFirstSeries + static_cast<int>(i % kSeriesColours); }
 
+// A cmap1 through these RGB (0..255) colours, evenly spaced.
+template <std::size_t N>
+void set_colour_map(const std::array<std::array<PLFLT, 3>, N>& colours) {
+  std::array<PLFLT, N> pos{}, red{}, green{}, blue{};
+  for (std::size_t i = 0; i < N; ++i) {
+    pos[i] = static_cast<PLFLT>(i) / static_cast<PLFLT>(N - 1);
+    red[i] = colours[i][0] / 255.0;
+    green[i] = colours[i][1] / 255.0;
+    blue[i] = colours[i][2] / 255.0;
+  }
+  plscmap1n(256);
+  plscmap1l(1, static_cast<PLINT>(N), pos.data(), red.data(), green.data(), blue.data(), nullptr);
+}
+
+// cmap1 for maps of magnitudes: viridis (van der Walt and Smith, matplotlib),
+// perceptually uniform and readable in grey, where jet invents bands at cyan
+// and yellow.
+void use_sequential_colour_map() {
+  constexpr std::array<std::array<PLFLT, 3>, 9> kViridis{{{68, 1, 84},
+                                                         {71, 44, 122},
+                                                         {59, 81, 139},
+                                                         {44, 113, 142},
+                                                         {33, 144, 141},
+                                                         {39, 173, 129},
+                                                         {92, 200, 99},
+                                                         {170, 220, 50},
+                                                         {253, 231, 37}}};
+  set_colour_map(kViridis);
+}
+
+// cmap1 for signed quantities: blue – white – red (ColorBrewer RdBu),
+// white at zero, so the sign is read from the hue.
+void use_diverging_colour_map() {
+  constexpr std::array<std::array<PLFLT, 3>, 5> kRdBu{
+      {{33, 102, 172}, {146, 197, 222}, {247, 247, 247}, {244, 165, 130}, {178, 24, 43}}};
+  set_colour_map(kRdBu);
+}
+
 void load_palette() {
   std::array<PLINT, kPalette.size() + 1> r{}, g{}, b{};
   std::array<PLFLT, kPalette.size() + 1> alpha;
@@ -62,13 +100,7 @@ void load_palette() {
     b[i] = kPalette[i][2];
   }
   plscmap0a(r.data(), g.data(), b.data(), alpha.data(), static_cast<PLINT>(r.size()));
-  // cmap1 for maps: dark blue → blue → cyan → yellow → red → dark red (jet-like, as in the paper's figures).
-  const std::array<PLFLT, 6> pos{0.0, 0.15, 0.4, 0.6, 0.85, 1.0};
-  const std::array<PLFLT, 6> red{0.0, 0.0, 0.0, 1.0, 1.0, 0.5};
-  const std::array<PLFLT, 6> green{0.0, 0.2, 1.0, 1.0, 0.1, 0.0};
-  const std::array<PLFLT, 6> blue{0.5, 1.0, 1.0, 0.0, 0.0, 0.0};
-  plscmap1n(256);
-  plscmap1l(1, static_cast<PLINT>(pos.size()), pos.data(), red.data(), green.data(), blue.data(), nullptr);
+  use_sequential_colour_map();
 }
 
 // PLplot interprets '#' as the start of an escape sequence; "##" is a literal '#'.
@@ -217,6 +249,7 @@ void draw_band(const FittedCurve& c, int colour) {
 }
 
 void draw_line(const FittedCurve& c, int colour) {
+  if (c.t.empty()) return;  // no fit
   plcol0(colour);
   plwidth(2);
   plline(static_cast<PLINT>(c.t.size()), c.t.data(), c.temp.data());
@@ -229,7 +262,9 @@ std::string format_estimate(const fitting::Estimate& e, const char* unit) {
                      display_number(e.high, "{:.4g}"));
 }
 
-std::string time_label(const std::string& time_basis) { return pl_text("time (" + time_basis + ")"); }
+// Short, as a journal's axes are; the time basis (origin, scale) is in
+// every time figure's caption.
+constexpr const char* kTimeAxisLabel = "t (s)";
 
 std::size_t codepoints(const std::string& utf8) {
   return static_cast<std::size_t>(
@@ -345,9 +380,9 @@ FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size
     plmtex("l", 4.5, 0.5, 0.5, value_label(series).c_str());
     plmtex("t", 1.5, 0.5, 0.5, title.c_str());
     draw_band(curve, kFirstSeries + 1);
+    draw_line(curve, kFirstSeries + 1);  // under the points, so no sample is hidden by its fit
     draw_points(t, temp, kFirstSeries);
     if (has_fit) {
-      draw_line(curve, kFirstSeries + 1);
       const auto& f = *series.fit;
       const std::string fit_text = pl_text(
           fmt::format("k = {:.4g} 1/s [{:.4g}, {:.4g}]   T0 = {:.2f} {}   T_amb = {:.2f} {}", f.k_per_s.value,
@@ -380,7 +415,7 @@ FigureFiles write_curve_figure(const CurveSeries& series, const FigureSize& size
       plschr(0, 1);
     }
     plcol0(kInk);
-    bottom_label(time_label(time_basis), 3.0);
+    bottom_label(kTimeAxisLabel, 3.0);
   });
   return files;
 }
@@ -427,19 +462,23 @@ FigureFiles write_overview_figure(const std::vector<CurveSeries>& series, const 
     plcol0(kInk);
     plbox("bcnst", 0, 0, "bcnstv", 0, 0);
     pllab("", "temperature (°C)", "All cooling curves");
-    bottom_label(time_label(time_basis), 3.2);
+    bottom_label(kTimeAxisLabel, 3.2);
+    // Bands, then every fit line, then every series' points on top: a fit
+    // never hides the measurements it was fitted to.
     for (std::size_t s = 0; s < series.size(); ++s) draw_band(curves[s], series_colour(s));
+    for (std::size_t s = 0; s < series.size(); ++s) draw_line(curves[s], series_colour(s));
     for (std::size_t s = 0; s < series.size(); ++s) {
-      const int colour = series_colour(s);
-      if (series[s].kind == SeriesKind::kBosProbe) {
-        plcol0(colour);
-        plssym(0, 0.5);
-        plpoin(static_cast<PLINT>(ts[s].size()), ts[s].data(), ys[s].data(), 5);  // 5: ×
-        plssym(0, 1);
-      } else {
-        draw_points(ts[s], ys[s], colour);
-      }
-      if (!curves[s].t.empty()) draw_line(curves[s], colour);
+      if (series[s].kind != SeriesKind::kBosProbe) draw_points(ts[s], ys[s], series_colour(s));
+    }
+    // BOS frames are few (tens): large bold crosses over the dense thermocouple dots.
+    for (std::size_t s = 0; s < series.size(); ++s) {
+      if (series[s].kind != SeriesKind::kBosProbe) continue;
+      plcol0(series_colour(s));
+      plwidth(2.5);
+      plssym(0, 1.3);
+      plpoin(static_cast<PLINT>(ts[s].size()), ts[s].data(), ys[s].data(), 5);  // 5: ×
+      plssym(0, 1);
+      plwidth(1);
     }
     // Legend to the right of the plot.
     const auto n = static_cast<PLINT>(series.size());
@@ -619,6 +658,48 @@ bool needs_own_cell(const cv::Mat& masked, int r, int c) {
 
 // The legend's one entry, in the figure's bottom right corner: the hatch
 // pattern of the cells that hold no measurement.
+// World units per mm of the current viewport, along x and y.
+std::array<double, 2> world_per_mm() {
+  PLFLT sx0 = 0, sx1 = 0, sy0 = 0, sy1 = 0, vx0 = 0, vx1 = 0, vy0 = 0, vy1 = 0, wx0 = 0, wx1 = 0, wy0 = 0, wy1 = 0;
+  plgspa(&sx0, &sx1, &sy0, &sy1);
+  plgvpd(&vx0, &vx1, &vy0, &vy1);
+  plgvpw(&wx0, &wx1, &wy0, &wy1);
+  return {std::abs(wx1 - wx0) / ((vx1 - vx0) * (sx1 - sx0)), std::abs(wy1 - wy0) / ((vy1 - vy0) * (sy1 - sy0))};
+}
+
+// Thermocouple positions: a black dot ringed in white, its name in black on
+// a white box beside it, so it reads on any colour of the map.
+void draw_markers(const std::vector<MapMarker>& markers, double scale, std::array<double, 2> wx,
+                  std::array<double, 2> wy) {
+  plschr(0, 0.8);
+  PLFLT default_mm = 0, height_mm = 0;
+  plgchr(&default_mm, &height_mm);
+  const auto [per_mm_x, per_mm_y] = world_per_mm();
+  for (const auto& m : markers) {
+    const PLFLT x = m.image_px.x * scale, y = m.image_px.y * scale;
+    if (x < wx[0] || x > wx[1] || y < wy[0] || y > wy[1]) continue;
+    plcol0(kBackground);
+    plssym(0, 1.6);
+    plpoin(1, &x, &y, 17);
+    plcol0(kInk);
+    plssym(0, 1.2);
+    plpoin(1, &x, &y, 17);
+    const std::string label = pl_text(m.name);
+    const double left = x + 0.02 * (wx[1] - wx[0]);
+    const double width = (0.72 * height_mm * static_cast<double>(codepoints(m.name)) + 1.5) * per_mm_x;
+    const double half_height = 0.9 * height_mm * per_mm_y;
+    const double pad = 0.75 * per_mm_x;
+    const std::array<PLFLT, 4> bx{left - pad, left + width, left + width, left - pad};
+    const std::array<PLFLT, 4> by{y - half_height, y - half_height, y + half_height, y + half_height};
+    plcol0(kBackground);
+    plfill(4, bx.data(), by.data());
+    plcol0(kInk);
+    plptex(left, y, 1, 0, 0, label.c_str());
+  }
+  plssym(0, 1);
+  plschr(0, 1);
+}
+
 void draw_mask_legend() {
   const PLINT opts[] = {PL_LEGEND_COLOR_BOX}, text_colours[] = {kInk}, box_colours[] = {kMaskHatch},
               box_patterns[] = {3}, unused_int[] = {0};
@@ -642,6 +723,35 @@ void grid_to_world(PLFLT i, PLFLT j, PLFLT* x, PLFLT* y, PLPointer data) {
   const auto* g = static_cast<const GridTransform*>(data);
   *x = (g->x0 + i * g->step) * g->scale;
   *y = (g->y0 + j * g->step) * g->scale;
+}
+
+// At most about 32 arrows a side, on every stride-th node of the grid:
+// denser arrows are unreadable. PLplot scales them so the longest spans
+// about one drawn cell.
+void draw_arrows(const MapField& map, double scale) {
+  if (map.u_px.size() != map.values.size() || map.v_px.size() != map.values.size()) {
+    throw std::invalid_argument("map '" + map.quantity + "': arrows need u and v of the values' size");
+  }
+  constexpr int kMaxArrowsPerSide = 32;
+  const int stride = std::max(1, (std::max(map.values.rows, map.values.cols) + kMaxArrowsPerSide - 1) / kMaxArrowsPerSide);
+  const int nx = (map.values.cols + stride - 1) / stride, ny = (map.values.rows + stride - 1) / stride;
+  std::vector<std::vector<PLFLT>> u(nx, std::vector<PLFLT>(ny, 0.0)), v(nx, std::vector<PLFLT>(ny, 0.0));
+  for (int c = 0; c < nx; ++c) {
+    for (int r = 0; r < ny; ++r) {
+      const double du = map.u_px.at<double>(r * stride, c * stride), dv = map.v_px.at<double>(r * stride, c * stride);
+      if (!std::isfinite(du) || !std::isfinite(dv)) continue;  // zero length: PLplot draws nothing there
+      u[c][r] = du;
+      v[c][r] = dv;
+    }
+  }
+  std::vector<const PLFLT*> u_rows(nx), v_rows(nx);
+  for (int c = 0; c < nx; ++c) {
+    u_rows[c] = u[c].data();
+    v_rows[c] = v[c].data();
+  }
+  GridTransform transform{map.x0_px, map.y0_px, map.step_px * stride, scale};
+  plcol0(kInk);
+  plvect(u_rows.data(), v_rows.data(), nx, ny, 0.0, grid_to_world, &transform);
 }
 
 }  // namespace
@@ -709,6 +819,9 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
   }
   const bool any_data = !range.empty();
   if (!any_data) range = {0, 1};
+  // Both signs: a diverging map symmetric about zero, white at zero.
+  const bool signed_values = any_data && range.low < 0 && range.high > 0;
+  if (signed_values) range = {-std::max(-range.low, range.high), std::max(-range.low, range.high)};
   if (range.high - range.low < 1e-9)
     range = {range.low - 0.5 * std::max(1e-3, std::abs(range.low) * 0.01),
              range.high + 0.5 * std::max(1e-3, std::abs(range.high) * 0.01)};
@@ -754,13 +867,15 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
   for (int c = 0; c < nx; ++c) z_rows[c] = z[c].data();
 
   FigureFiles files = files_for(base);
-  files.title = fmt::format("{} at t = {:.1f} s", map.quantity, map.time_s);
+  // A pair evaluated outside a run has no time to state.
+  const std::string when = map.time_s ? fmt::format(" at t = {:.1f} s", *map.time_s) : std::string();
+  files.title = map.quantity + when;
   files.caption = fmt::format(
-      "{} ({}) at t = {:.1f} s{}. Colour: value (bar on the right); black lines: contours every {:.3g} {}{}; hatched "
+      "{} ({}){}{}. Colour: value (bar on the right); black lines: contours every {:.3g} {}{}; hatched "
       "grey: masked or not measured ({} of {} cells), where no value is shown and no contour is drawn (bands and "
       "contours are computed from measured cells only); markers: thermocouple positions. Axes in {} from the image's "
       "top-left pixel, y pointing down.",
-      map.quantity, map.unit, map.time_s, map.source.empty() ? "" : ", " + map.source, spacing, map.unit,
+      map.quantity, map.unit, when, map.source.empty() ? "" : ", " + map.source, spacing, map.unit,
       widened ? " (widened from the requested spacing to keep the map readable)" : "", cv::countNonZero(masked),
       values.total(), unit_axis);
   if (!any_data) files.caption += " Every cell is masked: nothing was measured.";
@@ -771,7 +886,13 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
         block, map.values.cols, map.values.rows);
   }
 
+  if (signed_values) files.caption += " Colour: blue below zero, red above, white at zero.";
+  if (map.arrows) {
+    files.caption += " Arrows: the measured displacement (u, v) on a thinned grid, scaled so the longest spans about "
+                     "one arrow spacing; none where nothing was measured.";
+  }
   render_png_and_svg(files, size, [&] {
+    if (signed_values) use_diverging_colour_map();
     const double aspect = (wy1 - wy0) / (wx1 - wx0);
     plvpas(0.11, 0.80, 0.10, 0.92, aspect);
     plwind(wx0, wx1, wy1, wy0);  // y down, as in the image
@@ -825,23 +946,9 @@ FigureFiles write_map_figure(const MapField& map, double contour_spacing, const 
       }
     }
     plpsty(0);
+    if (map.arrows) draw_arrows(map, scale);
     if (any_masked) draw_mask_legend();
-    // Thermocouple markers.
-    plschr(0, 0.8);
-    for (const auto& m : markers) {
-      const PLFLT x = m.image_px.x * scale, y = m.image_px.y * scale;
-      if (x < wx0 || x > wx1 || y < wy0 || y > wy1) continue;
-      plcol0(kBackground);
-      plssym(0, 1.6);
-      plpoin(1, &x, &y, 17);
-      plcol0(kInk);
-      plssym(0, 1.2);
-      plpoin(1, &x, &y, 17);
-      const std::string label = pl_text(m.name);
-      plptex(x + 0.02 * (wx1 - wx0), y, 1, 0, 0, label.c_str());
-    }
-    plssym(0, 1);
-    plschr(0, 1);
+    draw_markers(markers, scale, {wx0, wx1}, {wy0, wy1});
     plcol0(kInk);
     plbox("bcnst", 0, 0, "bcnstv", 0, 0);
     const std::string x_label = fmt::format("x ({})", unit_axis), y_label = fmt::format("y ({}, down)", unit_axis);

@@ -248,6 +248,78 @@ TEST(Figures, MapFigureHasColourMaskContoursAndMarkers) {
   EXPECT_GT(grey, 200) << "the masked region is not shown";
 }
 
+// Pixels of the PNG within `tolerance` (per channel) of an RGB colour.
+int pixels_near(const cv::Mat& png, std::array<int, 3> rgb, int tolerance) {
+  int n = 0;
+  for (int r = 0; r < png.rows; ++r) {
+    for (int c = 0; c < png.cols; ++c) {
+      const auto p = png.at<cv::Vec3b>(r, c);  // BGR
+      if (std::abs(p[2] - rgb[0]) <= tolerance && std::abs(p[1] - rgb[1]) <= tolerance &&
+          std::abs(p[0] - rgb[2]) <= tolerance) {
+        ++n;
+      }
+    }
+  }
+  return n;
+}
+
+// Magnitudes in viridis (its yellow top and purple bottom, none of jet's
+// dark red); values of both signs in a diverging map, white at zero.
+TEST(Figures, MapsUseViridisForMagnitudesAndADivergingMapForSignedValues) {
+  testing::TempDir dir;
+  const auto bump = write_map_figure(testdata::bump_map(), 0, {}, std::nullopt, {900, 650}, dir / "bump");
+  const cv::Mat magnitude = cv::imread(bump.png.string(), cv::IMREAD_COLOR);
+  EXPECT_GT(pixels_near(magnitude, {253, 231, 37}, 30), 50) << "no viridis yellow at the bump's top";
+  EXPECT_GT(pixels_near(magnitude, {68, 1, 84}, 20), 5000) << "no viridis purple at the bottom";
+  EXPECT_EQ(pixels_near(magnitude, {128, 0, 0}, 30), 0) << "jet's dark red is still there";
+  EXPECT_EQ(bump.caption.find("blue below zero"), std::string::npos);
+
+  MapField ramp = testdata::bump_map();
+  ramp.mask.setTo(0);
+  for (int r = 0; r < ramp.values.rows; ++r) {
+    for (int c = 0; c < ramp.values.cols; ++c) ramp.values.at<double>(r, c) = (c - 15.5) / 15.5;  // −1 … +1
+  }
+  const auto files = write_map_figure(ramp, 0, {}, std::nullopt, {900, 650}, dir / "ramp");
+  const cv::Mat signed_map = cv::imread(files.png.string(), cv::IMREAD_COLOR);
+  EXPECT_GT(pixels_near(signed_map, {33, 102, 172}, 30), 1000) << "no blue for the negative end";
+  EXPECT_GT(pixels_near(signed_map, {178, 24, 43}, 30), 1000) << "no red for the positive end";
+  EXPECT_NE(files.caption.find("blue below zero, red above, white at zero"), std::string::npos) << files.caption;
+}
+
+// Arrows only when asked, and only where something was measured.
+TEST(Figures, ADisplacementMapDrawsArrowsWhenAsked) {
+  testing::TempDir dir;
+  MapField map = testdata::bump_map();
+  map.u_px = cv::Mat(map.values.size(), CV_64F, cv::Scalar(0.3));
+  map.v_px = cv::Mat(map.values.size(), CV_64F, cv::Scalar(-0.1));
+  const auto count_dark = [](const std::filesystem::path& png_file) {
+    const cv::Mat png = cv::imread(png_file.string(), cv::IMREAD_COLOR);
+    int n = 0;
+    for (int r = 0; r < png.rows; ++r) {
+      for (int c = 0; c < png.cols; ++c) n += png.at<cv::Vec3b>(r, c)[1] < 40 && png.at<cv::Vec3b>(r, c)[2] < 40;
+    }
+    return n;
+  };
+  const auto plain = write_map_figure(map, 0, {}, std::nullopt, {900, 650}, dir / "plain");
+  map.arrows = true;
+  const auto arrows = write_map_figure(map, 0, {}, std::nullopt, {900, 650}, dir / "arrows");
+  EXPECT_GT(count_dark(arrows.png), count_dark(plain.png) + 1000) << "no arrows drawn";
+  EXPECT_NE(arrows.caption.find("Arrows: the measured displacement"), std::string::npos) << arrows.caption;
+  EXPECT_EQ(plain.caption.find("Arrows"), std::string::npos);
+  map.u_px = cv::Mat();
+  EXPECT_THROW(write_map_figure(map, 0, {}, std::nullopt, {900, 650}, dir / "bad"), std::invalid_argument);
+}
+
+// A pair evaluated outside a run has no time: its map says none.
+TEST(Figures, AMapWithoutATimeStatesNone) {
+  testing::TempDir dir;
+  MapField map = testdata::bump_map();
+  map.time_s.reset();
+  const auto files = write_map_figure(map, 0, {}, std::nullopt, {900, 650}, dir / "pair");
+  EXPECT_EQ(files.title, "|displacement|");
+  EXPECT_EQ(files.caption.find("t = "), std::string::npos) << files.caption;
+}
+
 // The plot frame of a map figure in PNG pixels: the black box plbox draws
 // round the viewport (the colour bar's box, further right, is the second
 // pair of long vertical lines and is not taken).

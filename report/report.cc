@@ -169,7 +169,7 @@ std::vector<FigureFiles> draw_maps(const std::vector<MapField>& maps, const std:
   std::vector<FigureFiles> drawn;
   for (const auto& m : maps) {
     const double spacing = m.contour_spacing > 0 ? m.contour_spacing : default_spacing;
-    const fs::path base = out.base(fmt::format("map_{}_t{}", kind, time_tag(m.time_s)));
+    const fs::path base = out.base(fmt::format("map_{}{}", kind, m.time_s ? "_t" + time_tag(*m.time_s) : ""));
     drawn.push_back(write_map_figure(m, spacing, markers, input.px_per_mm, out.options.map_size, base));
     f.all.push_back(drawn.back());
     fs::path csv = drawn.back().png;

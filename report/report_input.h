@@ -57,7 +57,7 @@ struct AgreementEntry {
 struct MapField {
   std::string quantity = "|displacement|";  // shown in titles and the colour bar
   std::string unit = "px";                  // "px" or "°C"
-  double time_s = 0;                        // relative to the run's origin
+  std::optional<double> time_s;             // relative to the run's origin; none for a pair outside a run
   std::string source;                       // e.g. "frame 12 (t = 10.2 s) against reference frame 1"
   cv::Mat values;                           // CV_64FC1 (other depths are converted), rows × cols
   cv::Mat mask;                             // CV_8UC1 of the same size, non-zero: not a measurement; may be empty
@@ -66,6 +66,10 @@ struct MapField {
   double step_px = 1;
   cv::Size image_size_px;      // extent of the axes; empty: the grid's own extent
   double contour_spacing = 0;  // in `unit`; 0: ReportOptions' default for this unit
+  // A displacement map's vectors (px, CV_64FC1 of the values' size, NaN
+  // where not measured), drawn as arrows over the colours when `arrows`.
+  cv::Mat u_px, v_px;
+  bool arrows = false;
 };
 
 struct QualityInfo {

@@ -249,14 +249,19 @@ MapField displacement_magnitude_map(const fusion::DisplacementField& field, cv::
   map.quantity = "|displacement|";
   map.unit = "px";
   map.values = cv::Mat(field.rows, field.cols, CV_64F);
+  map.u_px = cv::Mat(field.rows, field.cols, CV_64F);
+  map.v_px = cv::Mat(field.rows, field.cols, CV_64F);
   map.mask = cv::Mat::zeros(field.rows, field.cols, CV_8U);
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   for (int r = 0; r < field.rows; ++r) {
     for (int c = 0; c < field.cols; ++c) {
       const auto& v = field.at(r, c);
       // Only kOk is a measurement of its own window, as the stored field's `valid` says: a replaced outlier
       // holds its neighbours' median (docs/REPORT.md, "Not measured").
       const bool shown = v.valid();
-      map.values.at<double>(r, c) = shown ? std::hypot(v.u_px, v.v_px) : std::numeric_limits<double>::quiet_NaN();
+      map.values.at<double>(r, c) = shown ? std::hypot(v.u_px, v.v_px) : kNaN;
+      map.u_px.at<double>(r, c) = shown ? v.u_px : kNaN;
+      map.v_px.at<double>(r, c) = shown ? v.v_px : kNaN;
       map.mask.at<std::uint8_t>(r, c) = shown ? 0 : 255;
     }
   }

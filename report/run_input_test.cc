@@ -88,7 +88,8 @@ TEST(RunInput, AProcessedRunIsReadFromWhatProcessStoredWithoutItsFrames) {
   ASSERT_EQ(input.temperature_maps.size(), 2u);
   for (int f = 0; f < 2; ++f) {
     const auto& map = input.displacement_maps[f];
-    EXPECT_NEAR(map.time_s, truth.frame_times_s[f], 0.01);
+    ASSERT_TRUE(map.time_s.has_value());
+    EXPECT_NEAR(*map.time_s, truth.frame_times_s[f], 0.01);
     EXPECT_EQ(map.image_size_px, truth.image);
     EXPECT_DOUBLE_EQ(map.step_px, 8);
     // The window-averaged peak of |shift| is a little below the true peak.
@@ -367,7 +368,8 @@ TEST(RunInput, StoredProbesFitsAgreementsAndFieldsAreUsed) {
   ASSERT_EQ(input.temperature_maps.size(), 1u);
   const auto& t = input.temperature_maps[0];
   EXPECT_EQ(t.unit, "°C");
-  EXPECT_NEAR(t.time_s, truth.frame_times_s[1] + 0.003, 1e-9);
+  ASSERT_TRUE(t.time_s.has_value());
+  EXPECT_NEAR(*t.time_s, truth.frame_times_s[1] + 0.003, 1e-9);
   ASSERT_EQ(t.values.size(), cv::Size(2, 2));
   EXPECT_DOUBLE_EQ(t.x0_px, 8.0);
   EXPECT_DOUBLE_EQ(t.step_px, 8.0);
