@@ -34,8 +34,10 @@ KAgreement compare_k(const Estimate& a, const Estimate& b, double critical) {
 }
 
 // The degrees of freedom of a fit's variances: infinite when they are
-// absolute (from a known σ) or the fit states none.
+// absolute (from a known σ) or the fit states none; a known σ whose scale
+// was estimated from the residuals has the dof of that estimate.
 double variance_dof(const NewtonFit& fit) {
+  if (fit.summary.absolute_sigma && fit.summary.interval_dof) return *fit.summary.interval_dof;
   return fit.summary.absolute_sigma || !(fit.summary.dof > 0) ? INFINITY : fit.summary.dof;
 }
 
@@ -95,22 +97,25 @@ double reach(const ParameterAgreement& p) {
 
 CurveAgreement compare_curves(const NewtonFit& a, const NewtonFit& b, const AgreementOptions& o, bool lag_estimated) {
   CurveAgreement curve;
+  curve.alpha = o.equivalence_alpha;
+  curve.confidence = 1.0 - 2.0 * o.equivalence_alpha;
+  const double level = curve.confidence;
   const double dof_a = variance_dof(a), dof_b = variance_dof(b);
   const ParameterShifts &sa = o.a_systematic, &sb = o.b_systematic;
   const double k_margin = o.margin_k_relative * std::abs(0.5 * (a.k_per_s.value + b.k_per_s.value));
   curve.parameters.push_back(test_parameter("k_per_s", {a.k_per_s.value, a.k_per_s.std_error, dof_a},
                                             {b.k_per_s.value, b.k_per_s.std_error, dof_b},
-                                            std::hypot(sa.k_per_s, sb.k_per_s), k_margin, o.confidence));
+                                            std::hypot(sa.k_per_s, sb.k_per_s), k_margin, level));
   if (o.b_is_temperature) {
     // b's T0 systematic is its fit's at its own T0 time, which is a's when
     // both are fitted from one origin (as `process` fits them).
     const auto [b_t0, b_t0_se] = t0_at(b, a.origin_s + a.t0_reference_s);
     curve.parameters.push_back(test_parameter("T0_c", {a.t0_c.value, a.t0_c.std_error, dof_a}, {b_t0, b_t0_se, dof_b},
-                                              std::hypot(sa.t0_c, sb.t0_c), o.margin_c, o.confidence));
+                                              std::hypot(sa.t0_c, sb.t0_c), o.margin_c, level));
     curve.parameters.back().in_verdict = !lag_estimated;
     curve.parameters.push_back(test_parameter("T_amb_c", {a.ambient_c.value, a.ambient_c.std_error, dof_a},
                                               {b.ambient_c.value, b.ambient_c.std_error, dof_b},
-                                              std::hypot(sa.t_amb_c, sb.t_amb_c), o.margin_c, o.confidence));
+                                              std::hypot(sa.t_amb_c, sb.t_amb_c), o.margin_c, level));
   }
   curve.verdict = Verdict::kAgree;
   for (const auto& p : curve.parameters) {
@@ -161,23 +166,24 @@ std::string dominant_part(const ParameterAgreement* d) {
 }
 
 std::string curve_sentence(const CurveAgreement& curve, const AgreementOptions& o) {
-  const std::string confidence = format_number("%.0f%%", 100.0 * o.confidence);
+  const std::string confidence = format_number("%.0f%%", 100.0 * curve.confidence);
+  const std::string level = format_number("two one-sided tests at α = %.3g", curve.alpha);
   const std::string tested = o.b_is_temperature ? "the whole curve (k, T0, T_amb)" : "k (the probe is not in °C)";
   const ParameterAgreement* d = curve.deciding();
   std::string text;
   switch (curve.verdict) {
     case Verdict::kAgree:
       text = "Agree: " + tested + " of " + o.label_a + " and " + o.label_b + " within the margins (" + confidence +
-             " intervals inside ±margin).";
+             " intervals inside ±margin: " + level + ").";
       break;
     case Verdict::kDiffer:
       text = "Differ: " + std::string(wording(d->name).name) + " of " + o.label_a + " and " + o.label_b +
-             " differ beyond the margin (its " + confidence + " interval lies wholly outside ±margin).";
+             " differ beyond the margin (its " + confidence + " interval lies wholly outside ±margin; " + level + ").";
       break;
     case Verdict::kInconclusive:
       text = "Inconclusive: the uncertainty of " + std::string(d ? wording(d->name).name : "the curve") +
              " is too large to tell whether " + o.label_a + " and " + o.label_b + " agree (its " + confidence +
-             " interval reaches past ±margin)" + dominant_part(d) + ".";
+             " interval reaches past ±margin; " + level + ")" + dominant_part(d) + ".";
       break;
   }
   text += " ";
@@ -273,6 +279,9 @@ const ParameterAgreement* CurveAgreement::deciding() const {
 
 std::string AgreementOptions::invalid_reason() const {
   if (!(confidence > 0.0 && confidence < 1.0)) return "confidence must lie strictly between 0 and 1";
+  if (!(equivalence_alpha > 0.0 && equivalence_alpha < 0.5)) {
+    return "the equivalence test's level alpha must lie strictly between 0 and 0.5";
+  }
   if (min_common_points < 2) return "at least 2 common points are needed for a spread";
   if (!(margin_c > 0.0 && std::isfinite(margin_c))) return "the temperature margin must be positive and finite";
   if (!(margin_k_relative > 0.0 && std::isfinite(margin_k_relative))) {
@@ -358,7 +367,7 @@ std::string Agreement::brief_report() const {
     for (const auto& p : curve->parameters) {
       const Wording w = wording(p.name);
       text += std::string("  Δ") + w.name + format_number(" = %.4g ± %.2g ", p.difference, p.std_error) + w.unit +
-              format_number(", z = %.2f, %.0f%% interval [%.4g, %.4g] ", p.z, 100.0 * confidence, p.interval_low,
+              format_number(", z = %.2f, %.0f%% interval [%.4g, %.4g] ", p.z, 100.0 * curve->confidence, p.interval_low,
                             p.interval_high) +
               w.unit + format_number(" against ±%.3g ", p.margin) + w.unit + ": " + to_string(p.verdict) +
               (p.in_verdict ? "\n" : " (not in the verdict)\n");

@@ -10,9 +10,13 @@
 // RMS difference, Bland–Altman bias and 95% limits of agreement on as many
 // pairs as there are frames in the overlap, as read and de-lagged.
 //
-// The verdict is an equivalence test of the whole curve: for each of k, T0
-// (at a's T0 time) and T_amb the difference a − b gets its confidence
-// interval from the two fits' standard errors (the fits are independent:
+// The verdict is an equivalence test of the whole curve, two one-sided
+// tests (TOST, Schuirmann 1987) for each of k, T0 (at a's T0 time) and
+// T_amb: equivalence at level α = 0.05 is shown when the difference's
+// 1 − 2α = 90 % interval lies inside ±margin (each one-sided test rejects
+// "beyond that side's margin" at α; a 95 % two-sided interval inside the
+// margin tests at α = 0.025 and overstates the standard). The difference
+// a − b gets that interval from the two fits' standard errors (the fits are independent:
 // different sensors, different noise; within each fit the parameters'
 // correlations are in its marginal standard errors) and, when given, each
 // series' systematic standard uncertainty of that parameter (a Type-B
@@ -49,7 +53,10 @@ enum class Verdict { kAgree, kDiffer, kInconclusive };
 const char* to_string(Verdict verdict);  // "agree", "differ", "inconclusive"
 
 struct AgreementOptions {
-  double confidence = 0.95;           // of the intervals and the limits of agreement
+  double confidence = 0.95;           // of the limits of agreement and the k significance test
+  // Level of each one-sided test of the equivalence (TOST): the verdict's
+  // intervals are at 1 − 2α (0.90 for the standard α = 0.05).
+  double equivalence_alpha = 0.05;
   std::size_t min_common_points = 3;  // fewer common times: no series statistics
   std::string label_a = "thermocouple";
   std::string label_b = "BOS probe";
@@ -102,8 +109,9 @@ struct ParameterAgreement {
   double systematic_std_error = 0.0;  // sqrt(sys_a² + sys_b²), the stated systematic parts
   double z = 0.0;             // difference / std_error
   double margin = 0.0;        // ± this is "the same"
-  double critical = 0.0;      // normal, or Student t with the Welch–Satterthwaite dof of two scaled fits
-  double interval_low = 0.0;  // difference ∓ critical · std_error
+  double critical = 0.0;      // normal, or Student t with the Welch–Satterthwaite dof of two scaled fits,
+                              // one-sided at α (two-sided at 1 − 2α)
+  double interval_low = 0.0;  // difference ∓ critical · std_error: the 1 − 2α interval
   double interval_high = 0.0;
   Verdict verdict = Verdict::kInconclusive;
   bool in_verdict = true;  // false: shown only (T0 with an estimated lag)
@@ -111,6 +119,8 @@ struct ParameterAgreement {
 
 struct CurveAgreement {
   Verdict verdict = Verdict::kInconclusive;
+  double alpha = 0.05;        // of each one-sided test (TOST)
+  double confidence = 0.90;   // of the parameters' intervals: 1 − 2α
   // Of the parameters with the curve's verdict, the one whose interval
   // reaches furthest relative to its margin: the closest call for agree, the
   // clearest for differ.

@@ -341,6 +341,50 @@ TEST(Agreement, AProbeInPixelsIsJudgedOnKAlone) {
   EXPECT_FALSE(result.series);
 }
 
+// The verdict is two one-sided tests at α = 0.05 (Schuirmann 1987): T0
+// 0.5 ± 0.28 °C apart (σ 0.2 each) against ±1 °C has the 90 % interval
+// [0.035, 0.965], inside the margin: equivalent; the 95 % two-sided
+// interval [−0.05, 1.05] reaches past it, which is a test at α = 0.025.
+// The level is an option, stored with the intervals it made.
+TEST(Agreement, TheVerdictIsTwoOneSidedTestsAtTheNinetyPercentInterval) {
+  NewtonFit a = fit_with_k(0.010, 0.00001), b = fit_with_k(0.010, 0.00001);
+  a.t0_c = {80.5, 0.2, 0, 0, false};
+  b.t0_c = {80.0, 0.2, 0, 0, false};
+  const auto tost = compare_fits(a, b, {}, {});
+  ASSERT_TRUE(tost.curve);
+  const ParameterAgreement& t0 = tost.curve->parameters[1];
+  EXPECT_DOUBLE_EQ(tost.curve->alpha, 0.05);
+  EXPECT_DOUBLE_EQ(tost.curve->confidence, 0.90);
+  EXPECT_NEAR(t0.critical, 1.6449, 1e-3) << "one-sided at 0.05";
+  EXPECT_NEAR(t0.interval_high, 0.5 + 1.6449 * 0.2 * std::sqrt(2.0), 1e-3);
+  EXPECT_EQ(t0.verdict, Verdict::kAgree);
+  EXPECT_EQ(tost.curve->verdict, Verdict::kAgree) << tost.verdict;
+  EXPECT_NE(tost.verdict.find("90% intervals inside ±margin: two one-sided tests at α = 0.05"), std::string::npos)
+      << tost.verdict;
+  AgreementOptions two_sided_95;
+  two_sided_95.equivalence_alpha = 0.025;
+  const auto strict = compare_fits(a, b, {}, {}, two_sided_95);
+  EXPECT_EQ(strict.curve->parameters[1].verdict, Verdict::kInconclusive);
+  EXPECT_GT(strict.curve->parameters[1].interval_high, 1.0);
+  two_sided_95.equivalence_alpha = 0.5;
+  EXPECT_NE(two_sided_95.invalid_reason(), "");
+}
+
+// A probe fit whose σ were scaled by a Birge ratio estimated from n − p
+// residuals carries that dof, and the comparison's critical value is
+// Student t at the Welch–Satterthwaite dof it gives, not normal.
+TEST(Agreement, AnEstimatedSigmaScaleGivesStudentT) {
+  NewtonFit a = fit_with_k(0.010, 0.0001), b = fit_with_k(0.010, 0.0001);
+  b.summary.absolute_sigma = true;
+  b.summary.interval_dof = 5.0;
+  const auto result = compare_fits(a, b, {}, {});
+  ASSERT_TRUE(result.curve);
+  // Equal variances, a's with infinite dof: (va + vb)² / (vb² / 5) = 20 dof, t one-sided 0.05 = 1.725.
+  EXPECT_NEAR(result.curve->parameters[0].critical, 1.7247, 1e-3);
+  b.summary.interval_dof.reset();
+  EXPECT_NEAR(compare_fits(a, b, {}, {}).curve->parameters[0].critical, 1.645, 1e-3);
+}
+
 TEST(Agreement, MarginsMustBePositive) {
   AgreementOptions options;
   options.margin_c = 0;

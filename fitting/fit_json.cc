@@ -82,6 +82,7 @@ std::optional<ParameterCovariance> covariance_from_json(const json& j) {
 // A fit stored before t_critical was written: the same value from what was.
 double t_critical_from(const NewtonFitSummary& s) {
   if (!s.ok() || !(s.dof > 0) || !(s.confidence > 0 && s.confidence < 1)) return 0.0;
+  if (s.absolute_sigma && s.interval_dof) return student_t_critical(*s.interval_dof, s.confidence);
   return s.absolute_sigma ? normal_critical(s.confidence) : student_t_critical(s.dof, s.confidence);
 }
 
@@ -101,6 +102,7 @@ void read_diagnostics(const json& d, NewtonFit& fit) {
   s.record_time_constants = number_or_nan(d, "record_time_constants");
   s.outliers = d.value("outliers", std::size_t{0});
   s.t_critical = number_or_nan(d, "t_critical");
+  if (const double dof = number_or_nan(d, "interval_dof"); std::isfinite(dof)) s.interval_dof = dof;
 }
 
 }  // namespace
@@ -145,6 +147,9 @@ CurveAgreement curve_from_json(const json& j) {
   CurveAgreement c;
   c.verdict = verdict_from_json(j.at("verdict"));
   c.deciding_parameter = j.value("deciding_parameter", std::string());
+  // Stored before the test was TOST: two-sided intervals at the stated confidence, α = (1 − confidence) / 2.
+  c.confidence = j.contains("confidence") ? number_or_nan(j, "confidence") : 0.95;
+  c.alpha = j.contains("alpha") ? number_or_nan(j, "alpha") : 0.5 * (1.0 - c.confidence);
   for (const json& p : j.at("parameters")) {
     ParameterAgreement pa;
     pa.name = p.at("name").get<std::string>();
@@ -165,7 +170,7 @@ CurveAgreement curve_from_json(const json& j) {
   return c;
 }
 
-ordered_json to_json(const CurveAgreement& c, double confidence) {
+ordered_json to_json(const CurveAgreement& c) {
   ordered_json parameters = ordered_json::array();
   for (const auto& p : c.parameters) {
     parameters.push_back({{"name", p.name},
@@ -183,8 +188,10 @@ ordered_json to_json(const CurveAgreement& c, double confidence) {
   }
   return {{"verdict", to_string(c.verdict)},
           {"deciding_parameter", c.deciding_parameter},
-          {"confidence", confidence},
-          {"test", "the difference's interval inside +-margin: agree; wholly outside: differ; else inconclusive"},
+          {"confidence", c.confidence},
+          {"alpha", c.alpha},
+          {"test", "two one-sided tests (TOST, Schuirmann 1987) at alpha: the difference's 1 - 2 alpha interval inside "
+                   "+-margin: agree; wholly outside: differ; else inconclusive"},
           {"combination", "the worst of the parameters in the verdict (differ over inconclusive over agree)"},
           {"parameters", parameters}};
 }
@@ -270,6 +277,7 @@ ordered_json to_json(const NewtonFit& fit) {
                       {"record_time_constants", number_or_null(ok ? s.record_time_constants : NAN)},
                       {"outliers", s.outliers}};
   if (ok) j["diagnostics"]["t_critical"] = number_or_null(s.t_critical);
+  if (ok && s.interval_dof) j["diagnostics"]["interval_dof"] = number_or_null(*s.interval_dof);
   // Only a fit with a known measurement σ has one; absent, not null, otherwise.
   if (s.reduced_chi_square) j["diagnostics"]["reduced_chi_square"] = number_or_null(*s.reduced_chi_square);
   write_covariance(fit, j);
@@ -303,7 +311,7 @@ ordered_json to_json(const Agreement& a) {
                    {"paired_at", "the BOS frame times, the thermocouple interpolated there"}};
   }
   j["confidence"] = a.confidence;
-  j["equivalence"] = a.curve ? to_json(*a.curve, a.confidence) : ordered_json(nullptr);
+  j["equivalence"] = a.curve ? to_json(*a.curve) : ordered_json(nullptr);
   j["lag"] = {{"source", a.lag.source},
               {"time_constant_s", number_or_null(a.lag.time_constant_s)},
               {"estimated_s", a.lag.estimated_s ? number_or_null(*a.lag.estimated_s) : ordered_json(nullptr)},

@@ -597,8 +597,10 @@ std::optional<Failure> set_uncertainties(NewtonFit& fit, Solution& solution, con
       summary.absolute_sigma ? 1.0 : solution.problem->robust_sum_of_squares(solution.residuals_c) / summary.dof;
   for (auto& row : *covariance)
     for (double& v : row) v *= variance_factor;
-  summary.t_critical = summary.absolute_sigma ? normal_critical(options.confidence)
-                                              : student_t_critical(summary.dof, options.confidence);
+  if (summary.absolute_sigma) summary.interval_dof = options.interval_dof;
+  summary.t_critical = !summary.absolute_sigma ? student_t_critical(summary.dof, options.confidence)
+                       : options.interval_dof  ? student_t_critical(*options.interval_dof, options.confidence)
+                                               : normal_critical(options.confidence);
   // The amplitude is judged where the data are, not at an origin that may lie far from them.
   const double delta_se = std::sqrt((*covariance)[1][1]);
   if (std::abs(p.delta_c) < summary.t_critical * delta_se) return flat_record(p.delta_c, delta_se, "±");
@@ -644,6 +646,9 @@ std::string NewtonFitOptions::invalid_reason() const {
   if (origin_s && !std::isfinite(*origin_s)) return "the time origin must be finite";
   if (measurement_sigma_c && !(*measurement_sigma_c > 0.0 && std::isfinite(*measurement_sigma_c))) {
     return "the measurement σ must be positive and finite";
+  }
+  if (interval_dof && !(*interval_dof > 0.0 && std::isfinite(*interval_dof))) {
+    return "the intervals' degrees of freedom must be positive and finite";
   }
   if (!std::isfinite(ambient.value_c)) return "the ambient value must be finite";
   if (ambient.mode == AmbientModel::Mode::kPrior && !(ambient.sigma_c > 0.0 && std::isfinite(ambient.sigma_c))) {

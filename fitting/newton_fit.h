@@ -68,6 +68,10 @@ struct NewtonFitOptions {
   std::optional<double> measurement_sigma_c;  // known σ of every sample: absolute uncertainties and a χ² test
                                               // (a σ per sample: fit_newton's sigma_c or CleanSeries::sigma_c)
   double confidence = 0.95;                   // of the reported intervals
+  // With a known σ whose scale was itself estimated from a fit's residuals
+  // (a Birge ratio from n − p residuals): the intervals' critical value is
+  // Student t at these degrees of freedom rather than normal.
+  std::optional<double> interval_dof;
   int max_iterations = 200;
   // A free ambient is weakly identified when the record spans fewer time
   // constants than this; the fit then warns and suggests fixing it.
@@ -122,6 +126,9 @@ struct NewtonFitSummary {
   double record_time_constants = 0.0;  // duration / τ
   double confidence = 0.95;
   double t_critical = 0.0;   // Student t (scaled) or normal (absolute) critical value of the intervals
+  // The dof of the variances with an absolute σ whose scale was estimated
+  // (NewtonFitOptions::interval_dof): t_critical is Student t at it.
+  std::optional<double> interval_dof;
   std::size_t outliers = 0;  // residuals beyond 5 robust σ (1.4826 × median |residual|)
 
   bool ok() const { return status == FitStatus::kOk; }

@@ -5,11 +5,16 @@
 // The points are weighted by each sample's random σ (its temperature's,
 // else its shift's when the series is in px): a frame known poorly pulls
 // the curve little. The σ are absolute, so when the scatter about the curve
-// is larger than they say (reduced χ² above 1 beyond chance: the vectors' σ
-// leave out what moves a probe from frame to frame but not within a frame),
-// the weights are kept and the σ scaled by √χ² (the Birge ratio), so the
-// intervals are never narrower than the scatter supports; the factor is
-// stored with the fit. A series in which some valid sample has no σ is
+// is larger than they say (reduced χ² above 1: the vectors' σ leave out
+// what moves a probe from frame to frame but not within a frame), the
+// weights are kept and the σ scaled by √χ² (the Birge ratio, as the PDG and
+// CODATA apply it: whenever it exceeds 1), with intervals at Student t of
+// the fit's n − p (the scale is estimated from those residuals), so they
+// are never narrower than the scatter supports; the factor is stored with
+// the fit. The residuals' lag-1 autocorrelation, which an AR(1) effective
+// n would widen by, is negative on the demo (the frames' errors are not
+// positively correlated in time); and a common error of every frame (the
+// shared reference image's noise) moves T_amb and T0 together, not k. A series in which some valid sample has no σ is
 // fitted unweighted (scaled uncertainties), as before σ existed.
 //
 // The systematic part is common to every sample of the series, so it is not
