@@ -66,6 +66,19 @@ void copy_markers(const sim::RecordedRun& recorded, double speed, std::int64_t s
   store.write_events(markers);
 }
 
+// The polls and frames stamped with the recording's times (sim/replay.h),
+// so the devices keep their timing between them; what could not be matched
+// keeps its wall-clock time and is named.
+void stamp_recorded_times(const sim::RecordedRun& recorded, const std::filesystem::path& dir, std::int64_t started_ns,
+                          double speed) {
+  const sim::RecordingTimes times = sim::stamp_from_recording(recorded, dir, started_ns, speed);
+  for (const std::string& problem : times.problems) spdlog::warn("{}: {}", dir.string(), problem);
+  spdlog::info(
+      "{} samples and {} frames stamped with the recording's times, scaled by the speed-up (the largest moved "
+      "{:.1f} ms from its poll or arrival)",
+      times.samples, times.frames, times.largest_move_s * 1e3);
+}
+
 void replay(const ReplayArgs& args) {
   refuse_standard_output(args.out, "--out", "a run is a folder (run.sqlite, frames/)");
   check_new_run_output(args.out, "--out");  // not the recorded run itself, nor inside its own folders
@@ -107,6 +120,7 @@ void replay(const ReplayArgs& args) {
     throw;
   }
   watcher.join();
+  stamp_recorded_times(recorded, store.dir(), started_ns, args.speed);
   std::cout << summary.BriefReport() << "\nreplayed run: " << store.dir().string() << "\n";
 }
 

@@ -216,9 +216,7 @@ TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
       << "export + fit and the stored fit disagree on one series";
 
   // 4. A replay at 2x (so 20x in all) processed with no options: the same
-  //    experiment. Not faster: a replay stamps its frames with the host clock
-  //    as a camera does, and at 100x (frames 0.1 s apart) the stamping delays
-  //    of a sanitizer build moved the BOS probes' k by 2%.
+  //    experiment.
   const fs::path replay = dir / "replay";
   const auto replayed = bosfuse("replay " + quoted(run) + " -o " + quoted(replay) + " --speed 2");
   ASSERT_EQ(replayed.exit_code, 0) << replayed.output;
@@ -227,21 +225,17 @@ TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
   ASSERT_EQ(processed.exit_code, 0) << processed.output;
   EXPECT_NE(processed.output.find("inherited from the recorded run"), std::string::npos) << processed.output;
   const StoredRates by_replay = stored_rates(replay);
-  // The BOS probes replay within the demo's intervals (their frames keep
-  // their recorded times). The thermocouples' replayed time axis has come out
-  // up to 3.2% short on a loaded machine (k high by as much; cause not found
-  // yet, docs/RELIABILITY.md), so they are held to the demo's own 5% bound.
+  // Every sample and frame of the replay is stamped with its recorded time
+  // (sim/replay.h), so the thermocouples, the BOS probes and their pairs are
+  // the demo's: the same k, and the same RMS difference, to the float32
+  // rounding of the replayed values. Stamped by the host clock, the
+  // thermocouples' k had come out up to 3.2% high and the RMS 0.11 °C off.
   for (const auto& [name, k] : by_demo.k) {
     ASSERT_TRUE(by_replay.k.count(name)) << name;
-    const bool probe = name.find("(BOS)") != std::string::npos;
-    EXPECT_NEAR(by_replay.k.at(name).value, k.value, probe ? k.high - k.value : 0.05 * k.value)
-        << name << (probe ? ": outside the demo's interval" : ": more than 5% from the demo's");
+    EXPECT_NEAR(by_replay.k.at(name).value, k.value, 2e-3 * k.value) << name;
   }
-  // The RMS difference moves with the timing jitter of a loaded machine (by
-  // up to ~0.11 °C measured), while a replay that lost the geometry or the
-  // mask is off by degrees.
   for (const auto& [name, rms] : by_demo.rms_difference_c) {
-    EXPECT_NEAR(by_replay.rms_difference_c.at(name), rms, 0.2) << name;
+    EXPECT_NEAR(by_replay.rms_difference_c.at(name), rms, 0.01) << name;
   }
   ASSERT_EQ(bosfuse("report " + quoted(replay) + " -o " + quoted(dir / "replay-report")).exit_code, 0);
   expect_report_states(dir / "replay-report", by_replay);

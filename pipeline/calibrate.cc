@@ -249,6 +249,10 @@ CalibrationOutcome calibrate_run(const fs::path& run_dir, const CalibrateOptions
   if (const auto problem = options.Validate(); !problem.empty()) throw std::invalid_argument(problem);
   storage::ProcessingStore results(run_dir, true);
   const auto store = storage::RunStore::open(run_dir);
+  if (const std::string why = why_no_bos_evaluation(store.frames()); !why.empty()) {
+    throw std::runtime_error(why + ": a calibration compares BOS probes with the thermocouples, so it needs a "
+                                   "camera's frames (the thermocouples' fits are `bosfuse process RUN`'s)");
+  }
   const auto probes = results.probes();
   if (probes.empty()) throw std::runtime_error("the run has no BOS probe series: run `bosfuse process RUN` first");
   const storage::ExperimentClock clock = storage::experiment_clock(store);

@@ -165,10 +165,22 @@ void remove_fields_except(const fs::path& run_dir, const std::string& keep) {
   }
 }
 
+// Why `--resume` has nothing to continue: the last processing completed,
+// or failed before it staged a frame (then its error is repeated).
+std::string nothing_to_resume(const fs::path& run_dir, const storage::ProcessingStore& results) {
+  const auto last = results.latest_processing();
+  const std::string failure = last ? processing_failure(*last) : "";
+  if (failure.empty()) return "nothing to resume: the run has no interrupted processing";
+  return fmt::format(
+      "nothing to resume: processing {} failed before it finished a frame: {}; once that is fixed, `bosfuse process "
+      "{}` starts again",
+      last->id, failure, run_dir.string());
+}
+
 Processing start_processing(const fs::path& run_dir, const ProcessOptions& options, storage::ProcessingStore& results) {
   const auto unfinished = results.unfinished_processing();
   if (options.resume) {
-    if (!unfinished) throw std::runtime_error("nothing to resume: the run has no interrupted processing");
+    if (!unfinished) throw std::runtime_error(nothing_to_resume(run_dir, results));
     if (!options.overrides.empty()) {
       throw std::runtime_error(
           "--resume continues with the interrupted processing's own settings; run without "
@@ -197,20 +209,29 @@ struct FitsAndAgreements {
   std::string text;
 };
 
+// Every fitted channel's Newton fit from the origin on (before it the
+// heater may still be on), with the series it was fitted to, by channel id.
+using ChannelFits = std::map<std::int64_t, std::pair<fitting::NewtonFit, fitting::CleanSeries>>;
+
+ChannelFits fit_channels(const storage::RunStore& store, const storage::ExperimentClock& clock,
+                         std::vector<storage::FitRecord>& records) {
+  ChannelFits tc_fits;
+  for (const auto& c : fitted_channels(store.channels())) {
+    const TimeSeries tc = within(channel_series(store, c.id, clock), 0.0, INFINITY);
+    auto series = fitting::clean_series(tc.t_s, tc.value, 0.0);
+    auto fit = fit_at_origin(series);
+    records.push_back({0, storage::FitSubject::kChannel, c.id, clock.origin_ns, fit.ok(),
+                       fit_json(fit, "temperature_c", "degC", clock).dump()});
+    tc_fits[c.id] = {std::move(fit), std::move(series)};
+  }
+  return tc_fits;
+}
+
 FitsAndAgreements fit_everything(const storage::RunStore& store, const storage::ProcessingStore& results,
                                  const FrameContext& ctx, std::int64_t processing_id,
                                  const storage::ExperimentClock& clock) {
   FitsAndAgreements out;
-  std::map<std::int64_t, std::pair<fitting::NewtonFit, fitting::CleanSeries>> tc_fits;
-  for (const auto& c : fitted_channels(store.channels())) {
-    // Newton's law holds from the origin on (before it the heater may still be on).
-    const TimeSeries tc = within(channel_series(store, c.id, clock), 0.0, INFINITY);
-    auto series = fitting::clean_series(tc.t_s, tc.value, 0.0);
-    auto fit = fit_at_origin(series);
-    out.fits.push_back({0, storage::FitSubject::kChannel, c.id, clock.origin_ns, fit.ok(),
-                        fit_json(fit, "temperature_c", "degC", clock).dump()});
-    tc_fits[c.id] = {std::move(fit), std::move(series)};
-  }
+  const ChannelFits tc_fits = fit_channels(store, clock, out.fits);
   const auto probes = results.staged_probes(processing_id);
   const AgreementSettings agreement_options = agreement_settings(store);
   for (std::size_t p = 0; p < probes.size(); ++p) {
@@ -335,35 +356,11 @@ struct FrameLoop {
   }
 };
 
-}  // namespace
-
-std::string ProcessOptions::Validate() const {
-  if (frames_at_once < 0) {
-    return fmt::format("frames_at_once is {}; it must be 0 (chosen for this machine), 1 or more", frames_at_once);
-  }
-  if (prefetch_frames < 0) {
-    return fmt::format("prefetch_frames is {}; it must be 0 (decode on the calling thread) or more", prefetch_frames);
-  }
-  return "";
-}
-
-ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options) {
-  FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres' own logging; the fit summaries say it better
-  const auto start = Clock::now();
-  if (const std::string problem = options.Validate(); !problem.empty()) {
-    throw std::invalid_argument("process options: " + problem);
-  }
-  // Opened first: a folder without a run, or with one a newer bosfuse
-  // wrote, is refused before a lock file is made in it.
-  const auto store = storage::RunStore::open(run_dir);
-  const auto lock = storage::RunLock::try_acquire(run_dir, "process.lock");
-  if (!lock) {
-    throw std::runtime_error("another bosfuse is processing " + run_dir.string() + " (" +
-                             storage::RunLock::holder(run_dir, "process.lock") + ")");
-  }
-  storage::ProcessingStore results(run_dir, true);
-  const storage::ExperimentClock clock = storage::experiment_clock(store);
-  Processing processing = start_processing(run_dir, options, results);
+// The frames of a run with a reference, evaluated against it, then every
+// fit, agreement and the quality index; stored when every frame is done.
+ProcessReport process_frames(const fs::path& run_dir, const ProcessOptions& options, const storage::RunStore& store,
+                             storage::ProcessingStore& results, const storage::ExperimentClock& clock,
+                             const Processing& processing, Clock::time_point start) {
   const RunFrames frames = split_frames(store.frames());
   const auto staged = results.staged_frame_ids(processing.id);
   const std::set<std::int64_t> done(staged.begin(), staged.end());
@@ -454,6 +451,102 @@ ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options
                     report.fits_ok, report.fits, report.agreements, report.seconds, clock.basis()) +
                 fitted.text + (distributor ? distributor->brief_report() : "");
   return report;
+}
+
+// A run with nothing for BOS to evaluate (`why`): each thermocouple's
+// Newton fit, as a run with frames gets it, stored as a complete processing
+// with no probes, agreements or fields.
+ProcessReport process_thermocouples_only(const fs::path& run_dir, const ProcessOptions& options,
+                                         const storage::RunStore& store, storage::ProcessingStore& results,
+                                         const storage::ExperimentClock& clock, const Processing& processing,
+                                         const std::string& why, Clock::time_point start) {
+  const std::string note = why + ": no BOS evaluation was done; the thermocouples are fitted";
+  if (options.progress) options.progress({0, 0, note, false});
+  const auto fits_start = Clock::now();
+  std::vector<storage::FitRecord> fits;
+  const ChannelFits tc_fits = fit_channels(store, clock, fits);
+  ProcessReport report;
+  report.processing_id = processing.id;
+  report.temperature_source = "none";
+  report.fits = fits.size();
+  for (const auto& f : fits) report.fits_ok += f.ok ? 1 : 0;
+  const json summary = {{"frames", 0},
+                        {"probes", 0},
+                        {"temperature_source", report.temperature_source},
+                        {"thermocouples_only", why},
+                        {"time_basis", clock.basis()}};
+  results.complete_processing(processing.id, fits, {}, summary.dump(), acquisition::utc_now_ns());
+  remove_fields_except(run_dir, "");
+  report.complete = true;
+  report.times.finishing_s = std::chrono::duration<double>(Clock::now() - fits_start).count();
+  report.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  std::string fitted;
+  for (const auto& c : fitted_channels(store.channels())) {
+    const auto& fit = tc_fits.at(c.id).first;
+    fitted += fit.ok() ? fmt::format("{}: thermocouple k = {:.4g} 1/s\n", c.name, fit.k_per_s.value)
+                       : fmt::format("{}: thermocouple: no fit\n", c.name);
+  }
+  report.text = processing.note +
+                fmt::format("thermocouples only ({}); {} of {} fits ok, {:.1f} s; times in {}\n", why,
+                            report.fits_ok, report.fits, report.seconds, clock.basis()) +
+                fitted;
+  return report;
+}
+
+// A processing that failed says so in its row, never left looking
+// interrupted (ProcessingStore::fail_processing). Its own failure to do so
+// must not hide the error being reported.
+void record_failure(storage::ProcessingStore& results, std::int64_t processing_id, const std::string& error) noexcept {
+  try {
+    results.fail_processing(processing_id, json{{"failure", error}}.dump(), acquisition::utc_now_ns());
+  } catch (...) {
+  }
+}
+
+}  // namespace
+
+std::string processing_failure(const storage::ProcessingRecord& processing) {
+  const auto summary = nlohmann::json::parse(processing.summary_json, nullptr, false);
+  if (!summary.is_object() || !summary.contains("failure") || !summary.at("failure").is_string()) return "";
+  return summary.at("failure").get<std::string>();
+}
+
+std::string ProcessOptions::Validate() const {
+  if (frames_at_once < 0) {
+    return fmt::format("frames_at_once is {}; it must be 0 (chosen for this machine), 1 or more", frames_at_once);
+  }
+  if (prefetch_frames < 0) {
+    return fmt::format("prefetch_frames is {}; it must be 0 (decode on the calling thread) or more", prefetch_frames);
+  }
+  return "";
+}
+
+ProcessReport process_run(const fs::path& run_dir, const ProcessOptions& options) {
+  FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres' own logging; the fit summaries say it better
+  const auto start = Clock::now();
+  if (const std::string problem = options.Validate(); !problem.empty()) {
+    throw std::invalid_argument("process options: " + problem);
+  }
+  // Opened first: a folder without a run, or with one a newer bosfuse
+  // wrote, is refused before a lock file is made in it.
+  const auto store = storage::RunStore::open(run_dir);
+  const auto lock = storage::RunLock::try_acquire(run_dir, "process.lock");
+  if (!lock) {
+    throw std::runtime_error("another bosfuse is processing " + run_dir.string() + " (" +
+                             storage::RunLock::holder(run_dir, "process.lock") + ")");
+  }
+  storage::ProcessingStore results(run_dir, true);
+  const storage::ExperimentClock clock = storage::experiment_clock(store);
+  const Processing processing = start_processing(run_dir, options, results);
+  try {
+    if (const std::string why = why_no_bos_evaluation(store.frames()); !why.empty()) {
+      return process_thermocouples_only(run_dir, options, store, results, clock, processing, why, start);
+    }
+    return process_frames(run_dir, options, store, results, clock, processing, start);
+  } catch (const std::exception& e) {
+    record_failure(results, processing.id, e.what());
+    throw;
+  }
 }
 
 }  // namespace bosfuse::pipeline

@@ -35,6 +35,7 @@
 
 #include "pipeline/frame_distributor.h"
 #include "pipeline/processing_settings.h"
+#include "storage/processing_store.h"
 
 namespace bosfuse::pipeline {
 
@@ -115,6 +116,18 @@ struct ProcessReport {
   std::string text;  // what a person reads at the end
 };
 
+// A run with no frames, or only reference frames, has nothing for BOS to
+// evaluate: its thermocouples get their fits as in a run with frames, stored
+// as a complete processing without probes, agreements or fields (its
+// summary's `thermocouples_only` says why), and a progress note says so.
+// A run with frames but no reference frame is refused (split_frames).
+// A processing that fails is recorded as failed (ProcessingStore::
+// fail_processing): abandoned when it had finished no frame, else left
+// resumable at the failing frame; either way its summary holds the error.
 ProcessReport process_run(const std::filesystem::path& run_dir, const ProcessOptions& options);
+
+// The error a failed processing recorded (its summary's `failure`); empty
+// for one that did not fail, or whose summary cannot be read.
+std::string processing_failure(const storage::ProcessingRecord& processing);
 
 }  // namespace bosfuse::pipeline

@@ -1,5 +1,6 @@
 #include "pipeline/run_selection.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -20,9 +21,22 @@ RunFrames split_frames(const std::vector<storage::FrameRecord>& frames) {
       out.measurements.push_back(f);
     }
   }
-  if (!found) throw std::runtime_error("the run has no reference frame (a frame with is_reference = 1)");
+  if (!found) {
+    throw std::runtime_error(
+        "the run has " + std::to_string(frames.size()) +
+        " frames but no reference frame (a frame recorded without the flow, is_reference = 1): mark one with "
+        "`sqlite3 RUN/run.sqlite \"UPDATE frames SET is_reference = 1 WHERE id = ID\"` (usually the first frame, "
+        "taken before the heater was switched on), or record with [[cameras]] reference_frames = N or its "
+        "reference_flag file (docs/CONFIG.md)");
+  }
   if (out.measurements.empty()) throw std::runtime_error("the run has no frames to evaluate besides the reference");
   return out;
+}
+
+std::string why_no_bos_evaluation(const std::vector<storage::FrameRecord>& frames) {
+  if (frames.empty()) return "the run has no frames";
+  const bool measured = std::any_of(frames.begin(), frames.end(), [](const auto& f) { return !f.is_reference; });
+  return measured ? "" : "the run has only reference frames, none to evaluate against them";
 }
 
 std::vector<storage::ChannelInfo> positioned_channels(const std::vector<storage::ChannelInfo>& channels) {

@@ -21,8 +21,14 @@ struct RunFrames {
   std::vector<storage::FrameRecord> measurements;  // in time order
 };
 
-// Throws when the run has no reference frame or nothing to evaluate.
+// Throws when the run has no reference frame (saying how to mark one) or
+// nothing to evaluate.
 RunFrames split_frames(const std::vector<storage::FrameRecord>& frames);
+
+// Why a run's frames give BOS nothing to evaluate, in words ("the run has
+// no frames"); empty when they do. A run with frames but no reference frame
+// is not such a run: split_frames refuses it.
+std::string why_no_bos_evaluation(const std::vector<storage::FrameRecord>& frames);
 
 // Channels (any kind) with a finite position in the image.
 std::vector<storage::ChannelInfo> positioned_channels(const std::vector<storage::ChannelInfo>& channels);

@@ -222,17 +222,28 @@ std::string page_head(const std::string& title, const ReportInput& input) {
   return h.str();
 }
 
+// Why the BOS results are not there: processing failed, or has not been done.
+std::string bos_missing(const ReportInput& input) {
+  return input.bos_missing.empty() ? std::string(kNotProcessed) : esc(input.bos_missing) + ".";
+}
+
 std::string summary_section(const ReportInput& input, const ReportSummary& summary) {
   std::string h = "<h2 id=\"summary\">Summary</h2>\n" + summary_html(summary);
+  if (!input.thermocouples_only.empty()) {
+    return h + "<p class=\"note\">Thermocouples only: " + esc(input.thermocouples_only) +
+           ", so this report has no BOS probes, agreement, maps or image quality index.</p>\n";
+  }
   if (!input.agreements.empty()) return h;
-  if (!input.has_probes()) return h + "<p class=\"note\">Thermocouples against BOS probes: " + kNotProcessed + "</p>\n";
+  if (!input.has_probes()) return h + "<p class=\"note\">Thermocouples against BOS probes: " + bos_missing(input) + "</p>\n";
   return h + "<p class=\"note\">No thermocouple has a BOS probe at its position to compare with.</p>\n";
 }
 
 std::string curves_section(const ReportInput& input, const Figures& f, const ReportOptions& options) {
   std::string h = "<h2 id=\"curves\">Cooling curves</h2>\n";
   if (f.curves.empty()) h += "<p class=\"note\">The run has no temperature samples.</p>\n";
-  if (!input.has_probes()) h += std::string("<p class=\"note\">BOS probe curves: ") + kNotProcessed + "</p>\n";
+  if (!input.has_probes() && input.thermocouples_only.empty()) {
+    h += "<p class=\"note\">BOS probe curves: " + bos_missing(input) + "</p>\n";
+  }
   if (f.overview) h += figure_html(*f.overview, options.curve_size);
   for (const auto& figure : f.curves) h += figure_html(figure, options.curve_size);
   return h;
@@ -262,7 +273,7 @@ std::string maps_sections(const ReportInput& input, const Figures& f, const Repo
   }
   for (const auto& figure : f.displacement_maps) h += figure_html(figure, options.map_size);
   h += "<h2 id=\"temperature\">Temperature maps</h2>\n";
-  if (f.temperature_maps.empty()) h += std::string("<p class=\"note\">") + kNotProcessed + "</p>\n";
+  if (f.temperature_maps.empty()) h += "<p class=\"note\">" + bos_missing(input) + "</p>\n";
   for (const auto& figure : f.temperature_maps) h += figure_html(figure, options.map_size);
   return h;
 }
@@ -306,13 +317,14 @@ ReportFiles write_report(const ReportInput& input, const ReportOptions& options,
   write_data(input, summary, figures, folder.path(), files);
 
   files.html = folder.path() / "report.html";
+  // A run with nothing for BOS gets the thermocouples' sections alone.
+  const bool bos = input.thermocouples_only.empty();
   write_text(files.html, page_head(title, input) + summary_section(input, summary) +
-                             "<h2 id=\"quality\">Image "
-                             "quality index</h2>\n" +
-                             quality_html(input) + curves_section(input, figures, options) +
-                             agreement_section(input, figures, options) + uncertainty_section(input) +
-                             maps_sections(input, figures, options) +
-                             files_section(files) + "</body>\n</html>\n");
+                             (bos ? "<h2 id=\"quality\">Image quality index</h2>\n" + quality_html(input) : "") +
+                             curves_section(input, figures, options) +
+                             (bos ? agreement_section(input, figures, options) : "") + uncertainty_section(input) +
+                             (bos ? maps_sections(input, figures, options) : "") + files_section(files) +
+                             "</body>\n</html>\n");
   folder.commit();
   return moved_to(std::move(files), out_dir);
 }

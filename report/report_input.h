@@ -96,6 +96,13 @@ struct ReportInput {
   // Why there are no displacement maps when there are none (e.g. "the run has no frames").
   std::string displacement_maps_note;
   std::vector<std::string> notes;  // anything else a reader should know, shown near the top
+  // Why BOS has nothing in this run (e.g. "the run has no frames"): then the
+  // report is the thermocouples' alone, without the BOS sections. Empty: a
+  // run with frames to evaluate.
+  std::string thermocouples_only;
+  // Why the BOS results are missing when the run has frames but they are (a
+  // processing that failed says what failed); empty: "not processed yet".
+  std::string bos_missing;
   UncertaintySummary uncertainty;  // the budget, the probes' σ and the fits' intervals (empty: not processed)
 
   bool has_probes() const;

@@ -11,8 +11,10 @@
 
 #include "fitting/fit_json.h"
 #include "fusion/field_csv.h"
+#include "pipeline/process.h"
 #include "pipeline/processing_settings.h"
 #include "pipeline/quality_json.h"
+#include "pipeline/run_selection.h"
 #include "report/run_uncertainty.h"
 #include "storage/experiment_clock.h"
 #include "storage/processing_store.h"
@@ -212,9 +214,54 @@ struct StoredReader {
   }
 };
 
+// What a run without stored results is told: to process it, or, when its
+// last processing failed, what failed (processing again would only repeat it).
+void not_processed_note(const storage::ProcessingStore& results, const fs::path& run_dir, ReportInput& input) {
+  const auto last = results.latest_processing();
+  const std::string failure = last && last->status == "abandoned" ? pipeline::processing_failure(*last) : "";
+  if (failure.empty()) {
+    input.notes.push_back(fmt::format(
+        "The run is not processed yet: no fits, BOS probes or maps are stored. Run `bosfuse process {}`, then "
+        "this report again.",
+        run_dir.string()));
+    return;
+  }
+  input.bos_missing = fmt::format("Not processed: processing {} failed: {}", last->id, failure);
+  input.notes.push_back(fmt::format(
+      "The run is not processed: processing {} failed: {}. Once that is fixed, `bosfuse process {}` processes it, "
+      "then make this report again.",
+      last->id, failure, run_dir.string()));
+}
+
+// A processing newer than the results shown: one that failed says what
+// failed, one under way or interrupted that `--resume` completes it.
+void later_processing_note(const storage::ProcessingRecord& later, const fs::path& run_dir, ReportInput& input) {
+  const std::string failure = pipeline::processing_failure(later);
+  if (later.status == "running" && failure.empty()) {
+    input.notes.push_back(fmt::format(
+        "A later processing ({}) was interrupted; its partial results are not shown. `bosfuse process {} --resume` "
+        "completes it.",
+        later.id, run_dir.string()));
+  } else if (later.status == "running") {
+    input.notes.push_back(fmt::format(
+        "A later processing ({}) failed at a frame: {}. Its partial results are not shown; once that is fixed, "
+        "`bosfuse process {} --resume` continues it from that frame.",
+        later.id, failure, run_dir.string()));
+  } else if (!failure.empty()) {
+    input.notes.push_back(fmt::format(
+        "A later processing ({}) failed: {}. The results shown are the earlier processing's.", later.id, failure));
+  }
+}
+
 // What the processing found and with which settings, from its stored row.
 void processing_record(const storage::ProcessingRecord& p, ReportInput& input) {
   const auto summary = json::parse(p.summary_json);
+  if (summary.contains("thermocouples_only")) {
+    input.notes.push_back(fmt::format("Processed on {} (processing {}): thermocouple fits only ({}).",
+                                      storage::format_iso8601_utc(p.started_ns, 0), p.id,
+                                      summary.at("thermocouples_only").get<std::string>()));
+    return;
+  }
   if (summary.contains("quality")) {
     const auto& q = summary.at("quality");
     QualityInfo quality;
@@ -294,6 +341,7 @@ ReportInput build_report_input(const storage::RunStore& store, const RunReportOp
     input.notes.push_back(std::string("Map axes in px: the run's geometry could not be read: ") + e.what());
   }
 
+  input.thermocouples_only = pipeline::why_no_bos_evaluation(store.frames());
   std::optional<storage::ProcessingStore> results;
   try {
     results.emplace(store.dir());
@@ -307,20 +355,13 @@ ReportInput build_report_input(const storage::RunStore& store, const RunReportOp
   }
   const auto processing = results->current_processing();
   const bool processed = processing || !results->fits().empty();
-  if (!processed) {
-    input.notes.push_back(fmt::format(
-        "The run is not processed yet: no fits, BOS probes or maps are stored. Run `bosfuse process {}`, then "
-        "this report again.",
-        store.dir().string()));
-  }
+  if (!processed) not_processed_note(*results, store.dir(), input);
   reader.thermocouples();
   reader.agreements(reader.probes());
   if (processing) processing_record(*processing, input);
-  if (const auto unfinished = results->unfinished_processing()) {
-    input.notes.push_back(fmt::format(
-        "A later processing ({}) was interrupted; its partial results are not shown. `bosfuse process {} --resume` "
-        "completes it.",
-        unfinished->id, store.dir().string()));
+  const auto later = results->latest_processing();
+  if (later && (!processing || later->id > processing->id) && (processed || later->status == "running")) {
+    later_processing_note(*later, store.dir(), input);
   }
   try {
     input.uncertainty = stored_uncertainty(store, *results, clock);
@@ -329,7 +370,7 @@ ReportInput build_report_input(const storage::RunStore& store, const RunReportOp
   }
   reader.maps("temperature", input.temperature_maps);
   reader.maps("displacement", input.displacement_maps);
-  if (input.displacement_maps.empty()) {
+  if (input.displacement_maps.empty() && input.thermocouples_only.empty()) {
     input.displacement_maps_note = store.frames().empty() ? "the run has no frames"
                                    : processed
                                        ? "the run was processed in probe mode (no fields): `bosfuse process RUN "

@@ -61,7 +61,7 @@ TEST(RunInput, ARunNotProcessedShowsItsSamplesWithoutFitsAndSaysToProcessIt) {
       << input.time_basis;
   EXPECT_NE(all_notes(input).find("not processed yet"), std::string::npos) << all_notes(input);
   EXPECT_NE(all_notes(input).find("bosfuse process"), std::string::npos);
-  EXPECT_EQ(input.displacement_maps_note, "the run has no frames");
+  EXPECT_EQ(input.thermocouples_only, "the run has no frames") << "the report's BOS sections are left out";
   EXPECT_FALSE(input.quality);
 }
 

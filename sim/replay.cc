@@ -10,6 +10,8 @@
 #include <stdexcept>
 
 #include "acquisition/experiment_config.h"
+#include "storage/database.h"
+#include "storage/record_rows.h"
 #include "storage/run_paths.h"
 #include "storage/run_store.h"
 
@@ -259,6 +261,79 @@ std::string replay_experiment_toml(const RecordedRun& run, const std::vector<int
   std::ostringstream toml;
   toml << "# Replay of a recorded run at " << number(speed) << "x, written by bosfuse replay.\n" << document << "\n";
   return toml.str();
+}
+
+namespace {
+
+// A recorded time on the replay's clock.
+std::int64_t replay_time_ns(std::int64_t recorded_ns, const RecordedRun& recorded, std::int64_t started_ns,
+                            double speed) {
+  return started_ns + std::llround(static_cast<double>(span_ns(recorded_ns, recorded.run.started_ns)) / speed);
+}
+
+// A poll that failed reached no module's sample: it drew nothing.
+bool failed_poll(int status) {
+  return status == static_cast<int>(SampleStatus::kTimeout) || status == static_cast<int>(SampleStatus::kBadReply);
+}
+
+std::string fmt_count(const std::string& label, std::size_t served, std::size_t recorded) {
+  return "channel " + label + ": " + std::to_string(served) + " samples replayed for " + std::to_string(recorded) +
+         " recorded; its times are those of the polls";
+}
+
+// One replayed channel's samples onto its recorded ones, in order.
+void stamp_channel(storage::Database& db, std::int64_t channel_id, const std::string& label,
+                   const std::vector<storage::Sample>& recorded_samples, const RecordedRun& recorded,
+                   std::int64_t started_ns, double speed, RecordingTimes& out) {
+  std::vector<std::pair<std::int64_t, std::int64_t>> served;  // rowid, poll time
+  auto rows = db.prepare("SELECT rowid, t_ns, status FROM samples WHERE channel_id = ? ORDER BY t_ns, rowid");
+  rows.bind(1, channel_id);
+  while (rows.step()) {
+    if (!failed_poll(static_cast<int>(rows.column_int64(2)))) served.emplace_back(rows.column_int64(0), rows.column_int64(1));
+  }
+  if (served.size() > recorded_samples.size()) {
+    out.problems.push_back(fmt_count(label, served.size(), recorded_samples.size()));
+    return;
+  }
+  auto update = db.prepare("UPDATE samples SET t_ns = ? WHERE rowid = ?");
+  for (std::size_t k = 0; k < served.size(); ++k) {
+    const std::int64_t t_ns = replay_time_ns(recorded_samples[k].t_ns, recorded, started_ns, speed);
+    out.largest_move_s = std::max(out.largest_move_s, std::abs(static_cast<double>(served[k].second - t_ns)) * 1e-9);
+    update.bind_all(t_ns, served[k].first).run();
+    ++out.samples;
+  }
+}
+
+}  // namespace
+
+RecordingTimes stamp_from_recording(const RecordedRun& recorded, const fs::path& replayed_dir, std::int64_t started_ns,
+                                    double speed) {
+  RecordingTimes out;
+  const storage::RunStore replayed = storage::RunStore::open(replayed_dir);
+  std::map<std::int64_t, std::string> device_names;
+  for (const auto& d : replayed.devices()) device_names[d.id] = d.name;
+  storage::Database db(storage::database_path(replayed_dir), storage::Database::Mode::kReadWrite);
+  storage::Transaction transaction(db);
+  for (const ReplayDevice& device : recorded.devices) {
+    for (const auto& channel : replayed.channels()) {
+      if (device_names[channel.device_id] != device.name) continue;
+      for (std::size_t c = 0; c < device.channels.size(); ++c) {
+        if (device.channels[c].name != channel.name) continue;
+        stamp_channel(db, channel.id, device.name + "/" + channel.name, device.samples[c], recorded, started_ns,
+                      speed, out);
+      }
+    }
+  }
+  auto update = db.prepare("UPDATE frames SET t_ns = ? WHERE id = ?");
+  for (const auto& frame : replayed.frames()) {
+    if (!frame.device_t_ns) continue;  // not served by a replayed camera
+    const std::int64_t t_ns = replay_time_ns(*frame.device_t_ns, recorded, started_ns, speed);
+    out.largest_move_s = std::max(out.largest_move_s, std::abs(static_cast<double>(frame.t_ns - t_ns)) * 1e-9);
+    update.bind_all(t_ns, frame.id).run();
+    ++out.frames;
+  }
+  transaction.commit();
+  return out;
 }
 
 }  // namespace bosfuse::sim

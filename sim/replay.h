@@ -10,9 +10,12 @@
 // statuses open-circuit and out-of-range (served as their codes); every
 // frame's pixels and reference flag, with its original time as the camera's
 // own time. Other statuses (timeout, bad-reply, invalid-value, disabled) come
-// back as invalid-value, and timing follows the recorded poll periods (the
-// mean interval between samples, outages left out) and frame times divided
-// by the speed-up.
+// back as invalid-value. The devices are polled at the recorded poll periods
+// (the mean interval between samples, outages left out) and frames are
+// served at their times divided by the speed-up; once recorded, every
+// sample and frame is stamped with its recorded time, scaled
+// (stamp_from_recording), so the replayed run keeps the recording's timing
+// between devices exactly, whatever the host's load did to the polls.
 
 #include <filesystem>
 #include <string>
@@ -54,5 +57,27 @@ ModbusSimServer::Options replay_module_options(const ReplayDevice& device, int p
 // its declared origin, and its time scale times `speed` (a run recorded at
 // 16× replayed at 10× is 160 experiment seconds per recorded second).
 std::string replay_experiment_toml(const RecordedRun& run, const std::vector<int>& ports, double speed);
+
+// What stamp_from_recording did: how many samples and frames it stamped,
+// how far the largest of them moved (wall seconds: how late the logger had
+// polled or stored it), and what it could not match, in words.
+struct RecordingTimes {
+  std::size_t samples = 0;
+  std::size_t frames = 0;
+  double largest_move_s = 0;
+  std::vector<std::string> problems;
+};
+
+// Sets the times of what a replay of `recorded` at `speed` recorded in the
+// run at `replayed_dir` (created at `started_ns`, from which the replay's
+// markers count too) to the recording's: started_ns + (t − the recorded
+// run's start) / speed. A channel's samples are matched to the recorded ones
+// in order (the modules serve sample k at poll k); a failed poll (timeout,
+// bad-reply), which drew no sample, keeps its poll's time. A channel with
+// more served samples than recorded keeps its poll times, and says so. A
+// frame's recorded time is its device_t_ns (the replayed camera's own
+// time). One transaction: all or none.
+RecordingTimes stamp_from_recording(const RecordedRun& recorded, const std::filesystem::path& replayed_dir,
+                                    std::int64_t started_ns, double speed);
 
 }  // namespace bosfuse::sim

@@ -191,5 +191,69 @@ TEST(InspectRecordedRun, APeriodOfNinetyNineYearsIsThatGap) {
             std::chrono::nanoseconds(std::llround(acquisition::TomlReader::kLongestSeconds * 1e9)));
 }
 
+// A recorded run: one device, `samples` ok samples of tc0 and tc1 150 ms
+// apart from 1 s after its start at 1e18 ns.
+void recorded_run(const std::filesystem::path& dir, int samples) {
+  auto store = storage::RunStore::create(
+      dir, {0, "recorded", 1'000'000'000'000'000'000, {}, "", storage::RunStatus::kRunning, 1.0, std::nullopt},
+      storage::RunStore::CreateMode::kNew);
+  const auto device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", ""});
+  for (const char* name : {"tc0", "tc1"}) {
+    const auto channel = store.add_channel({0, device, name, "thermocouple", "degC", "K", {}, {}});
+    std::vector<storage::Sample> series;
+    for (int i = 0; i < samples; ++i) {
+      series.push_back({channel, 1'000'000'001'000'000'000 + 150'000'000LL * i, {}, 20.0 + i, {},
+                        storage::SampleStatus::kOk});
+    }
+    store.write_samples(series);
+  }
+  store.finish(storage::RunStatus::kComplete, 1'000'000'010'000'000'000);
+}
+
+// The replayed samples, polled late and unevenly, are stamped with the
+// recorded times divided by the speed; a failed poll keeps its time, and a
+// channel with more samples than recorded keeps all its times and is named.
+TEST(StampFromRecording, SamplesTakeTheRecordedTimesScaledAndWhatCannotMatchIsNamed) {
+  testing::TempDir dir;
+  recorded_run(dir / "recorded", 4);
+  const RecordedRun recorded = inspect_recorded_run(dir / "recorded");
+  const std::int64_t started = 2'000'000'000'000'000'000;
+  {
+    auto store = storage::RunStore::create(
+        dir / "replay", {0, "replay", started, {}, "", storage::RunStatus::kRunning, 2.0, std::nullopt},
+        storage::RunStore::CreateMode::kNew);
+    const auto device = store.add_device({0, "adam", "modbus-tcp", "generic", "127.0.0.1:1"});
+    const auto tc0 = store.add_channel({0, device, "tc0", "thermocouple", "degC", "K", {}, {}});
+    const auto tc1 = store.add_channel({0, device, "tc1", "thermocouple", "degC", "K", {}, {}});
+    std::vector<storage::Sample> samples;
+    const std::int64_t late_ns[] = {0, 9'000'000, 31'000'000, 2'000'000};  // each poll's lateness
+    for (int i = 0; i < 4; ++i) {
+      const std::int64_t t = started + 500'000'000 + 75'000'000LL * i + late_ns[i];
+      samples.push_back({tc0, t, {}, 20.0 + i, {}, storage::SampleStatus::kOk});
+      samples.push_back({tc1, t, {}, 20.0 + i, {}, storage::SampleStatus::kOk});
+    }
+    samples.push_back({tc1, started + 400'000'000, {}, {}, {}, storage::SampleStatus::kTimeout});  // drew nothing
+    samples.push_back({tc1, started + 900'000'000, {}, 24.0, {}, storage::SampleStatus::kOk});     // one too many
+    store.write_samples(samples);
+    store.finish(storage::RunStatus::kComplete, started + 1'000'000'000);
+  }
+  const RecordingTimes times = stamp_from_recording(recorded, dir / "replay", started, 2.0);
+  EXPECT_EQ(times.samples, 4u) << "tc0's four";
+  EXPECT_EQ(times.frames, 0u);
+  EXPECT_NEAR(times.largest_move_s, 0.031, 1e-9);
+  ASSERT_EQ(times.problems.size(), 1u);
+  EXPECT_NE(times.problems[0].find("adam/tc1: 5 samples replayed for 4 recorded"), std::string::npos)
+      << times.problems[0];
+  const auto replay = storage::RunStore::open(dir / "replay");
+  const auto channels = replay.channels();
+  const auto tc0 = replay.read_samples(channels[0].id);
+  ASSERT_EQ(tc0.size(), 4u);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(tc0[i].t_ns, started + 500'000'000 + 75'000'000LL * i) << i;
+  const auto tc1 = replay.read_samples(channels[1].id);
+  ASSERT_EQ(tc1.size(), 6u);
+  EXPECT_EQ(tc1[0].t_ns, started + 400'000'000) << "tc1 is left as polled";
+  EXPECT_EQ(tc1[2].t_ns, started + 500'000'000 + 75'000'000 + 9'000'000);
+}
+
 }  // namespace
 }  // namespace bosfuse::sim

@@ -183,6 +183,25 @@ std::optional<ProcessingRecord> ProcessingStore::unfinished_processing() const {
   return processing_where("status = 'running'");
 }
 
+std::optional<ProcessingRecord> ProcessingStore::latest_processing() const {
+  return processing_where("status <> 'inherited'");
+}
+
+void ProcessingStore::fail_processing(std::int64_t processing_id, const std::string& summary_json,
+                                      std::int64_t finished_ns) {
+  Transaction transaction(db_);
+  auto staged = db_.prepare("SELECT COUNT(*) FROM staged_frames WHERE processing_id = ?");
+  staged.bind(1, processing_id).step();
+  const bool resumable = staged.column_int64(0) > 0;
+  if (!resumable) drop_staged(db_, processing_id);
+  db_.prepare(
+         "UPDATE processings SET summary_json = ?2, status = CASE WHEN ?3 THEN status ELSE 'abandoned' END, "
+         "finished_ns = CASE WHEN ?3 THEN finished_ns ELSE ?4 END WHERE id = ?1 AND status = 'running'")
+      .bind_all(processing_id, summary_json, resumable ? 1 : 0, finished_ns)
+      .run();
+  transaction.commit();
+}
+
 void ProcessingStore::abandon_processing(std::int64_t processing_id) {
   Transaction transaction(db_);
   drop_staged(db_, processing_id);

@@ -82,7 +82,11 @@ struct ProcessingRecord {
   std::int64_t id = 0;
   std::int64_t started_ns = 0;
   std::optional<std::int64_t> finished_ns;
-  std::string status;  // running, complete, abandoned, inherited
+  // running, complete, abandoned, inherited. A processing that failed is
+  // `abandoned` (nothing staged: nothing to resume) or still `running` (a
+  // frame failed after others were staged: `--resume` continues at it), and
+  // its summary_json then holds `failure`, the error in words.
+  std::string status;
   std::string settings_json;
   std::string summary_json;
 };
@@ -121,8 +125,15 @@ class ProcessingStore {
   std::optional<ProcessingRecord> current_processing() const;  // the newest complete one
   std::optional<ProcessingRecord> latest_settings() const;     // the newest complete or inherited one
   std::optional<ProcessingRecord> unfinished_processing() const;  // the newest still `running`
+  // The newest processing of any status but inherited: what the last
+  // `process` did, complete, running, failed or discarded.
+  std::optional<ProcessingRecord> latest_processing() const;
   // Drops what `processing_id` staged and marks it abandoned.
   void abandon_processing(std::int64_t processing_id);
+  // A processing that failed, with `summary_json` saying why. One that had
+  // staged no frame has nothing to resume: it is abandoned (no `running` row
+  // stays); one that had stays `running`, resumable at the failing frame.
+  void fail_processing(std::int64_t processing_id, const std::string& summary_json, std::int64_t finished_ns);
   // A staged probe series; an existing one of that name is returned as is (resume).
   std::int64_t stage_probe(std::int64_t processing_id, const ProbeSeriesRecord& probe);
   std::vector<ProbeSeriesRecord> staged_probes(std::int64_t processing_id) const;

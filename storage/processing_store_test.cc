@@ -78,6 +78,39 @@ TEST(ProcessingStore, ClearingKeepsCalibrationsAndAFailedTransactionStoresNothin
   EXPECT_TRUE(results.probes().empty());
 }
 
+// A processing that failed before any frame leaves no `running` row and
+// nothing staged; one that failed after a frame stays resumable. Both keep
+// the error in their summary.
+TEST(ProcessingStore, AFailedProcessingIsAbandonedUnlessAFrameWasStagedAndKeepsItsError) {
+  Fixture f;
+  ProcessingStore results(f.run_dir, true);
+  const std::int64_t early = results.begin_processing("{}", 10);
+  const std::int64_t probe = results.stage_probe(early, {0, f.channel, "tc0", 120.5, 80.0});
+  results.fail_processing(early, R"({"failure":"no reference frame"})", 20);
+  EXPECT_FALSE(results.unfinished_processing().has_value()) << "no running row stays";
+  const auto last = results.latest_processing();
+  ASSERT_TRUE(last.has_value());
+  EXPECT_EQ(last->id, early);
+  EXPECT_EQ(last->status, "abandoned");
+  EXPECT_EQ(last->finished_ns, 20);
+  EXPECT_EQ(last->summary_json, R"({"failure":"no reference frame"})");
+  EXPECT_TRUE(results.staged_probes(early).empty());
+  EXPECT_TRUE(results.staged_probe_samples(probe).empty());
+
+  const std::int64_t later = results.begin_processing("{}", 30);
+  results.stage_frame(later, f.frame, "{}", {}, {});
+  results.fail_processing(later, R"({"failure":"frame 3: unreadable"})", 40);
+  const auto unfinished = results.unfinished_processing();
+  ASSERT_TRUE(unfinished.has_value()) << "a staged frame: resumable";
+  EXPECT_EQ(unfinished->id, later);
+  EXPECT_FALSE(unfinished->finished_ns.has_value());
+  EXPECT_EQ(unfinished->summary_json, R"({"failure":"frame 3: unreadable"})");
+  EXPECT_EQ(results.staged_frame_ids(later), std::vector<std::int64_t>{f.frame});
+  EXPECT_EQ(results.latest_processing()->id, later);
+  results.add_inherited_settings("{}", 50);
+  EXPECT_EQ(results.latest_processing()->id, later) << "inherited settings are no processing";
+}
+
 TEST(ProcessingStore, AVersionOneStoreReadsAsEmptyAndIsMigratedWhenWritten) {
   Fixture f;
   {

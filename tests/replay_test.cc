@@ -4,12 +4,16 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <opencv2/imgcodecs.hpp>
 
 #include "acquisition/clock.h"
+#include "fusion/time_alignment.h"
 #include "storage/database.h"
+#include "storage/experiment_clock.h"
 #include "storage/run_store.h"
 #include "tests/support/subprocess.h"
+#include "tests/support/synthetic_run.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/test_images.h"
 
@@ -165,6 +169,96 @@ TEST(Replay, AFramePathLeadingOutOfTheRunIsRefusedByNameAndSkipped) {
     const auto replayed = storage::RunStore::open(dir / "replay");
     EXPECT_EQ(replayed.frames().size(), 2u) << "the frame outside the run was copied: " << stored;
     expect_same_frames(storage::RunStore::open(dir / "original"), replayed, 1);
+  }
+}
+
+// The synthetic cooling run (tests/support/synthetic_run.h) with its frames
+// on a camera, so that a replay serves them, and a "heater off" marker 2 s
+// in, its declared origin.
+void make_cooling_run_with_camera(const fs::path& dir, const testrun::Truth& truth) {
+  testrun::create_run(dir, true, truth);
+  storage::Database db((dir / "run.sqlite").string(), storage::Database::Mode::kReadWrite);
+  db.execute("INSERT INTO devices (run_id, name, kind, profile, address) VALUES (1, 'cam', 'camera', 'folder', '')");
+  db.execute("UPDATE frames SET device_id = (SELECT id FROM devices WHERE name = 'cam')");
+  db.prepare("INSERT INTO events (run_id, t_ns, kind, message) VALUES (1, ?, 'marker', 'heater off')")
+      .bind(1, truth.start_ns + 2'000'000'000)
+      .run();
+}
+
+// Each stream's experiment times, by channel name, and the frames'.
+std::map<std::string, std::vector<double>> experiment_times(const storage::RunStore& store) {
+  const storage::ExperimentClock clock = storage::experiment_clock(store);
+  std::map<std::string, std::vector<double>> out;
+  for (const auto& c : store.channels()) {
+    for (const auto& s : store.read_samples(c.id)) out[c.name].push_back(clock.seconds(s.t_ns));
+  }
+  for (const auto& f : store.frames()) out["frames"].push_back(clock.seconds(f.t_ns));
+  return out;
+}
+
+// Each thermocouple interpolated at the measurement frames' experiment
+// times, as the agreement pairs it with the BOS probe there
+// (fusion/time_alignment.h): the pairs whose mean difference is its
+// Bland-Altman bias.
+std::map<std::string, std::vector<double>> thermocouples_at_frames(const storage::RunStore& store) {
+  const storage::ExperimentClock clock = storage::experiment_clock(store);
+  std::vector<double> frame_t_s;
+  for (const auto& f : store.frames()) {
+    if (!f.is_reference) frame_t_s.push_back(clock.seconds(f.t_ns));
+  }
+  std::map<std::string, std::vector<double>> out;
+  for (const auto& c : store.channels()) {
+    std::vector<double> t_s, value;
+    for (const auto& s : store.read_samples(c.id)) {
+      if (s.status != SampleStatus::kOk || !s.value) continue;
+      t_s.push_back(clock.seconds(s.t_ns));
+      value.push_back(*s.value);
+    }
+    out[c.name] = fusion::align_to_frames(t_s, value, frame_t_s).value;
+  }
+  return out;
+}
+
+// Stamped from the recording's own times, a replay at 10x keeps every
+// sample's and frame's experiment time (to rounding: 1 us), so the
+// agreement pairs each probe with the same thermocouple value and its
+// Bland-Altman bias is the recording's (the probes come from the same
+// images at the same times). Stamped by the wall clock, a loaded host's late polls and
+// frames moved them by up to a poll period (issue 31: frame 2 from 11.19 to
+// 12.73 s, the bias from +0.015 to -0.104 degC).
+TEST(Replay, AtTenTimesTheSpeedEveryStreamKeepsItsExperimentTimesAndTheAgreementItsPairs) {
+  testing::TempDir dir;
+  testrun::Truth truth;
+  truth.samples = 80;  // 80 s, replayed in 8 s
+  truth.origin_event = "heater off";
+  make_cooling_run_with_camera(dir / "original", truth);
+  const auto replayed = testing::run_command(
+      kBosfuse + " replay " + (dir / "original").string() + " --out " + (dir / "replay").string() + " --speed 10", 60);
+  ASSERT_EQ(replayed.exit_code, 0) << replayed.output;
+  EXPECT_NE(replayed.output.find("stamped with the recording's times"), std::string::npos) << replayed.output;
+
+  const auto original = experiment_times(storage::RunStore::open(dir / "original"));
+  const auto replay = experiment_times(storage::RunStore::open(dir / "replay"));
+  EXPECT_EQ(storage::experiment_clock(storage::RunStore::open(dir / "replay")).origin_name, "heater off");
+  ASSERT_EQ(replay.size(), original.size());
+  for (const auto& [stream, times] : original) {
+    SCOPED_TRACE(stream);
+    const auto& again = replay.at(stream);
+    ASSERT_EQ(again.size(), times.size());
+    for (std::size_t i = 0; i < times.size(); ++i) ASSERT_NEAR(again[i], times[i], 1e-6) << "#" << i;
+  }
+
+  const auto paired = thermocouples_at_frames(storage::RunStore::open(dir / "original"));
+  const auto paired_again = thermocouples_at_frames(storage::RunStore::open(dir / "replay"));
+  ASSERT_EQ(paired_again.size(), paired.size());
+  for (const auto& [name, values] : paired) {
+    const auto& again = paired_again.at(name);
+    ASSERT_EQ(again.size(), values.size()) << name;
+    ASSERT_EQ(values.size(), 2u) << name;
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      ASSERT_TRUE(std::isfinite(values[i])) << name << " at frame " << i;
+      EXPECT_NEAR(again[i], values[i], 1e-4) << name << " at frame " << i << ": float32 rounding only";
+    }
   }
 }
 
