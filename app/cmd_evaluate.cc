@@ -18,6 +18,7 @@
 #include "app/ranks.h"
 #include "app/run_control.h"
 #include "fusion/displacement_evaluator.h"
+#include "fusion/preprocess.h"
 #include "pipeline/image_io.h"
 #include "pipeline/image_sequence.h"
 #include "pipeline/processing_settings.h"
@@ -34,7 +35,8 @@ using pipeline::read_image;
 
 struct EvaluateArgs {
   std::string reference, measurement, out = "-", map, mask, roi, method = "xcorr", flow = "dis", dis_preset = "medium",
-                                      subpixel = "auto", interpolator = "lanczos3", adaptive_refinement = "off";
+                                      subpixel = "auto", interpolator = "lanczos3", adaptive_refinement = "off",
+                                      preprocess = "none";
   std::string sequence_reference, sequence, settings;
   std::vector<std::string> probes;
   int window_px = 16, first_window_px = 0, step_px = 8, passes = 3;
@@ -107,6 +109,7 @@ fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
   options.xcorr.max_shift_px = args.max_shift_px;
   options.xcorr.adaptive_refinement = args.adaptive_refinement == "on";
   options.xcorr.adaptive_threshold = args.adaptive_threshold;
+  options.preprocess.method = fusion::parse_preprocessing(args.preprocess).value_or(fusion::Preprocessing::kNone);
   apply_xcorr_choices(args, options);
   const std::map<std::string, fusion::FlowAlgorithm> flows{{"dis", fusion::FlowAlgorithm::kDis},
                                                            {"farneback", fusion::FlowAlgorithm::kFarneback},
@@ -145,6 +148,7 @@ void evaluate(const EvaluateArgs& args) {
     report::write_map_figure(map, args.contour_px, {}, std::nullopt, {900, 650}, report::figure_base(args.map));
   }
   spdlog::info("{}", result.summary.BriefReport());
+  spdlog::info("preprocessing: {}", fusion::to_string(options.preprocess.method));
 }
 
 // The options the user gave (an option left at its default does not
@@ -160,6 +164,7 @@ pipeline::SettingsOverrides given_overrides(const EvaluateArgs& args, const CLI:
   if (given("--max-shift")) o.max_shift_px = args.max_shift_px;
   if (given("--adaptive-refinement")) o.adaptive_refinement = args.adaptive_refinement == "on";
   if (given("--adaptive-threshold")) o.adaptive_threshold = args.adaptive_threshold;
+  if (given("--preprocess")) o.preprocess = args.preprocess;
   if (given("--roi")) {
     const auto r = parse_ints(args.roi, 4, "--roi");
     o.roi_px = cv::Rect(r[0], r[1], r[2], r[3]);
@@ -352,6 +357,16 @@ void add_evaluate(CLI::App& root) {
   cmd->add_option("--adaptive-threshold", args->adaptive_threshold,
                   "Adaptive refinement: refine where the shift or its gradient exceeds this many times the first "
                   "pass's noise floor")
+      ->capture_default_str();
+  cmd->add_option("--preprocess", args->preprocess,
+                  "Filter both images first: none, normalize (local contrast), highpass (background subtraction) or "
+                  "minmax (local min-max); docs/CONFIG.md says when each helps")
+      ->check(CLI::Validator(
+          [](std::string& name) {
+            return fusion::parse_preprocessing(name) ? std::string()
+                                                     : "must be one of " + fusion::preprocessing_names();
+          },
+          "NAME"))
       ->capture_default_str();
   cmd->add_option("--mask", args->mask, "Mask image: non-zero pixels are not evaluated");
   cmd->add_option("--roi", args->roi, "Region of interest x,y,w,h in pixels");

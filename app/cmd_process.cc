@@ -14,6 +14,7 @@
 #include "app/ranks.h"
 #include "app/run_argument.h"
 #include "app/run_control.h"
+#include "fusion/preprocess.h"
 #include "pipeline/process.h"
 #include "pipeline/process_frame.h"
 
@@ -26,7 +27,7 @@ struct ProcessArgs {
   std::optional<std::string> mode, method, mask, geometry, roi;
   std::optional<int> window_px, step_px, passes, probe_context, threads, frames_at_once;
   std::optional<double> max_shift_px, adaptive_threshold;
-  std::optional<std::string> adaptive_refinement;
+  std::optional<std::string> adaptive_refinement, preprocess;
 };
 
 cv::Rect parse_roi(const std::string& text) {
@@ -49,6 +50,7 @@ pipeline::SettingsOverrides overrides(const ProcessArgs& args) {
   o.max_shift_px = args.max_shift_px;
   if (args.adaptive_refinement) o.adaptive_refinement = *args.adaptive_refinement == "on";
   o.adaptive_threshold = args.adaptive_threshold;
+  o.preprocess = args.preprocess;
   if (args.roi) o.roi_px = parse_roi(*args.roi);
   o.mask = args.mask;
   o.geometry_file = args.geometry;
@@ -103,6 +105,15 @@ void add_process(CLI::App& root) {
   cmd->add_option("--adaptive-threshold", args->adaptive_threshold,
                   "Adaptive refinement: refine where the shift or its gradient exceeds this many times the first "
                   "pass's noise floor (default: stored, else 4)");
+  cmd->add_option("--preprocess", args->preprocess,
+                  "Filter reference and frames first: none, normalize, highpass or minmax (docs/CONFIG.md) "
+                  "(default: stored, else none)")
+      ->check(CLI::Validator(
+          [](std::string& name) {
+            return fusion::parse_preprocessing(name) ? std::string()
+                                                     : "must be one of " + fusion::preprocessing_names();
+          },
+          "NAME"));
   cmd->add_option("--roi", args->roi, "Region of interest x,y,width,height in pixels (default: stored, else all)");
   cmd->add_option("--geometry", args->geometry,
                   "TOML file with [geometry] (and [alignment]); default: stored, else the run's experiment file, "

@@ -56,6 +56,28 @@ TEST_F(ProcessCli, AdaptiveRefinementIsStoredWithTheSettings) {
   EXPECT_NE(wrong.output.find("--adaptive-refinement"), std::string::npos) << wrong.output;
 }
 
+TEST_F(ProcessCli, PreprocessingIsStoredWithTheSettingsAndUsedAgain) {
+  const auto run = bosfuse("process --mode probes --preprocess normalize " + grid_);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto processing = storage::ProcessingStore(run_dir()).current_processing();
+  ASSERT_TRUE(processing.has_value());
+  EXPECT_EQ(nlohmann::json::parse(processing->settings_json).at("preprocess"), "normalize");
+  // The shifts still follow the hot spot with the filter.
+  const storage::ProcessingStore results(run_dir());
+  for (const auto& probe : results.probes()) {
+    for (const auto& s : results.probe_samples(probe.id)) EXPECT_TRUE(s.valid);
+  }
+  // Without options the stored setting is used again.
+  const auto again = bosfuse("process");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(nlohmann::json::parse(storage::ProcessingStore(run_dir()).current_processing()->settings_json)
+                .at("preprocess"),
+            "normalize");
+  const auto wrong = bosfuse("process --preprocess sharpen");
+  EXPECT_EQ(wrong.exit_code, 105) << wrong.output;
+  EXPECT_NE(wrong.output.find("none, normalize, highpass, minmax"), std::string::npos) << wrong.output;
+}
+
 TEST_F(ProcessCli, FullFieldsEqualProbesAtTheProbePointsAndWriteFieldFiles) {
   auto probe_samples = [&](const std::string& args) {
     EXPECT_EQ(bosfuse("process --mode probes " + args).exit_code, 0);

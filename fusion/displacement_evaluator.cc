@@ -3,11 +3,13 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "fusion/image_input.h"
 #include "fusion/memory_budget.h"
 
 namespace bosfuse::fusion {
 
 std::string EvaluatorOptions::Validate() const {
+  if (std::string problem = preprocess.Validate(); !problem.empty()) return problem;
   return method == Method::kCrossCorrelation ? xcorr.Validate() : flow.Validate();
 }
 
@@ -19,9 +21,15 @@ void EvaluatorOptions::set_grid(int window_px, int step_px, cv::Rect roi) {
 
 DisplacementEvaluator::DisplacementEvaluator(const cv::Mat& reference, const EvaluatorOptions& options,
                                              const cv::Mat& mask)
-    : reference_(reference), mask_(mask), options_(options) {
+    : mask_(mask), options_(options) {
+  if (const std::string problem = options.preprocess.Validate(); !problem.empty()) {
+    throw std::invalid_argument(problem);
+  }
+  // Without preprocessing the evaluators check the reference themselves.
+  if (options.preprocess.method != Preprocessing::kNone) check_image_pair(reference, reference, mask);
+  reference_ = preprocess(reference, options.preprocess, mask);
   if (options.method == Method::kCrossCorrelation) {
-    xcorr_.emplace(reference, options.xcorr, mask);
+    xcorr_.emplace(reference_, options.xcorr, mask);
   } else if (const std::string problem = options.Validate(); !problem.empty()) {
     throw std::invalid_argument(problem);
   }
@@ -42,16 +50,25 @@ GridGeometry DisplacementEvaluator::grid() const {
   return xcorr_ ? grid_of(options_.xcorr) : grid_of(options_.flow);
 }
 
+cv::Mat DisplacementEvaluator::prepared(const cv::Mat& measurement) const {
+  if (options_.preprocess.method == Preprocessing::kNone) return measurement;
+  // The pair's checks first, so a bad measurement is named as such.
+  check_image_pair(reference_, measurement, mask_);
+  return preprocess(measurement, options_.preprocess, mask_);
+}
+
 EvaluationResult DisplacementEvaluator::evaluate(const cv::Mat& measurement) {
-  if (xcorr_) return xcorr_->evaluate(measurement);
-  return evaluate_flow(reference_, measurement, options_.flow, mask_);
+  const cv::Mat image = prepared(measurement);
+  if (xcorr_) return xcorr_->evaluate(image);
+  return evaluate_flow(reference_, image, options_.flow, mask_);
 }
 
 EvaluationResult DisplacementEvaluator::probe(const cv::Mat& measurement, const std::vector<cv::Point2d>& points) {
-  if (xcorr_) return xcorr_->probe(measurement, points);
+  const cv::Mat image = prepared(measurement);
+  if (xcorr_) return xcorr_->probe(image, points);
   // Flow is dense anyway: evaluate a grid with step 1 restricted to the
   // points' windows would cost the same; take the nearest grid vector.
-  EvaluationResult full = evaluate_flow(reference_, measurement, options_.flow, mask_);
+  EvaluationResult full = evaluate_flow(reference_, image, options_.flow, mask_);
   EvaluationResult result;
   result.summary = full.summary;
   result.field.rows = 1;
@@ -76,6 +93,9 @@ EvaluationResult DisplacementEvaluator::probe(const cv::Mat& measurement, const 
 
 EvaluationResult evaluate_displacement(const cv::Mat& reference, const cv::Mat& measurement,
                                        const EvaluatorOptions& options, const cv::Mat& mask) {
+  if (options.preprocess.method != Preprocessing::kNone) {
+    return DisplacementEvaluator(reference, options, mask).evaluate(measurement);
+  }
   if (options.method == Method::kCrossCorrelation) return evaluate_xcorr(reference, measurement, options.xcorr, mask);
   return evaluate_flow(reference, measurement, options.flow, mask);
 }

@@ -4,6 +4,8 @@
 // by an option and get the same kind of result on the same grid.
 //   kCrossCorrelation — cross_correlation.h: the accurate default;
 //   kOpticalFlow      — optical_flow.h: dense flow averaged per window.
+// Either method evaluates the images after the preprocessing the options
+// name (preprocess.h; none by default).
 
 #include <opencv2/core.hpp>
 #include <optional>
@@ -12,6 +14,7 @@
 
 #include "fusion/cross_correlation.h"
 #include "fusion/optical_flow.h"
+#include "fusion/preprocess.h"
 
 namespace bosfuse::fusion {
 
@@ -21,6 +24,7 @@ struct EvaluatorOptions {
   Method method = Method::kCrossCorrelation;
   XcorrOptions xcorr;
   FlowOptions flow;
+  PreprocessOptions preprocess;  // applied to the reference once and to every measurement
 
   std::string Validate() const;  // empty when valid
   // Window, step and ROI set for both methods at once.
@@ -35,7 +39,9 @@ struct EvaluatorOptions {
 // probe_displacement, which are one-shot wrappers around it. Shares the
 // reference's and mask's pixels: do not write into them while it lives.
 // Bad options, reference or mask raise std::invalid_argument here; a bad
-// measurement, in evaluate / probe.
+// measurement, in evaluate / probe. With preprocessing the evaluator holds
+// the preprocessed reference (its own pixels) and preprocesses each
+// measurement whole, probes too (a 16 MP frame: docs/BENCHMARKS.md).
 class DisplacementEvaluator {
  public:
   DisplacementEvaluator(const cv::Mat& reference, const EvaluatorOptions& options, const cv::Mat& mask = {});
@@ -53,7 +59,9 @@ class DisplacementEvaluator {
   EvaluationResult probe(const cv::Mat& measurement, const std::vector<cv::Point2d>& points);
 
  private:
-  cv::Mat reference_, mask_;
+  cv::Mat prepared(const cv::Mat& measurement) const;  // preprocessed as the reference was
+
+  cv::Mat reference_, mask_;  // reference_: preprocessed
   EvaluatorOptions options_;
   std::optional<XcorrEvaluator> xcorr_;  // with Method::kCrossCorrelation
 };

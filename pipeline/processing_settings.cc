@@ -121,6 +121,14 @@ std::string mask_in_run(const fs::path& run_dir, const std::string& given) {
   return copy.string();
 }
 
+fusion::Preprocessing preprocessing_named(const std::string& name) {
+  const auto method = fusion::parse_preprocessing(name);
+  if (!method) {
+    throw std::runtime_error("preprocess must be one of " + fusion::preprocessing_names() + ", not \"" + name + "\"");
+  }
+  return *method;
+}
+
 // Everything but the files (mask, geometry), whose places differ with and without a run.
 void apply_evaluator(const SettingsOverrides& o, ProcessingSettings& s) {
   if (o.probes_only) s.probes_only = *o.probes_only;
@@ -142,6 +150,7 @@ void apply_evaluator(const SettingsOverrides& o, ProcessingSettings& s) {
   if (o.max_shift_px) s.evaluator.xcorr.max_shift_px = *o.max_shift_px;
   if (o.adaptive_refinement) s.evaluator.xcorr.adaptive_refinement = *o.adaptive_refinement;
   if (o.adaptive_threshold) s.evaluator.xcorr.adaptive_threshold = *o.adaptive_threshold;
+  if (o.preprocess) s.evaluator.preprocess.method = preprocessing_named(*o.preprocess);
 }
 
 void apply(const SettingsOverrides& o, const fs::path& run_dir, const std::string& run_config, ProcessingSettings& s) {
@@ -154,7 +163,8 @@ void apply(const SettingsOverrides& o, const fs::path& run_dir, const std::strin
 
 bool SettingsOverrides::empty() const {
   return !probes_only && !method && !flow_algorithm && !window_px && !step_px && !passes && !probe_context_nodes &&
-         !max_shift_px && !adaptive_refinement && !adaptive_threshold && !roi_px && !mask && !geometry_file;
+         !max_shift_px && !adaptive_refinement && !adaptive_threshold && !preprocess && !roi_px && !mask &&
+         !geometry_file;
 }
 
 std::string ProcessingSettings::Validate() const {
@@ -173,7 +183,8 @@ json to_json(const ProcessingSettings& s) {
             {"max_shift_px", x.max_shift_px},
             {"probe_context_nodes", x.probe_context_nodes},
             {"adaptive_refinement", x.adaptive_refinement},
-            {"adaptive_threshold", x.adaptive_threshold}};
+            {"adaptive_threshold", x.adaptive_threshold},
+            {"preprocess", std::string(fusion::to_string(s.evaluator.preprocess.method))}};
   if (!x.roi.empty()) j["roi_px"] = {x.roi.x, x.roi.y, x.roi.width, x.roi.height};
   if (!s.mask.empty()) j["mask"] = s.mask;
   j["geometry"] = geometry_json(s.geometry);
@@ -199,6 +210,8 @@ ProcessingSettings settings_from_json(const nlohmann::json& j) {
     // Settings stored before adaptive refinement existed: it was off.
     s.evaluator.xcorr.adaptive_refinement = j.value("adaptive_refinement", false);
     s.evaluator.xcorr.adaptive_threshold = j.value("adaptive_threshold", s.evaluator.xcorr.adaptive_threshold);
+    // Settings stored before preprocessing existed: there was none.
+    s.evaluator.preprocess.method = preprocessing_named(j.value("preprocess", std::string("none")));
     s.mask = j.value("mask", std::string());
     s.geometry = geometry_from_json(j.at("geometry"));
     return s;
@@ -256,6 +269,11 @@ std::optional<SettingsOverrides> parse_processing_table(const std::string& text,
   o.max_shift_px = r.optional_number("max_shift_px");
   o.adaptive_refinement = r.optional_bool("adaptive_refinement");
   o.adaptive_threshold = r.optional_number("adaptive_threshold");
+  if (const auto name = r.optional_string("preprocess"); name && !fusion::parse_preprocessing(*name)) {
+    r.fail("preprocess", "expected one of " + fusion::preprocessing_names() + ", not \"" + *name + "\"");
+  } else {
+    o.preprocess = name;
+  }
   if (r.has("roi_px")) {
     const std::vector<double> roi = r.numbers("roi_px");
     const bool whole_px =
@@ -311,6 +329,9 @@ std::string describe(const ProcessingSettings& s) {
   if (s.probes_only) text += fmt::format(", probe context {}", x.probe_context_nodes);
   if (x.adaptive_refinement && !s.probes_only) {
     text += fmt::format(", adaptive refinement ({:g} × noise floor)", x.adaptive_threshold);
+  }
+  if (s.evaluator.preprocess.method != fusion::Preprocessing::kNone) {
+    text += fmt::format(", preprocessing {}", fusion::to_string(s.evaluator.preprocess.method));
   }
   if (!x.roi.empty()) text += fmt::format(", ROI {},{} {}×{} px", x.roi.x, x.roi.y, x.roi.width, x.roi.height);
   text += s.mask.empty() ? ", no mask" : ", mask " + s.mask;

@@ -48,6 +48,7 @@ struct SettingsOverrides {
   std::optional<double> max_shift_px;
   std::optional<bool> adaptive_refinement;
   std::optional<double> adaptive_threshold;
+  std::optional<std::string> preprocess;  // a name of fusion/preprocess.h: none, normalize, highpass, minmax
   std::optional<cv::Rect> roi_px;
   std::optional<std::string> mask;           // relative to the run folder, or absolute (then copied into it)
   std::optional<std::string> geometry_file;  // a TOML file with [geometry] / [alignment]
@@ -68,8 +69,8 @@ ProcessingSettings resolve_settings(const std::filesystem::path& run_dir, const 
 
 // The [processing] table of a TOML document (`source_name` names it in
 // messages): mode ("full" or "probes"), method, flow_algorithm, window_px,
-// step_px, passes, max_shift_px, probe_context_nodes, roi_px = [x, y, width,
-// height] and mask, as overrides of the defaults; nullopt when the document
+// step_px, passes, max_shift_px, probe_context_nodes, preprocess, roi_px =
+// [x, y, width, height] and mask, as overrides of the defaults; nullopt when the document
 // has no such table. A wrong type, value or unknown key is an
 // acquisition::ConfigError naming the file, the line and the key. A relative
 // mask is returned as written: the caller knows what it is relative to.

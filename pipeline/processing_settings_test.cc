@@ -87,5 +87,35 @@ TEST(RunlessSettings, FlagsOverTheFileOverDefaults) {
   EXPECT_THROW(resolve_runless_settings((dir.path() / "other.toml").string(), {}), std::runtime_error);
 }
 
+TEST(PreprocessSetting, StoredReadBackAndAbsentFromOldSettingsReadsAsNone) {
+  SettingsOverrides flags;
+  flags.preprocess = "highpass";
+  const auto s = resolve_runless_settings("", flags);
+  EXPECT_EQ(s.evaluator.preprocess.method, fusion::Preprocessing::kHighpass);
+  EXPECT_NE(describe(s).find("preprocessing highpass"), std::string::npos) << describe(s);
+  auto j = nlohmann::json(to_json(s));
+  EXPECT_EQ(j.at("preprocess"), "highpass");
+  EXPECT_EQ(settings_from_json(j).evaluator.preprocess.method, fusion::Preprocessing::kHighpass);
+  j.erase("preprocess");  // as a run processed before preprocessing existed stored it
+  EXPECT_EQ(settings_from_json(j).evaluator.preprocess.method, fusion::Preprocessing::kNone);
+  j["preprocess"] = "sharpen";
+  EXPECT_THROW(settings_from_json(j), std::runtime_error);
+  flags.preprocess = "sharpen";
+  try {
+    resolve_runless_settings("", flags);
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("none, normalize, highpass, minmax"), std::string::npos) << e.what();
+  }
+}
+
+TEST(PreprocessSetting, TheTableKeyIsReadAndABadNameIsNamedWithTheValidOnes) {
+  const auto o = parse_processing_table("[processing]\npreprocess = \"normalize\"\n", "s.toml");
+  ASSERT_TRUE(o.has_value());
+  EXPECT_EQ(o->preprocess, "normalize");
+  EXPECT_EQ(error_of("[processing]\n\npreprocess = \"clahe\"\n"),
+            "s.toml:3: processing.preprocess: expected one of none, normalize, highpass, minmax, not \"clahe\"");
+}
+
 }  // namespace
 }  // namespace bosfuse::pipeline

@@ -1,0 +1,60 @@
+#pragma once
+// Image preprocessing before the displacement evaluation, the filters PIV
+// users know from PIVlab: they even out what the background pattern does not
+// move — uneven illumination, a glow or shadow behind the pattern, contrast
+// that differs across the frame — so every window's correlation weighs the
+// dots, not the light. Use one when the pattern is lit unevenly, has
+// saturated or dark patches, or has little contrast; on a well-lit pattern
+// `none` (the default) is as accurate and costs nothing. The evaluator
+// (displacement_evaluator.h) applies the same option to the reference once
+// and to every measurement, so every command gets it through one place.
+//
+//   none      — the image as the camera gave it.
+//   normalize — local contrast normalisation: (I − local mean) / local std
+//               over a square window (normalize_window_px).
+//   highpass  — background subtraction: I − Gaussian blur of σ highpass_sigma_px.
+//   minmax    — min–max normalisation: (I − local min) / (local max − local
+//               min) over a square window (minmax_window_px), the envelopes
+//               smoothed over the same window (PIVlab's "min-max filter").
+//
+// Every option returns CV_32FC1 centred on mid-grey in units of full scale
+// (most pixels within [0, 1]), which every evaluator takes as it takes a
+// camera's float image; float32 keeps a 16-bit sensor's precision. Masked
+// pixels (non-zero in the mask) do not enter their neighbours' statistics:
+// local sums are normalised by the unmasked weight, and the masked pixels
+// themselves come out at mid-grey.
+
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace bosfuse::fusion {
+
+enum class Preprocessing { kNone, kNormalize, kHighpass, kMinmax };
+
+// The one name table, used by the commands and the stored settings.
+std::string_view to_string(Preprocessing preprocessing);
+std::optional<Preprocessing> parse_preprocessing(std::string_view name);
+// "none, normalize, highpass, minmax", for messages and help.
+std::string preprocessing_names();
+
+struct PreprocessOptions {
+  Preprocessing method = Preprocessing::kNone;
+  int normalize_window_px = 15;    // odd, 3..255: spans several dots of 3 px, below a 16 px window
+  double highpass_sigma_px = 3;    // 0.5..64: above the dots' size, below the window's
+  int minmax_window_px = 9;        // odd, 3..255
+  // Local std (normalize) and local max − min (minmax) below this fraction
+  // of full scale count as this much: a featureless patch stays flat rather
+  // than have its sensor noise blown up to full contrast.
+  double min_contrast = 0.002;
+
+  std::string Validate() const;  // empty when valid
+};
+
+// `image`: 8- or 16-bit or float (as image_input.h takes them), grey or
+// colour. With kNone the image is returned as it is (no copy). Throws
+// std::invalid_argument on bad options or a mask of another size.
+cv::Mat preprocess(const cv::Mat& image, const PreprocessOptions& options, const cv::Mat& mask = {});
+
+}  // namespace bosfuse::fusion
