@@ -55,7 +55,7 @@ struct SceneMatchOptions {
   double blur_sigma_px = 1.5;    // low-pass before correlating (Gaussian σ)
   int max_shift_px = 8;          // the largest displacement a tile is searched for
   int tile_px = 64;              // side of a correlated tile (smaller on a small image)
-  int max_tiles_across = 7;      // tiles spread over the image, at most this many per row and column
+  int max_tiles_across = 5;      // tiles spread over the image, at most this many per row and column
   double min_correlation = 0.5;  // scene correlation below this: not the same scene
   double min_texture = 0.002;    // grey-level std, of full scale (0.5 grey level at 8 bits)
   double good_q_mod = 0.5;
