@@ -19,6 +19,7 @@
 #include "app/run_control.h"
 #include "fusion/displacement_evaluator.h"
 #include "fusion/preprocess.h"
+#include "fusion/scene_match.h"
 #include "pipeline/image_io.h"
 #include "pipeline/image_sequence.h"
 #include "pipeline/processing_settings.h"
@@ -137,6 +138,10 @@ void evaluate(const EvaluateArgs& args) {
     std::vector<cv::Point2d> points;
     for (const auto& p : args.probes) points.push_back(parse_point(p, reference.size()));
     result = fusion::probe_displacement(reference, measurement, points, options, mask);
+  }
+  if (const auto scene = fusion::match_scene(measurement, reference); !scene.same_scene()) {
+    fusion::refuse_vectors(result);  // a pair of two scenes supports no vector
+    spdlog::warn("{} against {}: {}; no vector is marked valid", args.measurement, args.reference, scene.Describe());
   }
   OutputStream out(args.out, "--out");
   fusion::write_csv(result.field, out.stream());

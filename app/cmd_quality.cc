@@ -1,5 +1,7 @@
 // bosfuse quality: the image quality index of a captured background against
-// the digital pattern it was printed from (Q_L, Q_C, Q_mod, Wang–Bovik Q).
+// the digital pattern it was printed from (Q_L, Q_C, Q_mod, Wang–Bovik Q),
+// and a verdict (fusion/scene_match.h): good, usable, poor, not the same
+// scene, or no texture, with the number that decided it and its threshold.
 // The result is text on standard output; --json FILE writes it for programs
 // as well, and --json - puts the JSON alone on standard output (the text
 // then goes to standard error).
@@ -13,6 +15,7 @@
 #include "app/command.h"
 #include "app/output_stream.h"
 #include "fusion/image_quality.h"
+#include "fusion/scene_match.h"
 #include "pipeline/image_io.h"
 #include "pipeline/quality_json.h"
 #include "report/figures.h"
@@ -27,24 +30,28 @@ struct QualityArgs {
   int window_px = 8;
 };
 
-nlohmann::ordered_json quality_json(const QualityArgs& args, const fusion::QualityReport& report) {
+nlohmann::ordered_json quality_json(const QualityArgs& args, const fusion::QualityReport& report,
+                                    const fusion::SceneMatch& scene) {
   nlohmann::ordered_json j = {{"image", args.image}, {"reference", args.reference}};
   j.update(pipeline::to_json(report.global));
+  j.update(pipeline::to_json(scene));
   j["universal_index"] = report.universal_index;
   j["mean_local_q_mod"] = report.mean_local_q_mod;
   j["window_px"] = args.window_px;
   return j;
 }
 
-std::string quality_text(const QualityArgs& args, const fusion::QualityReport& report) {
+std::string quality_text(const QualityArgs& args, const fusion::QualityReport& report,
+                         const fusion::SceneMatch& scene) {
   const auto& g = report.global;
   return fmt::format(
       "Q_L   {:.3f}  (luminance: mean {:.3f} vs {:.3f} of full scale)\n"
       "Q_C   {:.3f}  (contrast: std {:.3f} vs {:.3f})\n"
       "Q_mod {:.3f}\n"
-      "Wang-Bovik Q {:.3f}, mean local Q_mod {:.3f} ({} px windows)\n",
+      "Wang-Bovik Q {:.3f}, mean local Q_mod {:.3f} ({} px windows)\n"
+      "verdict: {}\n",
       g.q_l, g.mean_image, g.mean_reference, g.q_c, g.std_image, g.std_reference, g.q_mod, report.universal_index,
-      report.mean_local_q_mod, args.window_px);
+      report.mean_local_q_mod, args.window_px, scene.Describe());
 }
 
 // The local Q_mod as a map, one cell per window position (a large image's
@@ -74,9 +81,10 @@ void quality(const QualityArgs& args) {
   fusion::QualityOptions options;
   options.window_px = args.window_px;
   const auto report = fusion::assess_quality(image, reference, options);
-  text_stream(names_standard_output(args.json)) << quality_text(args, report) << std::flush;
+  const auto scene = fusion::match_scene(image, reference);
+  text_stream(names_standard_output(args.json)) << quality_text(args, report, scene) << std::flush;
   if (json) {
-    json->stream() << quality_json(args, report).dump(2) << "\n";
+    json->stream() << quality_json(args, report, scene).dump(2) << "\n";
     json->close();
   }
   if (!args.map.empty()) write_local_map(report, args);
@@ -84,7 +92,8 @@ void quality(const QualityArgs& args) {
 
 void add_quality(CLI::App& root) {
   auto args = std::make_shared<QualityArgs>();
-  CLI::App* cmd = root.add_subcommand("quality", "Image quality index of a captured background (Q_L, Q_C, Q_mod)");
+  CLI::App* cmd = root.add_subcommand("quality", "Image quality index of a captured background (Q_L, Q_C, Q_mod) and its verdict: good, usable, poor, "
+      "not the same scene, or no texture");
   cmd->add_option("image", args->image, "Captured background image")->required();
   cmd->add_option("--reference", args->reference, "The digital pattern it was printed from")->required();
   cmd->add_option("--json", args->json,

@@ -75,7 +75,7 @@ class FinishingFrame {
       : results_(results), processing_id_(processing_id), times_(times) {}
 
   // Stages the frame finishing before, then starts this one's finishing.
-  void start(const FrameContext& ctx, const FrameRecord& frame, fusion::EvaluationResult evaluated, bool aside) {
+  void start(const FrameContext& ctx, const FrameRecord& frame, CheckedEvaluation evaluated, bool aside) {
     stage();
     finishing_ =
         std::async(aside ? std::launch::async : std::launch::deferred,
@@ -105,6 +105,29 @@ class FinishingFrame {
   ProcessTimes& times_;
   std::future<FinishedFrame> finishing_;  // a std::async future: its destructor waits for the thread
 };
+
+// The frames this processing refused (resumed ones included), and why.
+struct RefusedFrames {
+  json stored = json::array();  // [{frame_id, reason}], for the processing's summary
+  std::string text;             // for a person: how many, and the first few
+};
+
+RefusedFrames refused_frames(const storage::ProcessingStore& results, std::int64_t processing_id) {
+  RefusedFrames out;
+  for (const auto& [frame_id, summary] : results.staged_frame_summaries(processing_id)) {
+    const auto reason = refusal_of(json::parse(summary));
+    if (!reason) continue;
+    if (out.stored.size() < 5) out.text += fmt::format("  frame {}: {}\n", frame_id, *reason);
+    out.stored.push_back({{"frame_id", frame_id}, {"reason", *reason}});
+  }
+  if (out.stored.empty()) return out;
+  const std::size_t more = out.stored.size() > 5 ? out.stored.size() - 5 : 0;
+  out.text = fmt::format("{} frames refused as not showing the reference's background; their probes have no "
+                         "temperature and their fields no valid vector:\n",
+                         out.stored.size()) +
+             out.text + (more ? fmt::format("  ... and {} more (in the processing's summary)\n", more) : "");
+  return out;
+}
 
 fitting::NewtonFit fit_at_origin(const fitting::CleanSeries& series) {
   fitting::NewtonFitOptions options;
@@ -267,7 +290,7 @@ json quality_json(const FrameContext& ctx, const RunFrames& frames, const cv::Ma
   const FrameRecord& last = frames.measurements.back();
   json j = {{"frame_id", last.id}, {"reference_frame_id", frames.reference.id}, {"t_s", clock.seconds(last.t_ns)}};
   const cv::Mat image = last_image.empty() ? load_frame(ctx.run_dir, last) : last_image;
-  j.update(to_json(fusion::modified_quality_index(image, ctx.reference)));
+  j.update(to_json(ctx.scene->match(image)));  // the index's keys and the verdict's
   return j;
 }
 
@@ -430,7 +453,10 @@ ProcessReport process_frames(const fs::path& run_dir, const ProcessOptions& opti
   report.fits = fitted.fits.size();
   report.agreements = fitted.agreements.size();
   const auto conversions = temperature_conversions(results, ctx.channels, !ctx.settings.probes_only);
+  const RefusedFrames refused = refused_frames(results, processing.id);
+  report.frames_refused = refused.stored.size();
   const json summary = {{"frames", report.frames},
+                        {"frames_refused", refused.stored},
                         {"probes", report.probes},
                         {"temperature_source", report.temperature_source},
                         {"temperature_conversions", conversions},
@@ -449,7 +475,7 @@ ProcessReport process_frames(const fs::path& run_dir, const ProcessOptions& opti
                     report.frames_resumed ? fmt::format(" ({} done before the resume)", report.frames_resumed) : "",
                     report.probes, ctx.settings.probes_only ? "probe mode" : "full fields", report.temperature_source,
                     report.fits_ok, report.fits, report.agreements, report.seconds, clock.basis()) +
-                fitted.text + (distributor ? distributor->brief_report() : "");
+                refused.text + fitted.text + (distributor ? distributor->brief_report() : "");
   return report;
 }
 

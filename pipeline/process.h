@@ -103,6 +103,9 @@ struct ProcessReport {
   std::size_t fits_ok = 0;
   std::size_t fits = 0;
   std::size_t agreements = 0;
+  // Frames refused as not showing the reference's background (process_frame.h:
+  // CheckedEvaluation): their probes hold no temperature.
+  std::size_t frames_refused = 0;
   std::string temperature_source;  // calibration, physical model, none
   // This process's temperature solver, which its frames side by side share:
   // the fields it recovered, its analyses of the Poisson system and its

@@ -171,8 +171,24 @@ FrameResult measure_probes(const fusion::EvaluationResult& evaluated) {
   return out;
 }
 
-FrameResult measure(const FrameContext& ctx, const fusion::EvaluationResult& evaluated, ProcessTimes& times) {
+// A refused frame's probes: no shift, none valid, so no temperature.
+FrameResult measure_nothing(const FrameContext& ctx) {
+  FrameResult out;
+  out.shifts.resize(ctx.channels.size());
+  out.model.resize(ctx.channels.size());
+  return out;
+}
+
+FrameResult measure(const FrameContext& ctx, const CheckedEvaluation& evaluated, ProcessTimes& times) {
+  if (evaluated.refused) return measure_nothing(ctx);
   return ctx.settings.probes_only ? measure_probes(evaluated) : measure_full(ctx, evaluated, times);
+}
+
+json refusal_json(const fusion::SceneMatch& scene) {
+  return {{"reason", scene.Describe()},
+          {"verdict", fusion::to_string(scene.verdict)},
+          {"scene_correlation", scene.correlation},
+          {"min_correlation", scene.options.min_correlation}};
 }
 
 // The full field's files and their rows.
@@ -244,10 +260,27 @@ std::vector<storage::ProbeSampleRecord> samples_of(const FrameContext& ctx, cons
 
 }  // namespace
 
-FinishedFrame finish_frame(const FrameContext& ctx, const FrameRecord& frame,
-                           const fusion::EvaluationResult& evaluated) {
+CheckedEvaluation FrameContext::evaluate(const cv::Mat& measurement) const {
+  CheckedEvaluation out;
+  if (scene) {
+    if (auto match = scene->match(measurement); !match.same_scene()) out.refused = std::move(match);
+  }
+  static_cast<fusion::EvaluationResult&>(out) =
+      settings.probes_only ? evaluator->probe(measurement, points) : evaluator->evaluate(measurement);
+  if (out.refused) fusion::refuse_vectors(out);
+  return out;
+}
+
+std::optional<std::string> refusal_of(const nlohmann::json& frame_summary) {
+  const auto refused = frame_summary.find("refused");
+  if (refused == frame_summary.end()) return std::nullopt;
+  return refused->at("reason").get<std::string>();
+}
+
+FinishedFrame finish_frame(const FrameContext& ctx, const FrameRecord& frame, const CheckedEvaluation& evaluated) {
   FinishedFrame out{frame, evaluation_json(evaluated.summary), {}, {}, {}};
   const FrameResult result = measure(ctx, evaluated, out.times);
+  if (evaluated.refused) out.summary["refused"] = refusal_json(*evaluated.refused);
   if (!ctx.settings.probes_only) out.fields = write_fields(ctx, frame, evaluated, result, out.summary, out.times);
   out.samples = samples_of(ctx, frame, result);
   return out;
@@ -260,7 +293,7 @@ std::string temperature_source(const FrameContext& ctx) {
 }
 
 std::vector<storage::ProbeSampleRecord> probe_samples(const FrameContext& ctx, const FrameRecord& frame,
-                                                      const fusion::EvaluationResult& evaluated) {
+                                                      const CheckedEvaluation& evaluated) {
   ProcessTimes unused;
   return samples_of(ctx, frame, measure(ctx, evaluated, unused));
 }
@@ -371,6 +404,7 @@ void load_frame_context(FrameContext& ctx) {
   ctx.reference = load_frame(ctx.run_dir, ctx.reference_frame);
   ctx.mask = load_mask(ctx.run_dir, ctx.settings.mask);
   ctx.evaluator = std::make_unique<fusion::DisplacementEvaluator>(ctx.reference, ctx.settings.evaluator, ctx.mask);
+  ctx.scene = std::make_shared<const fusion::SceneMatcher>(ctx.reference);
   ctx.temperature_solver =
       std::make_shared<fusion::TemperatureFieldSolver>(*ctx.geometry, ctx.settings.geometry.temperature_field);
   // Only a processing writes fields; the live page's context has no folder for them.

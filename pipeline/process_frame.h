@@ -20,6 +20,7 @@
 
 #include "fusion/bos_geometry.h"
 #include "fusion/displacement_evaluator.h"
+#include "fusion/scene_match.h"
 #include "fusion/temperature_field.h"
 #include "pipeline/frame_distributor.h"
 #include "pipeline/probe_calibration.h"
@@ -49,6 +50,16 @@ decltype(auto) timed(double& seconds, Work&& work) {
   return work();
 }
 
+// A frame's evaluation, and its refusal when the frame does not show the
+// reference's background (fusion/scene_match.h: a foreign or blank frame):
+// then every vector is flagged (fusion::refuse_vectors) in the displacement
+// field written, no temperature field is recovered, no probe sample is valid
+// or holds a temperature, and the frame's stored summary names the reason
+// under "refused".
+struct CheckedEvaluation : fusion::EvaluationResult {
+  std::optional<fusion::SceneMatch> refused;
+};
+
 // What every frame's evaluation needs besides the frame itself.
 struct FrameContext {
   std::filesystem::path run_dir;
@@ -71,12 +82,12 @@ struct FrameContext {
   // solver serialises its calls besides, so the contexts of frames side by
   // side in one process share it (planned_frame_work_sharing).
   std::shared_ptr<fusion::TemperatureFieldSolver> temperature_solver;
+  // The reference's moments, kept for every frame's scene check.
+  std::shared_ptr<const fusion::SceneMatcher> scene;
 
   // The one place frames meet the evaluator: the full field, or only the
-  // windows at the probes.
-  fusion::EvaluationResult evaluate(const cv::Mat& measurement) const {
-    return settings.probes_only ? evaluator->probe(measurement, points) : evaluator->evaluate(measurement);
-  }
+  // windows at the probes; a frame of another scene refused.
+  CheckedEvaluation evaluate(const cv::Mat& measurement) const;
 };
 
 // A frame's results as one transaction stages them, and what making them
@@ -98,7 +109,7 @@ void load_frame_context(FrameContext& ctx);
 // All of a frame's work after its evaluation: thread-safe against other
 // frames' work with other contexts (it reads `ctx`, writes the frame's own files).
 FinishedFrame finish_frame(const FrameContext& ctx, const storage::FrameRecord& frame,
-                           const fusion::EvaluationResult& evaluated);
+                           const CheckedEvaluation& evaluated);
 
 // A frame's samples at the probes exactly as finish_frame makes them, with
 // nothing written: the shift at each probe (the full field interpolated
@@ -115,7 +126,11 @@ FinishedFrame finish_frame(const FrameContext& ctx, const storage::FrameRecord& 
 // (temperature_budget.h) with the run's [geometry.uncertainty] and the
 // window-against-point term, under a calibration |shift| · σ of the slope.
 std::vector<storage::ProbeSampleRecord> probe_samples(const FrameContext& ctx, const storage::FrameRecord& frame,
-                                                      const fusion::EvaluationResult& evaluated);
+                                                      const CheckedEvaluation& evaluated);
+
+// The reason a frame's stored summary gives for its refusal; nullopt for a
+// frame that was not refused.
+std::optional<std::string> refusal_of(const nlohmann::json& frame_summary);
 
 // What gives the probes their temperatures: "calibration", "physical model",
 // or none (probe mode without a calibration).

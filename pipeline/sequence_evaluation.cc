@@ -51,6 +51,7 @@ SequenceEvaluator::SequenceEvaluator(const std::string& reference_path, fusion::
   grid_ = fusion::evaluation_grid(roi, options_.xcorr.window_px, options_.xcorr.step_px);
   evaluator_.emplace(reference_, options_, mask_);
   evaluator_->check_memory();
+  scene_.emplace(reference_);
 }
 
 SequenceFrameResult SequenceEvaluator::evaluate(const std::string& frame_path) {
@@ -66,6 +67,8 @@ SequenceFrameResult SequenceEvaluator::evaluate(const std::string& frame_path) {
       throw std::runtime_error(fmt::format("image size {}x{} differs from the reference's {}x{}", image.cols,
                                            image.rows, reference_.cols, reference_.rows));
     }
+    // Another scene supports no vector: the frame's status says so, as for an unreadable one.
+    if (const auto scene = scene_->match(image); !scene.same_scene()) throw std::runtime_error(scene.Describe());
     fusion::EvaluationResult evaluated = evaluator_->evaluate(image);
     if (evaluated.field.rows != grid_.rows || evaluated.field.cols != grid_.cols) {
       throw std::logic_error(fmt::format("the field has {}x{} nodes, not the {}x{} of the sequence's grid",

@@ -4,7 +4,8 @@
 // reference and the mask once, and knows the grid every field will have
 // before any frame is evaluated, so a writer can lay out its
 // [frames, ny, nx] arrays first. A frame's own problem (unreadable, another
-// size than the reference, ...) is its result's status, not an exception:
+// size than the reference, not the same scene (fusion/scene_match.h), ...)
+// is its result's status, not an exception:
 // the other frames go on. evaluate() keeps the reference prepared and its
 // buffers from frame to frame (fusion::DisplacementEvaluator) and takes the
 // frames in any order: workers (threads, or MPI ranks) each hold their own
@@ -15,6 +16,7 @@
 #include <string>
 
 #include "fusion/displacement_evaluator.h"
+#include "fusion/scene_match.h"
 #include "pipeline/image_sequence.h"
 
 namespace bosfuse::pipeline {
@@ -53,6 +55,7 @@ class SequenceEvaluator {
   fusion::EvaluatorOptions options_;
   fusion::GridGeometry grid_;
   std::optional<fusion::DisplacementEvaluator> evaluator_;  // made once the reference is checked
+  std::optional<fusion::SceneMatcher> scene_;
 };
 
 // A frame's result as bytes and back, bit for bit, so an MPI rank can send

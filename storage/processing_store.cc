@@ -266,6 +266,15 @@ std::vector<std::int64_t> ProcessingStore::staged_frame_ids(std::int64_t process
   return out;
 }
 
+std::vector<std::pair<std::int64_t, std::string>> ProcessingStore::staged_frame_summaries(
+    std::int64_t processing_id) const {
+  auto stmt = db_.prepare("SELECT frame_id, json FROM staged_frames WHERE processing_id = ? ORDER BY frame_id");
+  stmt.bind(1, processing_id);
+  std::vector<std::pair<std::int64_t, std::string>> out;
+  while (stmt.step()) out.emplace_back(stmt.column_int64(0), stmt.column_text(1));
+  return out;
+}
+
 void ProcessingStore::complete_processing(std::int64_t processing_id, std::span<const FitRecord> fits,
                                           std::span<const AgreementRecord> agreements,
                                           const std::string& summary_json, std::int64_t finished_ns) {

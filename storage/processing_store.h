@@ -17,6 +17,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "storage/database.h"
@@ -144,6 +145,8 @@ class ProcessingStore {
   void stage_frame(std::int64_t processing_id, std::int64_t frame_id, const std::string& json,
                    std::span<const ProbeSampleRecord> samples, std::span<const FieldRecord> fields);
   std::vector<std::int64_t> staged_frame_ids(std::int64_t processing_id) const;
+  // Each staged frame's id and the summary it was staged with, in frame order.
+  std::vector<std::pair<std::int64_t, std::string>> staged_frame_summaries(std::int64_t processing_id) const;
   // Replaces the current results by what `processing_id` staged plus these
   // fits and agreements (their probe ids are the staged ones, which are
   // kept), and marks it complete; all in one transaction.

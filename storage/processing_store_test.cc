@@ -163,6 +163,18 @@ TEST(ProcessingStore, SampleUncertaintiesRoundTripThroughTheStagedCopy) {
   EXPECT_DOUBLE_EQ(*stored[1].sigma_systematic_c, 2.6);
 }
 
+TEST(ProcessingStore, EachStagedFrameKeepsItsSummaryUntilTheProcessingCompletes) {
+  Fixture f;
+  ProcessingStore results(f.run_dir, true);
+  const auto processing = results.begin_processing("{}", 1'000);
+  results.stage_frame(processing, f.frame, R"({"refused":{"reason":"not the same scene"}})", {}, {});
+  const auto summaries = results.staged_frame_summaries(processing);
+  ASSERT_EQ(summaries.size(), 1u);
+  EXPECT_EQ(summaries[0].first, f.frame);
+  EXPECT_EQ(summaries[0].second, R"({"refused":{"reason":"not the same scene"}})");
+  EXPECT_TRUE(results.staged_frame_summaries(processing + 1).empty()) << "another processing's frames are not these";
+}
+
 // A run processed by a bosfuse of schema version 4: its samples have no σ
 // columns. Read-only it reads with every σ absent; opened for writing it is
 // migrated, the old samples' σ NULL, and new samples carry theirs.
