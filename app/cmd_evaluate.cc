@@ -1,5 +1,5 @@
 // bosfuse evaluate: a reference and a measurement image → a displacement
-// field as CSV (x,y,u,v,valid,peak_ratio,sigma_u,sigma_v) on standard output or in the
+// field as CSV (x,y,u,v,valid,flag,peak_ratio,sigma_u,sigma_v) on standard output or in the
 // file -o names, optionally a map PNG (--map); the summary goes to standard
 // error. With --sequence, a whole folder or glob of frames against one
 // reference → one HDF5 file (report/sequence_export.h), with progress on
@@ -44,6 +44,7 @@ struct EvaluateArgs {
   std::optional<int> threads;
   double max_shift_px = 4, contour_px = 0.1, adaptive_threshold = 4;
   bool arrows = false;
+  bool max_shift_given = false;  // --max-shift: an explicit bound, not widened from the scene
 };
 
 std::vector<int> parse_ints(const std::string& text, std::size_t count, const std::string& what) {
@@ -108,6 +109,7 @@ fusion::EvaluatorOptions evaluator_options(const EvaluateArgs& args) {
   options.set_grid(args.window_px, args.step_px, roi);
   options.xcorr.passes = args.passes;
   options.xcorr.max_shift_px = args.max_shift_px;
+  options.xcorr.find_search_range = !args.max_shift_given;
   options.xcorr.adaptive_refinement = args.adaptive_refinement == "on";
   options.xcorr.adaptive_threshold = args.adaptive_threshold;
   options.preprocess.method = fusion::parse_preprocessing(args.preprocess).value_or(fusion::Preprocessing::kNone);
@@ -314,7 +316,8 @@ void add_evaluate(CLI::App& root) {
   auto args = std::make_shared<EvaluateArgs>();
   CLI::App* cmd = root.add_subcommand(
       "evaluate",
-      "Displacement field of an image pair (CSV: x,y,u,v,valid,peak_ratio,sigma_u,sigma_v), or of every frame of a sequence "
+      "Displacement field of an image pair (CSV: x,y,u,v,valid,flag,peak_ratio,sigma_u,sigma_v), or of every frame of a "
+      "sequence "
       "against one reference (--sequence: HDF5)");
   cmd->add_option("reference", args->reference, "Reference image (no flow)");
   cmd->add_option("measurement", args->measurement, "Measurement image (through the flow)");
@@ -336,7 +339,9 @@ void add_evaluate(CLI::App& root) {
   cmd->add_option("--step", args->step_px, "Grid spacing, px")->capture_default_str();
   cmd->add_option("--passes", args->passes, "Passes at most (window deformation after the first)")
       ->capture_default_str();
-  cmd->add_option("--max-shift", args->max_shift_px, "Largest displacement expected, px (bounds the search)")
+  cmd->add_option("--max-shift", args->max_shift_px,
+                  "Largest displacement expected, px: an explicit search bound. Unset, the search starts at 4 px and "
+                  "a sample of the scene widens it (with a larger first window) when its peaks lie on the bound")
       ->capture_default_str();
   cmd->add_option("--method", args->method, "xcorr or flow")
       ->check(CLI::IsMember({"xcorr", "flow"}))
@@ -380,7 +385,10 @@ void add_evaluate(CLI::App& root) {
   cmd->add_flag("--arrows", args->arrows, "With --map: draw the displacement vectors as arrows over the colours")
       ->needs(map_option);
   cmd->add_option("--contour", args->contour_px, "Contour spacing of the map, px (0: none)")->capture_default_str();
-  cmd->callback([args, cmd] { evaluate_command(*args, *cmd); });
+  cmd->callback([args, cmd] {
+    args->max_shift_given = cmd->count("--max-shift") > 0;
+    evaluate_command(*args, *cmd);
+  });
 }
 
 BOSFUSE_COMMAND(add_evaluate);

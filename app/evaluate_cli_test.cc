@@ -55,13 +55,15 @@ TEST_F(EvaluateCli, AGoodPairGivesACsvWithTheHeader) {
   std::istringstream lines(csv);
   std::string header;
   std::getline(lines, header);
-  EXPECT_EQ(header, "x,y,u,v,valid,peak_ratio,sigma_u,sigma_v");
+  EXPECT_EQ(header, "x,y,u,v,valid,flag,peak_ratio,sigma_u,sigma_v");
   int rows = 0, valid = 0;
   double sum_u = 0;
   for (std::string line; std::getline(lines, line) && rows < 10000; ++rows) {
     double x, y, u, v, peak;
     int ok;
-    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%d,%lf", &x, &y, &u, &v, &ok, &peak), 6) << line;
+    char flag[32] = {};
+    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%d,%31[^,],%lf", &x, &y, &u, &v, &ok, flag, &peak), 7) << line;
+    EXPECT_EQ(ok == 1, std::string(flag) == "ok") << line;
     valid += ok;
     sum_u += ok ? u : 0;
   }
@@ -70,6 +72,35 @@ TEST_F(EvaluateCli, AGoodPairGivesACsvWithTheHeader) {
   EXPECT_NEAR(sum_u / valid, 0.4, 0.02);
   EXPECT_FALSE(cv::imread(path("map.png")).empty());
   EXPECT_NE(run.output.find("valid"), std::string::npos) << "a summary goes to stderr";
+}
+
+// The 6.5 px pair: with --max-shift 4 the bound is kept, every
+// window peaks on it, and the user is told so and how to fix it; unset, the
+// scene widens the search and says nothing alarming.
+TEST_F(EvaluateCli, PeaksOnAnExplicitSearchBoundAreFlaggedAndWarnedAbout) {
+  sim::PairOptions options;
+  options.pattern.width_px = options.pattern.height_px = 256;
+  options.pattern.dot_diameter_px = 3;
+  options.pattern.coverage = 0.5;
+  options.field = sim::DisplacementModel::uniform(5.3, -3.7);
+  const auto pair = sim::render_pair(options);
+  cv::imwrite(path("far_ref.png"), pair.reference);
+  cv::imwrite(path("far_meas.png"), pair.measurement);
+  const std::string images = "evaluate " + path("far_ref.png") + " " + path("far_meas.png");
+  const auto bounded = streams(images + " --max-shift 4 -o " + path("bounded.csv"));
+  ASSERT_EQ(bounded.exit_code, 0) << bounded.err;
+  EXPECT_NE(bounded.err.find("peaked on the ±4 px search bound"), std::string::npos) << bounded.err;
+  EXPECT_NE(bounded.err.find("raise --max-shift or leave it unset"), std::string::npos) << bounded.err;
+  const std::string csv = read(path("bounded.csv"));
+  EXPECT_TRUE(csv.starts_with("x,y,u,v,valid,flag,peak_ratio,sigma_u,sigma_v\n")) << csv.substr(0, 80);
+  EXPECT_NE(csv.find(",0,beyond-search,"), std::string::npos);
+  EXPECT_EQ(csv.find(",1,ok,"), std::string::npos) << "no vector of the wrong shift is valid";
+
+  const auto found = streams(images + " -o " + path("found.csv"));
+  ASSERT_EQ(found.exit_code, 0) << found.err;
+  EXPECT_EQ(found.err.find("search bound"), std::string::npos) << found.err;
+  EXPECT_NE(found.err.find("widened from the scene"), std::string::npos) << found.err;
+  EXPECT_NE(read(path("found.csv")).find(",1,ok,"), std::string::npos);
 }
 
 TEST_F(EvaluateCli, AdaptiveRefinementOfAShiftEverywhereRefinesEverything) {
@@ -88,7 +119,7 @@ TEST_F(EvaluateCli, AdaptiveRefinementOfAShiftEverywhereRefinesEverything) {
 TEST_F(EvaluateCli, ProbesGiveOneRowEach) {
   const auto run = bosfuse("evaluate " + path("ref.png") + " " + path("meas.png") + " --probe 40,40 --probe 80.5,50");
   ASSERT_EQ(run.exit_code, 0) << run.output;
-  EXPECT_NE(run.output.find("x,y,u,v,valid,peak_ratio,sigma_u,sigma_v\n"), std::string::npos);
+  EXPECT_NE(run.output.find("x,y,u,v,valid,flag,peak_ratio,sigma_u,sigma_v\n"), std::string::npos);
   // (40, 40) lies halfway between window centres 39.5 and 40.5: it snaps up.
   EXPECT_NE(run.output.find("\n40.5,40.5,0.4"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("\n80.5,50.5,0.3"), std::string::npos) << run.output;
@@ -332,7 +363,7 @@ TEST_F(EvaluateCli, BackgroundAndQuality) {
 TEST_F(EvaluateCli, DashIsStandardOutputWithOnlyTheCsvOnIt) {
   const auto dash = streams("evaluate " + path("ref.png") + " " + path("meas.png") + " -o -");
   ASSERT_EQ(dash.exit_code, 0) << dash.err;
-  EXPECT_TRUE(dash.out.starts_with("x,y,u,v,valid,peak_ratio,sigma_u,sigma_v\n")) << dash.out.substr(0, 200);
+  EXPECT_TRUE(dash.out.starts_with("x,y,u,v,valid,flag,peak_ratio,sigma_u,sigma_v\n")) << dash.out.substr(0, 200);
   EXPECT_EQ(std::count(dash.out.begin(), dash.out.end(), '\n'), 1 + 15 * 11);
   EXPECT_NE(dash.err.find("vectors"), std::string::npos) << "the summary goes to stderr: " << dash.err;
   EXPECT_EQ(dash.err.find("x,y,u,v"), std::string::npos) << dash.err;

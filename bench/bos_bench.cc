@@ -23,7 +23,10 @@
 #include <vector>
 
 #include "fusion/displacement_evaluator.h"
+#include "fusion/cross_correlation.h"
 #include "fusion/field_csv.h"
+#include "fusion/image_input.h"
+#include "fusion/search_range.h"
 #include "fusion/adaptive_refinement.h"
 #include "fusion/outlier_filter.h"
 #include "fusion/simd_kernels.h"
@@ -285,6 +288,59 @@ void BM_DisplacementCsv16MP(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_DisplacementCsv16MP)->ArgName("to_chars")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// ---- Search range found from the scene (fusion/search_range.h) ----
+
+// The cost of the scene's sample on the 16 MP small-displacement pair (its
+// bump peaks at 1.5 px, inside the default ±4 px): the sample alone, on the
+// images as the evaluator converts them. Compare with BM_FullFrame16MP.
+void BM_SearchRange16MP(benchmark::State& state) {
+  const auto& pair = full_frame();
+  const cv::Mat reference = fusion::to_grey_unit_float(pair.reference, "reference", false);
+  const cv::Mat measurement = fusion::to_grey_unit_float(pair.measurement, "measurement", false);
+  fusion::SearchRange range;
+  for (auto _ : state) {
+    range = fusion::find_search_range(reference, measurement, cv::Rect({0, 0}, reference.size()), {},
+                                      fusion::SearchStart{}, fusion::SearchRangeOptions{});
+  }
+  state.counters["widened"] = range.widened;
+  state.counters["max_shift_px"] = range.max_shift_px;
+}
+BENCHMARK(BM_SearchRange16MP)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// Uniform shifts past the old default bound on the 768×768 pair,
+// default options (the scene sets the search): case 0 (5.3, −3.7) px,
+// |d| = 6.5; case 1 (14, 0) px. rms_px over the valid vectors; interior:
+// more than one window from the border.
+void BM_LargeShift(benchmark::State& state) {
+  const bool fourteen = state.range(0) == 1;
+  const double u = fourteen ? 14 : 5.3, v = fourteen ? 0 : -3.7;
+  sim::PairOptions options;
+  options.pattern.width_px = options.pattern.height_px = 768;
+  options.pattern.dot_diameter_px = 3;
+  options.pattern.coverage = 0.5;
+  options.pattern.seed = 11;
+  options.field = sim::DisplacementModel::uniform(u, v);
+  const auto pair = sim::render_pair(options);
+  fusion::EvaluationResult result;
+  for (auto _ : state) result = fusion::evaluate_xcorr(pair.reference, pair.measurement, fusion::XcorrOptions{});
+  double sum = 0;
+  std::size_t valid = 0, interior = 0, interior_valid = 0;
+  for (const auto& vec : result.field.vectors) {
+    const bool inside = vec.x_px > 24 && vec.y_px > 24 && vec.x_px < 768 - 24 && vec.y_px < 768 - 24;
+    interior += inside;
+    if (!vec.valid()) continue;
+    sum += std::pow(vec.u_px - u, 2) + std::pow(vec.v_px - v, 2);
+    ++valid;
+    interior_valid += inside;
+  }
+  state.SetLabel(fourteen ? "(14, 0) px" : "(5.3, -3.7) px");
+  state.counters["rms_px"] = valid ? std::sqrt(sum / double(valid)) : std::nan("");
+  state.counters["interior_valid_pct"] = interior ? 100.0 * double(interior_valid) / double(interior) : 0;
+  state.counters["max_shift_px"] = result.summary.max_shift_px;
+  state.counters["first_window_px"] = result.summary.first_window_px;
+}
+BENCHMARK(BM_LargeShift)->ArgName("case")->Arg(0)->Arg(1)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(1);
 
 // A CV_8U mask of the field's nodes marking the middle quarter of its rows:
 // a band across it, as adaptive refinement selects around a plume.

@@ -122,59 +122,11 @@ cv::Mat view(const cv::Mat& image, cv::Rect r) {
                  image.step);
 }
 
-struct Peak {
-  int dx = 0;
-  int dy = 0;
-  double value = 0;
-  double ratio = 0;
-};
-
-// max(floor, the highest of values[0, count)), NaNs passed over, in four
-// independent chains: the maximum of a noisy plane changes at unpredictable
-// shifts, where a branch per value mispredicts.
-double highest(const double* values, int count, double floor) {
-  double m[4] = {floor, floor, floor, floor};
-  int i = 0;
-  for (; i + 4 <= count; i += 4) {
-    for (int k = 0; k < 4; ++k) m[k] = std::max(m[k], values[i + k]);
-  }
-  for (; i < count; ++i) m[0] = std::max(m[0], values[i]);
-  return std::max(std::max(m[0], m[1]), std::max(m[2], m[3]));
-}
-
-// The highest value (its first in row-major order, as a scan taking only a
-// higher value finds it), and the highest outside its 3×3 neighbourhood.
-Peak find_peak(const CorrelationPlane& plane) {
-  constexpr double kBelowAny = -2.0;  // correlations lie in [−1, 1]
-  const int r = plane.radius, side = plane.side();
-  const double* value = plane.value.data();
-  Peak peak{0, 0, highest(value, side * side, kBelowAny), 0};
-  if (peak.value > kBelowAny) {
-    const int at = static_cast<int>(std::find(value, value + side * side, peak.value) - value);
-    peak.dx = at % side - r;
-    peak.dy = at / side - r;
-  }
-  const int px = peak.dx + r, py = peak.dy + r;
-  double second = kBelowAny;
-  for (int y = 0; y < side; ++y) {
-    const double* row = value + static_cast<std::ptrdiff_t>(y) * side;
-    if (std::abs(y - py) > 1) {
-      second = highest(row, side, second);
-    } else {
-      const int left_end = std::max(px - 1, 0), right_begin = std::min(px + 2, side);
-      second = highest(row, left_end, second);
-      second = highest(row + right_begin, side - right_begin, second);
-    }
-  }
-  // A floor keeps the ratio finite when the rest of the plane is near 0 or
-  // negative; ratios above 100 mean "unambiguous" anyway.
-  peak.ratio = peak.value / std::max(second, 0.01);
-  return peak;
-}
-
 struct PassInput {
   int window_px = 16;
   int radius_px = 1;
+  double on_bound_px = 0.5;              // a peak further out in either axis lies on the search bound
+  double min_peak_ratio = 1;             // a peak of a lower ratio is not told from noise
   const GridField* predictor = nullptr;  // null in the first pass
   bool shift_whole_pixels = false;       // no deformation: offset each window by its rounded predictor
   cv::Mat warped;                        // measurement resampled over `region`
@@ -260,6 +212,31 @@ VectorUncertainty node_uncertainty(const PreparedPair& pair, const PassInput& in
   return correlation_statistics(reference_window, view(in.warped, at_peak), factors);
 }
 
+// Whether a fitted peak is a measurement: kBeyondSearch when it lies
+// within half a pixel of the pass's search bound in either axis, before or
+// after the sub-pixel fit (`on_bound_px` is that bound less 0.5 px: the true
+// shift may lie past it, and a peak there is as often a neighbour's tail as
+// the shift); kNoPeak when its ratio to the second peak is too low to tell
+// it from the noise of the plane.
+VectorFlag peak_verdict(const CorrelationPeak& peak, const SubpixelOffset& offset, double on_bound_px,
+                        double min_peak_ratio) {
+  const double integer_px = std::max(std::abs(peak.dx), std::abs(peak.dy));
+  const double fitted_px = std::max(std::abs(peak.dx + offset.dx_px), std::abs(peak.dy + offset.dy_px));
+  if (integer_px > on_bound_px || !(fitted_px <= on_bound_px)) return VectorFlag::kBeyondSearch;
+  if (!(peak.ratio >= min_peak_ratio)) return VectorFlag::kNoPeak;
+  return VectorFlag::kOk;
+}
+
+// Whether the predictor carries a node's window more than a quarter of it
+// past the measurement's edge: what it would match there was never imaged
+// (the border is replicated), and a peak in it is noise.
+bool displaced_past_image(const PreparedPair& pair, const NodeWindows& w, int window_px) {
+  const double slack_px = window_px / 4.0;
+  const double x0 = w.window.x + w.base_u, y0 = w.window.y + w.base_v;
+  return x0 < -slack_px || y0 < -slack_px || x0 + window_px > pair.measurement.cols + slack_px ||
+         y0 + window_px > pair.measurement.rows + slack_px;
+}
+
 void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOptions& options, int row, int col,
                    std::size_t node, WindowCorrelator& correlator, CorrelationPlane& plane, DisplacementVector& vec) {
   const int r = in.radius_px;
@@ -279,9 +256,17 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
     vec.flag = VectorFlag::kNoTexture;
     return;
   }
-  const Peak peak = find_peak(plane);
-  if (!(peak.value > 0) || std::abs(peak.dx) >= r || std::abs(peak.dy) >= r) {
-    vec.flag = VectorFlag::kNoPeak;  // flat, anti-correlated, or the shift lies beyond the search
+  if (in.predictor && displaced_past_image(pair, w, in.window_px)) {
+    vec.flag = VectorFlag::kBeyondSearch;
+    return;
+  }
+  const CorrelationPeak peak = find_peak(plane);
+  if (!(peak.value > 0)) {
+    vec.flag = VectorFlag::kNoPeak;  // flat or anti-correlated
+    return;
+  }
+  if (std::abs(peak.dx) >= r || std::abs(peak.dy) >= r) {
+    vec.flag = VectorFlag::kBeyondSearch;  // at the plane's edge: no fit, and the shift may lie past it
     return;
   }
   std::array<double, 9> c;
@@ -290,10 +275,11 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
   }
   const SubpixelOffset offset =
       subpixel_offset(c, pairing == WindowPairing::kEqualWindows ? options.refinement_subpixel : options.subpixel);
+  vec.flag = peak_verdict(peak, offset, in.on_bound_px, in.min_peak_ratio);
+  if (vec.flag != VectorFlag::kOk) return;
   vec.u_px = w.base_u + peak.dx + offset.dx_px;
   vec.v_px = w.base_v + peak.dy + offset.dy_px;
   vec.peak_ratio = peak.ratio;
-  vec.flag = VectorFlag::kOk;
   if (in.peak_dx) {
     in.peak_dx[node] = static_cast<std::int8_t>(peak.dx);
     in.peak_dy[node] = static_cast<std::int8_t>(peak.dy);
@@ -740,6 +726,66 @@ struct PassArea {
   }
 };
 
+// Where the first pass measured (textured, unmasked windows in the ROI) and
+// where of that it failed (peak on the bound or not told from noise), on
+// its own grid: node (row, col) is node (row0 + stride·row, col0 +
+// stride·col) of the full field.
+struct FirstPassSupport {
+  cv::Mat measured, failed, on_bound;  // CV_8U 0/1
+  int row0 = 0, col0 = 0, stride = 1;
+};
+
+// The first pass's `field` into `support`, and its counts into `summary`.
+void note_first_pass(const DisplacementField& field, int row0, int col0, int stride, FirstPassSupport& support,
+                     EvaluationSummary& summary) {
+  support = {cv::Mat::zeros(field.rows, field.cols, CV_8U), cv::Mat::zeros(field.rows, field.cols, CV_8U),
+             cv::Mat::zeros(field.rows, field.cols, CV_8U), row0, col0, stride};
+  for (int row = 0; row < field.rows; ++row) {
+    for (int col = 0; col < field.cols; ++col) {
+      const VectorFlag flag = field.at(row, col).flag;
+      if (flag == VectorFlag::kMasked || flag == VectorFlag::kNoTexture || flag == VectorFlag::kOutOfRoi) continue;
+      support.measured.at<std::uint8_t>(row, col) = 1;
+      ++summary.first_pass_windows;
+      const bool on_bound = flag == VectorFlag::kBeyondSearch;
+      support.on_bound.at<std::uint8_t>(row, col) = on_bound;
+      support.failed.at<std::uint8_t>(row, col) = on_bound || flag == VectorFlag::kNoPeak;
+      if (on_bound) ++summary.first_pass_on_bound;
+    }
+  }
+}
+
+// A refinement pass measures only what remains within ±refine_shift_px of
+// a predictor interpolated from the first pass: where most of the first
+// pass's windows around a node (3×3 first-pass nodes; half or more) found no peak or one
+// on the bound, that predictor is noise, and so is a peak around it, however
+// clear. Such nodes are flagged (kBeyondSearch when any of those windows
+// was on the bound, else kNoPeak). An isolated failure is not: its
+// neighbours' predictor is good, and the refinement measures it.
+void flag_unsupported(const FirstPassSupport& support, DisplacementField& field) {
+  if (support.measured.empty()) return;
+  cv::Mat measured, failed, on_bound;
+  const cv::Size box(3, 3);
+  cv::boxFilter(support.measured, measured, CV_32S, box, {-1, -1}, false, cv::BORDER_CONSTANT);
+  cv::boxFilter(support.failed, failed, CV_32S, box, {-1, -1}, false, cv::BORDER_CONSTANT);
+  cv::boxFilter(support.on_bound, on_bound, CV_32S, box, {-1, -1}, false, cv::BORDER_CONSTANT);
+  auto nearest = [&](int index, int origin, int count) {
+    const int n = static_cast<int>(std::lround(double(index - origin) / support.stride));
+    return std::clamp(n, 0, count - 1);
+  };
+  for_rows(field.rows, [&](int row) {
+    const int r = nearest(row, support.row0, measured.rows);
+    for (int col = 0; col < field.cols; ++col) {
+      auto& vec = field.at(row, col);
+      if (vec.flag != VectorFlag::kOk && vec.flag != VectorFlag::kOutlierReplaced) continue;
+      const int c = nearest(col, support.col0, measured.cols);
+      if (2 * failed.at<int>(r, c) < measured.at<int>(r, c) || measured.at<int>(r, c) == 0) continue;
+      vec.flag = on_bound.at<int>(r, c) > 0 ? VectorFlag::kBeyondSearch : VectorFlag::kNoPeak;
+      vec.u_px = vec.v_px = vec.peak_ratio = vec.sigma_u_px = vec.sigma_v_px = 0;
+      vec.first_pass_only = false;
+    }
+  });
+}
+
 // Runs every pass over `field` (centres set; kOutOfRoi nodes are left alone).
 EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid, const XcorrOptions& options,
                              PassWorkspace& workspace, DisplacementField& field) {
@@ -752,6 +798,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
   PassArea area;
   bool finish_now = false;
   std::optional<PassInput> final_pass;  // the pass the vectors come from, for their uncertainty
+  FirstPassSupport support;
   if (options.estimate_uncertainty) {
     workspace.peak_dx.resize(field.vectors.size());
     workspace.peak_dy.resize(field.vectors.size());
@@ -760,6 +807,10 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     PassInput in;
     in.window_px = windows[pass];
     in.radius_px = options.search_radius_px(pass);
+    in.on_bound_px = options.on_bound_px(pass);
+    // The first pass alone: a refinement pass measures a residual whose
+    // support is the first pass's (flag_unsupported).
+    in.min_peak_ratio = pass == 0 ? options.min_peak_ratio : 1.0;
     in.shift_whole_pixels = pass > 0 && !options.deform;
     in.refine = adaptive.active() ? &adaptive.selection.refine : nullptr;
     // What a pass reads depends on its window, its reach and the selection
@@ -802,6 +853,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
       if (const auto coarse = coarse_first_pass_grid(pair, grid, in.window_px, options)) {
         MeasuredPass measured;
         run_coarse_first_pass(pair, *coarse, in, options, workspace, field, measured);
+        note_first_pass(measured.field, coarse->row0, coarse->col0, 2, support, summary);
         summary.passes_run = 1;
         summary.window_px_per_pass.push_back(in.window_px);
         if (options.adaptive_refinement) {
@@ -853,6 +905,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
     // each pass would page-fault it anew.
     if (pass > 0) copy_field(field, workspace.previous_field, changeable);
     run_pass(pair, in, options, field);
+    if (pass == 0) note_first_pass(field, 0, 0, 1, support, summary);
     final_pass = in;
     if (options.replace_outliers) {
       replace_outliers(field, options.outliers, adaptive.active() ? &adaptive.outlier_tested : nullptr, changeable);
@@ -877,6 +930,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
   if (options.estimate_uncertainty && final_pass && final_pass->predictor && options.deform) {
     estimate_uncertainty(pair, *final_pass, field);
   }
+  flag_unsupported(support, field);
   count_flags(field, summary);
   summary.refined_fraction = adaptive.active() ? adaptive.selection.fraction() : summary.passes_run > 1 ? 1.0 : 0.0;
   return summary;
@@ -965,6 +1019,8 @@ std::string XcorrOptions::Validate() const {
   if (!(refine_shift_px >= 0) || refine_shift_px > 16) return "refine shift must be 0 to 16 px";
   if (2 * search_radius_px(1) >= window_px) return "refine shift must be below a quarter of the window";
   if (!(min_texture_std >= 0)) return "min texture std must not be negative";
+  if (!(min_peak_ratio >= 1) || !std::isfinite(min_peak_ratio)) return "min peak ratio must be at least 1";
+  if (const std::string problem = search.Validate(); !problem.empty()) return problem;
   if (!(max_masked_fraction >= 0 && max_masked_fraction <= 1)) return "max masked fraction must be 0 to 1";
   if (!(convergence_px >= 0)) return "convergence tolerance must not be negative";
   if (probe_context_nodes < -1) return "probe context must be -1 (exact) or at least 0 nodes";
@@ -993,6 +1049,13 @@ int XcorrOptions::search_radius_px(int pass) const {
   return static_cast<int>(std::ceil(shift)) + 1;
 }
 
+double XcorrOptions::on_bound_px(int pass) const {
+  // The first pass's bound is the user's or the scene's: half a pixel inside
+  // it. A refinement pass searches a residual, whose fit the plane supports
+  // up to half a pixel past ±refine_shift_px.
+  return pass == 0 ? std::max(max_shift_px - 0.5, 0.5) : refine_shift_px + 0.5;
+}
+
 int XcorrOptions::exact_probe_context_nodes() const {
   // Per refinement pass a node's value depends on the nodes whose predictor
   // reaches its window, search and interpolation kernel (+1 for the bilinear
@@ -1014,7 +1077,41 @@ struct XcorrEvaluator::State {
   GridGeometry grid;
   PassWorkspace workspace;
   bool colour_warned = false;
+  bool bound_warned = false;  // a frame's search-bound warning is given once per evaluator
+  std::optional<SearchRange> search;  // what find_search_range found at the first frame
 };
+
+namespace {
+
+// At the first frame: the search bound and first window from the scene,
+// into the evaluator's options (later frames reuse them), and the
+// measurement prepared again when its border must grow with the bound.
+void find_search_range_once(const cv::Mat& measurement, XcorrEvaluator::State& s) {
+  XcorrOptions& o = s.options;
+  SearchStart start{o.max_shift_px, o.window_px_per_pass().front(), o.window_px, o.min_texture_std,
+                    o.max_masked_fraction};
+  s.search = find_search_range(s.pair.reference, s.pair.measurement, s.pair.roi, s.pair.excluded, start, o.search);
+  if (!s.search->widened) return;
+  o.max_shift_px = s.search->max_shift_px;
+  o.first_window_px = s.search->first_window_px;
+  // Two passes at the final window at least: the halvings from a large first
+  // window leave one, whose predictor still carries the coarse windows' error.
+  int halvings = 0;
+  for (int w = o.first_window_px; w / 2 >= o.window_px; w /= 2) ++halvings;
+  o.passes = std::max(o.passes, halvings + 2);
+  spdlog::debug("{}", s.search->Describe());
+  prepare_measurement(measurement, cv::Rect({0, 0}, s.reference.size()), false, o, s.pair);
+}
+
+void describe_search(const XcorrEvaluator::State& s, EvaluationSummary& summary) {
+  summary.max_shift_px = s.options.max_shift_px;
+  summary.first_window_px = s.options.window_px_per_pass().front();
+  summary.search_from_scene = s.search.has_value();
+  summary.search_widened = s.search && s.search->widened;
+  summary.search_beyond_reach = s.search && s.search->beyond_reach;
+}
+
+}  // namespace
 
 XcorrEvaluator::XcorrEvaluator(const cv::Mat& reference, const XcorrOptions& options, const cv::Mat& mask)
     : state_(std::make_unique<State>()) {
@@ -1043,9 +1140,15 @@ EvaluationResult XcorrEvaluator::evaluate(const cv::Mat& measurement) {
   }
   prepare_measurement(measurement, whole, !s.colour_warned, s.options, s.pair);
   s.colour_warned = s.colour_warned || measurement.channels() > 1;
+  if (s.options.find_search_range && !s.search) find_search_range_once(measurement, s);
   EvaluationResult result;
   result.field = field_on_grid(s.grid);
   result.summary = run_passes(s.pair, s.grid, s.options, s.workspace, result.field);
+  describe_search(s, result.summary);
+  if (const std::string warning = search_bound_warning(result.summary); !warning.empty() && !s.bound_warned) {
+    spdlog::warn("{}", warning);
+    s.bound_warned = true;
+  }
   result.summary.seconds = seconds_since(start);
   return result;
 }

@@ -6,14 +6,16 @@
 // shift at a few points (thermocouple positions) of many frames.
 //
 // Pass 1 correlates reference windows against the measurement within
-// ±max_shift_px. Each later pass warps the measurement by the field so far
+// ±max_shift_px, which a sample of the scene widens, with a larger first
+// window, when its peaks lie on that bound (search_range.h). Each later pass warps the measurement by the field so far
 // (window deformation; see field_warp.h) and measures only what remains
 // within ±refine_shift_px, with the window shrinking from first_window_px to
 // window_px. After each pass the normalized-median test replaces outliers.
 // Refinement stops early when a pass at the final window changes no vector by
 // more than convergence_px. With adaptive_refinement the later passes
 // evaluate (and warp for) only where the first pass saw a displacement. Windows whose reference has no texture, that lie
-// under the mask, or give no clear peak are skipped and flagged.
+// under the mask, give no clear peak (kNoPeak) or peak on the search bound
+// (kBeyondSearch) are skipped and flagged: never a valid vector.
 //
 // Images may be 8- or 16-bit, grey or colour (converted with a warning);
 // input problems raise std::invalid_argument with a message naming them.
@@ -26,6 +28,7 @@
 #include "fusion/evaluation.h"
 #include "fusion/field_warp.h"
 #include "fusion/outlier_filter.h"
+#include "fusion/search_range.h"
 #include "fusion/subpixel.h"
 #include "fusion/window_correlator.h"
 
@@ -36,7 +39,12 @@ struct XcorrOptions {
   int first_window_px = 0;     // first pass window; 0: the same as window_px
   int step_px = 8;             // grid spacing (window_px/2 is 50% overlap)
   int passes = 3;              // at most; fewer when refinement converges
-  double max_shift_px = 4;     // largest displacement expected in the scene
+  double max_shift_px = 4;     // largest displacement expected in the scene (see find_search_range)
+  // Before the first frame, a sample of the scene says whether max_shift_px
+  // (and first_window_px) must be widened (search_range.h); false: they are
+  // an explicit bound, as given. Full fields only: probes search as given.
+  bool find_search_range = true;
+  SearchRangeOptions search;
   double refine_shift_px = 1;  // largest residual searched after deformation
   bool deform = true;          // window deformation in passes after the first
   // Warp both images half-way instead of the measurement all the way. Costs
@@ -59,6 +67,13 @@ struct XcorrOptions {
   OutlierOptions outliers;
   bool replace_outliers = true;
   double min_texture_std = 0.002;    // of full scale; the 8-bit equivalent is 0.5 grey level
+  // A first-pass peak whose ratio to the second-highest (outside its 3×3) is
+  // below this is not told from the plane's noise: kNoPeak. On 3 px dots
+  // with 1 % noise, 16 px windows' true peaks are at 1.6 or more, while
+  // those of a shift past the search are at 1.2 (median) to 3. A refinement
+  // pass's vector is valid only where most first-pass windows around it
+  // measured: a predictor interpolated over failures is noise.
+  double min_peak_ratio = 1.5;
   double max_masked_fraction = 0.5;  // of a window's pixels
   double convergence_px = 1e-3;      // 0: always run all passes
   cv::Rect roi;                      // empty: the whole image
@@ -86,6 +101,7 @@ struct XcorrOptions {
   std::string Validate() const;  // empty when valid
   std::vector<int> window_px_per_pass() const;
   int search_radius_px(int pass) const;  // including the margin the sub-pixel fit needs
+  double on_bound_px(int pass) const;    // a peak further out than this in either axis is kBeyondSearch
   int exact_probe_context_nodes() const;
 };
 
@@ -117,8 +133,9 @@ class XcorrEvaluator {
   // pixels around each point, so little is kept between frames.
   EvaluationResult probe(const cv::Mat& measurement, const std::vector<cv::Point2d>& points);
 
+  struct State;  // opaque; named here so the implementation's helpers can take it
+
  private:
-  struct State;
   std::unique_ptr<State> state_;
 };
 

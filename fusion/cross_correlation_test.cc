@@ -271,13 +271,17 @@ TEST(CrossCorrelation, SymmetricDeformationRecoversAGradient) {
   EXPECT_LT(std::abs(e.mean_u), 0.01);
 }
 
-TEST(CrossCorrelation, ShiftsBeyondTheSearchAreFlaggedNoPeak) {
+TEST(CrossCorrelation, ShiftsBeyondAnExplicitSearchAreFlaggedBeyondSearch) {
   const auto pair = render(sim::DisplacementModel::uniform(6.0, 0.0), 128);
   XcorrOptions options;
   options.max_shift_px = 2;
+  options.find_search_range = false;
   options.passes = 1;
   const auto result = evaluate_xcorr(pair.reference, pair.measurement, options);
-  EXPECT_GT(result.field.count(VectorFlag::kNoPeak), result.field.size() / 2);
+  EXPECT_GT(result.field.count(VectorFlag::kBeyondSearch), result.field.size() / 2);
+  // One pass of 16 px windows, three times the bound: the few noise peaks as
+  // clear as a measurement's among windows that measured are all that is left.
+  EXPECT_LE(result.field.count_valid(), result.field.size() / 50);
   EXPECT_TRUE(all_finite(result.field));
 }
 
@@ -293,9 +297,14 @@ TEST(CrossCorrelation, OutliersAreReplacedAndFlagged) {
   const auto result = evaluate_xcorr(pair.reference, measurement, options);
   const auto& centre = result.field.at(7, 7);  // the window at (56..71, 56..71)
   ASSERT_EQ(centre.x_px, 63.5);
-  EXPECT_TRUE(centre.flag == VectorFlag::kOutlierReplaced || centre.flag == VectorFlag::kOk);
-  EXPECT_NEAR(centre.u_px, 0.4, 0.1) << to_string(centre.flag);
-  EXPECT_GE(result.summary.outliers_replaced + result.field.count(VectorFlag::kNoPeak), 1u);
+  // Its peak is noise: not told from it (no peak, or on the bound), or
+  // replaced by its neighbours' median; never a valid wrong vector.
+  const bool not_measured = centre.flag == VectorFlag::kNoPeak || centre.flag == VectorFlag::kBeyondSearch;
+  EXPECT_TRUE(centre.flag == VectorFlag::kOutlierReplaced || centre.flag == VectorFlag::kOk || not_measured);
+  if (!not_measured) EXPECT_NEAR(centre.u_px, 0.4, 0.1) << to_string(centre.flag);
+  EXPECT_GE(result.summary.outliers_replaced + result.field.count(VectorFlag::kNoPeak) +
+                result.field.count(VectorFlag::kBeyondSearch),
+            1u);
 }
 
 TEST(CrossCorrelation, RefinementStopsWhenAPassChangesNothing) {

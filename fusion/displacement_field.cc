@@ -22,8 +22,20 @@ std::string to_string(VectorFlag flag) {
       return "out-of-roi";
     case VectorFlag::kNoPeak:
       return "no-peak";
+    case VectorFlag::kBeyondSearch:
+      return "beyond-search";
   }
   return "unknown";
+}
+
+bool parse_vector_flag(std::string_view name, VectorFlag& flag) {
+  for (int value = 0; value <= static_cast<int>(VectorFlag::kBeyondSearch); ++value) {
+    if (to_string(static_cast<VectorFlag>(value)) == name) {
+      flag = static_cast<VectorFlag>(value);
+      return true;
+    }
+  }
+  return false;
 }
 
 std::size_t DisplacementField::count(VectorFlag flag) const {
@@ -42,6 +54,7 @@ FieldCsvWriter field_text(const DisplacementField& field) {
     csv.fixed(v.u_px, 5);
     csv.fixed(v.v_px, 5);
     csv.integer(v.valid() ? 1 : 0);
+    csv.text(to_string(v.flag));
     csv.fixed(v.peak_ratio, 3);
     csv.fixed(v.sigma_u_px, 5);
     csv.fixed(v.sigma_v_px, 5);

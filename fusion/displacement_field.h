@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <iosfwd>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace bosfuse::fusion {
@@ -23,10 +24,13 @@ enum class VectorFlag : std::uint8_t {
   kNoTexture = 2,        // reference window too uniform to correlate (std below threshold)
   kMasked = 3,           // window centre or too much of the window under the mask
   kOutOfRoi = 4,         // window does not fit in the image / region of interest
-  kNoPeak = 5,           // no usable correlation peak (flat, negative, or at the search border)
+  kNoPeak = 5,           // no correlation peak distinguishable from noise (flat, negative, or peak ratio too low)
+  kBeyondSearch = 6,     // the peak lies on the search bound: the shift may lie beyond it
 };
 
 std::string to_string(VectorFlag flag);
+// The flag to_string names `name`; false when it names none.
+bool parse_vector_flag(std::string_view name, VectorFlag& flag);
 
 struct DisplacementVector {
   double x_px = 0;  // window centre
@@ -61,8 +65,8 @@ struct DisplacementField {
   std::size_t count_valid() const { return count(VectorFlag::kOk); }
 };
 
-// CSV with the header `x,y,u,v,valid,peak_ratio,sigma_u,sigma_v`, one
-// vector per line (σ 0 where not estimated).
+// CSV with the header `x,y,u,v,valid,flag,peak_ratio,sigma_u,sigma_v`, one
+// vector per line (flag by its name, σ 0 where not estimated).
 void write_csv(const DisplacementField& field, std::ostream& out);
 void write_csv(const DisplacementField& field, const std::filesystem::path& path);
 

@@ -10,14 +10,48 @@
 
 namespace bosfuse::fusion {
 
+namespace {
+
+std::string search_description(const EvaluationSummary& s) {
+  if (s.first_window_px == 0) return {};
+  const char* how = s.search_beyond_reach ? ", widest the scene allows"
+                    : s.search_widened    ? ", widened from the scene"
+                    : s.search_from_scene ? ", the scene needs no more"
+                                          : ", as given";
+  return fmt::format("; search ±{:g} px from {} px windows{}, {} of {} first-pass windows on the bound", s.max_shift_px,
+                     s.first_window_px, how, s.first_pass_on_bound, s.first_pass_windows);
+}
+
+}  // namespace
+
 std::string EvaluationSummary::BriefReport() const {
   const std::string windows = fmt::format("{}", fmt::join(window_px_per_pass, ","));
   return fmt::format(
-      "{}: {} vectors, {} valid, {} outliers replaced, {} no texture, {} masked, {} out of ROI, {} no peak; "
-      "{} pass(es) (windows {} px){}{}; {:.3f} s",
-      method, vectors, valid, outliers_replaced, no_texture, masked, out_of_roi, no_peak, passes_run, windows,
-      converged ? ", converged" : "",
-      passes_run > 1 && refined_fraction < 1 ? fmt::format(", {:.1f} % refined", 100 * refined_fraction) : "", seconds);
+      "{}: {} vectors, {} valid, {} outliers replaced, {} no texture, {} masked, {} out of ROI, {} no peak, "
+      "{} beyond search; {} pass(es) (windows {} px){}{}{}; {:.3f} s",
+      method, vectors, valid, outliers_replaced, no_texture, masked, out_of_roi, no_peak, beyond_search, passes_run,
+      windows, converged ? ", converged" : "",
+      passes_run > 1 && refined_fraction < 1 ? fmt::format(", {:.1f} % refined", 100 * refined_fraction) : "",
+      search_description(*this), seconds);
+}
+
+double EvaluationSummary::on_bound_fraction() const {
+  return first_pass_windows > 0 ? double(first_pass_on_bound) / first_pass_windows : 0.0;
+}
+
+std::string search_bound_warning(const EvaluationSummary& s) {
+  if (s.search_beyond_reach) {
+    return fmt::format(
+        "the displacements seem to exceed ±{:g} px, the widest search {} px first windows allow in this scene: "
+        "{} of {} windows ({:.1f} %) peaked on the bound and are flagged beyond-search; evaluate with a larger ROI, "
+        "or check that the images show the same background",
+        s.max_shift_px, s.first_window_px, s.first_pass_on_bound, s.first_pass_windows, 100 * s.on_bound_fraction());
+  }
+  if (s.on_bound_fraction() <= kOnBoundWarningFraction) return {};
+  return fmt::format(
+      "{} of {} windows ({:.1f} %) peaked on the ±{:g} px search bound and are flagged beyond-search: raise "
+      "--max-shift or leave it unset to let the scene set it",
+      s.first_pass_on_bound, s.first_pass_windows, 100 * s.on_bound_fraction(), s.max_shift_px);
 }
 
 cv::Rect effective_roi(cv::Rect roi, cv::Size image_size) {
@@ -73,6 +107,7 @@ void count_flags(const DisplacementField& field, EvaluationSummary& summary) {
   summary.masked = count(VectorFlag::kMasked);
   summary.out_of_roi = count(VectorFlag::kOutOfRoi);
   summary.no_peak = count(VectorFlag::kNoPeak);
+  summary.beyond_search = count(VectorFlag::kBeyondSearch);
 }
 
 }  // namespace bosfuse::fusion

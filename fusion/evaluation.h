@@ -30,10 +30,34 @@ struct EvaluationSummary {
   std::size_t masked = 0;
   std::size_t out_of_roi = 0;
   std::size_t no_peak = 0;
+  std::size_t beyond_search = 0;
+  // The first pass's search (cross-correlation; 0 for other methods): its
+  // bound and window, whether the scene's sample set them (search_range.h)
+  // and widened them, or found displacements past the widest it allows;
+  // and of the first pass's measured windows (textured, unmasked), how
+  // many peaked on the bound.
+  double max_shift_px = 0;
+  int first_window_px = 0;
+  bool search_from_scene = false;
+  bool search_widened = false;
+  bool search_beyond_reach = false;
+  std::size_t first_pass_windows = 0;
+  std::size_t first_pass_on_bound = 0;
   double seconds = 0;
 
   std::string BriefReport() const;
+  // Of the first pass's measured windows, the fraction on the search bound.
+  double on_bound_fraction() const;
 };
+
+// Above this fraction of the first pass's windows on the search bound, an
+// evaluation says so (search_bound_warning).
+inline constexpr double kOnBoundWarningFraction = 0.02;
+
+// The warning, with its fix, when more than kOnBoundWarningFraction of the
+// first pass's windows peaked on the search bound or the scene's
+// displacements lie past the widest search it allows; empty otherwise.
+std::string search_bound_warning(const EvaluationSummary& summary);
 
 struct EvaluationResult {
   DisplacementField field;

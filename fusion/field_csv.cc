@@ -11,6 +11,8 @@
 #include <map>
 #include <stdexcept>
 
+#include "fusion/displacement_field.h"
+
 namespace bosfuse::fusion {
 namespace {
 
@@ -116,6 +118,11 @@ void FieldCsvWriter::integer(int value) {
   text_ += ',';
 }
 
+void FieldCsvWriter::text(std::string_view value) {
+  text_ += value;
+  text_ += ',';
+}
+
 void FieldCsvWriter::empty() { text_ += ','; }
 
 void FieldCsvWriter::end_line() {
@@ -131,18 +138,40 @@ void FieldCsvWriter::save(const std::filesystem::path& path) const {
 
 namespace {
 
-// How many of `value_columns` the header line holds: all of them, or all
-// but a tail that kColumnsAddedLater lists; 0 when it is neither.
-std::size_t columns_in_header(const std::string& header, std::span<const std::string_view> value_columns) {
-  for (std::size_t count = value_columns.size(); count > 0; --count) {
-    if (header == field_csv_header(value_columns.first(count))) return count;
-    const std::string_view dropped = value_columns[count - 1];
-    if (std::find(std::begin(kColumnsAddedLater), std::end(kColumnsAddedLater), dropped) ==
-        std::end(kColumnsAddedLater)) {
-      break;
+bool added_later(std::string_view column) {
+  return std::find(std::begin(kColumnsAddedLater), std::end(kColumnsAddedLater), column) !=
+         std::end(kColumnsAddedLater);
+}
+
+// Where each of the header's value columns lies in `value_columns`: all of
+// them in order, less any of kColumnsAddedLater; empty when it is not such
+// a header.
+std::vector<std::size_t> column_positions(const std::string& header, std::span<const std::string_view> value_columns) {
+  const auto names = split(header);
+  if (names.size() < 3 || names[0] != "x" || names[1] != "y") return {};
+  std::vector<std::size_t> positions;
+  std::size_t next = 0;
+  for (std::size_t i = 2; i < names.size(); ++i) {
+    for (; next < value_columns.size() && value_columns[next] != names[i]; ++next) {
+      if (!added_later(value_columns[next])) return {};
     }
+    if (next == value_columns.size()) return {};
+    positions.push_back(next++);
   }
-  return 0;
+  for (; next < value_columns.size(); ++next) {
+    if (!added_later(value_columns[next])) return {};
+  }
+  return positions;
+}
+
+// A cell of column `name`: a number, or for `flag` a flag's name
+// (displacement_field.h), read as its value.
+bool parse_cell(std::string_view name, std::string_view cell, double& out) {
+  if (name != "flag") return parse_number(cell, out);
+  VectorFlag flag{};
+  if (!parse_vector_flag(cell, flag)) return false;
+  out = static_cast<double>(flag);
+  return true;
 }
 
 }  // namespace
@@ -154,12 +183,12 @@ StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<c
   std::string line;
   std::getline(in, line);
   if (!line.empty() && line.back() == '\r') line.pop_back();
-  const std::size_t in_file = columns_in_header(line, value_columns);
-  if (in_file == 0) {
+  const std::vector<std::size_t> positions = column_positions(line, value_columns);
+  if (positions.empty()) {
     throw std::runtime_error(
         fmt::format("'{}': the header is '{}', expected '{}'", path.string(), line.substr(0, 80), expected));
   }
-  const std::size_t width = in_file + 2;
+  const std::size_t width = positions.size() + 2;
   // Nodes keyed by (y, x) so rows come out in order; the grid is known only at the end.
   std::map<std::pair<double, double>, std::vector<double>> nodes;
   std::size_t line_number = 1;
@@ -172,16 +201,17 @@ StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<c
       throw std::runtime_error(
           fmt::format("'{}' line {}: {} cells, expected {}", path.string(), line_number, cells.size(), width));
     }
-    std::vector<double> numbers(width);
+    std::vector<double> numbers(value_columns.size() + 2, std::numeric_limits<double>::quiet_NaN());
     for (std::size_t i = 0; i < width; ++i) {
-      if (!parse_number(cells[i], numbers[i]) || (i < 2 && !std::isfinite(numbers[i]))) {
-        throw std::runtime_error(
-            fmt::format("'{}' line {}: '{}' is not a number", path.string(), line_number, cells[i].substr(0, 40)));
+      const std::size_t to = i < 2 ? i : positions[i - 2] + 2;
+      const std::string_view name = i < 2 ? std::string_view(i == 0 ? "x" : "y") : value_columns[positions[i - 2]];
+      if (!parse_cell(name, cells[i], numbers[to]) || (i < 2 && !std::isfinite(numbers[to]))) {
+        throw std::runtime_error(fmt::format("'{}' line {}: '{}' is not a {}", path.string(), line_number,
+                                             cells[i].substr(0, 40), name == "flag" ? "flag" : "number"));
       }
     }
     const std::pair key{numbers[1], numbers[0]};
     numbers.erase(numbers.begin(), numbers.begin() + 2);
-    numbers.resize(value_columns.size(), std::numeric_limits<double>::quiet_NaN());
     if (!nodes.emplace(key, std::move(numbers)).second) {
       throw std::runtime_error(fmt::format("'{}' line {}: the node ({}, {}) appears twice", path.string(), line_number,
                                            key.second, key.first));

@@ -1,7 +1,7 @@
 #pragma once
 // A field file (docs/SCHEMA.md, table `fields`) as write_csv() writes it
 // (displacement_field.h, temperature_field.h), read back onto its grid:
-// displacement `x,y,u,v,valid,peak_ratio,sigma_u,sigma_v` or temperature
+// displacement `x,y,u,v,valid,flag,peak_ratio,sigma_u,sigma_v` or temperature
 // `x,y,temperature_c,measured,sigma_c`, one line per grid node. The writers and this
 // one reader share the column names below, so the layout cannot drift
 // between them; the report's maps and the HDF5 export read through it.
@@ -33,12 +33,15 @@ struct StoredFieldGrid {
   const cv::Mat& column(std::string_view name) const;
 };
 
-inline constexpr std::string_view kDisplacementColumns[] = {"u",          "v",       "valid",
+// `flag` holds the flag's name (displacement_field.h: ok, no-peak,
+// beyond-search, ...); it is read as the flag's value.
+inline constexpr std::string_view kDisplacementColumns[] = {"u",    "v",          "valid",   "flag",
                                                             "peak_ratio", "sigma_u", "sigma_v"};
 inline constexpr std::string_view kTemperatureColumns[] = {"temperature_c", "measured", "sigma_c"};
-// Columns a field file written before they existed lacks at its end
-// (σ came with issue 29): such a file still reads, these columns NaN.
-inline constexpr std::string_view kColumnsAddedLater[] = {"sigma_u", "sigma_v", "sigma_c"};
+// Columns a field file written before they existed lacks (σ came with
+// issue 29, at the end; flag with issue 30, after valid): such a file still
+// reads, these columns NaN.
+inline constexpr std::string_view kColumnsAddedLater[] = {"flag", "sigma_u", "sigma_v", "sigma_c"};
 
 // The header line of a field file with these value columns ("x,y,u,v,...").
 std::string field_csv_header(std::span<const std::string_view> value_columns);
@@ -54,6 +57,7 @@ class FieldCsvWriter {
 
   void fixed(double value, int decimals);  // a cell: "nan", "inf" for those
   void integer(int value);                 // a cell
+  void text(std::string_view value);       // a cell, as it is (no comma in it)
   void empty();                            // a cell with nothing in it
   void end_line();
 
@@ -65,8 +69,8 @@ class FieldCsvWriter {
   std::string text_;
 };
 
-// Reads `path`, whose header must be `x,y` followed by `value_columns`, or
-// by them less a tail of kColumnsAddedLater (then NaN).
+// Reads `path`, whose header must be `x,y` followed by `value_columns` in
+// order, less any of kColumnsAddedLater (then NaN).
 // Throws std::runtime_error naming the file (and the line) when it cannot be
 // read, has another header, a short line or a cell that is not a number, or
 // holds no node.

@@ -99,8 +99,9 @@ TEST(FieldCsv, ReadsTheGridInRowOrderWhateverTheLineOrder) {
   const auto grid = read_stored_field(dir / "d.csv", kDisplacementColumns);
   EXPECT_EQ(grid.x_px, (std::vector<double>{8, 16}));
   EXPECT_EQ(grid.y_px, (std::vector<double>{8, 16}));
-  ASSERT_EQ(grid.columns.size(), 6u);
-  // Written before issue 29: no σ columns, read as NaN.
+  ASSERT_EQ(grid.columns.size(), 7u);
+  // Written before issue 29: no σ columns, read as NaN; before issue 30, no flag.
+  EXPECT_TRUE(std::isnan(grid.column("flag").at<double>(0, 0)));
   EXPECT_TRUE(std::isnan(grid.column("sigma_u").at<double>(0, 0)));
   EXPECT_TRUE(std::isnan(grid.column("sigma_v").at<double>(1, 1)));
   EXPECT_EQ(grid.column("u").at<double>(0, 0), 0.3) << "the text's double, exactly";
@@ -123,6 +124,22 @@ TEST(FieldCsv, ReadsTheUncertaintyColumnsWrittenBack) {
   EXPECT_EQ(grid.column("sigma_u").at<double>(0, 0), 0.0123);
   EXPECT_EQ(grid.column("sigma_v").at<double>(0, 0), 0.0045);
   EXPECT_EQ(grid.column("sigma_u").at<double>(0, 1), 0.0) << "not estimated";
+}
+
+TEST(FieldCsv, ReadsTheFlagColumnWrittenBackByName) {
+  testing::TempDir dir;
+  DisplacementField field;
+  field.rows = 1;
+  field.cols = 2;
+  field.vectors = {{7.5, 7.5, 0.25, -1.5, 3.2, VectorFlag::kOk}, {15.5, 7.5, 0, 0, 0, VectorFlag::kBeyondSearch}};
+  write_csv(field, dir / "d.csv");
+  const auto grid = read_stored_field(dir / "d.csv", kDisplacementColumns);
+  EXPECT_EQ(grid.column("flag").at<double>(0, 0), 0.0);
+  EXPECT_EQ(grid.column("flag").at<double>(0, 1), 6.0);
+  EXPECT_EQ(grid.column("peak_ratio").at<double>(0, 0), 3.2) << "the columns after flag stay in place";
+  std::ofstream(dir / "bad.csv") << "x,y,u,v,valid,flag,peak_ratio\n8,8,1,1,1,beyond,2\n";
+  EXPECT_NE(error_of(dir / "bad.csv", kDisplacementColumns).find("line 2: 'beyond' is not a flag"), std::string::npos)
+      << error_of(dir / "bad.csv", kDisplacementColumns);
 }
 
 TEST(FieldCsv, OnlyTheColumnsAddedLaterMayBeMissing) {

@@ -1,5 +1,6 @@
 #include "fusion/window_correlator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
 
@@ -12,7 +13,50 @@ namespace {
 // flat to float precision: its correlation is meaningless.
 constexpr double kMinEnergy = 1e-12;
 
+// max(floor, the highest of values[0, count)), NaNs passed over, in four
+// independent chains: the maximum of a noisy plane changes at unpredictable
+// shifts, where a branch per value mispredicts.
+double highest(const double* values, int count, double floor) {
+  double m[4] = {floor, floor, floor, floor};
+  int i = 0;
+  for (; i + 4 <= count; i += 4) {
+    for (int k = 0; k < 4; ++k) m[k] = std::max(m[k], values[i + k]);
+  }
+  for (; i < count; ++i) m[0] = std::max(m[0], values[i]);
+  return std::max(std::max(m[0], m[1]), std::max(m[2], m[3]));
+}
+
 }  // namespace
+
+// The highest value (its first in row-major order, as a scan taking only a
+// higher value finds it), and the highest outside its 3×3 neighbourhood.
+CorrelationPeak find_peak(const CorrelationPlane& plane) {
+  constexpr double kBelowAny = -2.0;  // correlations lie in [−1, 1]
+  const int r = plane.radius, side = plane.side();
+  const double* value = plane.value.data();
+  CorrelationPeak peak{0, 0, highest(value, side * side, kBelowAny), 0};
+  if (peak.value > kBelowAny) {
+    const int at = static_cast<int>(std::find(value, value + side * side, peak.value) - value);
+    peak.dx = at % side - r;
+    peak.dy = at / side - r;
+  }
+  const int px = peak.dx + r, py = peak.dy + r;
+  double second = kBelowAny;
+  for (int y = 0; y < side; ++y) {
+    const double* row = value + static_cast<std::ptrdiff_t>(y) * side;
+    if (std::abs(y - py) > 1) {
+      second = highest(row, side, second);
+    } else {
+      const int left_end = std::max(px - 1, 0), right_begin = std::min(px + 2, side);
+      second = highest(row, left_end, second);
+      second = highest(row + right_begin, side - right_begin, second);
+    }
+  }
+  // A floor keeps the ratio finite when the rest of the plane is near 0 or
+  // negative; ratios above 100 mean "unambiguous" anyway.
+  peak.ratio = peak.value / std::max(second, 0.01);
+  return peak;
+}
 
 CorrelationMethod WindowCorrelator::cheaper_method(int window_px, int radius_px) {
   const double shifts = std::pow(2.0 * radius_px + 1, 2);

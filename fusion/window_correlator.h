@@ -49,6 +49,17 @@ struct WindowStats {
   double energy = 0;
 };
 
+// The highest value of a plane (its first in row-major order) and how it
+// stands out: the ratio to the highest value outside its 3×3 neighbourhood
+// (floored at 0.01, so a plane near 0 elsewhere gives a finite ratio).
+struct CorrelationPeak {
+  int dx = 0;
+  int dy = 0;
+  double value = 0;
+  double ratio = 0;
+};
+CorrelationPeak find_peak(const CorrelationPlane& plane);
+
 // `window` is n×n CV_32FC1 (a view into a larger image is fine).
 WindowStats window_stats(const cv::Mat& window);
 

@@ -147,7 +147,11 @@ void apply_evaluator(const SettingsOverrides& o, ProcessingSettings& s) {
   }
   if (o.passes) s.evaluator.xcorr.passes = *o.passes;
   if (o.probe_context_nodes) s.evaluator.xcorr.probe_context_nodes = *o.probe_context_nodes;
-  if (o.max_shift_px) s.evaluator.xcorr.max_shift_px = *o.max_shift_px;
+  if (o.max_shift_px) {
+    // A bound the user gives is explicit: the scene does not widen it.
+    s.evaluator.xcorr.max_shift_px = *o.max_shift_px;
+    s.evaluator.xcorr.find_search_range = false;
+  }
   if (o.adaptive_refinement) s.evaluator.xcorr.adaptive_refinement = *o.adaptive_refinement;
   if (o.adaptive_threshold) s.evaluator.xcorr.adaptive_threshold = *o.adaptive_threshold;
   if (o.preprocess) s.evaluator.preprocess.method = preprocessing_named(*o.preprocess);
@@ -181,6 +185,7 @@ json to_json(const ProcessingSettings& s) {
             {"step_px", x.step_px},
             {"passes", x.passes},
             {"max_shift_px", x.max_shift_px},
+            {"find_search_range", x.find_search_range},
             {"probe_context_nodes", x.probe_context_nodes},
             {"adaptive_refinement", x.adaptive_refinement},
             {"adaptive_threshold", x.adaptive_threshold},
@@ -206,6 +211,8 @@ ProcessingSettings settings_from_json(const nlohmann::json& j) {
     s.evaluator.set_grid(j.at("window_px").get<int>(), j.at("step_px").get<int>(), roi);
     s.evaluator.xcorr.passes = j.at("passes").get<int>();
     s.evaluator.xcorr.max_shift_px = j.at("max_shift_px").get<double>();
+    // Settings stored before the scene set the search: their bound was explicit.
+    s.evaluator.xcorr.find_search_range = j.value("find_search_range", false);
     s.evaluator.xcorr.probe_context_nodes = j.at("probe_context_nodes").get<int>();
     // Settings stored before adaptive refinement existed: it was off.
     s.evaluator.xcorr.adaptive_refinement = j.value("adaptive_refinement", false);

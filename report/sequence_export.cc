@@ -48,7 +48,8 @@ constexpr Quantity kQuantities[] = {
     {"valid", "1", "1 where (u, v) was measured (flag 0), else 0", true},
     {"flag", "1",
      "why a node is or is not a measurement: 0 ok, 1 outlier replaced by its neighbours' median, 2 no texture, "
-     "3 masked, 4 out of the region of interest, 5 no correlation peak, 255 the frame was not evaluated (status)",
+     "3 masked, 4 out of the region of interest, 5 no correlation peak, 6 beyond the search range (peak on the "
+     "search bound), 255 the frame was not evaluated (status)",
      true},
 };
 
