@@ -30,7 +30,7 @@ std::string TypeBUncertainties::Validate() const {
 }
 
 TemperatureBudget temperature_budget(const BosGeometry& geometry, const TypeBUncertainties& u, double temperature_c,
-                                     std::optional<double> window_average_c) {
+                                     std::optional<double> window_correction_sigma_c) {
   if (const auto problem = u.Validate(); !problem.empty()) throw std::invalid_argument(problem);
   const double t_k = temperature_c + kZeroCelsiusK;
   if (!(t_k > 0)) throw std::invalid_argument(fmt::format("no budget for {} °C", temperature_c));
@@ -49,8 +49,10 @@ TemperatureBudget temperature_budget(const BosGeometry& geometry, const TypeBUnc
       component("magnification", "relative", u.magnification_relative, magnification_power * per_log),
       component("depth L (line of sight)", "relative", u.depth_relative, per_log),
   };
-  if (window_average_c) budget.components.push_back(component("window average against a point", "°C",
-                                                              *window_average_c, 1.0));
+  if (window_correction_sigma_c) {
+    budget.components.push_back(
+        component("window-average correction (curvature)", "°C", *window_correction_sigma_c, 1.0));
+  }
   double sum_sq = 0;
   for (const auto& c : budget.components) sum_sq += c.contribution_c * c.contribution_c;
   budget.combined_c = std::sqrt(sum_sq);
@@ -69,20 +71,62 @@ std::string TemperatureBudget::table() const {
   return out;
 }
 
-std::optional<double> window_average_uncertainty_c(const TemperatureField& field, double x_px, double y_px,
-                                                   double window_px) {
-  if (field.rows < 3 || field.cols < 3 || !(field.step_px > 0) || !(window_px > 0)) return std::nullopt;
-  const long col = std::lround((x_px - field.x0_px) / field.step_px);
-  const long row = std::lround((y_px - field.y0_px) / field.step_px);
+namespace {
+
+// κ of the evaluator alone (the header's measurements).
+CurvatureCoefficient evaluator_coefficient(const EvaluatorOptions& e) {
+  if (e.method == Method::kOpticalFlow) {
+    const double box = e.flow.window_px * e.flow.window_px / 24.0;
+    return {box, box};
+  }
+  const double w = e.xcorr.window_px;
+  if (e.xcorr.passes >= 2 && e.xcorr.deform) return {0.0, 1.5 * (w * w) / (16.0 * 16.0)};
+  // A box, as measured within 2 %; σ 5 % for the pixel grid's (w² − 1)/24.
+  return {w * w / 24.0, 0.05 * w * w / 24.0};
+}
+
+}  // namespace
+
+double CurvatureCoefficient::effective_window_px() const { return kappa_px2 > 0 ? std::sqrt(24 * kappa_px2) : 0.0; }
+
+CurvatureCoefficient chain_curvature_coefficient(const EvaluatorOptions& evaluator, double grid_step_px) {
+  const CurvatureCoefficient e = evaluator_coefficient(evaluator);
+  // The solve's h²/16 was measured to 1 %; its σ is the evaluator's.
+  return {e.kappa_px2 + grid_step_px * grid_step_px / 16.0, e.sigma_px2};
+}
+
+std::optional<WindowCorrection> window_correction(const TemperatureField& field, double x_px, double y_px,
+                                                  const CurvatureCoefficient& chain) {
+  if (field.rows < 3 || field.cols < 3 || !(field.step_px > 0)) return std::nullopt;
+  const double h = field.step_px;
+  const double fx = (x_px - field.x0_px) / h, fy = (y_px - field.y0_px) / h;
+  const long col = std::lround(fx), row = std::lround(fy);
   if (row < 1 || col < 1 || row > field.rows - 2 || col > field.cols - 2) return std::nullopt;
-  double neighbours = 0;
+  // The bilinear interpolation's own term per axis at fraction a of the cell.
+  const double ax = fx - std::floor(fx), ay = fy - std::floor(fy);
+  const double kx = chain.kappa_px2 + ax * (1 - ax) * h * h / 2, ky = chain.kappa_px2 + ay * (1 - ay) * h * h / 2;
+  WindowCorrection out;
+  double laplacian = 0, correction = 0;
+  // −(kx ∂²T/∂x² + ky ∂²T/∂y²), the second differences at the nearest node.
   for (const auto& [dr, dc] : {std::pair{0, 0}, {-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
     const std::size_t i = field.index(static_cast<int>(row) + dr, static_cast<int>(col) + dc);
     if (!field.measured[i] || !field.physical[i]) return std::nullopt;
-    neighbours += (dr == 0 && dc == 0 ? -4.0 : 1.0) * field.temperature_c[i];
+    const double lap_weight = (dr == 0 && dc == 0 ? -4.0 : 1.0) / (h * h);
+    const double weight = (dr == 0 && dc == 0 ? 2 * (kx + ky) : -(dr != 0 ? ky : kx)) / (h * h);
+    laplacian += lap_weight * field.temperature_c[i];
+    correction += weight * field.temperature_c[i];
+    out.nodes.push_back(i);
+    out.weights.push_back(weight);
   }
-  const double laplacian_per_px2 = neighbours / (field.step_px * field.step_px);
-  return window_px * window_px / 24.0 * std::abs(laplacian_per_px2);
+  out.correction_c = correction;
+  out.laplacian_c_per_px2 = laplacian;
+  out.coefficient_sigma_c = chain.sigma_px2 * std::abs(laplacian);
+  return out;
+}
+
+double window_correction_sigma_c(const WindowCorrection& c, std::optional<double> noise_sigma_c) {
+  if (!noise_sigma_c || !std::isfinite(*noise_sigma_c)) return std::hypot(c.coefficient_sigma_c, c.correction_c);
+  return std::hypot(c.coefficient_sigma_c, *noise_sigma_c);
 }
 
 }  // namespace bosfuse::fusion

@@ -4,6 +4,12 @@
 
 #include <cmath>
 #include <limits>
+#include <numeric>
+
+#include <Eigen/Dense>
+
+#include "fusion/displacement_evaluator.h"
+#include "sim/synthetic_pair.h"
 
 namespace bosfuse::fusion {
 namespace {
@@ -132,28 +138,165 @@ TemperatureField paraboloid(double curvature_c_per_px2) {
   return f;
 }
 
-TEST(WindowAverage, IsTheWindowsMeanAgainstItsCentreForACurvedField) {
-  const TemperatureField f = paraboloid(-0.002);
-  // ∇²T = 4 · (−0.002) °C/px², for a 16 px window: 16² / 24 · 0.008.
-  const auto u = window_average_uncertainty_c(f, 41, 31, 16);
-  ASSERT_TRUE(u);
-  EXPECT_NEAR(*u, 16.0 * 16.0 / 24.0 * 0.008, 1e-9);
-  // The mean of the paraboloid over the window's 16 × 16 pixels, against
-  // its centre, directly: (w² − 1) / 24 for pixels rather than w² / 24.
+TEST(WindowCorrection, AtANodeIsMinusTheChainsCoefficientTimesTheLaplacian) {
+  const TemperatureField f = paraboloid(-0.002);  // ∇²T = 4 · (−0.002) °C/px²
+  const CurvatureCoefficient box{16.0 * 16.0 / 24.0, 1.0};
+  const auto c = window_correction(f, 40, 32, box);  // a node: no interpolation term
+  ASSERT_TRUE(c);
+  EXPECT_NEAR(c->laplacian_c_per_px2, -0.008, 1e-12);
+  EXPECT_NEAR(c->correction_c, 16.0 * 16.0 / 24.0 * 0.008, 1e-9) << "a concave field reads low: added back";
+  EXPECT_NEAR(c->coefficient_sigma_c, 0.008, 1e-12);
+  double combined = 0;
+  for (std::size_t k = 0; k < c->nodes.size(); ++k) combined += c->weights[k] * f.temperature_c[c->nodes[k]];
+  EXPECT_NEAR(combined, c->correction_c, 1e-12) << "the weights are the correction, for its noise's propagation";
+  // The box's mean over its 16 × 16 pixels, against its centre, directly,
+  // is what the correction undoes: (w² − 1) / 24 for pixels, not w² / 24.
   double mean = 0;
   for (int i = -8; i < 8; ++i) {
     for (int j = -8; j < 8; ++j) mean += -0.002 * ((i + 0.5) * (i + 0.5) + (j + 0.5) * (j + 0.5));
   }
-  EXPECT_NEAR(std::abs(mean / 256), *u, *u / 256 + 1e-12);
+  EXPECT_NEAR(-mean / 256, c->correction_c, c->correction_c / 256 + 1e-12);
 }
 
-TEST(WindowAverage, IsUnknownNextToAnUnmeasuredNodeOrOffTheGrid) {
+TEST(WindowCorrection, BetweenNodesAddsTheBilinearInterpolationsExactTerm) {
+  const TemperatureField f = paraboloid(-0.002);
+  const CurvatureCoefficient none{0, 0};
+  // Half-way between nodes along x (a = 0.5), on a node along y: the
+  // interpolation of a parabola reads low by a(1 − a)·h²/2 · ∂²T/∂x².
+  const double x = 44, y = 32;
+  const auto c = window_correction(f, x, y, none);
+  ASSERT_TRUE(c);
+  const double truth = 30 - 0.002 * ((x - 40) * (x - 40) + (y - 30) * (y - 30));
+  EXPECT_NEAR(*f.temperature_at(x, y) + c->correction_c, truth, 1e-9);
+  EXPECT_GT(c->correction_c, 0.0);
+}
+
+TEST(WindowCorrection, ItsSigmaIsTheCoefficientsAndTheNoiseCombinedOrTheWholeCorrectionWithoutNoise) {
+  WindowCorrection c;
+  c.correction_c = 0.3;
+  c.coefficient_sigma_c = 0.04;
+  EXPECT_NEAR(window_correction_sigma_c(c, 0.03), 0.05, 1e-12);
+  EXPECT_NEAR(window_correction_sigma_c(c, std::nullopt), std::hypot(0.04, 0.3), 1e-12);
+  EXPECT_NEAR(window_correction_sigma_c(c, std::numeric_limits<double>::quiet_NaN()), std::hypot(0.04, 0.3), 1e-12);
+}
+
+TEST(WindowCorrection, IsUnknownNextToAnUnmeasuredNodeOrOffTheGrid) {
   TemperatureField f = paraboloid(0.001);
-  EXPECT_FALSE(window_average_uncertainty_c(f, 8, 8, 16)) << "a corner node has no four neighbours";
-  EXPECT_FALSE(window_average_uncertainty_c(f, 500, 30, 16));
+  const CurvatureCoefficient box{10, 1};
+  EXPECT_FALSE(window_correction(f, 8, 8, box)) << "a corner node has no four neighbours";
+  EXPECT_FALSE(window_correction(f, 500, 30, box));
   f.measured[f.index(3, 5)] = 0;
-  EXPECT_FALSE(window_average_uncertainty_c(f, 40, 32, 16)) << "its right neighbour was filled, not measured";
-  EXPECT_TRUE(window_average_uncertainty_c(f, 16, 16, 16));
+  EXPECT_FALSE(window_correction(f, 40, 32, box)) << "its right neighbour was filled, not measured";
+  EXPECT_TRUE(window_correction(f, 16, 16, box));
+}
+
+TEST(WindowCorrection, TheChainsCoefficientFollowsTheOptions) {
+  EvaluatorOptions deformed;  // the defaults: 16 px, 3 deformed passes
+  const auto d = chain_curvature_coefficient(deformed, 8);
+  EXPECT_NEAR(d.kappa_px2, 4.0, 1e-12) << "the solve's h²/16 and a deformed window's 0";
+  EXPECT_NEAR(d.effective_window_px(), std::sqrt(96.0), 1e-12);
+  EvaluatorOptions box = deformed;
+  box.xcorr.deform = false;
+  EXPECT_NEAR(chain_curvature_coefficient(box, 8).kappa_px2, 16.0 * 16.0 / 24 + 4, 1e-12);
+  EvaluatorOptions wide = deformed;
+  wide.xcorr.window_px = 32;
+  EXPECT_NEAR(chain_curvature_coefficient(wide, 16).sigma_px2, 4 * d.sigma_px2, 1e-12);
+}
+
+// κ of the whole chain measured on a generated plume: the refractive-index
+// change the solve gives at each node regressed on the truth's φ and ∇²φ
+// (and a constant), δn = s·(φ + κ·∇²φ) + c, so κ needs no sensitivity.
+// The plume is sim's Gaussian bump (φ = h·exp(−r²/2r0²), its gradient the
+// shift), within 3 r0 of its centre.
+double measured_kappa_px2(const TemperatureField& f, const sim::DisplacementModel& bump) {
+  const double r0 = bump.radius_px, height = std::abs(bump.amplitude_px) * r0 * std::exp(0.5);
+  std::vector<double> rows;
+  Eigen::MatrixXd a(f.temperature_c.size(), 3);
+  Eigen::VectorXd b(f.temperature_c.size());
+  int n = 0;
+  for (int r = 0; r < f.rows; ++r) {
+    for (int c = 0; c < f.cols; ++c) {
+      const double x = f.x0_px + c * f.step_px - bump.centre_x_px, y = f.y0_px + r * f.step_px - bump.centre_y_px;
+      const double r2 = x * x + y * y;
+      if (r2 > 9 * r0 * r0) continue;
+      const double phi = height * std::exp(-r2 / (2 * r0 * r0));
+      a.row(n) << phi, phi * (r2 / (r0 * r0 * r0 * r0) - 2 / (r0 * r0)), 1.0;
+      b(n++) = f.refractive_index[f.index(r, c)] - 1;
+    }
+  }
+  const Eigen::VectorXd coef = a.topRows(n).colPivHouseholderQr().solve(b.head(n));
+  return coef(1) / coef(0);
+}
+
+BosGeometryOptions camera_set_up() {
+  BosGeometryOptions o;
+  o.z_d_m = 0.5;
+  o.depth_m = 0.1;
+  o.magnification = 0.15;
+  o.pixel_pitch_um = 5.0;
+  return o;
+}
+
+// The chain's κ over six seeds' images of a plume of radius 32 px, peak
+// shift 0.3 px, 1 % noise: the mean, as w_eff = sqrt(24 κ).
+double measured_chain_width_px(const EvaluatorOptions& options) {
+  std::vector<double> kappas;
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    sim::PairOptions pair;
+    pair.pattern.width_px = pair.pattern.height_px = 320;
+    pair.pattern.seed = seed;
+    pair.noise_seed = 100 + seed;
+    pair.field = sim::DisplacementModel::bump_gradient(160, 160, 32, -0.3);
+    const auto images = sim::render_pair(pair);
+    const auto evaluated = evaluate_displacement(images.reference, images.measurement, options);
+    const auto solved = recover_temperature_field(evaluated.field, BosGeometry(camera_set_up()));
+    kappas.push_back(measured_kappa_px2(solved.field, pair.field));
+  }
+  const double kappa = std::accumulate(kappas.begin(), kappas.end(), 0.0) / kappas.size();
+  return std::sqrt(24 * std::max(kappa, 0.0));
+}
+
+TEST(WindowCorrection, TheDefaultChainsWidthIsWhatAGeneratedPlumeMeasures) {
+  EvaluatorOptions options;
+  options.set_grid(16, 8);
+  const double stated = chain_curvature_coefficient(options, 8).effective_window_px();
+  const double measured = measured_chain_width_px(options);
+  std::printf("default chain (16 px, 3 deformed passes, step 8): w_eff measured %.2f px, stated %.2f px\n", measured,
+              stated);
+  RecordProperty("measured_effective_window_px", std::to_string(measured));
+  EXPECT_NEAR(measured, stated, 0.2 * stated);
+}
+
+TEST(WindowCorrection, AChainWithoutDeformationAveragesOverItsBoxAndTheSolve) {
+  EvaluatorOptions options;
+  options.set_grid(16, 8);
+  options.xcorr.deform = false;
+  const double stated = chain_curvature_coefficient(options, 8).effective_window_px();
+  const double measured = measured_chain_width_px(options);
+  std::printf("16 px without deformation, step 8: w_eff measured %.2f px, stated %.2f px\n", measured, stated);
+  EXPECT_NEAR(measured, stated, 0.2 * stated);
+}
+
+TEST(WindowCorrection, TheSolvesOwnSmoothingIsTheStepSquaredOverSixteen) {
+  // Exact shifts at the nodes: what is left is the solve's h²/16.
+  for (const int step : {4, 8}) {
+    const auto bump = sim::DisplacementModel::bump_gradient(160, 160, 32, -0.3);
+    DisplacementField exact;
+    exact.rows = exact.cols = 320 / step;
+    for (int r = 0; r < exact.rows; ++r) {
+      for (int c = 0; c < exact.cols; ++c) {
+        DisplacementVector v;
+        v.x_px = step / 2.0 + c * step;
+        v.y_px = step / 2.0 + r * step;
+        const auto shift = bump.at(v.x_px, v.y_px);
+        v.u_px = shift.x;
+        v.v_px = shift.y;
+        exact.vectors.push_back(v);
+      }
+    }
+    const auto solved = recover_temperature_field(exact, BosGeometry(camera_set_up()));
+    EXPECT_NEAR(measured_kappa_px2(solved.field, bump), step * step / 16.0, 0.05 * step * step / 16.0) << step;
+  }
 }
 
 }  // namespace

@@ -113,6 +113,8 @@ std::string boundary_text(const fusion::TemperatureFieldOptions& o) {
 // A probe's temperature by the physical model and its uncertainties.
 struct ModelTemperature {
   std::optional<double> t_c, sigma_random_c, sigma_systematic_c;
+  // The window-average correction included in t_c and its σ (in the systematic σ).
+  std::optional<double> window_correction_c, window_correction_sigma_c;
 };
 
 // Everything measured at the probes of one frame, and the temperature field
@@ -128,9 +130,13 @@ std::optional<double> finite_or_none(double value) {
 }
 
 // The physical model's temperature at a probe, the bilinear interpolation of
-// the field's nodes, with the random σ of that interpolation (exact, through
-// the solve: average_sigma_c) and its Type-B budget with the run's
-// [geometry.uncertainty], the window-against-point term included.
+// the field's nodes corrected for the chain's averaging (the window's and
+// the solve's smoothing of a curved field, fusion/temperature_budget.h),
+// with the random σ of that interpolation (exact, through the solve:
+// average_sigma_c) and its Type-B budget with the run's
+// [geometry.uncertainty], the correction's uncertainty included. Where no
+// correction can be made (a neighbour of the nearest node not measured),
+// the interpolated value and no such term, as before.
 ModelTemperature model_temperature(const FrameContext& ctx, const fusion::EvaluationResult& evaluated,
                                    const fusion::TemperatureField& field, cv::Point2d p, const BilinearNodes& around) {
   ModelTemperature out;
@@ -138,8 +144,18 @@ ModelTemperature model_temperature(const FrameContext& ctx, const fusion::Evalua
   if (!out.t_c || around.nodes.empty()) return out;
   out.sigma_random_c = ctx.temperature_solver->average_sigma_c(evaluated.field, field, around.nodes, around.weights);
   if (out.sigma_random_c) out.sigma_random_c = finite_or_none(*out.sigma_random_c);
-  const auto window = fusion::window_average_uncertainty_c(field, p.x, p.y, ctx.settings.evaluator.xcorr.window_px);
-  const auto budget = fusion::temperature_budget(*ctx.geometry, ctx.settings.geometry.uncertainty, *out.t_c, window);
+  const auto chain = fusion::chain_curvature_coefficient(ctx.settings.evaluator, field.step_px);
+  std::optional<double> correction_sigma_c;
+  if (const auto correction = fusion::window_correction(field, p.x, p.y, chain)) {
+    const auto noise =
+        ctx.temperature_solver->average_sigma_c(evaluated.field, field, correction->nodes, correction->weights);
+    out.window_correction_c = correction->correction_c;
+    *out.t_c += correction->correction_c;
+    correction_sigma_c = fusion::window_correction_sigma_c(*correction, noise);
+    out.window_correction_sigma_c = correction_sigma_c;
+  }
+  const auto budget = fusion::temperature_budget(*ctx.geometry, ctx.settings.geometry.uncertainty, *out.t_c,
+                                                 correction_sigma_c);
   out.sigma_systematic_c = finite_or_none(budget.combined_c);
   return out;
 }
@@ -191,6 +207,24 @@ json refusal_json(const fusion::SceneMatch& scene) {
           {"min_correlation", scene.options.min_correlation}};
 }
 
+// The window-average correction each probe's temperature includes, with its
+// σ (in the sample's systematic σ), and the chain's coefficient behind it:
+// the probe samples' table has no column for it (a schema change).
+json window_correction_json(const FrameContext& ctx, const FrameResult& result) {
+  const auto chain = fusion::chain_curvature_coefficient(ctx.settings.evaluator, result.temperature->field.step_px);
+  json probes = json::array();
+  for (std::size_t p = 0; p < ctx.channels.size() && p < result.model.size(); ++p) {
+    const ModelTemperature& m = result.model[p];
+    probes.push_back({{"probe", ctx.channels[p].name},
+                      {"correction_c", m.window_correction_c ? fitting::number_or_null(*m.window_correction_c) : json(nullptr)},
+                      {"sigma_c", m.window_correction_sigma_c ? fitting::number_or_null(*m.window_correction_sigma_c) : json(nullptr)}});
+  }
+  return {{"kappa_px2", chain.kappa_px2},
+          {"kappa_sigma_px2", chain.sigma_px2},
+          {"effective_window_px", chain.effective_window_px()},
+          {"probes", probes}};
+}
+
 // The full field's files and their rows.
 std::vector<storage::FieldRecord> write_fields(const FrameContext& ctx, const FrameRecord& frame,
                                                const fusion::EvaluationResult& evaluated, const FrameResult& result,
@@ -207,7 +241,8 @@ std::vector<storage::FieldRecord> write_fields(const FrameContext& ctx, const Fr
                          {"max_c", fitting::number_or_null(s.max_c)},
                          {"unmeasured_nodes", s.unmeasured_nodes},
                          {"unphysical_nodes", s.unphysical_nodes},
-                         {"boundary", boundary_text(ctx.settings.geometry.temperature_field)}}
+                         {"boundary", boundary_text(ctx.settings.geometry.temperature_field)},
+                         {"window_correction", window_correction_json(ctx, result)}}
                         .dump()});
   return fields;
 }

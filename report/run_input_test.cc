@@ -121,8 +121,24 @@ TEST(RunInput, TheUncertaintySectionIsWhatProcessStored) {
     EXPECT_TRUE(p.median_systematic_c) << p.probe;
   }
   ASSERT_TRUE(u.budget);
-  EXPECT_EQ(u.budget->components.size(), 6u);
+  ASSERT_EQ(u.budget->components.size(), 7u) << "the set-up's six and the window-average correction's";
+  EXPECT_EQ(u.budget->components.back().quantity, "window-average correction (curvature)");
   EXPECT_NE(u.budget_basis.find("the hottest BOS probe sample"), std::string::npos) << u.budget_basis;
+  EXPECT_NE(u.budget_basis.find("includes the window-average correction"), std::string::npos) << u.budget_basis;
+  {
+    // The table is the hottest sample's own budget: its combined σ is the
+    // sample's stored systematic σ, the correction's σ included.
+    const storage::ProcessingStore results(dir / "run");
+    std::optional<storage::ProbeSampleRecord> hottest;
+    for (const auto& probe : results.probes()) {
+      for (const auto& s : results.probe_samples(probe.id)) {
+        if (s.temperature_c && s.sigma_systematic_c && (!hottest || *s.temperature_c > *hottest->temperature_c))
+          hottest = s;
+      }
+    }
+    ASSERT_TRUE(hottest);
+    EXPECT_NEAR(u.budget->combined_c, *hottest->sigma_systematic_c, 1e-9 * *hottest->sigma_systematic_c);
+  }
   EXPECT_TRUE(u.notes.empty());
   const auto files = write_report(input, {}, dir / "out");
   std::ifstream page(files.html);
