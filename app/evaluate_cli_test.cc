@@ -480,21 +480,25 @@ TEST_F(EvaluateCli, PreprocessHighpassIsChosenReportedAndHelpsUnderAGlow) {
     cv::imwrite(path(name), lit);
   }
   const std::string glow_pair = "evaluate " + path("glow_ref.png") + " " + path("glow_meas.png");
-  const auto mean_error = [&](const std::string& csv) {
+  struct Measured {
+    int valid = 0;
+    double mean_error_px = 0;
+  };
+  const auto measured = [&](const std::string& csv) {
     std::istringstream lines(read(csv));
     std::string line;
     std::getline(lines, line);
+    Measured m;
     double sum = 0;
-    int valid = 0;
     for (int rows = 0; std::getline(lines, line) && rows < 10000; ++rows) {
       double x, y, u, v;
       int ok;
       if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%d", &x, &y, &u, &v, &ok) != 5 || !ok) continue;
       sum += std::hypot(u - 0.6, v - 0.35);
-      ++valid;
+      ++m.valid;
     }
-    EXPECT_GT(valid, 100);
-    return valid ? sum / valid : 1e9;
+    m.mean_error_px = m.valid ? sum / m.valid : 0;
+    return m;
   };
   const auto plain = bosfuse(glow_pair + " -o " + path("plain.csv"));
   const auto filtered = bosfuse(glow_pair + " --preprocess highpass -o " + path("highpass.csv"));
@@ -502,8 +506,16 @@ TEST_F(EvaluateCli, PreprocessHighpassIsChosenReportedAndHelpsUnderAGlow) {
   ASSERT_EQ(filtered.exit_code, 0) << filtered.output;
   EXPECT_NE(plain.output.find("preprocessing: none"), std::string::npos) << plain.output;
   EXPECT_NE(filtered.output.find("preprocessing: highpass"), std::string::npos) << filtered.output;
-  const double none_px = mean_error(path("plain.csv")), highpass_px = mean_error(path("highpass.csv"));
-  EXPECT_LT(highpass_px, 0.8 * none_px) << "none " << none_px << " px, highpass " << highpass_px << " px";
+  // The glow dominates the unfiltered correlation: its windows show no clear
+  // peak and are flagged, never valid and wrong, and the warning names the fix.
+  const Measured none = measured(path("plain.csv")), highpass = measured(path("highpass.csv"));
+  EXPECT_GT(highpass.valid, 200) << filtered.output;
+  EXPECT_LT(highpass.mean_error_px, 0.05);
+  EXPECT_LT(none.valid, highpass.valid / 2) << plain.output;
+  if (none.valid > 0) {
+    EXPECT_LT(highpass.mean_error_px, 0.8 * none.mean_error_px);
+  }
+  EXPECT_NE(plain.output.find("try --preprocess highpass"), std::string::npos) << plain.output;
   // An unknown name is a usage error that lists the valid ones.
   const auto unknown = streams(glow_pair + " --preprocess clahe");
   EXPECT_EQ(unknown.exit_code, 105) << unknown.err;

@@ -42,9 +42,11 @@ double EvaluationSummary::on_bound_fraction() const {
 std::string search_bound_warning(const EvaluationSummary& s) {
   if (s.search_beyond_reach) {
     return fmt::format(
-        "the displacements seem to exceed ±{:g} px, the widest search {} px first windows allow in this scene: "
-        "{} of {} windows ({:.1f} %) peaked on the bound and are flagged beyond-search; evaluate with a larger ROI, "
-        "or check that the images show the same background",
+        "most sampled windows showed no clear correlation peak even with the widest search the scene allows (±{:g} "
+        "px, {} px first windows); {} of {} windows ({:.1f} %) peaked on the bound and are flagged beyond-search, "
+        "windows without a clear peak no-peak. The displacements may exceed that search (evaluate with a larger "
+        "ROI), the images may not show the same background, or light that does not move with the pattern may "
+        "dominate the correlation (try --preprocess highpass)",
         s.max_shift_px, s.first_window_px, s.first_pass_on_bound, s.first_pass_windows, 100 * s.on_bound_fraction());
   }
   if (s.on_bound_fraction() <= kOnBoundWarningFraction) return {};

@@ -87,6 +87,9 @@ int multiple_of_8_at_least(double px) { return 8 * static_cast<int>(std::ceil(px
 std::string SearchRangeOptions::Validate() const {
   if (sample_windows < 1 || sample_windows > 4096) return "search sample must be 1 to 4096 windows";
   if (!(widen_fraction >= 0 && widen_fraction <= 1)) return "search widening fraction must be 0 to 1";
+  if (!(beyond_reach_fraction >= widen_fraction && beyond_reach_fraction <= 1)) {
+    return "search beyond-reach fraction must lie between the widening fraction and 1";
+  }
   if (wide_window_px < 8 || wide_window_px > 128) return "wide search window must be 8 to 128 px";
   if (!(margin_px >= 0 && margin_px <= 16)) return "search margin must be 0 to 16 px";
   if (!(min_peak_ratio >= 1) || !std::isfinite(min_peak_ratio)) return "search peak ratio must be at least 1";
@@ -130,7 +133,7 @@ SearchRange find_search_range(const cv::Mat& reference, const cv::Mat& measureme
   }
   const SampleResult wide =
       sample(reference, measurement, roi, excluded, wide_window_px, wide_bound_px, start, options);
-  if (wide.textured == 0 || wide.unclear_fraction() > options.widen_fraction) {
+  if (wide.textured == 0 || wide.unclear_fraction() > options.beyond_reach_fraction) {
     range.widened = range.beyond_reach = true;
     range.max_shift_px = wide_bound_px;
     range.first_window_px = wide_window_px;

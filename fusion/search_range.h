@@ -24,6 +24,11 @@ struct SearchRangeOptions {
   // show no clear peak above which the search is widened. A still scene
   // shows a few in its untextured corners; a shift past the bound, most.
   double widen_fraction = 0.05;
+  // Of the widened sample, the fraction without a clear peak above which
+  // even the widest search is short of the displacement. Below it, the
+  // unclear windows are the scene's (dark, glare, blur), not a shift: the
+  // clear ones say how far to search.
+  double beyond_reach_fraction = 0.5;
   int wide_window_px = 64;      // the widened sample's window (less when the ROI is small)
   double margin_px = 2;         // added to the largest displacement found
   double min_peak_ratio = 1.5;  // a sample peak below this ratio to the second is not clear

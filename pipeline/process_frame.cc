@@ -96,8 +96,17 @@ json evaluation_json(const fusion::EvaluationSummary& s) {
           {"masked", s.masked},
           {"no_texture", s.no_texture},
           {"no_peak", s.no_peak},
+          {"beyond_search", s.beyond_search},
           {"outliers_replaced", s.outliers_replaced},
           {"refined_fraction", s.refined_fraction},
+          {"search",
+           {{"max_shift_px", s.max_shift_px},
+            {"first_window_px", s.first_window_px},
+            {"from_scene", s.search_from_scene},
+            {"widened", s.search_widened},
+            {"beyond_reach", s.search_beyond_reach},
+            {"first_pass_windows", s.first_pass_windows},
+            {"first_pass_on_bound", s.first_pass_on_bound}}},
           {"seconds", s.seconds}};
 }
 

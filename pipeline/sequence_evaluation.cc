@@ -86,28 +86,24 @@ SequenceFrameResult SequenceEvaluator::evaluate(const std::string& frame_path) {
 
 namespace {
 
+// Every field, in one order both ways (ranks of one job run one build).
 json summary_json(const fusion::EvaluationSummary& s) {
-  return {s.method,  s.passes_run, s.window_px_per_pass, s.converged,  s.last_change_px, s.refined_fraction,
-          s.vectors, s.valid,      s.outliers_replaced,  s.no_texture, s.masked,         s.out_of_roi,
-          s.no_peak, s.seconds};
+  return {s.method,        s.passes_run,         s.window_px_per_pass,  s.converged,          s.last_change_px,
+          s.refined_fraction, s.vectors,         s.valid,               s.outliers_replaced,  s.no_texture,
+          s.masked,        s.out_of_roi,         s.no_peak,             s.beyond_search,      s.max_shift_px,
+          s.first_window_px, s.search_from_scene, s.search_widened,     s.search_beyond_reach, s.first_pass_windows,
+          s.first_pass_on_bound, s.seconds};
 }
 
 fusion::EvaluationSummary summary_from_json(const json& j) {
   fusion::EvaluationSummary s;
-  j.at(0).get_to(s.method);
-  j.at(1).get_to(s.passes_run);
-  j.at(2).get_to(s.window_px_per_pass);
-  j.at(3).get_to(s.converged);
-  j.at(4).get_to(s.last_change_px);
-  j.at(5).get_to(s.refined_fraction);
-  j.at(6).get_to(s.vectors);
-  j.at(7).get_to(s.valid);
-  j.at(8).get_to(s.outliers_replaced);
-  j.at(9).get_to(s.no_texture);
-  j.at(10).get_to(s.masked);
-  j.at(11).get_to(s.out_of_roi);
-  j.at(12).get_to(s.no_peak);
-  j.at(13).get_to(s.seconds);
+  std::size_t i = 0;
+  const auto next = [&](auto& field) { j.at(i++).get_to(field); };
+  next(s.method), next(s.passes_run), next(s.window_px_per_pass), next(s.converged), next(s.last_change_px);
+  next(s.refined_fraction), next(s.vectors), next(s.valid), next(s.outliers_replaced), next(s.no_texture);
+  next(s.masked), next(s.out_of_roi), next(s.no_peak), next(s.beyond_search), next(s.max_shift_px);
+  next(s.first_window_px), next(s.search_from_scene), next(s.search_widened), next(s.search_beyond_reach);
+  next(s.first_pass_windows), next(s.first_pass_on_bound), next(s.seconds);
   return s;
 }
 

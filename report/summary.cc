@@ -337,7 +337,8 @@ std::string pairs_table(const ReportSummary& s) {
   Footnotes notes;
   std::ostringstream h;
   h << "<table class=\"summary agreement\"><caption>Each thermocouple against the BOS probe at its position. "
-       "Verdict: each of k, T0 and T_amb agrees when the 95% interval of its difference lies inside ±margin, "
+       "Verdict: each of k, T0 and T_amb agrees when the 90% interval of its difference (two one-sided tests at "
+       "α = 0.05) lies inside ±margin, "
        "differs when it lies wholly outside, and is inconclusive otherwise; the curve takes the worst of them "
        "(by: the parameter that decided it, its z = difference/σ and margin). The thermocouple's response lag "
        "is removed first (docs/FITTING.md). Δk = k_thermocouple − k_probe ± its combined standard error σ, "
