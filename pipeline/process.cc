@@ -475,7 +475,9 @@ ProcessReport process_frames(const fs::path& run_dir, const ProcessOptions& opti
                     report.frames_resumed ? fmt::format(" ({} done before the resume)", report.frames_resumed) : "",
                     report.probes, ctx.settings.probes_only ? "probe mode" : "full fields", report.temperature_source,
                     report.fits_ok, report.fits, report.agreements, report.seconds, clock.basis()) +
-                refused.text + fitted.text + (distributor ? distributor->brief_report() : "");
+                refused.text + fitted.text;
+  // How the frames were shared out is about the machine, not the results: a note.
+  if (distributor && options.progress) options.progress({report.frames, report.frames, distributor->brief_report(), false});
   return report;
 }
 

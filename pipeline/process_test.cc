@@ -385,9 +385,15 @@ TEST_F(Process, FramesSideBySideStoreWhatOneAtATimeStores) {
     ASSERT_TRUE(process_run(run(), options).complete);
     const Results one_at_a_time(run());
     options.frames_at_once = 3;
+    std::string notes;
+    options.progress = [&](const ProcessProgress& p) {
+      if (!p.frame) notes += p.line;
+    };
     const auto side_by_side = process_run(run(), options);
     ASSERT_TRUE(side_by_side.complete);
-    EXPECT_NE(side_by_side.text.find("3 frames side by side"), std::string::npos) << side_by_side.text;
+    // How the frames were shared is a note (standard error), not the results' text (standard output).
+    EXPECT_NE(notes.find("3 frames side by side"), std::string::npos) << notes;
+    EXPECT_EQ(side_by_side.text.find("side by side"), std::string::npos) << side_by_side.text;
     expect_equal(Results(run()), one_at_a_time);
     // The threads share one temperature solver: every frame's field, one analysis of the Poisson system.
     EXPECT_EQ(side_by_side.temperature_fields, probes_only ? 0 : int(side_by_side.frames));
