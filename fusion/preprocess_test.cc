@@ -30,19 +30,7 @@ cv::Mat expose(cv::Mat image, const Lighting& lighting, std::uint64_t noise_seed
   image = 0.5 + lighting.contrast * (image - 0.5);
   if (!lighting.gain.empty()) image = image.mul(lighting.gain);
   if (!lighting.background.empty()) image += lighting.background;
-  cv::Mat noise(image.size(), CV_64F);
-  cv::RNG(noise_seed).fill(noise, cv::RNG::NORMAL, 0.0, lighting.noise_std);
-  image += noise;
-  const double levels = std::ldexp(1.0, lighting.bits) - 1, lsb = std::ldexp(1.0, 16 - lighting.bits);
-  cv::Mat out(image.size(), CV_16U);
-  for (int y = 0; y < image.rows; ++y) {
-    const double* in = image.ptr<double>(y);
-    auto* o = out.ptr<std::uint16_t>(y);
-    for (int x = 0; x < image.cols; ++x) {
-      o[x] = static_cast<std::uint16_t>(std::clamp(std::round(in[x] * levels), 0.0, levels) * lsb);
-    }
-  }
-  return out;
+  return sim::sensor_image(image, lighting.noise_std, lighting.bits, noise_seed);
 }
 
 struct Pair {

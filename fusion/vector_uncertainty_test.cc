@@ -171,19 +171,7 @@ cv::Mat expose(cv::Mat image, const Camera& camera, double gain, std::uint64_t n
   image *= gain;
   if (camera.blur_sigma_px > 0) cv::GaussianBlur(image, image, cv::Size(0, 0), camera.blur_sigma_px);
   image = image(cv::Rect(margin_px, margin_px, image.cols - 2 * margin_px, image.rows - 2 * margin_px)).clone();
-  cv::Mat noise(image.size(), CV_64F);
-  cv::RNG(noise_seed).fill(noise, cv::RNG::NORMAL, 0.0, camera.noise_std);
-  image += noise;
-  const double levels = std::ldexp(1.0, camera.bits) - 1, lsb = std::ldexp(1.0, 16 - camera.bits);
-  cv::Mat out(image.size(), CV_16U);
-  for (int y = 0; y < image.rows; ++y) {
-    const double* in = image.ptr<double>(y);
-    auto* o = out.ptr<std::uint16_t>(y);
-    for (int x = 0; x < image.cols; ++x) {
-      o[x] = static_cast<std::uint16_t>(std::clamp(std::round(in[x] * levels), 0.0, levels) * lsb);
-    }
-  }
-  return out;
+  return sim::sensor_image(image, camera.noise_std, camera.bits, noise_seed);
 }
 
 struct Coverage {

@@ -165,4 +165,21 @@ SyntheticPair render_pair(const PairOptions& options) {
   return pair;
 }
 
+cv::Mat sensor_image(cv::Mat image, double noise_std, int bits, std::uint64_t noise_seed) {
+  CV_Assert(image.type() == CV_64FC1 && bits >= 1 && bits <= 16);
+  cv::Mat noise(image.size(), CV_64F);
+  cv::RNG(noise_seed).fill(noise, cv::RNG::NORMAL, 0.0, noise_std);
+  image += noise;
+  const double levels = std::ldexp(1.0, bits) - 1, lsb = std::ldexp(1.0, 16 - bits);
+  cv::Mat out(image.size(), CV_16U);
+  for (int y = 0; y < image.rows; ++y) {
+    const double* in = image.ptr<double>(y);
+    auto* o = out.ptr<std::uint16_t>(y);
+    for (int x = 0; x < image.cols; ++x) {
+      o[x] = static_cast<std::uint16_t>(std::clamp(std::round(in[x] * levels), 0.0, levels) * lsb);
+    }
+  }
+  return out;
+}
+
 }  // namespace bosfuse::sim

@@ -80,4 +80,10 @@ cv::Mat render_dots(const BackgroundPattern& pattern, const DisplacementModel* d
 cv::Mat camera_image(cv::Mat image, double blur_sigma_px, double noise_std, int bit_depth, std::uint64_t noise_seed,
                      std::uint64_t stream);
 
+// A sensor of `bits` (1..16) whose frames are stored in 16 bits, as a 10-
+// or 12-bit camera's are: Gaussian noise (fraction of full scale, seeded by
+// noise_seed) added to a CV_64F image with full scale 1.0, which is then
+// clamped and rounded to 2^bits − 1 levels held in the CV_16U's top bits.
+cv::Mat sensor_image(cv::Mat image, double noise_std, int bits, std::uint64_t noise_seed);
+
 }  // namespace bosfuse::sim

@@ -93,5 +93,27 @@ TEST(SyntheticPair, BadOptionsAreNamed) {
   EXPECT_THROW(render_pair(options), std::invalid_argument);
 }
 
+// A 10-bit camera stored in 16 bits: 1023 levels in the top bits, clamped
+// at both ends, and the noise the seed draws.
+TEST(SensorImage, QuantisesToTheSensorsLevelsInTheTopBits) {
+  cv::Mat image(1, 4, CV_64F);
+  image.at<double>(0, 0) = 0.5;
+  image.at<double>(0, 1) = 1.2;
+  image.at<double>(0, 2) = -0.1;
+  image.at<double>(0, 3) = 1.0 / 1023;
+  const cv::Mat out = sensor_image(image.clone(), 0.0, 10, 1);
+  ASSERT_EQ(out.type(), CV_16UC1);
+  EXPECT_EQ(out.at<std::uint16_t>(0, 0), 512 * 64);
+  EXPECT_EQ(out.at<std::uint16_t>(0, 1), 1023 * 64);
+  EXPECT_EQ(out.at<std::uint16_t>(0, 2), 0);
+  EXPECT_EQ(out.at<std::uint16_t>(0, 3), 64);
+  cv::Mat grey(64, 64, CV_64F, cv::Scalar(0.5));
+  const cv::Mat a = sensor_image(grey.clone(), 0.01, 12, 7), b = sensor_image(grey.clone(), 0.01, 12, 7);
+  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0) << "the same seed draws the same noise";
+  cv::Scalar mean, deviation;
+  cv::meanStdDev(a, mean, deviation);
+  EXPECT_NEAR(deviation[0] / 65535, 0.01, 0.001);
+}
+
 }  // namespace
 }  // namespace bosfuse::sim
