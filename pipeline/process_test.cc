@@ -366,10 +366,16 @@ TEST_F(Process, ADistributedProcessingStoresWhatOneProcessStores) {
     const Results alone(run());
     ReversedDistributor distributor;
     options.distributor = &distributor;
+    std::string notes;
+    options.progress = [&](const ProcessProgress& p) {
+      if (!p.frame) notes += p.line;
+    };
     const auto distributed = process_run(run(), options);
     ASSERT_TRUE(distributed.complete);
     EXPECT_EQ(distributed.frames, 6u);
-    EXPECT_NE(distributed.text.find("reversed"), std::string::npos) << "the distributor's report";
+    // The distributor's report is a note (standard error), not the results' text.
+    EXPECT_NE(notes.find("reversed"), std::string::npos) << notes;
+    EXPECT_EQ(distributed.text.find("reversed"), std::string::npos) << distributed.text;
     expect_equal(Results(run()), alone);
     EXPECT_GT(distributed.times.evaluation_s, 0) << "every rank's times reach the report";
   }
