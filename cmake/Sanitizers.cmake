@@ -69,7 +69,7 @@ if(BOSFUSE_FUZZ)
   message(STATUS "bosfuse: libFuzzer targets (fuzz/), libraries with fuzzer-no-link,address,undefined")
 endif()
 
-# Highway (fusion/simd_kernels.cc) compiles every kernel once per x86 target
+# Highway (fusion/simd_*.cc, one file per kernel family) compiles every kernel once per x86 target
 # and picks one at run time; instrumented, that one file took 69 CPU-s with
 # all five targets against 36 s with two. The instrumented builds compile
 # only the target this machine's CPU runs (what the sanitizers then check,

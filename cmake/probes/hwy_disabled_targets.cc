@@ -1,6 +1,6 @@
 // Configure-time probe (cmake/Sanitizers.cmake): prints the Highway targets
 // an instrumented build need not compile on this machine, i.e. all that
-// fusion/simd_kernels.cc would compile except the best one this CPU runs and
+// fusion/simd_*.cc would compile except the best one this CPU runs and
 // the portable baseline (SCALAR/EMU128, which BOSFUSE_SIMD=portable selects).
 #include <cstdint>
 #include <cstdio>
