@@ -2,7 +2,7 @@
 
 #include <iostream>
 
-#include "storage/database.h"
+#include "storage/storage_error.h"
 
 namespace bosfuse::app {
 

@@ -14,6 +14,7 @@
 #include "storage/record_rows.h"
 #include "storage/run_paths.h"
 #include "storage/run_store.h"
+#include "storage/transaction.h"
 
 namespace bosfuse::sim {
 namespace fs = std::filesystem;

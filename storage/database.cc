@@ -1,16 +1,14 @@
 #include "storage/database.h"
 
+#include <sqlite3.h>
+
 #include <algorithm>
-#include <cerrno>
 #include <string>
+
+#include "storage/sqlite_failure.h"
 
 namespace bosfuse::storage {
 namespace {
-
-[[noreturn]] void fail(sqlite3* db, const std::string& what) {
-  if (!db) throw StorageError(what + ": out of memory", SQLITE_NOMEM);
-  throw StorageError(what + ": " + sqlite3_errmsg(db), sqlite3_extended_errcode(db), sqlite3_system_errno(db));
-}
 
 int open_flags(Database::Mode mode) {
   switch (mode) {
@@ -45,26 +43,7 @@ std::string immutable_uri(const std::string& path) {
 
 }  // namespace
 
-StorageError::StorageError(const std::string& what, int sqlite_code, int system_errno)
-    : std::runtime_error(what), sqlite_code_(sqlite_code), system_errno_(system_errno) {}
-
-StorageError::Kind StorageError::kind() const {
-  switch (sqlite_code_ & 0xff) {
-    case SQLITE_FULL:
-      return Kind::kDiskFull;
-    case SQLITE_IOERR:
-      // A write that found no room can surface as an I/O error (growing the
-      // shared-memory index, say): it is a full disk all the same.
-      return system_errno_ == ENOSPC || system_errno_ == EDQUOT ? Kind::kDiskFull : Kind::kIoError;
-    case SQLITE_BUSY:
-    case SQLITE_LOCKED:
-      return Kind::kLocked;
-    default:
-      return Kind::kOther;
-  }
-}
-
-std::string StorageError::reason() const { return sqlite_code_ == 0 ? std::string() : sqlite3_errstr(sqlite_code_); }
+void SqliteCloser::operator()(sqlite3* db) const noexcept { sqlite3_close_v2(db); }
 
 // SQLite's busy handler: short sleeps (at most 10 ms, so a lock released is
 // taken at once) until the timeout or the deadline, whichever comes first.
@@ -89,7 +68,7 @@ Database::Database(const std::string& path, Mode mode) : path_(path) {
   const std::string name = mode == Mode::kImmutable ? immutable_uri(path) : path;
   const int rc = sqlite3_open_v2(name.c_str(), &raw, open_flags(mode) | SQLITE_OPEN_FULLMUTEX, nullptr);
   db_.reset(raw);  // owned even on failure: sqlite3_open_v2 may allocate a handle
-  if (rc != SQLITE_OK) fail(raw, "cannot open run store '" + path + "'");
+  if (rc != SQLITE_OK) throw_last_error(raw, "cannot open run store '" + path + "'");
   sqlite3_extended_result_codes(raw, 1);
   sqlite3_busy_handler(raw, &Database::wait_for_lock, lock_wait_.get());
   execute("PRAGMA foreign_keys = ON");
@@ -115,85 +94,5 @@ void Database::execute(std::string_view sql) {
 Statement Database::prepare(std::string_view sql) { return Statement(db_.get(), sql); }
 
 std::int64_t Database::last_insert_rowid() const { return sqlite3_last_insert_rowid(db_.get()); }
-
-Statement::Statement(sqlite3* db, std::string_view sql) : db_(db) {
-  sqlite3_stmt* raw = nullptr;
-  if (sqlite3_prepare_v3(db, sql.data(), static_cast<int>(sql.size()), SQLITE_PREPARE_PERSISTENT, &raw, nullptr) !=
-      SQLITE_OK) {
-    fail(db, "cannot prepare SQL (" + std::string(sql.substr(0, 80)) + ")");
-  }
-  stmt_.reset(raw);
-}
-
-void Statement::check(int rc, const char* what) const {
-  if (rc != SQLITE_OK) fail(db_, std::string(what) + " in (" + sqlite3_sql(stmt_.get()) + ")");
-}
-
-Statement& Statement::bind(int index, std::int64_t value) {
-  check(sqlite3_bind_int64(stmt_.get(), index, value), "bind");
-  return *this;
-}
-Statement& Statement::bind(int index, double value) {
-  check(sqlite3_bind_double(stmt_.get(), index, value), "bind");
-  return *this;
-}
-Statement& Statement::bind(int index, std::string_view value) {
-  check(sqlite3_bind_text(stmt_.get(), index, value.data(), static_cast<int>(value.size()), SQLITE_TRANSIENT), "bind");
-  return *this;
-}
-Statement& Statement::bind(int index, std::nullopt_t) {
-  check(sqlite3_bind_null(stmt_.get(), index), "bind");
-  return *this;
-}
-
-bool Statement::step() {
-  const int rc = sqlite3_step(stmt_.get());
-  if (rc == SQLITE_ROW) return true;
-  if (rc == SQLITE_DONE) return false;
-  const std::string sql = sqlite3_sql(stmt_.get());
-  sqlite3_reset(stmt_.get());
-  fail(db_, "SQL step failed in (" + sql + ")");
-}
-
-void Statement::run() {
-  step();
-  reset();
-}
-
-void Statement::reset() { sqlite3_reset(stmt_.get()); }
-
-bool Statement::is_null(int column) const { return sqlite3_column_type(stmt_.get(), column) == SQLITE_NULL; }
-std::int64_t Statement::column_int64(int column) const { return sqlite3_column_int64(stmt_.get(), column); }
-double Statement::column_double(int column) const { return sqlite3_column_double(stmt_.get(), column); }
-std::string Statement::column_text(int column) const {
-  const auto* text = sqlite3_column_text(stmt_.get(), column);
-  return text ? reinterpret_cast<const char*>(text) : std::string();
-}
-std::optional<double> Statement::column_optional_double(int column) const {
-  if (is_null(column)) return std::nullopt;
-  return column_double(column);
-}
-std::optional<std::int64_t> Statement::column_optional_int64(int column) const {
-  if (is_null(column)) return std::nullopt;
-  return column_int64(column);
-}
-std::optional<std::string> Statement::column_optional_text(int column) const {
-  if (is_null(column)) return std::nullopt;
-  return column_text(column);
-}
-
-Transaction::Transaction(Database& db) : db_(db) { db_.execute("BEGIN IMMEDIATE"); }
-
-Transaction::~Transaction() {
-  if (committed_) return;
-  // Destructors never throw: a failed rollback leaves SQLite to roll back the
-  // open transaction when the connection closes.
-  sqlite3_exec(db_.handle(), "ROLLBACK", nullptr, nullptr, nullptr);
-}
-
-void Transaction::commit() {
-  db_.execute("COMMIT");
-  committed_ = true;
-}
 
 }  // namespace bosfuse::storage

@@ -6,6 +6,7 @@
 #include "storage/database.h"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <cerrno>
 #include <future>

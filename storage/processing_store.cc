@@ -6,6 +6,7 @@
 #include "storage/record_rows.h"
 #include "storage/run_store.h"
 #include "storage/schema.h"
+#include "storage/transaction.h"
 
 namespace bosfuse::storage {
 namespace {

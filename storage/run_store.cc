@@ -10,6 +10,7 @@
 #include "storage/record_rows.h"
 #include "storage/schema.h"
 #include "storage/space_reserve.h"
+#include "storage/transaction.h"
 
 namespace bosfuse::storage {
 namespace {

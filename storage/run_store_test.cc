@@ -9,6 +9,7 @@
 #include "storage/run_tail.h"
 #include "storage/run_writer.h"
 #include "storage/schema.h"
+#include "storage/transaction.h"
 #include "tests/support/temp_dir.h"
 
 namespace bosfuse::storage {

@@ -8,6 +8,7 @@
 #include "storage/run_writer.h"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <atomic>
 #include <future>

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "storage/records.h"
+#include "storage/transaction.h"
 
 namespace bosfuse::storage {
 namespace {
