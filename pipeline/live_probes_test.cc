@@ -6,7 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "pipeline/process.h"
-#include "sim/convection_scene.h"
+#include "sim/demo_setup.h"
 #include "storage/processing_store.h"
 #include "storage/run_store.h"
 #include "tests/support/temp_dir.h"
@@ -17,31 +17,20 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr std::int64_t kStartNs = 1'795'000'000'000'000'000;
-constexpr double kPixelPitchUm = 5;
-
-// The demo's scene: a plume in the middle of a 480×440 image at 8 px/mm.
-sim::SceneOptions scene_options() {
-  sim::SceneOptions s;
-  s.pure_exponential = true;
-  s.width_px = 480;
-  s.height_px = 440;
-  s.px_per_mm = 8;
-  s.cylinder_x_px = 240;
-  s.cylinder_y_px = 420;
-  s.z_d_m = 0.5;
-  return s;
-}
-
+// The demo's scene (a plume in the middle of a 480×440 image at 8 px/mm)
+// and its two thermocouples, seen at one frame.
 struct SceneRun {
-  sim::ConvectionScene scene{scene_options()};
-  std::vector<cv::Point2d> probes_m{{0.0, 0.035}, {0.0, 0.045}};  // (x, z) from the cylinder's centre
+  sim::DemoSetup demo = sim::demo_setup(sim::DemoOptions{}.experiment_s);
   double frame_t_s = 15;
+  const sim::ConvectionScene& scene() const { return *demo.model; }
 };
 
-std::string geometry_toml(const sim::SceneOptions& s) {
-  return fmt::format("[geometry]\nz_d_m = {}\ndepth_m = {}\nmagnification = {}\npixel_pitch_um = {}\n"
-                     "ambient_temperature_c = {}\nopen_edges = [\"top\"]\n",
-                     s.z_d_m, s.depth_m, s.px_per_mm * kPixelPitchUm * 1e-3, kPixelPitchUm, s.ambient_c);
+std::string geometry_toml(const sim::DemoSetup& demo) {
+  const sim::SceneOptions& s = demo.scene;
+  return fmt::format(
+      "[geometry]\nz_d_m = {}\ndepth_m = {}\nmagnification = {}\npixel_pitch_um = {}\n"
+      "ambient_temperature_c = {}\nopen_edges = [\"top\"]\n",
+      s.z_d_m, s.depth_m, s.px_per_mm * demo.pixel_pitch_um * 1e-3, demo.pixel_pitch_um, s.ambient_c);
 }
 
 void write_frame(storage::RunStore& store, const fs::path& dir, const std::string& name, const cv::Mat& image,
@@ -57,25 +46,26 @@ void create_scene_run(const fs::path& dir, const SceneRun& run, bool with_refere
   storage::RunInfo info;
   info.name = "scene";
   info.started_ns = kStartNs;
-  info.config_toml = geometry_toml(run.scene.options());
+  info.config_toml = geometry_toml(run.demo);
   auto store = storage::RunStore::create(dir, info, storage::RunStore::CreateMode::kNew);
   const auto device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", "127.0.0.1:502"});
-  for (std::size_t i = 0; i < run.probes_m.size(); ++i) {
-    const cv::Point2d at = run.scene.image_position_px(run.probes_m[i].x, run.probes_m[i].y);
+  for (std::size_t i = 0; i < run.demo.thermocouples.size(); ++i) {
+    const sim::SceneThermocouple& tc = run.demo.thermocouples[i];
+    const cv::Point2d at = run.scene().image_position_px(tc.x_m, tc.z_m);
     store.add_channel({0, device, "tc" + std::to_string(i), "thermocouple", "degC", "K", at.x, at.y});
   }
   fs::create_directories(dir / "frames");
   sim::PatternOptions pattern;
-  pattern.width_px = run.scene.options().width_px;
-  pattern.height_px = run.scene.options().height_px;
+  pattern.width_px = run.scene().options().width_px;
+  pattern.height_px = run.scene().options().height_px;
   pattern.seed = 3;
   const auto background = sim::generate_pattern(pattern);
   const sim::CameraModel camera;
   if (with_reference) {
-    write_frame(store, dir, "frames/reference.png", run.scene.render_frame(background, camera, 0, false, 0), 0, true);
+    write_frame(store, dir, "frames/reference.png", run.scene().render_frame(background, camera, 0, false, 0), 0, true);
   }
   if (with_frame) {
-    write_frame(store, dir, "frames/plume.png", run.scene.render_frame(background, camera, run.frame_t_s, true, 1),
+    write_frame(store, dir, "frames/plume.png", run.scene().render_frame(background, camera, run.frame_t_s, true, 1),
                 run.frame_t_s, false);
   }
   store.finish(storage::RunStatus::kComplete, kStartNs + static_cast<std::int64_t>(run.frame_t_s * 1e9));
@@ -116,8 +106,9 @@ TEST(LiveProbes, GiveWhatProcessStoresAtEachThermocouple) {
     EXPECT_NEAR(*probe.temperature_c, *samples[0].temperature_c, 1e-9) << probe.name;
     EXPECT_NEAR(probe.u_px, samples[0].u_px, 1e-12) << probe.name;
     EXPECT_NEAR(probe.v_px, samples[0].v_px, 1e-12) << probe.name;
-    const double truth_c = run.scene.temperature_c(run.probes_m[i].x, run.probes_m[i].y, run.frame_t_s);
-    const double excess_c = truth_c - run.scene.options().ambient_c;
+    const sim::SceneThermocouple& tc = run.demo.thermocouples[i];
+    const double truth_c = run.scene().temperature_c(tc.x_m, tc.z_m, run.frame_t_s);
+    const double excess_c = truth_c - run.scene().options().ambient_c;
     ASSERT_GT(excess_c, 5.0) << "the scene must heat the probe for the test to mean anything";
     EXPECT_NEAR(*probe.temperature_c, truth_c, 0.1 * excess_c) << probe.name;
   }

@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include "fusion/displacement_evaluator.h"
+#include "sim/demo_setup.h"
 
 namespace bosfuse::sim {
 namespace {
@@ -128,14 +129,9 @@ TEST(ConvectionScene, ThermocouplesLagTheAirTheySit) {
 // below the point by the budget's window-average term (w²/24)·|∇²T|, to
 // leading order in w/δ; a vanishing window is the point.
 TEST(ConvectionScene, AWindowsMeanOnTheCentrelineIsThePointLessTheCurvatureTerm) {
-  SceneOptions o;
-  o.pure_exponential = true;
-  o.px_per_mm = 8;
-  o.width_px = 480;
-  o.height_px = 440;
-  o.cylinder_x_px = 240;
-  o.cylinder_y_px = 420;
-  const ConvectionScene scene(o);
+  const DemoSetup demo = demo_setup(DemoOptions{}.experiment_s);
+  const SceneOptions& o = demo.scene;
+  const ConvectionScene& scene = *demo.model;
   const cv::Point2d at = scene.image_position_px(0, 0.035);
   const double t_s = 5;
   const double h_px = 0.5, h_m = h_px * 1e-3 / o.px_per_mm;
