@@ -177,12 +177,9 @@ std::vector<XdmfCollection> xdmf_collections(const std::vector<Grid>& grids,
   return collections;
 }
 
-}  // namespace
+using FramesById = std::map<std::int64_t, storage::FrameRecord>;
 
-fs::path xdmf_path_for(const fs::path& hdf5_path) { return fs::path(hdf5_path).replace_extension(".xmf"); }
-
-FieldExportResult export_fields(const storage::RunStore& store, const fs::path& hdf5_path,
-                                const FieldExportOptions& options) {
+void check_destination(const fs::path& hdf5_path, const FieldExportOptions& options) {
   if (hdf5_path.filename().empty() || hdf5_path.extension() == ".xmf") {
     throw std::invalid_argument(
         fmt::format("'{}': name the HDF5 file (e.g. fields.h5); its .xmf sidecar goes beside it", hdf5_path.string()));
@@ -193,8 +190,9 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
   if (const fs::path folder = hdf5_path.parent_path(); !folder.empty() && !fs::is_directory(folder)) {
     throw std::runtime_error(fmt::format("cannot write '{}': no folder '{}'", hdf5_path.string(), folder.string()));
   }
-  const auto run = store.run();
-  const storage::ExperimentClock clock = storage::experiment_clock(store);
+}
+
+std::vector<storage::FieldRecord> stored_fields(const storage::RunStore& store) {
   const storage::ProcessingStore results(store.dir());
   auto rows = results.fields();
   if (rows.empty()) {
@@ -202,12 +200,11 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
         "the run '{}' has no stored fields: run `bosfuse process RUN --mode full` first",
         store.dir().string()));
   }
-  std::map<std::int64_t, storage::FrameRecord> frame_by_id;
-  for (const auto& f : store.frames()) frame_by_id[f.id] = f;
-  FieldExportResult result;
-  result.hdf5_path = hdf5_path;
-  result.xdmf_path = xdmf_path_for(hdf5_path);
+  return rows;
+}
 
+// In time order, so the per-kind t_s arrays and the XDMF collection need no sorting.
+void sort_by_frame_time(std::vector<storage::FieldRecord>& rows, const FramesById& frame_by_id) {
   // The schema allows only the two kinds and only frames of the run; a row
   // naming a frame the run lacks means the store was edited by hand.
   for (const auto& row : rows) {
@@ -216,101 +213,147 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
                                            storage::printable(row.kind), storage::printable(row.path), row.frame_id));
     }
   }
-  // In time order, so the per-kind t_s arrays and the XDMF collection need no sorting.
   std::sort(rows.begin(), rows.end(), [&](const auto& a, const auto& b) {
     return std::pair(frame_by_id.at(a.frame_id).t_ns, a.frame_id) <
            std::pair(frame_by_id.at(b.frame_id).t_ns, b.frame_id);
   });
+}
 
-  storage::PartialFile h5_file(hdf5_path), xmf_file(result.xdmf_path);
+void write_file_attributes(hdf5::Writer& out, const storage::RunInfo& run, const storage::ExperimentClock& clock,
+                           const FieldExportOptions& options) {
+  out.set_attribute("/", "title", fmt::format("bosfuse field export of run '{}'", run.name));
+  out.set_attribute("/", "run_name", run.name);
+  out.set_attribute("/", "run_started_utc", acquisition::format_iso8601_utc(run.started_ns, 3));
+  out.set_attribute("/", "bosfuse_version", BOSFUSE_VERSION);
+  out.set_attribute("/", "layout_version", kLayoutVersion);
+  out.set_attribute("/", "content",
+                    "displacement and temperature fields of the run's frames as stored by `bosfuse process`: "
+                    "/displacement/frame_NNNNNN and /temperature/frame_NNNNNN (NNNNNN = frame id in the run "
+                    "store), grid coordinates under /grids; see docs/REPORT.md, Field export");
+  out.set_attribute("/", "displacement_convention", kDisplacementConvention);
+  out.set_attribute("/", "coordinates", coordinates_convention("2-D arrays are [ny, nx]"));
+  out.set_attribute("/", "time", "t_s: " + clock.basis());
+  if (options.px_per_mm) out.set_attribute("/", "px_per_mm", *options.px_per_mm);
+  out.create_group("/grids");
+}
+
+// What an export reads while it writes the HDF5 file, and what it has written so far.
+struct ExportState {
+  const storage::RunStore& store;
+  const storage::ExperimentClock& clock;
+  const FramesById& frame_by_id;
+  std::optional<double> px_per_mm;
   std::vector<Grid> grids;
   std::map<std::string_view, std::vector<ExportedFrame>> exported;
+};
+
+// The frame's quantities as 2-D datasets of `group`: flags as 0/1, values NaN where nothing was measured.
+void write_quantities(hdf5::Writer& out, const Kind& kind, const fusion::StoredFieldGrid& field,
+                      const std::string& group) {
+  for (const auto& q : kind.quantities) {
+    const std::string path = group + "/" + std::string(q.dataset);
+    const cv::Mat& values = field.column(q.column);
+    if (q.flag) {
+      out.write_2d(path, as_flags(values), field.y_px.size(), field.x_px.size());
+    } else {
+      out.write_2d(path, measured_values(values, field.column(kind.measured_column)), field.y_px.size(),
+                   field.x_px.size());
+    }
+    out.set_attribute(path, "units", q.units);
+    out.set_attribute(path, "description", q.description);
+  }
+}
+
+// One stored field as its frame's group, linked to its grid's coordinates.
+ExportedFrame write_frame(hdf5::Writer& out, ExportState& state, const Kind& kind, const storage::FieldRecord& row) {
+  const auto& frame = state.frame_by_id.at(row.frame_id);
+  fusion::StoredFieldGrid field;
+  try {
+    field = fusion::read_stored_field(storage::resolve_in_run(state.store.dir(), row.path), kind.columns);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(fmt::format("stored {} field of frame {}: {}", kind.name, frame.id, e.what()));
+  }
+  ExportedFrame f;
+  f.group = fmt::format("/{}/frame_{:06d}", kind.name, frame.id);
+  f.frame_id = frame.id;
+  f.t_s = state.clock.seconds(frame.t_ns);
+  f.grid = grid_of(field, state.grids, out, state.px_per_mm);
+  f.rows = field.rows();
+  f.cols = field.cols();
+  out.create_group(f.group);
+  out.set_attribute(f.group, "t_s", f.t_s);
+  out.set_attribute(f.group, "frame_id", f.frame_id);
+  out.set_attribute(f.group, "frame_path", frame.path);
+  out.set_attribute(f.group, "field_path", row.path);
+  out.set_attribute(f.group, "grid", state.grids[f.grid].group);
+  out.set_attribute(f.group, "summary", row.json);
+  for (const char* axis : {"x_px", "y_px", "x_mm", "y_mm"}) {
+    if (state.px_per_mm || std::string_view(axis).ends_with("_px")) {
+      out.link(state.grids[f.grid].group + "/" + axis, f.group + "/" + axis);
+    }
+  }
+  write_quantities(out, kind, field, f.group);
+  return f;
+}
+
+// The kind's group with a group per frame (rows in time order) and its t_s and frame_id arrays; none without frames.
+void write_kind(hdf5::Writer& out, ExportState& state, const Kind& kind,
+                const std::vector<storage::FieldRecord>& rows) {
+  const std::string group = fmt::format("/{}", kind.name);
+  std::vector<double> times_s;
+  std::vector<std::int64_t> frame_ids;
+  for (const auto& row : rows) {
+    if (row.kind != kind.name) continue;
+    if (times_s.empty()) {
+      out.create_group(group);
+      out.set_attribute(group, "description", kind.description);
+    }
+    ExportedFrame f = write_frame(out, state, kind, row);
+    times_s.push_back(f.t_s);
+    frame_ids.push_back(f.frame_id);
+    state.exported[kind.name].push_back(std::move(f));
+  }
+  if (times_s.empty()) return;
+  out.write_1d(group + "/t_s", times_s);
+  out.set_attribute(group + "/t_s", "units", "s");
+  out.set_attribute(group + "/t_s", "description", "t_s of the frames below, in time order");
+  out.write_1d(group + "/frame_id", frame_ids);
+  out.set_attribute(group + "/frame_id", "units", "1");
+  out.set_attribute(group + "/frame_id", "description", "frame ids in the run store, in the order of t_s");
+}
+
+}  // namespace
+
+fs::path xdmf_path_for(const fs::path& hdf5_path) { return fs::path(hdf5_path).replace_extension(".xmf"); }
+
+FieldExportResult export_fields(const storage::RunStore& store, const fs::path& hdf5_path,
+                                const FieldExportOptions& options) {
+  check_destination(hdf5_path, options);
+  const auto run = store.run();
+  const storage::ExperimentClock clock = storage::experiment_clock(store);
+  auto rows = stored_fields(store);
+  FramesById frame_by_id;
+  for (const auto& f : store.frames()) frame_by_id[f.id] = f;
+  FieldExportResult result;
+  result.hdf5_path = hdf5_path;
+  result.xdmf_path = xdmf_path_for(hdf5_path);
+  sort_by_frame_time(rows, frame_by_id);
+
+  storage::PartialFile h5_file(hdf5_path), xmf_file(result.xdmf_path);
+  ExportState state{store, clock, frame_by_id, options.px_per_mm, {}, {}};
   {
     hdf5::Writer out(h5_file.path(), hdf5_path);
-    out.set_attribute("/", "title", fmt::format("bosfuse field export of run '{}'", run.name));
-    out.set_attribute("/", "run_name", run.name);
-    out.set_attribute("/", "run_started_utc", acquisition::format_iso8601_utc(run.started_ns, 3));
-    out.set_attribute("/", "bosfuse_version", BOSFUSE_VERSION);
-    out.set_attribute("/", "layout_version", kLayoutVersion);
-    out.set_attribute("/", "content",
-                      "displacement and temperature fields of the run's frames as stored by `bosfuse process`: "
-                      "/displacement/frame_NNNNNN and /temperature/frame_NNNNNN (NNNNNN = frame id in the run "
-                      "store), grid coordinates under /grids; see docs/REPORT.md, Field export");
-    out.set_attribute("/", "displacement_convention", kDisplacementConvention);
-    out.set_attribute("/", "coordinates", coordinates_convention("2-D arrays are [ny, nx]"));
-    out.set_attribute("/", "time", "t_s: " + clock.basis());
-    if (options.px_per_mm) out.set_attribute("/", "px_per_mm", *options.px_per_mm);
-    out.create_group("/grids");
-
-    for (const auto& kind : kKinds) {
-      const std::string group = fmt::format("/{}", kind.name);
-      std::vector<double> times_s;
-      std::vector<std::int64_t> frame_ids;
-      for (const auto& row : rows) {
-        if (row.kind != kind.name) continue;
-        if (times_s.empty()) {
-          out.create_group(group);
-          out.set_attribute(group, "description", kind.description);
-        }
-        const auto& frame = frame_by_id.at(row.frame_id);
-        fusion::StoredFieldGrid field;
-        try {
-          field = fusion::read_stored_field(storage::resolve_in_run(store.dir(), row.path), kind.columns);
-        } catch (const std::exception& e) {
-          throw std::runtime_error(fmt::format("stored {} field of frame {}: {}", kind.name, frame.id, e.what()));
-        }
-        ExportedFrame f;
-        f.group = fmt::format("/{}/frame_{:06d}", kind.name, frame.id);
-        f.frame_id = frame.id;
-        f.t_s = clock.seconds(frame.t_ns);
-        f.grid = grid_of(field, grids, out, options.px_per_mm);
-        f.rows = field.rows();
-        f.cols = field.cols();
-        out.create_group(f.group);
-        out.set_attribute(f.group, "t_s", f.t_s);
-        out.set_attribute(f.group, "frame_id", f.frame_id);
-        out.set_attribute(f.group, "frame_path", frame.path);
-        out.set_attribute(f.group, "field_path", row.path);
-        out.set_attribute(f.group, "grid", grids[f.grid].group);
-        out.set_attribute(f.group, "summary", row.json);
-        for (const char* axis : {"x_px", "y_px", "x_mm", "y_mm"}) {
-          if (options.px_per_mm || std::string_view(axis).ends_with("_px")) {
-            out.link(grids[f.grid].group + "/" + axis, f.group + "/" + axis);
-          }
-        }
-        for (const auto& q : kind.quantities) {
-          const std::string path = f.group + "/" + std::string(q.dataset);
-          const cv::Mat& values = field.column(q.column);
-          if (q.flag) {
-            out.write_2d(path, as_flags(values), field.y_px.size(), field.x_px.size());
-          } else {
-            out.write_2d(path, measured_values(values, field.column(kind.measured_column)), field.y_px.size(),
-                         field.x_px.size());
-          }
-          out.set_attribute(path, "units", q.units);
-          out.set_attribute(path, "description", q.description);
-        }
-        times_s.push_back(f.t_s);
-        frame_ids.push_back(f.frame_id);
-        exported[kind.name].push_back(std::move(f));
-      }
-      if (times_s.empty()) continue;
-      out.write_1d(group + "/t_s", times_s);
-      out.set_attribute(group + "/t_s", "units", "s");
-      out.set_attribute(group + "/t_s", "description", "t_s of the frames below, in time order");
-      out.write_1d(group + "/frame_id", frame_ids);
-      out.set_attribute(group + "/frame_id", "units", "1");
-      out.set_attribute(group + "/frame_id", "description", "frame ids in the run store, in the order of t_s");
-    }
+    write_file_attributes(out, run, clock, options);
+    for (const auto& kind : kKinds) write_kind(out, state, kind, rows);
     out.close();
   }
   write_xdmf(xmf_file.path(), hdf5_path.filename().string(),
-             xdmf_collections(grids, exported, options.px_per_mm.has_value()));
+             xdmf_collections(state.grids, state.exported, options.px_per_mm.has_value()));
   h5_file.commit();
   xmf_file.commit();
-  result.displacement_frames = exported["displacement"].size();
-  result.temperature_frames = exported["temperature"].size();
-  result.grids = grids.size();
+  result.displacement_frames = state.exported["displacement"].size();
+  result.temperature_frames = state.exported["temperature"].size();
+  result.grids = state.grids.size();
   return result;
 }
 

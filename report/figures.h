@@ -10,6 +10,10 @@
 // return; other PLplot users in the process must not run meanwhile. They throw
 // std::runtime_error when the cairo devices are missing (Debian package
 // plplot-driver-cairo) or the input has nothing to draw.
+//
+// Each kind of figure is drawn in its own file (curve_figure.cc,
+// overview_figure.cc, agreement_figure.cc, map_figure.cc), all in the frame
+// of figure_frame.h.
 
 #include <filesystem>
 #include <optional>
