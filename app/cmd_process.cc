@@ -10,11 +10,11 @@
 #include <iostream>
 
 #include "app/command.h"
+#include "app/evaluator_arguments.h"
 #include "app/progress_display.h"
 #include "app/ranks.h"
 #include "app/run_argument.h"
 #include "app/run_control.h"
-#include "fusion/preprocess.h"
 #include "pipeline/process.h"
 #include "pipeline/process_frame.h"
 
@@ -24,35 +24,15 @@ namespace {
 struct ProcessArgs {
   std::string run;
   bool resume = false;
-  std::optional<std::string> mode, method, mask, geometry, roi;
-  std::optional<int> window_px, step_px, passes, probe_context, threads, frames_at_once;
-  std::optional<double> max_shift_px, adaptive_threshold;
-  std::optional<std::string> adaptive_refinement, preprocess;
+  EvaluatorArguments evaluator;
+  std::optional<std::string> mode, geometry;
+  std::optional<int> probe_context, threads, frames_at_once;
 };
 
-cv::Rect parse_roi(const std::string& text) {
-  int x = 0, y = 0, w = 0, h = 0;
-  char tail = 0;
-  if (std::sscanf(text.c_str(), "%d,%d,%d,%d%c", &x, &y, &w, &h, &tail) != 4 || w <= 0 || h <= 0 || x < 0 || y < 0) {
-    throw std::runtime_error("--roi '" + text + "': expected x,y,width,height in pixels");
-  }
-  return {x, y, w, h};
-}
-
 pipeline::SettingsOverrides overrides(const ProcessArgs& args) {
-  pipeline::SettingsOverrides o;
+  pipeline::SettingsOverrides o = settings_overrides(args.evaluator);
   if (args.mode) o.probes_only = *args.mode == "probes";
-  o.method = args.method;
-  o.window_px = args.window_px;
-  o.step_px = args.step_px;
-  o.passes = args.passes;
   o.probe_context_nodes = args.probe_context;
-  o.max_shift_px = args.max_shift_px;
-  if (args.adaptive_refinement) o.adaptive_refinement = *args.adaptive_refinement == "on";
-  o.adaptive_threshold = args.adaptive_threshold;
-  o.preprocess = args.preprocess;
-  if (args.roi) o.roi_px = parse_roi(*args.roi);
-  o.mask = args.mask;
   o.geometry_file = args.geometry;
   return o;
 }
@@ -88,39 +68,14 @@ void add_process(CLI::App& root) {
                   "full: displacement and temperature fields of every frame; probes: only the windows at the "
                   "thermocouples' image positions (default: stored, else full)")
       ->check(CLI::IsMember({"full", "probes"}));
-  cmd->add_option("--method", args->method, "xcorr or flow (default: stored, else xcorr)")
-      ->check(CLI::IsMember({"xcorr", "flow"}));
-  cmd->add_option("--window", args->window_px, "Final interrogation window, px (default: stored, else 16)");
-  cmd->add_option("--step", args->step_px, "Grid spacing, px (default: stored, else 8)");
-  cmd->add_option("--passes", args->passes, "Passes, window deformation after the first (default: stored, else 3)");
+  add_evaluator_options(*cmd, args->evaluator, SettingsBase::kStored);
   cmd->add_option("--probe-context", args->probe_context,
                   "Probe mode: grid nodes evaluated around each probe; -1: all the full field depends on (then a "
                   "probe equals the full field there, but is ~40x slower) (default: stored, else 1)")
       ->check(CLI::Range(-1, 16));
-  cmd->add_option("--max-shift", args->max_shift_px, "Largest displacement expected, px (default: stored, else 4)");
-  cmd->add_option("--adaptive-refinement", args->adaptive_refinement,
-                  "on: refinement passes only where the first pass found a displacement above the noise floor "
-                  "(docs/CONFIG.md) (default: stored, else off)")
-      ->check(CLI::IsMember({"on", "off"}));
-  cmd->add_option("--adaptive-threshold", args->adaptive_threshold,
-                  "Adaptive refinement: refine where the shift or its gradient exceeds this many times the first "
-                  "pass's noise floor (default: stored, else 4)");
-  cmd->add_option("--preprocess", args->preprocess,
-                  "Filter reference and frames first: none, normalize, highpass or minmax (docs/CONFIG.md) "
-                  "(default: stored, else none)")
-      ->check(CLI::Validator(
-          [](std::string& name) {
-            return fusion::parse_preprocessing(name) ? std::string()
-                                                     : "must be one of " + fusion::preprocessing_names();
-          },
-          "NAME"));
-  cmd->add_option("--roi", args->roi, "Region of interest x,y,width,height in pixels (default: stored, else all)");
   cmd->add_option("--geometry", args->geometry,
                   "TOML file with [geometry] (and [alignment]); default: stored, else the run's experiment file, "
                   "else built-in defaults");
-  cmd->add_option("--mask", args->mask,
-                  "Mask image (e.g. the heater's holder): non-zero pixels are not evaluated; a path relative to the "
-                  "run folder, or absolute (then copied into the run); '' for none (default: stored, else none)");
   cmd->add_option("--frames-at-once", args->frames_at_once,
                   "Frames evaluated side by side, each with its own evaluator (~600 MB at 16 MP); 1: one at a time "
                   "(default: one per core, at most 4; under mpirun each rank takes one at a time)")

@@ -408,6 +408,22 @@ TEST_F(EvaluateCli, UsageMistakesExitWithCli11sValidationCode) {
   }
 }
 
+// One ROI parser serves evaluate and process: a ROI of no width or height
+// is a usage mistake that names the option, before any image is read.
+TEST_F(EvaluateCli, ARoiOfNoWidthIsRefusedAsAUsageMistake) {
+  constexpr int kValidationError = 105;
+  for (const char* roi : {"0,0,0,10", "0,0,10,0", "-1,0,10,10", "0,0,10,10x"}) {
+    const auto run = streams("evaluate " + path("ref.png") + " " + path("meas.png") + " --roi " + roi);
+    EXPECT_EQ(run.exit_code, kValidationError) << roi << ": " << run.err;
+    EXPECT_NE(run.err.find("--roi '" + std::string(roi) + "'"), std::string::npos) << run.err;
+    EXPECT_EQ(run.out, "") << roi;
+  }
+  const auto sequence = streams("evaluate --reference " + path("ref.png") + " --sequence " + path("meas.png") +
+                                " -o " + path("s.h5") + " --roi 0,0,0,10");
+  EXPECT_EQ(sequence.exit_code, kValidationError) << sequence.err;
+  EXPECT_NE(sequence.err.find("width and height at least 1"), std::string::npos) << sequence.err;
+}
+
 // An output's format is checked before anything is written (issue 31).
 TEST_F(EvaluateCli, AMapThatIsNotAPngIsRefusedBeforeTheCsvIsWritten) {
   const auto jpeg = streams("evaluate " + path("ref.png") + " " + path("meas.png") + " -o " + path("f.csv") +

@@ -56,6 +56,15 @@ TEST_F(ProcessCli, AdaptiveRefinementIsStoredWithTheSettings) {
   EXPECT_NE(wrong.output.find("--adaptive-refinement"), std::string::npos) << wrong.output;
 }
 
+// The ROI parser is evaluate's (app/evaluator_arguments.h): a usage mistake.
+TEST_F(ProcessCli, ARoiOfNoWidthIsRefusedAsAUsageMistake) {
+  const auto run = bosfuse("process --roi 0,0,0,10 " + grid_);
+  EXPECT_EQ(run.exit_code, 105) << run.output;
+  EXPECT_NE(run.output.find("--roi '0,0,0,10': expected x,y,width,height in pixels"), std::string::npos)
+      << run.output;
+  EXPECT_FALSE(storage::ProcessingStore(run_dir()).current_processing().has_value());
+}
+
 TEST_F(ProcessCli, PreprocessingIsStoredWithTheSettingsAndUsedAgain) {
   const auto run = bosfuse("process --mode probes --preprocess normalize " + grid_);
   ASSERT_EQ(run.exit_code, 0) << run.output;

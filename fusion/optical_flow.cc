@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 #include <stdexcept>
+#include <utility>
 
 #include "fusion/image_input.h"
 #include "fusion/memory_budget.h"
@@ -16,6 +17,37 @@
 
 namespace bosfuse::fusion {
 namespace {
+
+constexpr std::pair<FlowAlgorithm, std::string_view> kFlowAlgorithmNames[] = {
+    {FlowAlgorithm::kDis, "dis"}, {FlowAlgorithm::kFarneback, "farneback"}, {FlowAlgorithm::kTvl1, "tvl1"}};
+constexpr std::pair<DisPreset, std::string_view> kDisPresetNames[] = {
+    {DisPreset::kUltrafast, "ultrafast"}, {DisPreset::kFast, "fast"}, {DisPreset::kMedium, "medium"}};
+
+template <typename Enum, std::size_t N>
+using NameTable = std::pair<Enum, std::string_view>[N];
+
+template <typename Enum, std::size_t N>
+std::string name_in(const NameTable<Enum, N>& table, Enum value) {
+  for (const auto& [known, name] : table) {
+    if (known == value) return std::string(name);
+  }
+  return "unknown";
+}
+
+template <typename Enum, std::size_t N>
+std::optional<Enum> value_named(const NameTable<Enum, N>& table, std::string_view name) {
+  for (const auto& [value, known] : table) {
+    if (known == name) return value;
+  }
+  return std::nullopt;
+}
+
+template <typename Enum, std::size_t N>
+std::vector<std::string> names_of(const NameTable<Enum, N>& table) {
+  std::vector<std::string> names;
+  for (const auto& [value, name] : table) names.emplace_back(name);
+  return names;
+}
 
 cv::Mat to_8bit(const cv::Mat& unit) {
   cv::Mat out;
@@ -31,29 +63,15 @@ double box_sum(const cv::Mat& integral, cv::Rect r) {
 
 }  // namespace
 
-std::string to_string(FlowAlgorithm algorithm) {
-  switch (algorithm) {
-    case FlowAlgorithm::kDis:
-      return "dis";
-    case FlowAlgorithm::kFarneback:
-      return "farneback";
-    case FlowAlgorithm::kTvl1:
-      return "tvl1";
-  }
-  return "unknown";
+std::string to_string(FlowAlgorithm algorithm) { return name_in(kFlowAlgorithmNames, algorithm); }
+std::optional<FlowAlgorithm> parse_flow_algorithm(std::string_view name) {
+  return value_named(kFlowAlgorithmNames, name);
 }
+std::vector<std::string> flow_algorithm_names() { return names_of(kFlowAlgorithmNames); }
 
-std::string to_string(DisPreset preset) {
-  switch (preset) {
-    case DisPreset::kUltrafast:
-      return "ultrafast";
-    case DisPreset::kFast:
-      return "fast";
-    case DisPreset::kMedium:
-      return "medium";
-  }
-  return "unknown";
-}
+std::string to_string(DisPreset preset) { return name_in(kDisPresetNames, preset); }
+std::optional<DisPreset> parse_dis_preset(std::string_view name) { return value_named(kDisPresetNames, name); }
+std::vector<std::string> dis_preset_names() { return names_of(kDisPresetNames); }
 
 bool flow_algorithm_available(FlowAlgorithm algorithm) {
 #if BOSFUSE_HAVE_OPTFLOW

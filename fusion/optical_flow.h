@@ -12,7 +12,9 @@
 // reference(x, y) ≈ measurement(x + u, y + v).
 
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "fusion/evaluation.h"
@@ -21,7 +23,11 @@ namespace bosfuse::fusion {
 
 enum class FlowAlgorithm { kDis, kFarneback, kTvl1 };
 
+// The one name table of the algorithms ("dis", "farneback", "tvl1"), used by
+// the commands and the stored settings; the names in the enum's order.
 std::string to_string(FlowAlgorithm algorithm);
+std::optional<FlowAlgorithm> parse_flow_algorithm(std::string_view name);
+std::vector<std::string> flow_algorithm_names();
 bool flow_algorithm_available(FlowAlgorithm algorithm);
 
 // OpenCV's DIS presets (DISOpticalFlow::PRESET_*), each run down to full
@@ -34,7 +40,10 @@ bool flow_algorithm_available(FlowAlgorithm algorithm);
 // FullFrame16MPMethods (0.011 against 0.014 px RMS).
 enum class DisPreset { kUltrafast, kFast, kMedium };
 
+// The one name table of the presets ("ultrafast", "fast", "medium"), likewise.
 std::string to_string(DisPreset preset);
+std::optional<DisPreset> parse_dis_preset(std::string_view name);
+std::vector<std::string> dis_preset_names();
 
 struct FlowOptions {
   FlowAlgorithm algorithm = FlowAlgorithm::kDis;

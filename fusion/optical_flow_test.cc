@@ -30,6 +30,16 @@ double rms_error(const DisplacementField& field, const sim::DisplacementModel& t
   return n ? std::sqrt(sum / n) : 1e9;
 }
 
+// One table names the algorithms and presets both ways, for the commands and the stored settings.
+TEST(OpticalFlow, AlgorithmAndPresetNamesReadBackAsTheirValues) {
+  EXPECT_EQ(flow_algorithm_names(), (std::vector<std::string>{"dis", "farneback", "tvl1"}));
+  for (const auto& name : flow_algorithm_names()) EXPECT_EQ(to_string(parse_flow_algorithm(name).value()), name);
+  EXPECT_EQ(dis_preset_names(), (std::vector<std::string>{"ultrafast", "fast", "medium"}));
+  for (const auto& name : dis_preset_names()) EXPECT_EQ(to_string(parse_dis_preset(name).value()), name);
+  EXPECT_FALSE(parse_flow_algorithm("DIS").has_value());
+  EXPECT_FALSE(parse_dis_preset("slow").has_value());
+}
+
 TEST(OpticalFlow, EveryAlgorithmFollowsAUniformShift) {
   const auto pair = render(sim::DisplacementModel::uniform(0.6, -0.4));
   for (const auto algorithm : {FlowAlgorithm::kDis, FlowAlgorithm::kFarneback, FlowAlgorithm::kTvl1}) {

@@ -379,6 +379,90 @@ struct FrameLoop {
   }
 };
 
+// What a processing reports before its first frame.
+ProcessReport opening_report(const Processing& processing, const RunFrames& frames, const FrameContext& ctx,
+                             std::size_t frames_resumed) {
+  ProcessReport report;
+  report.processing_id = processing.id;
+  report.frames = frames.measurements.size();
+  report.probes = ctx.channels.size();
+  report.temperature_source = temperature_source(ctx);
+  report.frames_resumed = frames_resumed;
+  return report;
+}
+
+// This process's temperature solver's work (ProcessReport).
+void count_solver_work(const fusion::TemperatureFieldSolver& solver, ProcessReport& report) {
+  report.temperature_fields = solver.fields();
+  report.temperature_analyses = solver.analyses();
+  report.temperature_factorisations = solver.factorisations();
+}
+
+// What a processing whose frames are all staged is completed from.
+struct StagedProcessing {
+  const fs::path& run_dir;
+  const storage::RunStore& store;
+  storage::ProcessingStore& results;
+  const FrameContext& ctx;
+  const RunFrames& frames;
+  const storage::ExperimentClock& clock;
+  const Processing& processing;
+};
+
+// Every fit and agreement, the quality index and the summary stored, the
+// staged results swapped into the current ones; `report` gets the counts.
+// Returns what the refused frames and the fits say.
+std::string complete_processing(const StagedProcessing& p, const cv::Mat& last_image, ProcessReport& report) {
+  const auto fits_start = Clock::now();
+  const FitsAndAgreements fitted = fit_everything(p.store, p.results, p.ctx, p.processing.id, p.clock);
+  for (const auto& f : fitted.fits) report.fits_ok += f.ok ? 1 : 0;
+  report.fits = fitted.fits.size();
+  report.agreements = fitted.agreements.size();
+  const auto conversions = temperature_conversions(p.results, p.ctx.channels, !p.ctx.settings.probes_only);
+  const RefusedFrames refused = refused_frames(p.results, p.processing.id);
+  report.frames_refused = refused.stored.size();
+  const json summary = {{"frames", report.frames},
+                        {"frames_refused", refused.stored},
+                        {"probes", report.probes},
+                        {"temperature_source", report.temperature_source},
+                        {"temperature_conversions", conversions},
+                        {"time_basis", p.clock.basis()},
+                        {"quality", quality_json(p.ctx, p.frames, last_image, p.clock)}};
+  p.results.complete_processing(p.processing.id, fitted.fits, fitted.agreements, summary.dump(),
+                                acquisition::utc_now_ns());
+  remove_fields_except(p.run_dir, fmt::format("p{}", p.processing.id));
+  report.complete = true;
+  report.times.finishing_s = std::chrono::duration<double>(Clock::now() - fits_start).count();
+  return refused.text + fitted.text;
+}
+
+// The notes that open a processing's progress.
+std::string opening_note(const fs::path& run_dir, const FrameContext& ctx, const storage::ExperimentClock& clock) {
+  return fmt::format("processing {} ({}), settings from {}; times in {}", run_dir.string(),
+                     ctx.settings.probes_only ? "probe mode" : "full fields", ctx.settings.source, clock.basis());
+}
+
+std::string geometry_note(const FrameContext& ctx) {
+  return "geometry from " + ctx.settings.geometry.source + ":\n" + ctx.geometry->brief_report();
+}
+
+std::string stopped_text(std::size_t done, std::size_t frames, const fs::path& run_dir) {
+  return fmt::format(
+      "stopped after {} of {} frames; the run's earlier results are unchanged; `bosfuse process {} --resume` "
+      "continues\n",
+      done, frames, run_dir.string());
+}
+
+// The line that opens a complete processing's text.
+std::string completed_text(const ProcessReport& report, const FrameContext& ctx,
+                           const storage::ExperimentClock& clock) {
+  return fmt::format(
+      "{} frames{}, {} probes ({}), temperatures from {}; {} of {} fits ok, {} agreements, {:.1f} s; times in {}\n",
+      report.frames, report.frames_resumed ? fmt::format(" ({} done before the resume)", report.frames_resumed) : "",
+      report.probes, ctx.settings.probes_only ? "probe mode" : "full fields", report.temperature_source, report.fits_ok,
+      report.fits, report.agreements, report.seconds, clock.basis());
+}
+
 // The frames of a run with a reference, evaluated against it, then every
 // fit, agreement and the quality index; stored when every frame is done.
 ProcessReport process_frames(const fs::path& run_dir, const ProcessOptions& options, const storage::RunStore& store,
@@ -413,21 +497,12 @@ ProcessReport process_frames(const fs::path& run_dir, const ProcessOptions& opti
         std::launch::async, [solver = ctx.temperature_solver, grid = ctx.evaluator->grid()] { solver->prepare(grid); });
   }
 
-  ProcessReport report;
-  report.processing_id = processing.id;
-  report.frames = frames.measurements.size();
-  report.probes = ctx.channels.size();
-  report.temperature_source = temperature_source(ctx);
-  report.frames_resumed = done.size();
+  ProcessReport report = opening_report(processing, frames, ctx, done.size());
   auto progress = [&](std::size_t n, const std::string& line, bool frame = false) {
     if (options.progress) options.progress({n, report.frames, line, frame});
   };
-  progress(done.size(),
-           fmt::format("processing {} ({}), settings from {}; times in {}", run_dir.string(),
-                       ctx.settings.probes_only ? "probe mode" : "full fields", ctx.settings.source, clock.basis()));
-  if (!ctx.settings.probes_only) {
-    progress(done.size(), "geometry from " + ctx.settings.geometry.source + ":\n" + ctx.geometry->brief_report());
-  }
+  progress(done.size(), opening_note(run_dir, ctx, clock));
+  if (!ctx.settings.probes_only) progress(done.size(), geometry_note(ctx));
   std::size_t n = done.size();
   auto frame_staged = [&](const FrameRecord& frame) {
     progress(++n, fmt::format("frame {} (t = {:.2f} s) evaluated", frame.id, clock.seconds(frame.t_ns)), true);
@@ -436,46 +511,15 @@ ProcessReport process_frames(const fs::path& run_dir, const ProcessOptions& opti
   // The quality index's, kept rather than decoded twice.
   const cv::Mat last_image = distributor ? loop.distributed(*distributor, todo, options.stop)
                                          : loop.here(*ahead, options, frames.measurements.back().id);
-  report.temperature_fields = ctx.temperature_solver->fields();
-  report.temperature_analyses = ctx.temperature_solver->analyses();
-  report.temperature_factorisations = ctx.temperature_solver->factorisations();
+  count_solver_work(*ctx.temperature_solver, report);
   if (n < report.frames) {
-    report.text = processing.note + fmt::format(
-                                        "stopped after {} of {} frames; the run's earlier results are "
-                                        "unchanged; `bosfuse process {} --resume` continues\n",
-                                        n, report.frames, run_dir.string());
+    report.text = processing.note + stopped_text(n, report.frames, run_dir);
     return report;
   }
-
-  const auto fits_start = Clock::now();
-  const FitsAndAgreements fitted = fit_everything(store, results, ctx, processing.id, clock);
-  for (const auto& f : fitted.fits) report.fits_ok += f.ok ? 1 : 0;
-  report.fits = fitted.fits.size();
-  report.agreements = fitted.agreements.size();
-  const auto conversions = temperature_conversions(results, ctx.channels, !ctx.settings.probes_only);
-  const RefusedFrames refused = refused_frames(results, processing.id);
-  report.frames_refused = refused.stored.size();
-  const json summary = {{"frames", report.frames},
-                        {"frames_refused", refused.stored},
-                        {"probes", report.probes},
-                        {"temperature_source", report.temperature_source},
-                        {"temperature_conversions", conversions},
-                        {"time_basis", clock.basis()},
-                        {"quality", quality_json(ctx, frames, last_image, clock)}};
-  results.complete_processing(processing.id, fitted.fits, fitted.agreements, summary.dump(), acquisition::utc_now_ns());
-  remove_fields_except(run_dir, fmt::format("p{}", processing.id));
-  report.complete = true;
-  report.times.finishing_s = std::chrono::duration<double>(Clock::now() - fits_start).count();
+  const std::string details =
+      complete_processing({run_dir, store, results, ctx, frames, clock, processing}, last_image, report);
   report.seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  report.text = processing.note +
-                fmt::format(
-                    "{} frames{}, {} probes ({}), temperatures from {}; {} of {} fits ok, {} agreements, "
-                    "{:.1f} s; times in {}\n",
-                    report.frames,
-                    report.frames_resumed ? fmt::format(" ({} done before the resume)", report.frames_resumed) : "",
-                    report.probes, ctx.settings.probes_only ? "probe mode" : "full fields", report.temperature_source,
-                    report.fits_ok, report.fits, report.agreements, report.seconds, clock.basis()) +
-                refused.text + fitted.text;
+  report.text = processing.note + completed_text(report, ctx, clock) + details;
   // How the frames were shared out is about the machine, not the results: a note.
   if (distributor && options.progress) options.progress({report.frames, report.frames, distributor->brief_report(), false});
   return report;

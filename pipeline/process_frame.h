@@ -24,7 +24,7 @@
 #include "fusion/temperature_field.h"
 #include "pipeline/frame_distributor.h"
 #include "pipeline/probe_calibration.h"
-#include "pipeline/process.h"
+#include "pipeline/process_times.h"
 #include "pipeline/processing_settings.h"
 #include "storage/processing_store.h"
 #include "storage/records.h"

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <map>
 #include <sstream>
 
 #include "acquisition/clock.h"
@@ -19,10 +18,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using json = nlohmann::ordered_json;
-
-const std::map<std::string, fusion::FlowAlgorithm> kFlowAlgorithms{{"dis", fusion::FlowAlgorithm::kDis},
-                                                                   {"farneback", fusion::FlowAlgorithm::kFarneback},
-                                                                   {"tvl1", fusion::FlowAlgorithm::kTvl1}};
 
 ProcessingSettings defaults() {
   ProcessingSettings s;
@@ -137,9 +132,9 @@ void apply_evaluator(const SettingsOverrides& o, ProcessingSettings& s) {
     s.evaluator.method = *o.method == "flow" ? fusion::Method::kOpticalFlow : fusion::Method::kCrossCorrelation;
   }
   if (o.flow_algorithm) {
-    const auto it = kFlowAlgorithms.find(*o.flow_algorithm);
-    if (it == kFlowAlgorithms.end()) throw std::runtime_error("flow algorithm must be dis, farneback or tvl1");
-    s.evaluator.flow.algorithm = it->second;
+    const auto algorithm = fusion::parse_flow_algorithm(*o.flow_algorithm);
+    if (!algorithm) throw std::runtime_error("flow algorithm must be dis, farneback or tvl1");
+    s.evaluator.flow.algorithm = *algorithm;
   }
   if (o.window_px || o.step_px || o.roi_px) {
     s.evaluator.set_grid(o.window_px.value_or(s.evaluator.xcorr.window_px),
@@ -202,7 +197,7 @@ ProcessingSettings settings_from_json(const nlohmann::json& j) {
     s.probes_only = j.at("mode").get<std::string>() == "probes";
     s.evaluator.method =
         j.at("method").get<std::string>() == "flow" ? fusion::Method::kOpticalFlow : fusion::Method::kCrossCorrelation;
-    s.evaluator.flow.algorithm = kFlowAlgorithms.at(j.at("flow_algorithm").get<std::string>());
+    s.evaluator.flow.algorithm = fusion::parse_flow_algorithm(j.at("flow_algorithm").get<std::string>()).value();
     cv::Rect roi;
     if (j.contains("roi_px")) {
       const auto& r = j.at("roi_px");
@@ -253,11 +248,11 @@ std::optional<SettingsOverrides> parse_processing_table(const std::string& text,
   if (!table) return std::nullopt;
   const auto& r = *table;
   SettingsOverrides o;
-  auto one_of = [&](std::string_view key, std::initializer_list<std::string_view> allowed) {
+  auto one_of = [&](std::string_view key, const std::vector<std::string>& allowed) {
     std::optional<std::string> value = r.optional_string(key);
     if (value && std::find(allowed.begin(), allowed.end(), *value) == allowed.end()) {
       std::string names;
-      for (const auto name : allowed) names += (names.empty() ? "\"" : ", \"") + std::string(name) + "\"";
+      for (const auto& name : allowed) names += (names.empty() ? "\"" : ", \"") + name + "\"";
       r.fail(key, "expected one of " + names + ", not \"" + *value + "\"");
     }
     return value;
@@ -268,7 +263,7 @@ std::optional<SettingsOverrides> parse_processing_table(const std::string& text,
   };
   if (const auto mode = one_of("mode", {"full", "probes"})) o.probes_only = *mode == "probes";
   o.method = one_of("method", {"xcorr", "flow"});
-  o.flow_algorithm = one_of("flow_algorithm", {"dis", "farneback", "tvl1"});
+  o.flow_algorithm = one_of("flow_algorithm", fusion::flow_algorithm_names());
   o.window_px = whole("window_px");
   o.step_px = whole("step_px");
   o.passes = whole("passes");
@@ -299,6 +294,12 @@ std::optional<SettingsOverrides> parse_processing_table(const std::string& text,
   apply_evaluator(o, check);
   if (const auto problem = check.evaluator.Validate(); !problem.empty()) r.fail("", problem);
   return o;
+}
+
+fusion::EvaluatorOptions default_evaluator_with(const SettingsOverrides& overrides) {
+  ProcessingSettings s = defaults();
+  apply_evaluator(overrides, s);
+  return s.evaluator;
 }
 
 ProcessingSettings resolve_runless_settings(const std::string& settings_file, const SettingsOverrides& flags) {

@@ -76,6 +76,11 @@ ProcessingSettings resolve_settings(const std::filesystem::path& run_dir, const 
 // mask is returned as written: the caller knows what it is relative to.
 std::optional<SettingsOverrides> parse_processing_table(const std::string& text, const std::string& source_name);
 
+// The defaults' evaluator with the evaluator's part of `overrides` applied
+// (not their mask, geometry or probe mode), unchecked: what an evaluation
+// of one image pair uses, which checks the options itself.
+fusion::EvaluatorOptions default_evaluator_with(const SettingsOverrides& overrides);
+
 // The settings of an evaluation without a run: defaults, then the
 // [processing] table of `settings_file` when one is given (a relative mask
 // there is relative to the file's folder), then `flags` (a mask as given).
