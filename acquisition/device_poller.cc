@@ -215,6 +215,6 @@ void DevicePoller::poll_until_done() {
   }
 }
 
-void DevicePoller::close_device() noexcept { source_->disconnect(); }
+void DevicePoller::disconnect_device() noexcept { source_->disconnect(); }
 
 }  // namespace bosfuse::acquisition

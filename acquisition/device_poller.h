@@ -82,7 +82,7 @@ class DevicePoller : public DeviceWorker {
   void poll_until_done();
   bool wait_watching(SteadyTime deadline);
   void report_alarms(const std::vector<AlarmTransition>& transitions);
-  void close_device() noexcept override;
+  void disconnect_device() noexcept override;
   bool ensure_connected();
   bool poll_once();  // false when the device failed
   void note_failure(const DeviceError& failure, std::int64_t t_ns);

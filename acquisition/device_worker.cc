@@ -138,7 +138,7 @@ void DeviceWorker::run() noexcept {
     }
     pause = std::min(pause * 2, kLongestRestartPause);
   }
-  close_device();
+  disconnect_device();
   {
     std::lock_guard lock(mutex_);
     ended_ = true;

@@ -54,7 +54,7 @@ class DeviceWorker : public std::enable_shared_from_this<DeviceWorker> {
   // The device's loop; returns when stopping() or when the device is done.
   virtual void loop() = 0;
   // Called once when the loop has ended for good (close the device).
-  virtual void close_device() noexcept {}
+  virtual void disconnect_device() noexcept {}
 
   // Sleeps until `deadline`; false when a stop was requested.
   bool wait_until(SteadyTime deadline);

@@ -55,7 +55,7 @@ FrameRecorder::Stats FrameRecorder::stats() const {
 
 bool FrameRecorder::ensure_connected() {
   if (stats().connected) return true;
-  const bool connected = connection_.connect([this] { source_->open(); }, source_->describe());
+  const bool connected = connection_.connect([this] { source_->connect(); }, source_->describe());
   std::lock_guard lock(stats_mutex_);
   stats_.connected = connected;
   return connected;
@@ -103,7 +103,7 @@ bool FrameRecorder::take_one(std::chrono::milliseconds wait) {
     ++stats_.failures;
     return true;
   } catch (const DeviceError& e) {
-    source_->close();
+    source_->disconnect();
     connection_.failed("disconnect", e.what(), utc_now_ns());
     std::lock_guard lock(stats_mutex_);
     stats_.connected = false;
@@ -143,6 +143,6 @@ void FrameRecorder::record_frames() {
   }
 }
 
-void FrameRecorder::close_device() noexcept { source_->close(); }
+void FrameRecorder::disconnect_device() noexcept { source_->disconnect(); }
 
 }  // namespace bosfuse::acquisition

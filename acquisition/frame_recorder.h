@@ -53,7 +53,7 @@ class FrameRecorder : public DeviceWorker {
  private:
   void loop() override;
   void record_frames();
-  void close_device() noexcept override;
+  void disconnect_device() noexcept override;
   bool ensure_connected();
   bool take_one(std::chrono::milliseconds wait);  // false when the source has ended
   void store(const CapturedFrame& frame);

@@ -27,8 +27,8 @@ class ScriptedCamera : public FrameSource {
 
   std::string kind() const override { return "virtual"; }
   std::string describe() const override { return "scripted camera"; }
-  void open() override {}
-  void close() override {}
+  void connect() override {}
+  void disconnect() override {}
   std::optional<CapturedFrame> next(std::chrono::milliseconds wait) override {
     const int call = calls_++;
     if (call == fail_at || (call < flapping_until && call % 2 == 1)) throw DeviceError("cable pulled");

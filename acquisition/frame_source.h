@@ -13,7 +13,7 @@
 #include <optional>
 #include <string>
 
-#include "acquisition/thermocouple_source.h"  // DeviceError
+#include "acquisition/device_reading.h"
 
 namespace bosfuse::acquisition {
 
@@ -31,8 +31,9 @@ class FrameSource {
 
   virtual std::string kind() const = 0;      // "video", "folder", "virtual": stored as the device's profile
   virtual std::string describe() const = 0;  // "camera 0", "folder /data/dslr"
-  virtual void open() = 0;                   // throws DeviceError
-  virtual void close() = 0;                  // never throws
+  // The same verbs as a thermocouple source (thermocouple_source.h).
+  virtual void connect() = 0;     // throws DeviceError
+  virtual void disconnect() = 0;  // never throws
   // The next frame, waiting at most `wait`; nullopt when none came in time.
   // Throws DeviceError when the camera is gone, EndOfFrames when a finite
   // source (a video file) has no more, and FrameLost for a frame it lost.

@@ -1,5 +1,7 @@
 #include "acquisition/hid_device.h"
 
+#include <hidapi/hidapi.h>
+
 #include <array>
 #include <cstdio>
 #include <cwchar>
@@ -37,6 +39,8 @@ bool matches(const hid_device_info& info, const HidMatch& match) {
 }
 
 }  // namespace
+
+void HidClose::operator()(hid_device* device) const noexcept { hid_close(device); }
 
 std::string HidMatch::describe() const {
   char ids[16];

@@ -6,8 +6,6 @@
 // its reply. A device that vanishes makes read() throw DeviceError, so the
 // poller records the disconnect and reopens it when it returns.
 
-#include <hidapi/hidapi.h>
-
 #include <chrono>
 #include <memory>
 #include <optional>
@@ -15,6 +13,11 @@
 
 #include "acquisition/hid_protocol.h"
 #include "acquisition/thermocouple_source.h"
+
+// hidapi's device, declared as <hidapi/hidapi.h> declares it, so that only
+// hid_device.cc includes the C header.
+struct hid_device_;
+typedef struct hid_device_ hid_device;
 
 namespace bosfuse::acquisition {
 
@@ -27,7 +30,7 @@ struct HidMatch {
 };
 
 struct HidClose {
-  void operator()(hid_device* device) const noexcept { hid_close(device); }
+  void operator()(hid_device* device) const noexcept;  // hid_close
 };
 using HidHandle = std::unique_ptr<hid_device, HidClose>;
 

@@ -26,7 +26,7 @@
 #include <vector>
 
 #include "acquisition/alarm_limits.h"
-#include "acquisition/modbus_channel.h"
+#include "acquisition/device_reading.h"
 
 namespace bosfuse::acquisition {
 

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "acquisition/alarm_limits.h"
+#include "acquisition/device_reading.h"
 #include "acquisition/register_codec.h"
 #include "storage/records.h"
 
@@ -27,12 +28,6 @@ struct LinearMapping {
   double raw_high = 65535;
   double value_low = 0;
   double value_high = 1;
-};
-
-struct ChannelReading {
-  std::optional<double> value;  // only when status is ok
-  double raw = 0;
-  storage::SampleStatus status = storage::SampleStatus::kOk;
 };
 
 struct ModbusChannel {

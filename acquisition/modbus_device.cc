@@ -1,5 +1,6 @@
 #include "acquisition/modbus_device.h"
 
+#include <modbus/modbus.h>
 #include <netdb.h>
 #include <sys/socket.h>
 
@@ -54,6 +55,11 @@ bool same_block(const RegisterBlock& block, const ModbusChannel& channel, int ma
 }
 
 }  // namespace
+
+void ModbusFree::operator()(modbus_t* ctx) const noexcept {
+  modbus_close(ctx);
+  modbus_free(ctx);
+}
 
 std::string ModbusEndpoint::describe() const {
   if (transport == ModbusTransport::kTcp) return host + ":" + std::to_string(port);

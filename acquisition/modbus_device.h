@@ -12,8 +12,6 @@
 // resolved when the logger starts (check_endpoint_resolves) and again at
 // every connection.
 
-#include <modbus/modbus.h>
-
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -22,6 +20,10 @@
 
 #include "acquisition/modbus_profile.h"
 #include "acquisition/thermocouple_source.h"
+
+// libmodbus's context, declared as <modbus/modbus.h> declares it, so that
+// only the wrappers' .cc files include the C header.
+typedef struct _modbus modbus_t;
 
 namespace bosfuse::acquisition {
 
@@ -53,10 +55,7 @@ void check_endpoint_resolves(const ModbusEndpoint& endpoint);
 DeviceError modbus_failure(const std::string& what, int error);
 
 struct ModbusFree {
-  void operator()(modbus_t* ctx) const noexcept {
-    modbus_close(ctx);
-    modbus_free(ctx);
-  }
+  void operator()(modbus_t* ctx) const noexcept;  // closes and frees
 };
 using ModbusHandle = std::unique_ptr<modbus_t, ModbusFree>;
 

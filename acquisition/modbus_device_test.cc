@@ -1,6 +1,7 @@
 #include "acquisition/modbus_device.h"
 
 #include <gtest/gtest.h>
+#include <modbus/modbus.h>
 
 #include <cerrno>
 

@@ -16,7 +16,7 @@ RecordedFrameSource::RecordedFrameSource(RecordedFrames recorded) : recorded_(st
 
 std::string RecordedFrameSource::describe() const { return "replay of " + recorded_.run_dir.string(); }
 
-void RecordedFrameSource::open() {
+void RecordedFrameSource::connect() {
   if (opened_) return;  // a replay resumes where it was, it does not start over
   started_ = std::chrono::steady_clock::now();
   opened_ = true;

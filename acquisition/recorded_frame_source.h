@@ -27,8 +27,8 @@ class RecordedFrameSource : public FrameSource {
 
   std::string kind() const override { return "replay"; }
   std::string describe() const override;
-  void open() override;
-  void close() override {}
+  void connect() override;
+  void disconnect() override {}
   std::optional<CapturedFrame> next(std::chrono::milliseconds wait) override;
 
   std::size_t skipped() const { return skipped_; }

@@ -5,37 +5,13 @@
 // timing, retries and events; a source only knows its protocol. Sources are
 // used from one thread at a time.
 
-#include <optional>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "acquisition/modbus_channel.h"
+#include "acquisition/device_reading.h"
 #include "storage/records.h"
 
 namespace bosfuse::acquisition {
-
-// A failed poll. By default a transport failure (no answer, connection
-// lost, device gone): the poller marks the poll's samples timed out and
-// reconnects. A device that answered with something other than readings (a
-// Modbus exception, a malformed frame) says so with kBadReply and, where
-// there is one, the code it sent in `raw`; the samples carry both. Either
-// way the poller records one event per outage and backs off while it lasts.
-class DeviceError : public std::runtime_error {
- public:
-  explicit DeviceError(const std::string& what, storage::SampleStatus status = storage::SampleStatus::kTimeout,
-                       std::optional<double> raw = std::nullopt)
-      : std::runtime_error(what), status_(status), raw_(raw) {}
-
-  storage::SampleStatus status() const { return status_; }
-  std::optional<double> raw() const { return raw_; }
-  // A reply arrived, so the link itself is fine and need not be reopened.
-  bool link_alive() const { return status_ == storage::SampleStatus::kBadReply; }
-
- private:
-  storage::SampleStatus status_;
-  std::optional<double> raw_;
-};
 
 class ThermocoupleSource {
  public:

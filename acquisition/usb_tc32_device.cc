@@ -1,8 +1,10 @@
 #include "acquisition/usb_tc32_device.h"
 
+#include <libusb.h>
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
+#include <type_traits>
 
 namespace bosfuse::acquisition {
 namespace {
@@ -32,7 +34,17 @@ struct DeviceListFree {
   void operator()(libusb_device** list) const noexcept { libusb_free_device_list(list, 1); }
 };
 
+static_assert(std::is_same_v<libusb_hotplug_callback_handle, int>, "usb_tc32_device.h keeps the handle as an int");
+
+int hotplug_callback(libusb_context*, libusb_device* device, libusb_hotplug_event event, void* self) {
+  static_cast<UsbTc32Device*>(self)->on_hotplug(event == LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED, location(device));
+  return 0;  // stay registered
+}
+
 }  // namespace
+
+void LibusbContextFree::operator()(libusb_context* context) const noexcept { libusb_exit(context); }
+void LibusbHandleClose::operator()(libusb_device_handle* handle) const noexcept { libusb_close(handle); }
 
 UsbTc32Device::UsbTc32Device(std::string name, std::optional<std::string> serial, std::vector<UsbTc32Channel> channels,
                              std::chrono::milliseconds timeout)
@@ -61,12 +73,9 @@ std::vector<storage::ChannelInfo> UsbTc32Device::channel_infos() const {
   return infos;
 }
 
-int UsbTc32Device::on_hotplug(libusb_context*, libusb_device* device, libusb_hotplug_event event, void* self) {
-  auto& me = *static_cast<UsbTc32Device*>(self);
-  const bool arrived = event == LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED;
-  if (!arrived) me.unplugged_ = true;  // fail the next read now rather than after a time-out
-  me.notice((arrived ? "USB-TC-32 plugged in at " : "USB-TC-32 unplugged from ") + location(device));
-  return 0;  // stay registered
+void UsbTc32Device::on_hotplug(bool arrived, const std::string& where) {
+  if (!arrived) unplugged_ = true;  // fail the next read now rather than after a time-out
+  notice((arrived ? "USB-TC-32 plugged in at " : "USB-TC-32 unplugged from ") + where);
 }
 
 void UsbTc32Device::notice(std::string text) {
@@ -85,7 +94,7 @@ void UsbTc32Device::start_hotplug_watch() {
   const int events = LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED | LIBUSB_HOTPLUG_EVENT_DEVICE_LEFT;
   const int result = libusb_hotplug_register_callback(context_.get(), events, LIBUSB_HOTPLUG_NO_FLAGS, kUsbTc32VendorId,
                                                       kUsbTc32ProductId, LIBUSB_HOTPLUG_MATCH_ANY,
-                                                      &UsbTc32Device::on_hotplug, this, &hotplug_);
+                                                      hotplug_callback, this, &hotplug_);
   if (result != LIBUSB_SUCCESS) {
     spdlog::warn("{}: {}; unplugging is noticed at the next read", name_, usb_failure("no hot-plug notices", result));
     return;

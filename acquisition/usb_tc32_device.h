@@ -7,8 +7,6 @@
 // at once instead of after a time-out, and both become notices the poller
 // records as events; the poller's reconnection then resumes reading.
 
-#include <libusb.h>
-
 #include <atomic>
 #include <chrono>
 #include <memory>
@@ -21,6 +19,13 @@
 #include "acquisition/alarm_limits.h"
 #include "acquisition/thermocouple_source.h"
 #include "acquisition/usb_tc32_protocol.h"
+
+// libusb's handles, declared as <libusb.h> declares them, so that only
+// usb_tc32_device.cc includes the C header.
+struct libusb_context;
+struct libusb_device_handle;
+typedef struct libusb_context libusb_context;
+typedef struct libusb_device_handle libusb_device_handle;
 
 namespace bosfuse::acquisition {
 
@@ -36,10 +41,10 @@ struct UsbTc32Channel {
 };
 
 struct LibusbContextFree {
-  void operator()(libusb_context* context) const noexcept { libusb_exit(context); }
+  void operator()(libusb_context* context) const noexcept;  // libusb_exit
 };
 struct LibusbHandleClose {
-  void operator()(libusb_device_handle* handle) const noexcept { libusb_close(handle); }
+  void operator()(libusb_device_handle* handle) const noexcept;  // libusb_close
 };
 using LibusbHandle = std::unique_ptr<libusb_device_handle, LibusbHandleClose>;
 
@@ -56,8 +61,11 @@ class UsbTc32Device : public ThermocoupleSource {
   std::vector<ChannelReading> read() override;
   std::vector<std::string> take_notices() override;
 
+  // What libusb's hot-plug callback (in the .cc, where libusb's types are)
+  // reports, on libusb's event thread.
+  void on_hotplug(bool arrived, const std::string& where);
+
  private:
-  static int on_hotplug(libusb_context*, libusb_device* device, libusb_hotplug_event event, void* self);
   void start_hotplug_watch();
   void notice(std::string text);
   LibusbHandle open_matching();
@@ -70,7 +78,7 @@ class UsbTc32Device : public ThermocoupleSource {
 
   std::unique_ptr<libusb_context, LibusbContextFree> context_;
   LibusbHandle handle_;
-  libusb_hotplug_callback_handle hotplug_ = 0;
+  int hotplug_ = 0;  // libusb_hotplug_callback_handle, an int
   std::atomic<bool> watching_{false};
   std::atomic<bool> unplugged_{false};
   std::thread event_thread_;

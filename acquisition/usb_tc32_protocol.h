@@ -18,7 +18,7 @@
 #include <string_view>
 #include <vector>
 
-#include "acquisition/modbus_channel.h"
+#include "acquisition/device_reading.h"
 
 namespace bosfuse::acquisition {
 

@@ -23,14 +23,14 @@ std::string VideoCaptureSource::describe() const {
   return is_camera_index(target_) ? "camera " + target_ : "video " + target_;
 }
 
-void VideoCaptureSource::open() {
+void VideoCaptureSource::connect() {
   is_file_ = std::filesystem::is_regular_file(target_);
   const bool opened = is_camera_index(target_) ? capture_.open(std::stoi(target_)) : capture_.open(target_);
   if (!opened || !capture_.isOpened()) throw DeviceError("cannot open " + describe());
   if (!is_file_) capture_.set(cv::CAP_PROP_BUFFERSIZE, 1);  // where the backend supports it
 }
 
-void VideoCaptureSource::close() { capture_.release(); }
+void VideoCaptureSource::disconnect() { capture_.release(); }
 
 std::optional<CapturedFrame> VideoCaptureSource::next(std::chrono::milliseconds) {
   if (!capture_.isOpened()) throw DeviceError(describe() + " is not open");

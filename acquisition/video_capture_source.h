@@ -17,8 +17,8 @@ class VideoCaptureSource : public FrameSource {
 
   std::string kind() const override { return "video"; }
   std::string describe() const override;
-  void open() override;
-  void close() override;
+  void connect() override;
+  void disconnect() override;
   std::optional<CapturedFrame> next(std::chrono::milliseconds wait) override;
 
  private:

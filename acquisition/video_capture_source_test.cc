@@ -26,7 +26,7 @@ TEST(VideoCaptureSource, ReadsEveryFrameOfAFileThenEnds) {
     }
   }
   VideoCaptureSource source(path.string());
-  source.open();
+  source.connect();
   std::int64_t previous_ns = 0;
   for (int i = 0; i < frame_count; ++i) {
     const auto frame = source.next(std::chrono::milliseconds(100));
@@ -41,7 +41,7 @@ TEST(VideoCaptureSource, ReadsEveryFrameOfAFileThenEnds) {
 
 TEST(VideoCaptureSource, MissingFileIsADeviceError) {
   VideoCaptureSource source("/nonexistent/clip.avi");
-  EXPECT_THROW(source.open(), DeviceError);
+  EXPECT_THROW(source.connect(), DeviceError);
   EXPECT_EQ(source.describe(), "video /nonexistent/clip.avi");
   EXPECT_EQ(VideoCaptureSource("2").describe(), "camera 2");
 }

@@ -56,7 +56,7 @@ WatchedFolderSource::WatchedFolderSource(WatchedFolderOptions options) : options
 
 std::string WatchedFolderSource::describe() const { return "folder " + options_.folder.string(); }
 
-void WatchedFolderSource::open() {
+void WatchedFolderSource::connect() {
   std::error_code error;
   if (!fs::is_directory(options_.folder, error)) throw DeviceError(describe() + " does not exist");
   for (const auto& entry : fs::directory_iterator(options_.folder, error)) done_.insert(entry.path());

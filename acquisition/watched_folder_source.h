@@ -35,8 +35,8 @@ class WatchedFolderSource : public FrameSource {
 
   std::string kind() const override { return "folder"; }
   std::string describe() const override;
-  void open() override;
-  void close() override {}
+  void connect() override;
+  void disconnect() override {}
   std::optional<CapturedFrame> next(std::chrono::milliseconds wait) override;
 
   static bool is_image_name(const std::filesystem::path& path);

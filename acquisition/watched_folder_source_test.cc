@@ -28,7 +28,7 @@ class WatchedFolder : public ::testing::Test {
  protected:
   WatchedFolderSource open_source(double offset_s = 0) {
     WatchedFolderSource source({dir.path(), 150ms, offset_s, 120s});
-    source.open();
+    source.connect();
     return source;
   }
   testing::TempDir dir;
@@ -112,7 +112,7 @@ TEST_F(WatchedFolder, ExifTimePlusOffsetElseFileTime) {
 // lost with libjpeg's reason. Either way the folder goes on to the next file.
 TEST_F(WatchedFolder, APaddedOrTruncatedFileIsALostFrameAndTheFolderGoesOn) {
   WatchedFolderSource source({dir.path(), 100ms, 0, 1s});
-  source.open();
+  source.connect();
   testing::write_padded(dir.path() / "a_padded.png", encoded(textured_frame(8), ".png"), 1'900'000'000);
   const std::vector<std::uint8_t> jpeg = encoded(textured_frame(9, CV_8U, {320, 240}), ".jpg");
   write_file(dir.path() / "b_half.jpg", std::vector<std::uint8_t>(jpeg.begin(), jpeg.begin() + jpeg.size() / 2));
@@ -142,7 +142,7 @@ TEST_F(WatchedFolder, APaddedOrTruncatedFileIsALostFrameAndTheFolderGoesOn) {
 
 TEST_F(WatchedFolder, MissingFolderIsADeviceError) {
   WatchedFolderSource source({dir.path() / "nowhere", 100ms, 0, 1s});
-  EXPECT_THROW(source.open(), DeviceError);
+  EXPECT_THROW(source.connect(), DeviceError);
 }
 
 }  // namespace

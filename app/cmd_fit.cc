@@ -86,7 +86,7 @@ NewtonFitOptions fit_options(const FitArgs& args) {
   options.loss = parse_loss(args.loss);
   options.measurement_sigma_c = args.sigma_c;
   options.confidence = args.confidence;
-  if (auto reason = options.invalid_reason(); !reason.empty()) throw std::runtime_error(reason);
+  if (auto reason = options.Validate(); !reason.empty()) throw std::runtime_error(reason);
   return options;
 }
 

@@ -277,7 +277,7 @@ const ParameterAgreement* CurveAgreement::deciding() const {
   return nullptr;
 }
 
-std::string AgreementOptions::invalid_reason() const {
+std::string AgreementOptions::Validate() const {
   if (!(confidence > 0.0 && confidence < 1.0)) return "confidence must lie strictly between 0 and 1";
   if (!(equivalence_alpha > 0.0 && equivalence_alpha < 0.5)) {
     return "the equivalence test's level alpha must lie strictly between 0 and 0.5";
@@ -333,7 +333,7 @@ std::optional<SeriesAgreement> compare_series(const CleanSeries& a, const CleanS
 
 Agreement compare_fits(const NewtonFit& a, const NewtonFit& b, const CleanSeries& a_series, const CleanSeries& b_series,
                        const AgreementOptions& options) {
-  if (auto reason = options.invalid_reason(); !reason.empty()) throw std::invalid_argument(reason);
+  if (auto reason = options.Validate(); !reason.empty()) throw std::invalid_argument(reason);
   Agreement result;
   result.confidence = options.confidence;
   result.lag = a.ok() ? lag_of(a, b, a_series, b_series, options) : LagModel{};

@@ -74,7 +74,7 @@ struct AgreementOptions {
   ParameterShifts a_systematic, b_systematic;
 
   // Empty when usable, else the reason.
-  std::string invalid_reason() const;
+  std::string Validate() const;
 };
 
 // Statistics of the paired differences a − b at b's times within the overlap.

@@ -367,7 +367,7 @@ TEST(Agreement, TheVerdictIsTwoOneSidedTestsAtTheNinetyPercentInterval) {
   EXPECT_EQ(strict.curve->parameters[1].verdict, Verdict::kInconclusive);
   EXPECT_GT(strict.curve->parameters[1].interval_high, 1.0);
   two_sided_95.equivalence_alpha = 0.5;
-  EXPECT_NE(two_sided_95.invalid_reason(), "");
+  EXPECT_NE(two_sided_95.Validate(), "");
 }
 
 // A probe fit whose σ were scaled by a Birge ratio estimated from n − p
@@ -388,13 +388,13 @@ TEST(Agreement, AnEstimatedSigmaScaleGivesStudentT) {
 TEST(Agreement, MarginsMustBePositive) {
   AgreementOptions options;
   options.margin_c = 0;
-  EXPECT_NE(options.invalid_reason(), "");
+  EXPECT_NE(options.Validate(), "");
   options.margin_c = 1;
   options.margin_k_relative = -0.1;
-  EXPECT_NE(options.invalid_reason(), "");
+  EXPECT_NE(options.Validate(), "");
   options.margin_k_relative = 0.05;
   options.a_time_constant_s = -1;
-  EXPECT_NE(options.invalid_reason(), "");
+  EXPECT_NE(options.Validate(), "");
 }
 
 }  // namespace

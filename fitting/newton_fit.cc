@@ -473,7 +473,7 @@ void describe_input(NewtonFitSummary& summary, const CleanSeries& s, const Newto
 
 std::optional<Failure> check_input(const NewtonFitSummary& summary, const CleanSeries& s,
                                    const NewtonFitOptions& options) {
-  if (auto reason = options.invalid_reason(); !reason.empty()) return Failure{FitStatus::kInvalidOptions, reason};
+  if (auto reason = options.Validate(); !reason.empty()) return Failure{FitStatus::kInvalidOptions, reason};
   if (options.measurement_sigma_c && !s.sigma_c.empty()) {
     return Failure{FitStatus::kInvalidOptions,
                    "both one measurement σ and a σ per sample are given: give one or the other"};
@@ -640,7 +640,7 @@ NewtonFit fit_from_first_sample(const CleanSeries& data, double origin_s, double
 
 }  // namespace
 
-std::string NewtonFitOptions::invalid_reason() const {
+std::string NewtonFitOptions::Validate() const {
   if (!(confidence > 0.0 && confidence < 1.0)) return "confidence must lie strictly between 0 and 1";
   if (max_iterations < 1) return "max_iterations must be at least 1";
   if (origin_s && !std::isfinite(*origin_s)) return "the time origin must be finite";
@@ -686,7 +686,7 @@ NewtonFit fit_newton(std::span<const double> time_s, std::span<const double> tem
                      const NewtonFitOptions& options) {
   if (time_s.size() != temperature_c.size()) throw std::invalid_argument("time and temperature differ in length");
   NewtonFit fit;
-  if (auto reason = options.invalid_reason(); !reason.empty()) {
+  if (auto reason = options.Validate(); !reason.empty()) {
     return failed(fit, FitStatus::kInvalidOptions, reason);
   }
   const CleanSeries data = clean_series(time_s, temperature_c);  // from the first sample, rounded once
@@ -697,7 +697,7 @@ NewtonFit fit_newton(std::span<const double> time_s, std::span<const double> tem
 NewtonFit fit_newton(std::span<const double> time_s, std::span<const double> temperature_c,
                      std::span<const double> sigma_c, const NewtonFitOptions& options) {
   NewtonFit fit;
-  if (auto reason = options.invalid_reason(); !reason.empty()) {
+  if (auto reason = options.Validate(); !reason.empty()) {
     return failed(fit, FitStatus::kInvalidOptions, reason);
   }
   const CleanSeries data = clean_series(time_s, temperature_c, sigma_c);

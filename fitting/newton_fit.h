@@ -81,7 +81,7 @@ struct NewtonFitOptions {
   double max_lag1_autocorrelation = 0.3;
 
   // Empty when the options are usable, else the reason they are not.
-  std::string invalid_reason() const;
+  std::string Validate() const;
 };
 
 enum class FitStatus {

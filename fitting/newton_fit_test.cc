@@ -172,16 +172,16 @@ TEST(NewtonFit, TooFewPointsIsAnErrorWithAReason) {
 TEST(NewtonFit, InvalidOptionsAreRefusedWithAReason) {
   NewtonFitOptions options;
   options.ambient = AmbientModel::prior(20.0, 0.0);
-  EXPECT_NE(options.invalid_reason().find("σ"), std::string::npos);
+  EXPECT_NE(options.Validate().find("σ"), std::string::npos);
   const auto result = fit(sample(Curve{}, 50, 1.0, 0.0, 1), options);
   EXPECT_EQ(result.summary.status, FitStatus::kInvalidOptions);
   options = {};
   options.confidence = 1.0;
-  EXPECT_FALSE(options.invalid_reason().empty());
+  EXPECT_FALSE(options.Validate().empty());
   options = {};
   options.loss = RobustLoss::huber(-1.0);
-  EXPECT_FALSE(options.invalid_reason().empty());
-  EXPECT_TRUE(NewtonFitOptions{}.invalid_reason().empty());
+  EXPECT_FALSE(options.Validate().empty());
+  EXPECT_TRUE(NewtonFitOptions{}.Validate().empty());
 }
 
 TEST(NewtonFit, MismatchedLengthsThrow) {

@@ -1,6 +1,7 @@
 #include "sim/modbus_server.h"
 
 #include <arpa/inet.h>
+#include <modbus/modbus.h>
 #include <netinet/in.h>
 #include <spdlog/spdlog.h>
 #include <sys/select.h>
@@ -43,6 +44,10 @@ int bound_port(int socket) {
 constexpr int kTcpHeaderLength = 7;  // MBAP: transaction id, protocol id, length, unit id
 
 }  // namespace
+
+void ModbusSimServer::MappingFree::operator()(modbus_mapping_t* mapping) const noexcept {
+  modbus_mapping_free(mapping);
+}
 
 std::string ModbusSimServer::Options::Validate() const {
   if (channels.empty()) return "the simulated module needs at least one channel";

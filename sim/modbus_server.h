@@ -27,6 +27,10 @@
 #include "acquisition/modbus_device.h"
 #include "sim/unique_fd.h"
 
+// libmodbus's register map, declared as <modbus/modbus.h> declares it, so
+// that only modbus_server.cc includes the C header.
+typedef struct _modbus_mapping_t modbus_mapping_t;
+
 namespace bosfuse::sim {
 
 class ModbusSimServer {
@@ -92,7 +96,7 @@ class ModbusSimServer {
 
  private:
   struct MappingFree {
-    void operator()(modbus_mapping_t* mapping) const noexcept { modbus_mapping_free(mapping); }
+    void operator()(modbus_mapping_t* mapping) const noexcept;  // modbus_mapping_free
   };
   struct RegisterRead {
     int function = 0;

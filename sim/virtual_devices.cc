@@ -66,7 +66,7 @@ SceneCamera::SceneCamera(std::shared_ptr<const ConvectionScene> scene, Backgroun
   if (!(speed_ > 0)) throw std::invalid_argument("speed-up must be positive");
 }
 
-void SceneCamera::open() {
+void SceneCamera::connect() {
   if (!started_) started_ = std::chrono::steady_clock::now();
 }
 

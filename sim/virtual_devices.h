@@ -7,7 +7,7 @@
 //
 // The start is one instant shared by both devices, the scene's t = 0 (the
 // demo's "heater off" marker): each device's own start (the server's
-// start(), the camera's open(), tens to hundreds of ms apart on a loaded
+// start(), the camera's connect(), tens to hundreds of ms apart on a loaded
 // machine) would put the frames' and the readings' time stamps that far
 // behind the scene they show, a clock error of 16× as many experiment
 // seconds at the demo's speed-up (issue 29: T0 of BOS and thermocouple
@@ -55,14 +55,14 @@ ModbusSimServer::Options scene_module_options(
 // moment it is taken. Ends when the scene's duration is reached.
 class SceneCamera : public acquisition::FrameSource {
  public:
-  // `scene_start`: the instant of the scene's t = 0; none: open().
+  // `scene_start`: the instant of the scene's t = 0; none: connect().
   SceneCamera(std::shared_ptr<const ConvectionScene> scene, BackgroundPattern pattern, CameraModel camera, double speed,
               int reference_frames, std::optional<std::chrono::steady_clock::time_point> scene_start = std::nullopt);
 
   std::string kind() const override { return "virtual"; }
   std::string describe() const override { return "virtual camera"; }
-  void open() override;
-  void close() override {}
+  void connect() override;
+  void disconnect() override {}
   std::optional<acquisition::CapturedFrame> next(std::chrono::milliseconds wait) override;
 
  private:

@@ -1,5 +1,7 @@
 #include "storage/processing_store.h"
 
+#include <fmt/format.h>
+
 #include <string>
 #include <string_view>
 
@@ -36,20 +38,39 @@ std::vector<ProbeSampleRecord> read_probe_samples(Statement& stmt) {
 
 // The columns read_probe_samples reads, from `table`: a store opened read-only
 // before version 5 has no σ columns, which read as NULL.
-std::string probe_sample_select(const char* table, bool with_sigmas) {
-  return std::string("SELECT probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid, ") +
-         (with_sigmas ? "sigma_u_px, sigma_v_px, sigma_shift_px, sigma_random_c, sigma_systematic_c"
-                      : "NULL, NULL, NULL, NULL, NULL") +
-         " FROM " + table + " WHERE probe_id = ? ORDER BY t_ns, frame_id";
+// The columns a result table shares with its staged twin (schema.cc builds
+// both tables from one definition); a staged row is keyed by its processing
+// instead of its run. A probe sample's σ come last (schema.h).
+constexpr const char* kProbeSeriesColumns = "channel_id, name, x_px, y_px";
+constexpr const char* kFieldColumns = "frame_id, kind, path, json";
+constexpr const char* kSampleValueColumns = "probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid";
+
+std::string sigma_columns() {
+  std::string columns;
+  for (const std::string_view column : kProbeSampleSigmaColumns) {
+    columns += (columns.empty() ? "" : ", ") + std::string(column);
+  }
+  return columns;
 }
 
-constexpr const char* kSampleColumns =
-    "(probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid, sigma_u_px, sigma_v_px, sigma_shift_px, "
-    "sigma_random_c, sigma_systematic_c)";
+std::string sample_columns() { return std::string(kSampleValueColumns) + ", " + sigma_columns(); }
+
+// "INSERT INTO table (owner, columns) VALUES (?, ...)" for one row of `count` columns after the owner.
+std::string insert_row(const char* table, const char* owner, const char* columns, int count) {
+  std::string marks = "?";
+  for (int i = 0; i < count; ++i) marks += ", ?";
+  return fmt::format("INSERT INTO {} ({}, {}) VALUES ({})", table, owner, columns, marks);
+}
+
+std::string probe_sample_select(const char* table, bool with_sigmas) {
+  return std::string("SELECT ") + kSampleValueColumns + ", " +
+         (with_sigmas ? sigma_columns() : std::string("NULL, NULL, NULL, NULL, NULL")) + " FROM " + table +
+         " WHERE probe_id = ? ORDER BY t_ns, frame_id";
+}
 
 void insert_probe_samples(Database& db, const char* table, std::span<const ProbeSampleRecord> samples) {
-  auto stmt = db.prepare(std::string("INSERT INTO ") + table + " " + kSampleColumns +
-                         " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  auto stmt = db.prepare(fmt::format("INSERT INTO {} ({}) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", table,
+                                     sample_columns()));
   for (const ProbeSampleRecord& s : samples) {
     stmt.bind_all(s.probe_id, s.frame_id, s.t_ns, s.u_px, s.v_px, s.shift_px, s.temperature_c, s.valid ? 1 : 0,
                   s.sigma_u_px, s.sigma_v_px, s.sigma_shift_px, s.sigma_random_c, s.sigma_systematic_c);
@@ -105,7 +126,7 @@ void ProcessingStore::clear_results() {
 }
 
 std::int64_t ProcessingStore::add_probe(const ProbeSeriesRecord& p) {
-  db_.prepare("INSERT INTO probe_series (run_id, channel_id, name, x_px, y_px) VALUES (?, ?, ?, ?, ?)")
+  db_.prepare(insert_row("probe_series", "run_id", kProbeSeriesColumns, 4))
       .bind_all(run_id_, p.channel_id, p.name, p.x_px, p.y_px)
       .run();
   return db_.last_insert_rowid();
@@ -137,9 +158,8 @@ std::int64_t ProcessingStore::add_calibration(const CalibrationRecord& c) {
 }
 
 std::int64_t ProcessingStore::add_field(const FieldRecord& f) {
-  db_.prepare(
-         "INSERT INTO fields (run_id, frame_id, kind, path, json) VALUES (?, ?, ?, ?, ?) "
-         "ON CONFLICT (frame_id, kind) DO UPDATE SET path = excluded.path, json = excluded.json")
+  db_.prepare(insert_row("fields", "run_id", kFieldColumns, 4) +
+              " ON CONFLICT (frame_id, kind) DO UPDATE SET path = excluded.path, json = excluded.json")
       .bind_all(run_id_, f.frame_id, f.kind, f.path, f.json)
       .run();
   return db_.last_insert_rowid();
@@ -215,8 +235,7 @@ void ProcessingStore::abandon_processing(std::int64_t processing_id) {
 std::int64_t ProcessingStore::stage_probe(std::int64_t processing_id, const ProbeSeriesRecord& p) {
   auto existing = db_.prepare("SELECT id FROM staged_probe_series WHERE processing_id = ? AND name = ?");
   if (existing.bind_all(processing_id, p.name).step()) return existing.column_int64(0);
-  db_.prepare(
-         "INSERT INTO staged_probe_series (processing_id, channel_id, name, x_px, y_px) VALUES (?, ?, ?, ?, ?)")
+  db_.prepare(insert_row("staged_probe_series", "processing_id", kProbeSeriesColumns, 4))
       .bind_all(processing_id, p.channel_id, p.name, p.x_px, p.y_px)
       .run();
   return db_.last_insert_rowid();
@@ -247,8 +266,7 @@ void ProcessingStore::stage_frame(std::int64_t processing_id, std::int64_t frame
                                   std::span<const ProbeSampleRecord> samples, std::span<const FieldRecord> fields) {
   Transaction transaction(db_);
   insert_probe_samples(db_, "staged_probe_samples", samples);
-  auto field = db_.prepare(
-      "INSERT INTO staged_fields (processing_id, frame_id, kind, path, json) VALUES (?, ?, ?, ?, ?)");
+  auto field = db_.prepare(insert_row("staged_fields", "processing_id", kFieldColumns, 4));
   for (const FieldRecord& f : fields) {
     field.bind_all(processing_id, frame_id, f.kind, f.path, f.json);
     field.run();
@@ -281,19 +299,19 @@ void ProcessingStore::complete_processing(std::int64_t processing_id, std::span<
                                           const std::string& summary_json, std::int64_t finished_ns) {
   Transaction transaction(db_);
   clear_results();
-  for (const char* sql :
-       {"INSERT INTO probe_series (id, run_id, channel_id, name, x_px, y_px) "
-        "SELECT id, ?2, channel_id, name, x_px, y_px FROM staged_probe_series WHERE processing_id = ?1",
-        "INSERT INTO probe_samples (probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid, "
-        "sigma_u_px, sigma_v_px, sigma_shift_px, sigma_random_c, sigma_systematic_c) "
-        "SELECT s.probe_id, s.frame_id, s.t_ns, s.u_px, s.v_px, s.shift_px, s.temperature_c, s.valid, "
-        "s.sigma_u_px, s.sigma_v_px, s.sigma_shift_px, s.sigma_random_c, s.sigma_systematic_c "
-        "FROM staged_probe_samples s JOIN staged_probe_series p ON p.id = s.probe_id WHERE p.processing_id = ?1",
-        "INSERT INTO fields (run_id, frame_id, kind, path, json) "
-        "SELECT ?2, frame_id, kind, path, json FROM staged_fields WHERE processing_id = ?1"}) {
+  // ?1 the processing, ?2 the run.
+  for (const std::string& sql :
+       {fmt::format("INSERT INTO probe_series (id, run_id, {0}) SELECT id, ?2, {0} FROM staged_probe_series "
+                    "WHERE processing_id = ?1",
+                    kProbeSeriesColumns),
+        fmt::format("INSERT INTO probe_samples ({0}) SELECT {0} FROM staged_probe_samples "
+                    "WHERE probe_id IN (SELECT id FROM staged_probe_series WHERE processing_id = ?1)",
+                    sample_columns()),
+        fmt::format("INSERT INTO fields (run_id, {0}) SELECT ?2, {0} FROM staged_fields WHERE processing_id = ?1",
+                    kFieldColumns)}) {
     auto stmt = db_.prepare(sql);
     stmt.bind(1, processing_id);
-    if (std::string_view(sql).find("?2") != std::string_view::npos) stmt.bind(2, run_id_);
+    if (sql.find("?2") != std::string::npos) stmt.bind(2, run_id_);
     stmt.run();
   }
   for (const FitRecord& f : fits) add_fit(f);

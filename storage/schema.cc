@@ -1,8 +1,12 @@
 #include "storage/schema.h"
 
+#include <fmt/format.h>
+
 #include <array>
 #include <chrono>
 #include <string>
+#include <tuple>
+#include <type_traits>
 
 #include "storage/records.h"
 #include "storage/transaction.h"
@@ -79,20 +83,15 @@ CREATE TABLE events (
 CREATE INDEX events_by_time ON events (t_ns);
 )sql";
 
-// Version 2: results of `bosfuse process` and `bosfuse calibrate`. Numbers,
-// JSON text and paths only; fields themselves are files under RUN/fields/.
-constexpr std::string_view kSchemaV2 = R"sql(
-CREATE TABLE probe_series (
-  id         INTEGER PRIMARY KEY,
-  run_id     INTEGER NOT NULL REFERENCES runs(id),
+// The result tables and their staged twins (version 4) share their columns:
+// a staged row is a result row keyed by its processing instead of its run.
+// Each shared block is written once here and both tables are built from it.
+constexpr std::string_view kProbeSeriesColumns = R"sql(
   channel_id INTEGER REFERENCES channels(id),
   name       TEXT    NOT NULL,
   x_px       REAL    NOT NULL,
-  y_px       REAL    NOT NULL,
-  UNIQUE (run_id, name)
-);
-CREATE TABLE probe_samples (
-  probe_id      INTEGER NOT NULL REFERENCES probe_series(id) ON DELETE CASCADE,
+  y_px       REAL    NOT NULL,)sql";
+constexpr std::string_view kProbeSampleColumns = R"sql(
   frame_id      INTEGER NOT NULL REFERENCES frames(id),
   t_ns          INTEGER NOT NULL,
   u_px          REAL    NOT NULL,
@@ -101,8 +100,35 @@ CREATE TABLE probe_samples (
   temperature_c REAL,
   valid         INTEGER NOT NULL CHECK (valid IN (0, 1)),
   PRIMARY KEY (probe_id, frame_id)
-);
-CREATE TABLE fits (
+);)sql";
+constexpr std::string_view kFieldColumns = R"sql(
+  frame_id INTEGER NOT NULL REFERENCES frames(id),
+  kind     TEXT    NOT NULL CHECK (kind IN ('displacement', 'temperature')),
+  path     TEXT    NOT NULL,
+  json     TEXT    NOT NULL,)sql";
+
+std::string probe_series_table(std::string_view table, std::string_view owner) {
+  return fmt::format("CREATE TABLE {} (\n  id INTEGER PRIMARY KEY,\n  {}{}\n  UNIQUE ({}, name)\n);\n", table,
+                     owner == "run_id" ? "run_id INTEGER NOT NULL REFERENCES runs(id),"
+                                       : "processing_id INTEGER NOT NULL REFERENCES processings(id),",
+                     kProbeSeriesColumns, owner);
+}
+
+std::string probe_samples_table(std::string_view table, std::string_view series) {
+  return fmt::format("CREATE TABLE {} (\n  probe_id INTEGER NOT NULL REFERENCES {}(id) ON DELETE CASCADE,{}\n", table,
+                     series, kProbeSampleColumns);
+}
+
+std::string fields_table(std::string_view table, std::string_view key_and_owner) {
+  return fmt::format("CREATE TABLE {} ({}{}\n  {}\n);\n", table, key_and_owner, kFieldColumns,
+                     table == "fields" ? "UNIQUE (frame_id, kind)" : "PRIMARY KEY (processing_id, frame_id, kind)");
+}
+
+// Version 2: results of `bosfuse process` and `bosfuse calibrate`. Numbers,
+// JSON text and paths only; fields themselves are files under RUN/fields/.
+std::string schema_v2() {
+  return probe_series_table("probe_series", "run_id") + probe_samples_table("probe_samples", "probe_series") +
+         R"sql(CREATE TABLE fits (
   id           INTEGER PRIMARY KEY,
   run_id       INTEGER NOT NULL REFERENCES runs(id),
   subject_kind TEXT    NOT NULL CHECK (subject_kind IN ('channel', 'probe')),
@@ -124,16 +150,8 @@ CREATE TABLE calibrations (
   created_ns INTEGER NOT NULL,
   json       TEXT    NOT NULL
 );
-CREATE TABLE fields (
-  id       INTEGER PRIMARY KEY,
-  run_id   INTEGER NOT NULL REFERENCES runs(id),
-  frame_id INTEGER NOT NULL REFERENCES frames(id),
-  kind     TEXT    NOT NULL CHECK (kind IN ('displacement', 'temperature')),
-  path     TEXT    NOT NULL,
-  json     TEXT    NOT NULL,
-  UNIQUE (frame_id, kind)
-);
-)sql";
+)sql" + fields_table("fields", "\n  id       INTEGER PRIMARY KEY,\n  run_id   INTEGER NOT NULL REFERENCES runs(id),");
+}
 
 // Version 3: what a run whose logger died needs to say what is missing: the
 // logger's last sign of life (a heartbeat with every commit) and, when the
@@ -149,7 +167,8 @@ ALTER TABLE runs ADD COLUMN planned_end_ns INTEGER;
 // are written aside (staged_*) while it runs, so an interrupted process
 // never mixes with the results it is replacing and can be resumed. On
 // success the staged rows replace the current results in one transaction.
-constexpr std::string_view kSchemaV4 = R"sql(
+std::string schema_v4() {
+  return R"sql(
 ALTER TABLE runs ADD COLUMN time_scale REAL NOT NULL DEFAULT 1 CHECK (time_scale > 0);
 ALTER TABLE runs ADD COLUMN origin_event TEXT;
 CREATE TABLE processings (
@@ -167,56 +186,26 @@ CREATE TABLE staged_frames (
   json          TEXT    NOT NULL,
   PRIMARY KEY (processing_id, frame_id)
 );
-CREATE TABLE staged_probe_series (
-  id            INTEGER PRIMARY KEY,
-  processing_id INTEGER NOT NULL REFERENCES processings(id),
-  channel_id    INTEGER REFERENCES channels(id),
-  name          TEXT    NOT NULL,
-  x_px          REAL    NOT NULL,
-  y_px          REAL    NOT NULL,
-  UNIQUE (processing_id, name)
-);
-CREATE TABLE staged_probe_samples (
-  probe_id      INTEGER NOT NULL REFERENCES staged_probe_series(id) ON DELETE CASCADE,
-  frame_id      INTEGER NOT NULL REFERENCES frames(id),
-  t_ns          INTEGER NOT NULL,
-  u_px          REAL    NOT NULL,
-  v_px          REAL    NOT NULL,
-  shift_px      REAL    NOT NULL,
-  temperature_c REAL,
-  valid         INTEGER NOT NULL CHECK (valid IN (0, 1)),
-  PRIMARY KEY (probe_id, frame_id)
-);
-CREATE TABLE staged_fields (
-  processing_id INTEGER NOT NULL REFERENCES processings(id),
-  frame_id      INTEGER NOT NULL REFERENCES frames(id),
-  kind          TEXT    NOT NULL CHECK (kind IN ('displacement', 'temperature')),
-  path          TEXT    NOT NULL,
-  json          TEXT    NOT NULL,
-  PRIMARY KEY (processing_id, frame_id, kind)
-);
-)sql";
+)sql" + probe_series_table("staged_probe_series", "processing_id") +
+         probe_samples_table("staged_probe_samples", "staged_probe_series") +
+         fields_table("staged_fields", "\n  processing_id INTEGER NOT NULL REFERENCES processings(id),");
+}
 
 // Version 5: each probe sample carries its uncertainty, NULL where it was
 // not estimated (an older run's samples, a field without σ): the σ of the
 // probe's shift components and of its magnitude (px), and the random and the
-// systematic (Type-B) standard uncertainty of its temperature (°C).
-constexpr std::string_view kSchemaV5 = R"sql(
-ALTER TABLE probe_samples ADD COLUMN sigma_u_px REAL;
-ALTER TABLE probe_samples ADD COLUMN sigma_v_px REAL;
-ALTER TABLE probe_samples ADD COLUMN sigma_shift_px REAL;
-ALTER TABLE probe_samples ADD COLUMN sigma_random_c REAL;
-ALTER TABLE probe_samples ADD COLUMN sigma_systematic_c REAL;
-ALTER TABLE staged_probe_samples ADD COLUMN sigma_u_px REAL;
-ALTER TABLE staged_probe_samples ADD COLUMN sigma_v_px REAL;
-ALTER TABLE staged_probe_samples ADD COLUMN sigma_shift_px REAL;
-ALTER TABLE staged_probe_samples ADD COLUMN sigma_random_c REAL;
-ALTER TABLE staged_probe_samples ADD COLUMN sigma_systematic_c REAL;
-)sql";
+// systematic (Type-B) standard uncertainty of its temperature (°C); in the
+// results and in the staged samples alike.
+std::string schema_v5() {
+  std::string sql;
+  for (const char* table : {"probe_samples", "staged_probe_samples"}) {
+    for (const std::string_view column : kProbeSampleSigmaColumns) {
+      sql += fmt::format("ALTER TABLE {} ADD COLUMN {} REAL;\n", table, column);
+    }
+  }
+  return sql;
+}
 
-constexpr std::array<Migration, 5> kMigrations = {
-    {{1, kSchemaV1}, {2, kSchemaV2}, {3, kSchemaV3}, {4, kSchemaV4}, {5, kSchemaV5}}};
-static_assert(kMigrations.back().version == kSchemaVersion);
 static_assert(kSampleStatusCount == 7, "update the sample_status rows of the schema");
 
 bool has_version_table(Database& db) {
@@ -231,7 +220,14 @@ std::int64_t now_ns() {
 
 }  // namespace
 
-std::span<const Migration> schema_migrations() { return kMigrations; }
+std::span<const Migration> schema_migrations() {
+  // Built once: Migration holds views of these strings.
+  static const std::array<std::string, 3> derived = {schema_v2(), schema_v4(), schema_v5()};
+  static const std::array<Migration, 5> migrations = {
+      {{1, kSchemaV1}, {2, derived[0]}, {3, kSchemaV3}, {4, derived[1]}, {5, derived[2]}}};
+  static_assert(std::tuple_size_v<std::remove_reference_t<decltype(migrations)>> == kSchemaVersion);
+  return migrations;
+}
 
 int schema_version(Database& db) {
   if (!has_version_table(db)) return 0;

@@ -5,6 +5,7 @@
 // A store written by a newer bosfuse is refused rather than misread. The
 // schema is documented for users in docs/SCHEMA.md.
 
+#include <array>
 #include <span>
 #include <string_view>
 
@@ -21,6 +22,11 @@ struct Migration {
 std::span<const Migration> schema_migrations();
 
 inline constexpr int kSchemaVersion = 5;
+
+// The uncertainty columns of a probe sample (version 5), in probe_samples and
+// staged_probe_samples alike, in the order ProcessingStore writes them.
+inline constexpr std::array<std::string_view, 5> kProbeSampleSigmaColumns = {
+    "sigma_u_px", "sigma_v_px", "sigma_shift_px", "sigma_random_c", "sigma_systematic_c"};
 
 // 0 for a file with no schema yet.
 int schema_version(Database& db);
