@@ -20,6 +20,7 @@
 #include "fusion/displacement_evaluator.h"
 #include "fusion/preprocess.h"
 #include "fusion/scene_match.h"
+#include "pipeline/field_csv.h"
 #include "pipeline/image_io.h"
 #include "pipeline/image_sequence.h"
 #include "pipeline/processing_settings.h"
@@ -146,7 +147,7 @@ void evaluate(const EvaluateArgs& args) {
     spdlog::warn("{} against {}: {}; no vector is marked valid", args.measurement, args.reference, scene.Describe());
   }
   OutputStream out(args.out, "--out");
-  fusion::write_csv(result.field, out.stream());
+  pipeline::write_csv(result.field, out.stream());
   out.close();
   if (!args.map.empty()) {
     report::MapField map = report::displacement_magnitude_map(result.field, reference.size());

@@ -10,7 +10,7 @@
 #include <string_view>
 
 #include "acquisition/clock.h"
-#include "fusion/field_csv.h"
+#include "pipeline/field_csv.h"
 #include "report/field_conventions.h"
 #include "report/hdf5_writer.h"
 #include "report/xdmf_sidecar.h"
@@ -70,9 +70,9 @@ struct Kind {
 };
 
 const Kind kKinds[] = {
-    {"displacement", fusion::kDisplacementColumns, kDisplacementQuantities, "valid",
+    {"displacement", pipeline::kDisplacementColumns, kDisplacementQuantities, "valid",
      "displacement fields of the measurement frames against the reference frame, one group per frame"},
-    {"temperature", fusion::kTemperatureColumns, kTemperatureQuantities, "measured",
+    {"temperature", pipeline::kTemperatureColumns, kTemperatureQuantities, "measured",
      "temperature fields recovered from the displacement fields, one group per frame"},
 };
 
@@ -118,7 +118,7 @@ std::vector<std::uint8_t> as_flags(const cv::Mat& values) {
   return out;
 }
 
-std::size_t grid_of(const fusion::StoredFieldGrid& field, std::vector<Grid>& grids, hdf5::Writer& out,
+std::size_t grid_of(const pipeline::StoredFieldGrid& field, std::vector<Grid>& grids, hdf5::Writer& out,
                     std::optional<double> px_per_mm) {
   for (std::size_t i = 0; i < grids.size(); ++i) {
     if (grids[i].x_px == field.x_px && grids[i].y_px == field.y_px) return i;
@@ -253,9 +253,9 @@ FieldExportResult export_fields(const storage::RunStore& store, const fs::path& 
           out.set_attribute(group, "description", kind.description);
         }
         const auto& frame = frame_by_id.at(row.frame_id);
-        fusion::StoredFieldGrid field;
+        pipeline::StoredFieldGrid field;
         try {
-          field = fusion::read_stored_field(storage::resolve_in_run(store.dir(), row.path), kind.columns);
+          field = pipeline::read_stored_field(storage::resolve_in_run(store.dir(), row.path), kind.columns);
         } catch (const std::exception& e) {
           throw std::runtime_error(fmt::format("stored {} field of frame {}: {}", kind.name, frame.id, e.what()));
         }
