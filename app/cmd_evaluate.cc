@@ -20,6 +20,7 @@
 #include "fusion/displacement_evaluator.h"
 #include "fusion/preprocess.h"
 #include "fusion/scene_match.h"
+#include "pipeline/evaluation_log.h"
 #include "pipeline/field_csv.h"
 #include "pipeline/image_io.h"
 #include "pipeline/image_sequence.h"
@@ -142,7 +143,10 @@ void evaluate(const EvaluateArgs& args) {
     for (const auto& p : args.probes) points.push_back(parse_point(p, reference.size()));
     result = fusion::probe_displacement(reference, measurement, points, options, mask);
   }
-  if (const auto scene = fusion::match_scene(measurement, reference); !scene.same_scene()) {
+  pipeline::log_evaluation(result.summary);
+  const auto scene = fusion::match_scene(measurement, reference);
+  pipeline::log_warnings(scene.warnings);
+  if (!scene.same_scene()) {
     fusion::refuse_vectors(result);  // a pair of two scenes supports no vector
     spdlog::warn("{} against {}: {}; no vector is marked valid", args.measurement, args.reference, scene.Describe());
   }

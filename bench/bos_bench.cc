@@ -296,8 +296,8 @@ BENCHMARK(BM_DisplacementCsv16MP)->ArgName("to_chars")->Arg(0)->Arg(1)->Unit(ben
 // images as the evaluator converts them. Compare with BM_FullFrame16MP.
 void BM_SearchRange16MP(benchmark::State& state) {
   const auto& pair = full_frame();
-  const cv::Mat reference = fusion::to_grey_unit_float(pair.reference, "reference", false);
-  const cv::Mat measurement = fusion::to_grey_unit_float(pair.measurement, "measurement", false);
+  const cv::Mat reference = fusion::to_grey_unit_float(pair.reference, "reference");
+  const cv::Mat measurement = fusion::to_grey_unit_float(pair.measurement, "measurement");
   fusion::SearchRange range;
   for (auto _ : state) {
     range = fusion::find_search_range(reference, measurement, cv::Rect({0, 0}, reference.size()), {},

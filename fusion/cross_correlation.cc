@@ -1,7 +1,6 @@
 #include "fusion/cross_correlation.h"
 
 #include <fmt/format.h>
-#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <atomic>
@@ -45,11 +44,12 @@ void check_inputs(const cv::Mat& reference, const cv::Mat& measurement, const cv
 
 // The reference (or the part `crop` of it) as the evaluator works on it;
 // coordinates in the result are relative to the crop. The measurement is
-// left for prepare_measurement.
+// left for prepare_measurement. A colour image's conversion is warned of
+// into `warnings` (nullptr: silently), here and in prepare_measurement.
 PreparedPair prepare_reference(const cv::Mat& reference, const cv::Mat& mask, const XcorrOptions& options,
-                               cv::Rect crop, bool warn_colour) {
+                               cv::Rect crop, std::vector<std::string>* warnings) {
   PreparedPair pair;
-  pair.reference = to_grey_unit_float(reference(crop), "reference", warn_colour);
+  pair.reference = to_grey_unit_float(reference(crop), "reference", warnings);
   const cv::Rect full_roi = effective_roi(options.roi, reference.size());
   pair.roi = (full_roi & crop) - crop.tl();
   pair.full_roi_origin = full_roi.tl() - crop.tl();
@@ -79,20 +79,21 @@ void replicate_border(cv::Mat& storage, int border_px) {
 
 // Into the pair's measurement buffer, reused when it has the size already,
 // with a border as wide as the first pass's search.
-void prepare_measurement(const cv::Mat& measurement, cv::Rect crop, bool warn_colour, const XcorrOptions& options,
-                         PreparedPair& pair) {
+void prepare_measurement(const cv::Mat& measurement, cv::Rect crop, std::vector<std::string>* warnings,
+                         const XcorrOptions& options, PreparedPair& pair) {
   const int b = options.search_radius_px(0);
   create_large_image(pair.measurement_storage, crop.height + 2 * b, crop.width + 2 * b, CV_32F);
   pair.measurement_border_px = b;
   pair.measurement = pair.measurement_storage(cv::Rect(b, b, crop.width, crop.height));
-  to_grey_unit_float(measurement(crop), "measurement", warn_colour, pair.measurement);
+  to_grey_unit_float(measurement(crop), "measurement", warnings, pair.measurement);
   replicate_border(pair.measurement_storage, b);
 }
 
-PreparedPair prepare(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
-                     const XcorrOptions& options, cv::Rect crop, bool warn_colour) {
-  PreparedPair pair = prepare_reference(reference, mask, options, crop, warn_colour);
-  prepare_measurement(measurement, crop, warn_colour, options, pair);
+// Both images, converted silently (a probe's caller warns of colour once).
+PreparedPair prepare_silently(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
+                              const XcorrOptions& options, cv::Rect crop) {
+  PreparedPair pair = prepare_reference(reference, mask, options, crop, nullptr);
+  prepare_measurement(measurement, crop, nullptr, options, pair);
   return pair;
 }
 
@@ -614,9 +615,9 @@ void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, P
 // Into `adaptive`, whose buffers an evaluator keeps between frames; the
 // unselected nodes of `field` marked first-pass-only and smoothed (the
 // refined nodes' predictor sees the smoothed values). No refinement pass
-// changes them.
+// changes them. What it selected is told in `notes`.
 void select_for_refinement(const MeasuredPass& measured, DisplacementField& field, const GridGeometry& grid,
-                           const XcorrOptions& options, AdaptivePasses& adaptive) {
+                           const XcorrOptions& options, AdaptivePasses& adaptive, std::vector<std::string>& notes) {
   const int context = refinement_context_nodes(options.window_px_per_pass()[1], options.search_radius_px(1),
                                                static_cast<int>(std::ceil(grid.step_px)));
   adaptive.selection =
@@ -630,9 +631,9 @@ void select_for_refinement(const MeasuredPass& measured, DisplacementField& fiel
   });
   smooth_unrefined(field, adaptive.selection.refine, options.adaptive_smoothing_nodes, adaptive.smoothing);
   cv::dilate(adaptive.selection.refine, adaptive.outlier_tested, cv::Mat::ones(3, 3, CV_8U));
-  spdlog::debug("adaptive refinement: noise floor {:.4f} px, threshold {:.4f} px, {:.1f} % of the windows refined",
-                adaptive.selection.noise_floor_px, adaptive.selection.threshold_px,
-                100 * adaptive.selection.fraction());
+  notes.push_back(fmt::format(
+      "adaptive refinement: noise floor {:.4f} px, threshold {:.4f} px, {:.1f} % of the windows refined",
+      adaptive.selection.noise_floor_px, adaptive.selection.threshold_px, 100 * adaptive.selection.fraction()));
 }
 
 // What a pass under adaptive refinement reads, in one visit of the selected
@@ -786,10 +787,10 @@ void flag_unsupported(const FirstPassSupport& support, DisplacementField& field)
   });
 }
 
-// Runs every pass over `field` (centres set; kOutOfRoi nodes are left alone).
-EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid, const XcorrOptions& options,
-                             PassWorkspace& workspace, DisplacementField& field) {
-  EvaluationSummary summary;
+// Runs every pass over `field` (centres set; kOutOfRoi nodes are left alone),
+// telling how into `summary` (its messages added to).
+void run_passes(const PreparedPair& pair, const GridGeometry& grid, const XcorrOptions& options,
+                PassWorkspace& workspace, DisplacementField& field, EvaluationSummary& summary) {
   summary.method = "xcorr";
   const std::vector<int> windows = options.window_px_per_pass();
   GridField& predictor = workspace.predictor;
@@ -857,7 +858,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
         summary.passes_run = 1;
         summary.window_px_per_pass.push_back(in.window_px);
         if (options.adaptive_refinement) {
-          select_for_refinement(measured, field, grid, options, adaptive);
+          select_for_refinement(measured, field, grid, options, adaptive, summary.notes);
         }
         continue;
       }
@@ -911,7 +912,7 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
       replace_outliers(field, options.outliers, adaptive.active() ? &adaptive.outlier_tested : nullptr, changeable);
     }
     if (pass == 0 && windows.size() > 1 && options.adaptive_refinement) {
-      select_for_refinement({field, grid}, field, grid, options, adaptive);
+      select_for_refinement({field, grid}, field, grid, options, adaptive, summary.notes);
     }
     summary.passes_run = pass + 1;
     summary.window_px_per_pass.push_back(in.window_px);
@@ -933,7 +934,6 @@ EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid,
   flag_unsupported(support, field);
   count_flags(field, summary);
   summary.refined_fraction = adaptive.active() ? adaptive.selection.fraction() : summary.passes_run > 1 ? 1.0 : 0.0;
-  return summary;
 }
 
 // A probe's vector is the centre of its own small grid.
@@ -989,7 +989,7 @@ DisplacementVector evaluate_probe(const cv::Mat& reference, const cv::Mat& measu
   DisplacementVector vec{
       grid.x0_px + context * grid.step_px, grid.y0_px + context * grid.step_px, 0, 0, 0, VectorFlag::kOutOfRoi};
   if (crop.area() == 0) return vec;
-  const PreparedPair pair = prepare(reference, measurement, mask, options, crop, false);
+  const PreparedPair pair = prepare_silently(reference, measurement, mask, options, crop);
   PassWorkspace workspace;
   GridGeometry local_grid = grid;
   local_grid.x0_px -= crop.x;
@@ -997,7 +997,7 @@ DisplacementVector evaluate_probe(const cv::Mat& reference, const cv::Mat& measu
   DisplacementField local = field_on_grid(local_grid);
   flag_nodes_outside(pair, options.window_px, local);
   if (local.at(context, context).flag == VectorFlag::kOutOfRoi) return vec;
-  summary = run_passes(pair, local_grid, options, workspace, local);
+  run_passes(pair, local_grid, options, workspace, local, summary);
   vec = local.at(context, context);
   vec.x_px += crop.x;
   vec.y_px += crop.y;
@@ -1099,8 +1099,7 @@ void find_search_range_once(const cv::Mat& measurement, XcorrEvaluator::State& s
   int halvings = 0;
   for (int w = o.first_window_px; w / 2 >= o.window_px; w /= 2) ++halvings;
   o.passes = std::max(o.passes, halvings + 2);
-  spdlog::debug("{}", s.search->Describe());
-  prepare_measurement(measurement, cv::Rect({0, 0}, s.reference.size()), false, o, s.pair);
+  prepare_measurement(measurement, cv::Rect({0, 0}, s.reference.size()), nullptr, o, s.pair);
 }
 
 void describe_search(const XcorrEvaluator::State& s, EvaluationSummary& summary) {
@@ -1130,23 +1129,29 @@ EvaluationResult XcorrEvaluator::evaluate(const cv::Mat& measurement) {
   State& s = *state_;
   check_inputs(s.reference, measurement, s.mask, s.options);
   const cv::Rect whole({0, 0}, s.reference.size());
+  EvaluationResult result;
+  EvaluationSummary& summary = result.summary;
   if (!s.prepared) {
     // Once, before the first frame allocates: later frames reuse its buffers.
-    check_xcorr_memory(s.reference, s.mask, s.options);
-    s.pair = prepare_reference(s.reference, s.mask, s.options, whole, true);
+    if (std::string account = check_xcorr_memory(s.reference, s.mask, s.options); !account.empty()) {
+      summary.notes.push_back(std::move(account));
+    }
+    s.pair = prepare_reference(s.reference, s.mask, s.options, whole, &summary.warnings);
     s.grid = evaluation_grid(s.pair.roi, s.options.window_px, s.options.step_px);
     s.workspace.cache_reference_stats = true;
     s.prepared = true;
   }
-  prepare_measurement(measurement, whole, !s.colour_warned, s.options, s.pair);
+  prepare_measurement(measurement, whole, s.colour_warned ? nullptr : &summary.warnings, s.options, s.pair);
   s.colour_warned = s.colour_warned || measurement.channels() > 1;
-  if (s.options.find_search_range && !s.search) find_search_range_once(measurement, s);
-  EvaluationResult result;
+  if (s.options.find_search_range && !s.search) {
+    find_search_range_once(measurement, s);
+    if (s.search->widened) summary.notes.push_back(s.search->Describe());
+  }
   result.field = field_on_grid(s.grid);
-  result.summary = run_passes(s.pair, s.grid, s.options, s.workspace, result.field);
-  describe_search(s, result.summary);
-  if (const std::string warning = search_bound_warning(result.summary); !warning.empty() && !s.bound_warned) {
-    spdlog::warn("{}", warning);
+  run_passes(s.pair, s.grid, s.options, s.workspace, result.field, summary);
+  describe_search(s, summary);
+  if (std::string warning = search_bound_warning(summary); !warning.empty() && !s.bound_warned) {
+    summary.warnings.push_back(std::move(warning));
     s.bound_warned = true;
   }
   result.summary.seconds = seconds_since(start);
@@ -1162,10 +1167,11 @@ EvaluationResult XcorrEvaluator::probe(const cv::Mat& measurement, const std::ve
       options.probe_context_nodes < 0 ? options.exact_probe_context_nodes() : options.probe_context_nodes;
   XcorrOptions probe_options = options;
   probe_options.adaptive_refinement = false;  // a probe's grid is local already, too small for a noise floor
-  if (s.reference.channels() > 1 || measurement.channels() > 1) {
-    spdlog::warn("colour image converted to grey ({} and {} channels)", s.reference.channels(), measurement.channels());
-  }
   EvaluationResult result;
+  if (s.reference.channels() > 1 || measurement.channels() > 1) {
+    result.summary.warnings.push_back(fmt::format("colour image converted to grey ({} and {} channels)",
+                                                  s.reference.channels(), measurement.channels()));
+  }
   result.summary.method = "xcorr-probe";
   result.field.rows = 1;
   result.field.cols = static_cast<int>(points.size());

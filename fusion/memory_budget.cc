@@ -1,7 +1,6 @@
 #include "fusion/memory_budget.h"
 
 #include <fmt/format.h>
-#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <atomic>
@@ -207,12 +206,12 @@ std::string AvailableMemory::limited_by() const {
 
 void install_available_memory_probe(AvailableMemoryProbe probe) { installed_probe.store(probe); }
 
-void check_memory(const MemoryRequest& request, const AvailableMemory& available) {
+std::string check_memory(const MemoryRequest& request, const AvailableMemory& available) {
   const auto bytes = available.bytes();
-  spdlog::debug("memory: {}x{} pair needs {} ({}); available {} ({})", request.size.width, request.size.height,
-                format_bytes(request.needed_bytes), request.settings, bytes ? format_bytes(*bytes) : "unknown",
-                describe_sources(available));
-  if (!bytes || request.needed_bytes <= *bytes) return;
+  std::string account = fmt::format("memory: {}x{} pair needs {} ({}); available {} ({})", request.size.width,
+                                    request.size.height, format_bytes(request.needed_bytes), request.settings,
+                                    bytes ? format_bytes(*bytes) : "unknown", describe_sources(available));
+  if (!bytes || request.needed_bytes <= *bytes) return account;
   throw InsufficientMemory(fmt::format(
       "a {}×{} pair needs {} to evaluate with these settings ({}); {} are available to this process (the least of "
       "{}); {}",
@@ -220,9 +219,9 @@ void check_memory(const MemoryRequest& request, const AvailableMemory& available
       format_bytes(*bytes), describe_sources(available), join_remedies(request.remedies)));
 }
 
-void check_xcorr_memory(const cv::Mat& reference, const cv::Mat& mask, const XcorrOptions& options) {
+std::string check_xcorr_memory(const cv::Mat& reference, const cv::Mat& mask, const XcorrOptions& options) {
   const std::optional<AvailableMemory> probed = probe_available_memory();
-  if (!probed) return;
+  if (!probed) return {};
   const AvailableMemory& available = *probed;
   const PairShape pair = PairShape::of(reference, mask);
   MemoryRequest request{pair.size, xcorr_bytes_needed(pair, options), xcorr_settings(options), {}};
@@ -235,12 +234,12 @@ void check_xcorr_memory(const cv::Mat& reference, const cv::Mat& mask, const Xco
     request.remedies.push_back("evaluate a region (--roi)");
   request.remedies.push_back("use probe mode (--probe)");
   request.remedies.push_back("a machine with more memory");
-  check_memory(request, available);
+  return check_memory(request, available);
 }
 
-void check_flow_memory(const cv::Mat& reference, const cv::Mat& mask, const FlowOptions& options) {
+std::string check_flow_memory(const cv::Mat& reference, const cv::Mat& mask, const FlowOptions& options) {
   const std::optional<AvailableMemory> probed = probe_available_memory();
-  if (!probed) return;
+  if (!probed) return {};
   const AvailableMemory& available = *probed;
   const PairShape pair = PairShape::of(reference, mask);
   MemoryRequest request{pair.size, flow_bytes_needed(pair, options), flow_settings(options), {}};
@@ -260,7 +259,7 @@ void check_flow_memory(const cv::Mat& reference, const cv::Mat& mask, const Flow
     request.remedies.push_back("cross-correlation (--method xcorr, needs " + format_bytes(needed) + ")");
   }
   request.remedies.push_back("a machine with more memory");
-  check_memory(request, available);
+  return check_memory(request, available);
 }
 
 std::string format_bytes(std::uint64_t bytes) {

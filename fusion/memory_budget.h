@@ -88,13 +88,16 @@ struct MemoryRequest {
 
 // Throws InsufficientMemory when `request` needs more than `available`
 // holds; does nothing when nothing is known of the available memory.
-void check_memory(const MemoryRequest& request, const AvailableMemory& available);
+// Returns the account of both ("memory: 4000x3000 pair needs ..."), for the
+// caller's log at debug level.
+std::string check_memory(const MemoryRequest& request, const AvailableMemory& available);
 
 // check_memory for an evaluation of this pair with these options, against
 // what the installed probe says is available (nothing checked without a
-// probe or when it says so). Allocates nothing of image size.
-void check_xcorr_memory(const cv::Mat& reference, const cv::Mat& mask, const XcorrOptions& options);
-void check_flow_memory(const cv::Mat& reference, const cv::Mat& mask, const FlowOptions& options);
+// probe or when it says so). Allocates nothing of image size. Returns
+// check_memory's account, empty when nothing was checked.
+std::string check_xcorr_memory(const cv::Mat& reference, const cv::Mat& mask, const XcorrOptions& options);
+std::string check_flow_memory(const cv::Mat& reference, const cv::Mat& mask, const FlowOptions& options);
 
 // "6.4 GB", "512 MB": decimal units, as `free -h` and the message use them.
 std::string format_bytes(std::uint64_t bytes);

@@ -6,6 +6,7 @@
 
 #include "fitting/fit_json.h"
 #include "fusion/temperature_budget.h"
+#include "pipeline/evaluation_log.h"
 #include "pipeline/field_csv.h"
 #include "pipeline/run_selection.h"
 
@@ -308,10 +309,13 @@ std::vector<storage::ProbeSampleRecord> samples_of(const FrameContext& ctx, cons
 CheckedEvaluation FrameContext::evaluate(const cv::Mat& measurement) const {
   CheckedEvaluation out;
   if (scene) {
-    if (auto match = scene->match(measurement); !match.same_scene()) out.refused = std::move(match);
+    auto match = scene->match(measurement);
+    log_warnings(match.warnings);
+    if (!match.same_scene()) out.refused = std::move(match);
   }
   static_cast<fusion::EvaluationResult&>(out) =
       settings.probes_only ? evaluator->probe(measurement, points) : evaluator->evaluate(measurement);
+  log_evaluation(out.summary);
   if (out.refused) fusion::refuse_vectors(out);
   return out;
 }
