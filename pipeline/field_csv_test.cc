@@ -16,6 +16,22 @@
 namespace bosfuse::pipeline {
 namespace {
 
+// A field of one row of two vectors.
+fusion::DisplacementField row_of_two(const fusion::DisplacementVector& first,
+                                     const fusion::DisplacementVector& second) {
+  fusion::DisplacementField field;
+  field.rows = 1;
+  field.cols = 2;
+  field.vectors = {first, second};
+  return field;
+}
+
+// `field` written to a file in `dir` and read back.
+StoredFieldGrid written_back(const fusion::DisplacementField& field, const std::filesystem::path& dir) {
+  write_csv(field, dir / "d.csv");
+  return read_stored_field(dir / "d.csv", kDisplacementColumns);
+}
+
 std::string error_of(const std::filesystem::path& path, std::span<const std::string_view> columns) {
   try {
     read_stored_field(path, columns);
@@ -116,13 +132,9 @@ TEST(FieldCsv, ReadsTheGridInRowOrderWhateverTheLineOrder) {
 
 TEST(FieldCsv, ReadsTheUncertaintyColumnsWrittenBack) {
   testing::TempDir dir;
-  fusion::DisplacementField field;
-  field.rows = 1;
-  field.cols = 2;
-  field.vectors = {{7.5, 7.5, 0.25, -1.5, 3.2, fusion::VectorFlag::kOk, false, 0.0123, 0.0045},
-                   {15.5, 7.5, 0, 0, 0, fusion::VectorFlag::kMasked}};
-  write_csv(field, dir / "d.csv");
-  const auto grid = read_stored_field(dir / "d.csv", kDisplacementColumns);
+  const auto grid = written_back(row_of_two({7.5, 7.5, 0.25, -1.5, 3.2, fusion::VectorFlag::kOk, false, 0.0123, 0.0045},
+                                            {15.5, 7.5, 0, 0, 0, fusion::VectorFlag::kMasked}),
+                                 dir.path());
   EXPECT_EQ(grid.column("sigma_u").at<double>(0, 0), 0.0123);
   EXPECT_EQ(grid.column("sigma_v").at<double>(0, 0), 0.0045);
   EXPECT_EQ(grid.column("sigma_u").at<double>(0, 1), 0.0) << "not estimated";
@@ -130,13 +142,9 @@ TEST(FieldCsv, ReadsTheUncertaintyColumnsWrittenBack) {
 
 TEST(FieldCsv, ReadsTheFlagColumnWrittenBackByName) {
   testing::TempDir dir;
-  fusion::DisplacementField field;
-  field.rows = 1;
-  field.cols = 2;
-  field.vectors = {{7.5, 7.5, 0.25, -1.5, 3.2, fusion::VectorFlag::kOk},
-                   {15.5, 7.5, 0, 0, 0, fusion::VectorFlag::kBeyondSearch}};
-  write_csv(field, dir / "d.csv");
-  const auto grid = read_stored_field(dir / "d.csv", kDisplacementColumns);
+  const auto grid = written_back(row_of_two({7.5, 7.5, 0.25, -1.5, 3.2, fusion::VectorFlag::kOk},
+                                            {15.5, 7.5, 0, 0, 0, fusion::VectorFlag::kBeyondSearch}),
+                                 dir.path());
   EXPECT_EQ(grid.column("flag").at<double>(0, 0), 0.0);
   EXPECT_EQ(grid.column("flag").at<double>(0, 1), 6.0);
   EXPECT_EQ(grid.column("peak_ratio").at<double>(0, 0), 3.2) << "the columns after flag stay in place";
@@ -193,11 +201,9 @@ TEST(FieldCsv, MistakesNameTheFileAndLine) {
 }
 
 TEST(DisplacementField, CsvHasTheHeaderAndOneLinePerVector) {
-  fusion::DisplacementField field;
-  field.rows = 1;
-  field.cols = 2;
-  field.vectors = {{7.5, 7.5, 0.25, -1.5, 3.2, fusion::VectorFlag::kOk, false, 0.0123, 0.00456},
-                   {15.5, 7.5, 0, 0, 0, fusion::VectorFlag::kMasked}};
+  const fusion::DisplacementField field =
+      row_of_two({7.5, 7.5, 0.25, -1.5, 3.2, fusion::VectorFlag::kOk, false, 0.0123, 0.00456},
+                 {15.5, 7.5, 0, 0, 0, fusion::VectorFlag::kMasked});
   std::ostringstream out;
   write_csv(field, out);
   EXPECT_EQ(out.str(),
