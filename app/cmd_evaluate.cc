@@ -13,6 +13,7 @@
 #include "app/output_stream.h"
 #include "app/run_control.h"
 #include "app/sequence_file.h"
+#include "pipeline/field_csv.h"
 #include "pipeline/pair_evaluation.h"
 #include "pipeline/sequence_run.h"
 #include "report/field_export.h"
@@ -47,7 +48,7 @@ void evaluate(const EvaluateArgs& args) {
   for (const auto& p : args.probes) points.push_back(parse_probe(p, pair.reference.size()));
   const auto result = pipeline::evaluate_image_pair(pair, options, points);
   OutputStream out(args.out, "--out");
-  fusion::write_csv(result.field, out.stream());
+  pipeline::write_csv(result.field, out.stream());
   out.close();
   if (!args.map.empty()) {
     report::MapField map = report::displacement_magnitude_map(result.field, pair.reference.size());

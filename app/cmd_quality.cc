@@ -16,6 +16,7 @@
 #include "app/output_stream.h"
 #include "fusion/image_quality.h"
 #include "fusion/scene_match.h"
+#include "pipeline/evaluation_log.h"
 #include "pipeline/image_io.h"
 #include "pipeline/quality_json.h"
 #include "report/figures.h"
@@ -81,7 +82,9 @@ void quality(const QualityArgs& args) {
   fusion::QualityOptions options;
   options.window_px = args.window_px;
   const auto report = fusion::assess_quality(image, reference, options);
+  pipeline::log_warnings(report.warnings);
   const auto scene = fusion::match_scene(image, reference);
+  pipeline::log_warnings(scene.warnings);
   text_stream(names_standard_output(args.json)) << quality_text(args, report, scene) << std::flush;
   if (json) {
     json->stream() << quality_json(args, report, scene).dump(2) << "\n";

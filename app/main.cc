@@ -8,6 +8,8 @@
 #include "app/argument_check.h"
 #include "app/command.h"
 #include "app/run_control.h"
+#include "pipeline/available_memory.h"
+#include "pipeline/simd_environment.h"
 
 namespace bosfuse::app {
 
@@ -31,6 +33,9 @@ void log_to_stderr() {
 int main(int argc, char** argv) {
   using namespace bosfuse::app;
   log_to_stderr();
+  // What the host sets for fusion's evaluations, which read no environment.
+  bosfuse::pipeline::apply_simd_environment();
+  bosfuse::pipeline::install_memory_probe();
   CLI::App root{
       "bosfuse: thermocouple-and-image data fusion logger for background oriented "
       "schlieren (BOS) convection experiments"};

@@ -24,7 +24,7 @@
 
 #include "fusion/displacement_evaluator.h"
 #include "fusion/cross_correlation.h"
-#include "fusion/field_csv.h"
+#include "pipeline/field_csv.h"
 #include "fusion/image_input.h"
 #include "fusion/search_range.h"
 #include "fusion/adaptive_refinement.h"
@@ -274,12 +274,12 @@ void BM_DisplacementCsv16MP(benchmark::State& state) {
   std::ofstream out("/dev/null");
   for (auto _ : state) {
     if (state.range(0) == 1) {
-      fusion::write_csv(field, out);
+      pipeline::write_csv(field, out);
       continue;
     }
     fmt::memory_buffer text;
     const auto to = std::back_inserter(text);
-    fmt::format_to(to, "{}\n", fusion::field_csv_header(fusion::kDisplacementColumns));
+    fmt::format_to(to, "{}\n", pipeline::field_csv_header(pipeline::kDisplacementColumns));
     for (const auto& v : field.vectors) {
       fmt::format_to(to, "{:.1f},{:.1f},{:.5f},{:.5f},{},{:.3f}\n", v.x_px, v.y_px, v.u_px, v.v_px, v.valid() ? 1 : 0,
                      v.peak_ratio);
@@ -296,8 +296,8 @@ BENCHMARK(BM_DisplacementCsv16MP)->ArgName("to_chars")->Arg(0)->Arg(1)->Unit(ben
 // images as the evaluator converts them. Compare with BM_FullFrame16MP.
 void BM_SearchRange16MP(benchmark::State& state) {
   const auto& pair = full_frame();
-  const cv::Mat reference = fusion::to_grey_unit_float(pair.reference, "reference", false);
-  const cv::Mat measurement = fusion::to_grey_unit_float(pair.measurement, "measurement", false);
+  const cv::Mat reference = fusion::to_grey_unit_float(pair.reference, "reference");
+  const cv::Mat measurement = fusion::to_grey_unit_float(pair.measurement, "measurement");
   fusion::SearchRange range;
   for (auto _ : state) {
     range = fusion::find_search_range(reference, measurement, cv::Rect({0, 0}, reference.size()), {},

@@ -1,7 +1,6 @@
 #include "fusion/cross_correlation.h"
 
 #include <fmt/format.h>
-#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <atomic>
@@ -45,11 +44,12 @@ void check_inputs(const cv::Mat& reference, const cv::Mat& measurement, const cv
 
 // The reference (or the part `crop` of it) as the evaluator works on it;
 // coordinates in the result are relative to the crop. The measurement is
-// left for prepare_measurement.
+// left for prepare_measurement. A colour image's conversion is warned of
+// into `warnings` (nullptr: silently), here and in prepare_measurement.
 PreparedPair prepare_reference(const cv::Mat& reference, const cv::Mat& mask, const XcorrOptions& options,
-                               cv::Rect crop, bool warn_colour) {
+                               cv::Rect crop, std::vector<std::string>* warnings) {
   PreparedPair pair;
-  pair.reference = to_grey_unit_float(reference(crop), "reference", warn_colour);
+  pair.reference = to_grey_unit_float(reference(crop), "reference", warnings);
   const cv::Rect full_roi = effective_roi(options.roi, reference.size());
   pair.roi = (full_roi & crop) - crop.tl();
   pair.full_roi_origin = full_roi.tl() - crop.tl();
@@ -79,20 +79,21 @@ void replicate_border(cv::Mat& storage, int border_px) {
 
 // Into the pair's measurement buffer, reused when it has the size already,
 // with a border as wide as the first pass's search.
-void prepare_measurement(const cv::Mat& measurement, cv::Rect crop, bool warn_colour, const XcorrOptions& options,
-                         PreparedPair& pair) {
+void prepare_measurement(const cv::Mat& measurement, cv::Rect crop, std::vector<std::string>* warnings,
+                         const XcorrOptions& options, PreparedPair& pair) {
   const int b = options.search_radius_px(0);
   create_large_image(pair.measurement_storage, crop.height + 2 * b, crop.width + 2 * b, CV_32F);
   pair.measurement_border_px = b;
   pair.measurement = pair.measurement_storage(cv::Rect(b, b, crop.width, crop.height));
-  to_grey_unit_float(measurement(crop), "measurement", warn_colour, pair.measurement);
+  to_grey_unit_float(measurement(crop), "measurement", warnings, pair.measurement);
   replicate_border(pair.measurement_storage, b);
 }
 
-PreparedPair prepare(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
-                     const XcorrOptions& options, cv::Rect crop, bool warn_colour) {
-  PreparedPair pair = prepare_reference(reference, mask, options, crop, warn_colour);
-  prepare_measurement(measurement, crop, warn_colour, options, pair);
+// Both images, converted silently (a probe's caller warns of colour once).
+PreparedPair prepare_silently(const cv::Mat& reference, const cv::Mat& measurement, const cv::Mat& mask,
+                              const XcorrOptions& options, cv::Rect crop) {
+  PreparedPair pair = prepare_reference(reference, mask, options, crop, nullptr);
+  prepare_measurement(measurement, crop, nullptr, options, pair);
   return pair;
 }
 
@@ -614,9 +615,9 @@ void run_coarse_first_pass(const PreparedPair& pair, const CoarseGrid& coarse, P
 // Into `adaptive`, whose buffers an evaluator keeps between frames; the
 // unselected nodes of `field` marked first-pass-only and smoothed (the
 // refined nodes' predictor sees the smoothed values). No refinement pass
-// changes them.
+// changes them. What it selected is told in `notes`.
 void select_for_refinement(const MeasuredPass& measured, DisplacementField& field, const GridGeometry& grid,
-                           const XcorrOptions& options, AdaptivePasses& adaptive) {
+                           const XcorrOptions& options, AdaptivePasses& adaptive, std::vector<std::string>& notes) {
   const int context = refinement_context_nodes(options.window_px_per_pass()[1], options.search_radius_px(1),
                                                static_cast<int>(std::ceil(grid.step_px)));
   adaptive.selection =
@@ -630,9 +631,9 @@ void select_for_refinement(const MeasuredPass& measured, DisplacementField& fiel
   });
   smooth_unrefined(field, adaptive.selection.refine, options.adaptive_smoothing_nodes, adaptive.smoothing);
   cv::dilate(adaptive.selection.refine, adaptive.outlier_tested, cv::Mat::ones(3, 3, CV_8U));
-  spdlog::debug("adaptive refinement: noise floor {:.4f} px, threshold {:.4f} px, {:.1f} % of the windows refined",
-                adaptive.selection.noise_floor_px, adaptive.selection.threshold_px,
-                100 * adaptive.selection.fraction());
+  notes.push_back(fmt::format(
+      "adaptive refinement: noise floor {:.4f} px, threshold {:.4f} px, {:.1f} % of the windows refined",
+      adaptive.selection.noise_floor_px, adaptive.selection.threshold_px, 100 * adaptive.selection.fraction()));
 }
 
 // What a pass under adaptive refinement reads, in one visit of the selected
@@ -786,154 +787,247 @@ void flag_unsupported(const FirstPassSupport& support, DisplacementField& field)
   });
 }
 
-// Runs every pass over `field` (centres set; kOutOfRoi nodes are left alone).
-EvaluationSummary run_passes(const PreparedPair& pair, const GridGeometry& grid, const XcorrOptions& options,
-                             PassWorkspace& workspace, DisplacementField& field) {
-  EvaluationSummary summary;
-  summary.method = "xcorr";
-  const std::vector<int> windows = options.window_px_per_pass();
-  GridField& predictor = workspace.predictor;
-  AdaptivePasses& adaptive = workspace.adaptive;
-  adaptive.selection = {};  // none until this frame's first pass selects
+// What run_passes carries from one pass to the next.
+struct PassLoop {
+  PassLoop(const PreparedPair& pair, const GridGeometry& grid, const XcorrOptions& options, PassWorkspace& workspace,
+           DisplacementField& field, EvaluationSummary& summary)
+      : pair(pair),
+        grid(grid),
+        options(options),
+        workspace(workspace),
+        field(field),
+        summary(summary),
+        windows(options.window_px_per_pass()) {}
+
+  const PreparedPair& pair;
+  const GridGeometry& grid;
+  const XcorrOptions& options;
+  PassWorkspace& workspace;
+  DisplacementField& field;
+  EvaluationSummary& summary;
+  std::vector<int> windows;
   PassArea area;
   bool finish_now = false;
   std::optional<PassInput> final_pass;  // the pass the vectors come from, for their uncertainty
   FirstPassSupport support;
+
+  bool more_than_one_pass() const { return windows.size() > 1; }
+};
+
+// What a pass is before anything is read for it: its window, search and
+// peak test, and under adaptive refinement the nodes it evaluates.
+PassInput pass_settings(const PassLoop& loop, int pass) {
+  const XcorrOptions& options = loop.options;
+  PassInput in;
+  in.window_px = loop.windows[pass];
+  in.radius_px = options.search_radius_px(pass);
+  in.on_bound_px = options.on_bound_px(pass);
+  // The first pass alone: a refinement pass measures a residual whose
+  // support is the first pass's (flag_unsupported).
+  in.min_peak_ratio = pass == 0 ? options.min_peak_ratio : 1.0;
+  in.shift_whole_pixels = pass > 0 && !options.deform;
+  in.refine = loop.workspace.adaptive.active() ? &loop.workspace.adaptive.selection.refine : nullptr;
+  return in;
+}
+
+// The pass's region into `in`. What a pass reads depends on its window, its
+// reach and the selection alone (node positions, the ROI and the mask hold
+// for the frame): passes alike in these share it.
+void read_area(PassLoop& loop, int reach_px, PassInput& in) {
+  PassArea& area = loop.area;
+  if (!area.serves(in.window_px, reach_px, in.refine)) {
+    if (in.refine) {
+      SelectedArea selected = selected_area(loop.pair, loop.field, *in.refine, in.window_px, reach_px, loop.options);
+      area = {in.window_px, reach_px, in.refine, selected.region, std::move(selected.tiles)};
+    } else {
+      area = {in.window_px, reach_px, in.refine, pass_region(loop.pair, loop.field, in.window_px, reach_px), {}};
+    }
+  }
+  in.region = area.region;
+}
+
+// A refinement pass's predictor from the field so far, into `in`; returns
+// the nodes it was computed at (null: all of them). Under adaptive
+// refinement a deforming pass reads its predictor at the selected nodes and
+// under the warp's tiles alone: computed there.
+const cv::Mat* predict(PassLoop& loop, int pass, PassInput& in) {
+  if (pass == 0) return nullptr;
+  PassWorkspace& workspace = loop.workspace;
+  GridField& predictor = workspace.predictor;
+  const cv::Mat* predicted = nullptr;
+  if (in.refine && !in.shift_whole_pixels) {
+    read_area(loop, in.radius_px, in);
+    nodes_read(loop.area.tiles, loop.grid, *in.refine, workspace.predicted_nodes, workspace.predicted_nodes_around);
+    predicted = &workspace.predicted_nodes;
+  }
+  if (!(predicted && predictor_at(loop.field, loop.grid, predictor, workspace.predicted_nodes_around))) {
+    predictor_from(loop.field, loop.grid, predictor);
+  }
+  if (loop.options.deform && loop.options.smooth_predictor) {
+    smooth_predictor(predictor, workspace.predictor_scratch, predicted);
+  }
+  in.predictor = &predictor;
+  return predicted;
+}
+
+// The first pass on a coarser grid when there are refinement passes to
+// follow and such a grid serves (coarse_first_pass_grid); false when the
+// pass runs on the full grid.
+bool ran_coarse_first_pass(PassLoop& loop, const PassInput& in) {
+  const auto coarse = coarse_first_pass_grid(loop.pair, loop.grid, in.window_px, loop.options);
+  if (!coarse) return false;
+  MeasuredPass measured;
+  run_coarse_first_pass(loop.pair, *coarse, in, loop.options, loop.workspace, loop.field, measured);
+  note_first_pass(measured.field, coarse->row0, coarse->col0, 2, loop.support, loop.summary);
+  loop.summary.passes_run = 1;
+  loop.summary.window_px_per_pass.push_back(in.window_px);
+  if (loop.options.adaptive_refinement) {
+    select_for_refinement(measured, loop.field, loop.grid, loop.options, loop.workspace.adaptive, loop.summary.notes);
+  }
+  return true;
+}
+
+// The images the pass correlates over its region, into `in`: the
+// measurement undeformed or warped by the predictor (and with symmetric
+// deformation the reference the other way), on the selected tiles alone
+// under adaptive refinement.
+void warp_for_pass(const PassLoop& loop, const cv::Mat* predicted, bool warp, bool warp_reference,
+                   Interpolator interpolator, PassInput& in) {
+  const PreparedPair& pair = loop.pair;
+  PassWorkspace& workspace = loop.workspace;
+  const GridField& predictor = workspace.predictor;
+  auto warp_pass = [&](const cv::Mat& image, const GridField& by, cv::Mat& out) {
+    if (in.refine) {
+      warp_tiles(image, by, in.region, loop.area.tiles, interpolator, out);
+    } else {
+      warp_region(image, by, in.region, interpolator, out);
+    }
+  };
+  if (!warp) {
+    in.warped = undeformed_measurement(pair, in.region, interpolator, workspace.warped_storage);
+  } else {
+    in.warped = reuse(workspace.warped_storage, in.region.size());
+    if (warp_reference) {
+      // Each image moves half-way: both are interpolated at half the offset,
+      // and the interpolation errors of the two largely cancel.
+      in.warped_reference = reuse(workspace.warped_reference_storage, in.region.size());
+      warp_pass(pair.measurement, scaled(predictor, 0.5, predicted), in.warped);
+      warp_pass(pair.reference, scaled(predictor, -0.5, predicted), in.warped_reference);
+    } else {
+      warp_pass(pair.measurement, predictor, in.warped);
+    }
+  }
+}
+
+// The pass itself over the images set up for it, its outliers replaced,
+// and after the first pass the selection for adaptive refinement; its
+// counts into the summary.
+void measure_pass(PassLoop& loop, int pass, PassInput& in) {
+  const XcorrOptions& options = loop.options;
+  PassWorkspace& workspace = loop.workspace;
+  AdaptivePasses& adaptive = workspace.adaptive;
+  DisplacementField& field = loop.field;
+  // Under adaptive refinement only the selected nodes change in a pass;
+  // the rest keep the first pass's values.
+  const cv::Mat* changeable = adaptive.active() ? &adaptive.selection.refine : nullptr;
+  // Into a buffer kept between passes and frames: a fresh 12 MB copy (16 MP)
+  // each pass would page-fault it anew.
+  if (pass > 0) copy_field(field, workspace.previous_field, changeable);
+  run_pass(loop.pair, in, options, field);
+  if (pass == 0) note_first_pass(field, 0, 0, 1, loop.support, loop.summary);
+  loop.final_pass = in;
+  if (options.replace_outliers) {
+    replace_outliers(field, options.outliers, adaptive.active() ? &adaptive.outlier_tested : nullptr, changeable);
+  }
+  if (pass == 0 && loop.more_than_one_pass() && options.adaptive_refinement) {
+    select_for_refinement({field, loop.grid}, field, loop.grid, options, adaptive, loop.summary.notes);
+  }
+  loop.summary.passes_run = pass + 1;
+  loop.summary.window_px_per_pass.push_back(in.window_px);
+  if (pass > 0) loop.summary.last_change_px = max_change_px(workspace.previous_field, field, changeable);
+}
+
+// After a pass: whether the passes are done, because this one finished
+// them or because it changed nothing (same window as the pass before): then
+// one more pass with the accurate kernel finishes, unless this one had it.
+bool passes_done(PassLoop& loop, int pass, Interpolator interpolator) {
+  const XcorrOptions& options = loop.options;
+  EvaluationSummary& summary = loop.summary;
+  const bool same_window = pass > 0 && loop.windows[pass] == loop.windows[pass - 1];
+  if (loop.finish_now) return true;
+  if (same_window && options.convergence_px > 0 && summary.last_change_px < options.convergence_px) {
+    summary.converged = true;
+    if (interpolator == options.interpolator) return true;
+    loop.finish_now = true;
+  }
+  return false;
+}
+
+// One pass, from its settings to its vectors; false when no pass follows.
+bool run_one_pass(PassLoop& loop, int pass) {
+  const XcorrOptions& options = loop.options;
+  PassWorkspace& workspace = loop.workspace;
+  PassInput in = pass_settings(loop, pass);
+  const cv::Mat* predicted = predict(loop, pass, in);
+  const int reach_px = in.radius_px + (in.shift_whole_pixels ? max_abs_shift_px(workspace.predictor) : 0);
+  const bool warp = pass > 0 && options.deform;
+  const bool warp_reference = warp && options.symmetric_deformation;
+  if (workspace.cache_reference_stats && !warp_reference) {
+    in.reference_stats = reference_stats_for(loop.pair, loop.field, in.window_px, workspace).data();
+    in.stats_cols = loop.field.cols;
+  }
+  if (pass == 0 && loop.more_than_one_pass() && ran_coarse_first_pass(loop, in)) return true;
+  read_area(loop, reach_px, in);
+  if (options.estimate_uncertainty) {
+    in.peak_dx = workspace.peak_dx.data();
+    in.peak_dy = workspace.peak_dy.data();
+  }
+  // Passes before the last only feed the next pass's predictor: the
+  // cheaper cubic kernel serves them as well; when they have converged, one
+  // pass with the accurate kernel finishes.
+  const bool last = pass + 1 == static_cast<int>(loop.windows.size()) || loop.finish_now;
+  const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
+  in.uncertainty_now = options.estimate_uncertainty && last && warp;
+  if (options.estimate_uncertainty && last && in.reference_stats) {
+    in.noise_factors = noise_factors_for(loop.pair, loop.field, in.window_px, workspace).data();
+  }
+  warp_for_pass(loop, predicted, warp, warp_reference, interpolator, in);
+  measure_pass(loop, pass, in);
+  return !passes_done(loop, pass, interpolator);
+}
+
+// After the last pass: the vectors' σ, the flags of nodes the first pass
+// did not support, and the counts.
+void finish_passes(PassLoop& loop) {
+  const XcorrOptions& options = loop.options;
+  EvaluationSummary& summary = loop.summary;
+  const AdaptivePasses& adaptive = loop.workspace.adaptive;
+  // Without deformation the final pass pairs a window with a larger search
+  // patch, whose C(±1) read different pixels: the statistics of equal
+  // windows do not describe that peak, and σ is left 0 (not estimated).
+  if (options.estimate_uncertainty && loop.final_pass && loop.final_pass->predictor && options.deform) {
+    estimate_uncertainty(loop.pair, *loop.final_pass, loop.field);
+  }
+  flag_unsupported(loop.support, loop.field);
+  count_flags(loop.field, summary);
+  summary.refined_fraction = adaptive.active() ? adaptive.selection.fraction() : summary.passes_run > 1 ? 1.0 : 0.0;
+}
+
+// Runs every pass over `field` (centres set; kOutOfRoi nodes are left alone),
+// telling how into `summary` (its messages added to).
+void run_passes(const PreparedPair& pair, const GridGeometry& grid, const XcorrOptions& options,
+                PassWorkspace& workspace, DisplacementField& field, EvaluationSummary& summary) {
+  summary.method = "xcorr";
+  PassLoop loop(pair, grid, options, workspace, field, summary);
+  workspace.adaptive.selection = {};  // none until this frame's first pass selects
   if (options.estimate_uncertainty) {
     workspace.peak_dx.resize(field.vectors.size());
     workspace.peak_dy.resize(field.vectors.size());
   }
-  for (int pass = 0; pass < static_cast<int>(windows.size()); ++pass) {
-    PassInput in;
-    in.window_px = windows[pass];
-    in.radius_px = options.search_radius_px(pass);
-    in.on_bound_px = options.on_bound_px(pass);
-    // The first pass alone: a refinement pass measures a residual whose
-    // support is the first pass's (flag_unsupported).
-    in.min_peak_ratio = pass == 0 ? options.min_peak_ratio : 1.0;
-    in.shift_whole_pixels = pass > 0 && !options.deform;
-    in.refine = adaptive.active() ? &adaptive.selection.refine : nullptr;
-    // What a pass reads depends on its window, its reach and the selection
-    // alone (node positions, the ROI and the mask hold for the frame):
-    // passes alike in these share it.
-    const auto read_area = [&](int reach_px) {
-      if (!area.serves(in.window_px, reach_px, in.refine)) {
-        if (in.refine) {
-          SelectedArea selected = selected_area(pair, field, *in.refine, in.window_px, reach_px, options);
-          area = {in.window_px, reach_px, in.refine, selected.region, std::move(selected.tiles)};
-        } else {
-          area = {in.window_px, reach_px, in.refine, pass_region(pair, field, in.window_px, reach_px), {}};
-        }
-      }
-      in.region = area.region;
-    };
-    // Under adaptive refinement a deforming pass reads its predictor at the
-    // selected nodes and under the warp's tiles alone: computed there.
-    const cv::Mat* predicted = nullptr;
-    if (pass > 0 && in.refine && !in.shift_whole_pixels) {
-      read_area(in.radius_px);
-      nodes_read(area.tiles, grid, *in.refine, workspace.predicted_nodes, workspace.predicted_nodes_around);
-      predicted = &workspace.predicted_nodes;
-    }
-    if (pass > 0 && !(predicted && predictor_at(field, grid, predictor, workspace.predicted_nodes_around))) {
-      predictor_from(field, grid, predictor);
-    }
-    if (pass > 0 && options.deform && options.smooth_predictor) {
-      smooth_predictor(predictor, workspace.predictor_scratch, predicted);
-    }
-    in.predictor = pass > 0 ? &predictor : nullptr;
-    const int reach_px = in.radius_px + (in.shift_whole_pixels ? max_abs_shift_px(predictor) : 0);
-    const bool warp = pass > 0 && options.deform;
-    const bool warp_reference = warp && options.symmetric_deformation;
-    if (workspace.cache_reference_stats && !warp_reference) {
-      in.reference_stats = reference_stats_for(pair, field, in.window_px, workspace).data();
-      in.stats_cols = field.cols;
-    }
-    if (pass == 0 && windows.size() > 1) {
-      if (const auto coarse = coarse_first_pass_grid(pair, grid, in.window_px, options)) {
-        MeasuredPass measured;
-        run_coarse_first_pass(pair, *coarse, in, options, workspace, field, measured);
-        note_first_pass(measured.field, coarse->row0, coarse->col0, 2, support, summary);
-        summary.passes_run = 1;
-        summary.window_px_per_pass.push_back(in.window_px);
-        if (options.adaptive_refinement) {
-          select_for_refinement(measured, field, grid, options, adaptive);
-        }
-        continue;
-      }
-    }
-    read_area(reach_px);
-    const std::vector<cv::Rect>& tiles = area.tiles;
-    if (options.estimate_uncertainty) {
-      in.peak_dx = workspace.peak_dx.data();
-      in.peak_dy = workspace.peak_dy.data();
-    }
-    // Passes before the last only feed the next pass's predictor: the
-    // cheaper cubic kernel serves them as well; when they have converged, one
-    // pass with the accurate kernel finishes.
-    const bool last = pass + 1 == static_cast<int>(windows.size()) || finish_now;
-    const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
-    in.uncertainty_now = options.estimate_uncertainty && last && warp;
-    if (options.estimate_uncertainty && last && in.reference_stats) {
-      in.noise_factors = noise_factors_for(pair, field, in.window_px, workspace).data();
-    }
-    auto warp_pass = [&](const cv::Mat& image, const GridField& by, cv::Mat& out) {
-      if (in.refine) {
-        warp_tiles(image, by, in.region, tiles, interpolator, out);
-      } else {
-        warp_region(image, by, in.region, interpolator, out);
-      }
-    };
-    if (!warp) {
-      in.warped = undeformed_measurement(pair, in.region, interpolator, workspace.warped_storage);
-    } else {
-      in.warped = reuse(workspace.warped_storage, in.region.size());
-      if (warp_reference) {
-        // Each image moves half-way: both are interpolated at half the offset,
-        // and the interpolation errors of the two largely cancel.
-        in.warped_reference = reuse(workspace.warped_reference_storage, in.region.size());
-        warp_pass(pair.measurement, scaled(predictor, 0.5, predicted), in.warped);
-        warp_pass(pair.reference, scaled(predictor, -0.5, predicted), in.warped_reference);
-      } else {
-        warp_pass(pair.measurement, predictor, in.warped);
-      }
-    }
-    // Under adaptive refinement only the selected nodes change in a pass;
-    // the rest keep the first pass's values.
-    const cv::Mat* changeable = adaptive.active() ? &adaptive.selection.refine : nullptr;
-    // Into a buffer kept between passes and frames: a fresh 12 MB copy (16 MP)
-    // each pass would page-fault it anew.
-    if (pass > 0) copy_field(field, workspace.previous_field, changeable);
-    run_pass(pair, in, options, field);
-    if (pass == 0) note_first_pass(field, 0, 0, 1, support, summary);
-    final_pass = in;
-    if (options.replace_outliers) {
-      replace_outliers(field, options.outliers, adaptive.active() ? &adaptive.outlier_tested : nullptr, changeable);
-    }
-    if (pass == 0 && windows.size() > 1 && options.adaptive_refinement) {
-      select_for_refinement({field, grid}, field, grid, options, adaptive);
-    }
-    summary.passes_run = pass + 1;
-    summary.window_px_per_pass.push_back(in.window_px);
-    if (pass > 0) summary.last_change_px = max_change_px(workspace.previous_field, field, changeable);
-    const bool same_window = pass > 0 && windows[pass] == windows[pass - 1];
-    if (finish_now) break;
-    if (same_window && options.convergence_px > 0 && summary.last_change_px < options.convergence_px) {
-      summary.converged = true;
-      if (interpolator == options.interpolator) break;
-      finish_now = true;
-    }
+  for (int pass = 0; pass < static_cast<int>(loop.windows.size()); ++pass) {
+    if (!run_one_pass(loop, pass)) break;
   }
-  // Without deformation the final pass pairs a window with a larger search
-  // patch, whose C(±1) read different pixels: the statistics of equal
-  // windows do not describe that peak, and σ is left 0 (not estimated).
-  if (options.estimate_uncertainty && final_pass && final_pass->predictor && options.deform) {
-    estimate_uncertainty(pair, *final_pass, field);
-  }
-  flag_unsupported(support, field);
-  count_flags(field, summary);
-  summary.refined_fraction = adaptive.active() ? adaptive.selection.fraction() : summary.passes_run > 1 ? 1.0 : 0.0;
-  return summary;
+  finish_passes(loop);
 }
 
 // A probe's vector is the centre of its own small grid.
@@ -989,7 +1083,7 @@ DisplacementVector evaluate_probe(const cv::Mat& reference, const cv::Mat& measu
   DisplacementVector vec{
       grid.x0_px + context * grid.step_px, grid.y0_px + context * grid.step_px, 0, 0, 0, VectorFlag::kOutOfRoi};
   if (crop.area() == 0) return vec;
-  const PreparedPair pair = prepare(reference, measurement, mask, options, crop, false);
+  const PreparedPair pair = prepare_silently(reference, measurement, mask, options, crop);
   PassWorkspace workspace;
   GridGeometry local_grid = grid;
   local_grid.x0_px -= crop.x;
@@ -997,7 +1091,7 @@ DisplacementVector evaluate_probe(const cv::Mat& reference, const cv::Mat& measu
   DisplacementField local = field_on_grid(local_grid);
   flag_nodes_outside(pair, options.window_px, local);
   if (local.at(context, context).flag == VectorFlag::kOutOfRoi) return vec;
-  summary = run_passes(pair, local_grid, options, workspace, local);
+  run_passes(pair, local_grid, options, workspace, local, summary);
   vec = local.at(context, context);
   vec.x_px += crop.x;
   vec.y_px += crop.y;
@@ -1099,8 +1193,7 @@ void find_search_range_once(const cv::Mat& measurement, XcorrEvaluator::State& s
   int halvings = 0;
   for (int w = o.first_window_px; w / 2 >= o.window_px; w /= 2) ++halvings;
   o.passes = std::max(o.passes, halvings + 2);
-  spdlog::debug("{}", s.search->Describe());
-  prepare_measurement(measurement, cv::Rect({0, 0}, s.reference.size()), false, o, s.pair);
+  prepare_measurement(measurement, cv::Rect({0, 0}, s.reference.size()), nullptr, o, s.pair);
 }
 
 void describe_search(const XcorrEvaluator::State& s, EvaluationSummary& summary) {
@@ -1130,23 +1223,29 @@ EvaluationResult XcorrEvaluator::evaluate(const cv::Mat& measurement) {
   State& s = *state_;
   check_inputs(s.reference, measurement, s.mask, s.options);
   const cv::Rect whole({0, 0}, s.reference.size());
+  EvaluationResult result;
+  EvaluationSummary& summary = result.summary;
   if (!s.prepared) {
     // Once, before the first frame allocates: later frames reuse its buffers.
-    check_xcorr_memory(s.reference, s.mask, s.options);
-    s.pair = prepare_reference(s.reference, s.mask, s.options, whole, true);
+    if (std::string account = check_xcorr_memory(s.reference, s.mask, s.options); !account.empty()) {
+      summary.notes.push_back(std::move(account));
+    }
+    s.pair = prepare_reference(s.reference, s.mask, s.options, whole, &summary.warnings);
     s.grid = evaluation_grid(s.pair.roi, s.options.window_px, s.options.step_px);
     s.workspace.cache_reference_stats = true;
     s.prepared = true;
   }
-  prepare_measurement(measurement, whole, !s.colour_warned, s.options, s.pair);
+  prepare_measurement(measurement, whole, s.colour_warned ? nullptr : &summary.warnings, s.options, s.pair);
   s.colour_warned = s.colour_warned || measurement.channels() > 1;
-  if (s.options.find_search_range && !s.search) find_search_range_once(measurement, s);
-  EvaluationResult result;
+  if (s.options.find_search_range && !s.search) {
+    find_search_range_once(measurement, s);
+    if (s.search->widened) summary.notes.push_back(s.search->Describe());
+  }
   result.field = field_on_grid(s.grid);
-  result.summary = run_passes(s.pair, s.grid, s.options, s.workspace, result.field);
-  describe_search(s, result.summary);
-  if (const std::string warning = search_bound_warning(result.summary); !warning.empty() && !s.bound_warned) {
-    spdlog::warn("{}", warning);
+  run_passes(s.pair, s.grid, s.options, s.workspace, result.field, summary);
+  describe_search(s, summary);
+  if (std::string warning = search_bound_warning(summary); !warning.empty() && !s.bound_warned) {
+    summary.warnings.push_back(std::move(warning));
     s.bound_warned = true;
   }
   result.summary.seconds = seconds_since(start);
@@ -1162,10 +1261,11 @@ EvaluationResult XcorrEvaluator::probe(const cv::Mat& measurement, const std::ve
       options.probe_context_nodes < 0 ? options.exact_probe_context_nodes() : options.probe_context_nodes;
   XcorrOptions probe_options = options;
   probe_options.adaptive_refinement = false;  // a probe's grid is local already, too small for a noise floor
-  if (s.reference.channels() > 1 || measurement.channels() > 1) {
-    spdlog::warn("colour image converted to grey ({} and {} channels)", s.reference.channels(), measurement.channels());
-  }
   EvaluationResult result;
+  if (s.reference.channels() > 1 || measurement.channels() > 1) {
+    result.summary.warnings.push_back(fmt::format("colour image converted to grey ({} and {} channels)",
+                                                  s.reference.channels(), measurement.channels()));
+  }
   result.summary.method = "xcorr-probe";
   result.field.rows = 1;
   result.field.cols = static_cast<int>(points.size());

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "fusion/image_input.h"
 #include "fusion/memory_budget.h"
@@ -27,7 +28,7 @@ DisplacementEvaluator::DisplacementEvaluator(const cv::Mat& reference, const Eva
   }
   // Without preprocessing the evaluators check the reference themselves.
   if (options.preprocess.method != Preprocessing::kNone) check_image_pair(reference, reference, mask);
-  reference_ = preprocess(reference, options.preprocess, mask);
+  reference_ = preprocess(reference, options.preprocess, mask, &reference_warnings_);
   if (options.method == Method::kCrossCorrelation) {
     xcorr_.emplace(reference_, options.xcorr, mask);
   } else if (const std::string problem = options.Validate(); !problem.empty()) {
@@ -35,12 +36,9 @@ DisplacementEvaluator::DisplacementEvaluator(const cv::Mat& reference, const Eva
   }
 }
 
-void DisplacementEvaluator::check_memory() const {
-  if (xcorr_) {
-    check_xcorr_memory(reference_, mask_, options_.xcorr);
-  } else {
-    check_flow_memory(reference_, mask_, options_.flow);
-  }
+std::string DisplacementEvaluator::check_memory() const {
+  return xcorr_ ? check_xcorr_memory(reference_, mask_, options_.xcorr)
+                : check_flow_memory(reference_, mask_, options_.flow);
 }
 
 GridGeometry DisplacementEvaluator::grid() const {
@@ -50,22 +48,34 @@ GridGeometry DisplacementEvaluator::grid() const {
   return xcorr_ ? grid_of(options_.xcorr) : grid_of(options_.flow);
 }
 
-cv::Mat DisplacementEvaluator::prepared(const cv::Mat& measurement) const {
+cv::Mat DisplacementEvaluator::prepared(const cv::Mat& measurement, std::vector<std::string>& warnings) const {
   if (options_.preprocess.method == Preprocessing::kNone) return measurement;
   // The pair's checks first, so a bad measurement is named as such.
   check_image_pair(reference_, measurement, mask_);
-  return preprocess(measurement, options_.preprocess, mask_);
+  return preprocess(measurement, options_.preprocess, mask_, &warnings);
+}
+
+EvaluationResult DisplacementEvaluator::warned(std::vector<std::string> preprocessing_warnings,
+                                               EvaluationResult result) {
+  std::vector<std::string> warnings = std::exchange(reference_warnings_, {});
+  for (const auto* from : {&preprocessing_warnings, &result.summary.warnings}) {
+    warnings.insert(warnings.end(), from->begin(), from->end());
+  }
+  result.summary.warnings = std::move(warnings);
+  return result;
 }
 
 EvaluationResult DisplacementEvaluator::evaluate(const cv::Mat& measurement) {
-  const cv::Mat image = prepared(measurement);
-  if (xcorr_) return xcorr_->evaluate(image);
-  return evaluate_flow(reference_, image, options_.flow, mask_);
+  std::vector<std::string> warnings;
+  const cv::Mat image = prepared(measurement, warnings);
+  if (xcorr_) return warned(std::move(warnings), xcorr_->evaluate(image));
+  return warned(std::move(warnings), evaluate_flow(reference_, image, options_.flow, mask_));
 }
 
 EvaluationResult DisplacementEvaluator::probe(const cv::Mat& measurement, const std::vector<cv::Point2d>& points) {
-  const cv::Mat image = prepared(measurement);
-  if (xcorr_) return xcorr_->probe(image, points);
+  std::vector<std::string> warnings;
+  const cv::Mat image = prepared(measurement, warnings);
+  if (xcorr_) return warned(std::move(warnings), xcorr_->probe(image, points));
   // Flow is dense anyway: evaluate a grid with step 1 restricted to the
   // points' windows would cost the same; take the nearest grid vector.
   EvaluationResult full = evaluate_flow(reference_, image, options_.flow, mask_);
@@ -88,7 +98,7 @@ EvaluationResult DisplacementEvaluator::probe(const cv::Mat& measurement, const 
     result.field.vectors.push_back(vec);
   }
   count_flags(result.field, result.summary);
-  return result;
+  return warned(std::move(warnings), std::move(result));
 }
 
 EvaluationResult evaluate_displacement(const cv::Mat& reference, const cv::Mat& measurement,

@@ -49,8 +49,10 @@ class DisplacementEvaluator {
   // Throws InsufficientMemory (memory_budget.h) when a full-field
   // evaluation needs more than this process can get. evaluate() checks it
   // at its first frame; a caller that must know before it starts (a
-  // sequence, whose output file is laid out first) asks here.
-  void check_memory() const;
+  // sequence, whose output file is laid out first) asks here. Returns the
+  // account of needed and available memory (memory_budget.h), empty when
+  // nothing was checked, for the caller's log at debug level.
+  std::string check_memory() const;
 
   EvaluationResult evaluate(const cv::Mat& measurement);
   // The grid of the fields evaluate() gives, known before any frame.
@@ -59,10 +61,15 @@ class DisplacementEvaluator {
   EvaluationResult probe(const cv::Mat& measurement, const std::vector<cv::Point2d>& points);
 
  private:
-  cv::Mat prepared(const cv::Mat& measurement) const;  // preprocessed as the reference was
+  // Preprocessed as the reference was; its colour conversion warned of into `warnings`.
+  cv::Mat prepared(const cv::Mat& measurement, std::vector<std::string>& warnings) const;
+  // `result` with the warnings of the reference's preprocessing (the first
+  // result only) and of the measurement's before its own.
+  EvaluationResult warned(std::vector<std::string> preprocessing_warnings, EvaluationResult result);
 
   cv::Mat reference_, mask_;  // reference_: preprocessed
   EvaluatorOptions options_;
+  std::vector<std::string> reference_warnings_;  // the reference's preprocessing's, until the first result
   std::optional<XcorrEvaluator> xcorr_;  // with Method::kCrossCorrelation
 };
 

@@ -10,8 +10,6 @@
 // where nothing could be measured), and `valid` is true only for kOk.
 
 #include <cstdint>
-#include <filesystem>
-#include <iosfwd>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -64,10 +62,5 @@ struct DisplacementField {
   std::size_t count(VectorFlag flag) const;
   std::size_t count_valid() const { return count(VectorFlag::kOk); }
 };
-
-// CSV with the header `x,y,u,v,valid,flag,peak_ratio,sigma_u,sigma_v`, one
-// vector per line (flag by its name, σ 0 where not estimated).
-void write_csv(const DisplacementField& field, std::ostream& out);
-void write_csv(const DisplacementField& field, const std::filesystem::path& path);
 
 }  // namespace bosfuse::fusion

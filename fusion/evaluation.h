@@ -44,6 +44,13 @@ struct EvaluationSummary {
   std::size_t first_pass_windows = 0;
   std::size_t first_pass_on_bound = 0;
   double seconds = 0;
+  // What the evaluation has to tell, for the caller to log (fusion/ logs
+  // nothing), each in the order it arose: warnings (a colour image
+  // converted, a search bound hit) at warning level, and notes of how it
+  // went (the memory it needs, the search found, the refinement's
+  // threshold) at debug level.
+  std::vector<std::string> warnings;
+  std::vector<std::string> notes;
 
   std::string BriefReport() const;
   // Of the first pass's measured windows, the fraction on the search bound.

@@ -1,7 +1,6 @@
 #include "fusion/image_input.h"
 
 #include <fmt/format.h>
-#include <spdlog/spdlog.h>
 #include <sys/mman.h>
 
 #include <cstdint>
@@ -15,6 +14,10 @@ namespace {
 std::string describe(cv::Size size) { return fmt::format("{}x{}", size.width, size.height); }
 
 }  // namespace
+
+std::string colour_conversion_warning(const std::string& name, int channels) {
+  return fmt::format("{}: colour image ({} channels) converted to grey", name, channels);
+}
 
 double full_scale(int depth) {
   switch (depth) {
@@ -31,9 +34,9 @@ double full_scale(int depth) {
   }
 }
 
-cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn_colour) {
+cv::Mat to_grey_unit_float(const cv::Mat& image, const std::string& name, std::vector<std::string>* warnings) {
   cv::Mat unit;
-  to_grey_unit_float(image, name, warn_colour, unit);
+  to_grey_unit_float(image, name, warnings, unit);
   return unit;
 }
 
@@ -49,11 +52,12 @@ void create_large_image(cv::Mat& image, int rows, int cols, int type) {
   if (last > first) madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
 }
 
-void to_grey_unit_float(const cv::Mat& image, const std::string& name, bool warn_colour, cv::Mat& out) {
+void to_grey_unit_float(const cv::Mat& image, const std::string& name, std::vector<std::string>* warnings,
+                        cv::Mat& out) {
   if (image.empty()) throw std::invalid_argument(name + ": the image is empty (unreadable file or no pixels)");
   cv::Mat grey = image;
   if (image.channels() == 3 || image.channels() == 4) {
-    if (warn_colour) spdlog::warn("{}: colour image ({} channels) converted to grey", name, image.channels());
+    if (warnings) warnings->push_back(colour_conversion_warning(name, image.channels()));
     cv::cvtColor(image, grey, image.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
   } else if (image.channels() != 1) {
     throw std::invalid_argument(fmt::format("{}: {} channels, expected grey or colour", name, image.channels()));

@@ -1,7 +1,6 @@
 #include "fusion/image_quality.h"
 
 #include <fmt/format.h>
-#include <spdlog/spdlog.h>
 
 #include <cmath>
 #include <opencv2/imgproc.hpp>
@@ -43,13 +42,14 @@ std::string QualityOptions::Validate() const {
 
 GreyMoments grey_moments(const cv::Mat& image, const std::string& name) {
   if (image.empty()) throw std::invalid_argument(name + ": the image is empty (unreadable file or no pixels)");
+  GreyMoments moments;
   cv::Mat grey = image;
   double scale = full_scale(image.depth());
   if (image.depth() == CV_32F || image.depth() == CV_64F) {
-    grey = to_grey_unit_float(image, name);  // NaNs patched, colour converted
+    grey = to_grey_unit_float(image, name, &moments.warnings);  // NaNs patched, colour converted
     scale = 1.0;
   } else if (image.channels() == 3 || image.channels() == 4) {
-    spdlog::warn("{}: colour image ({} channels) converted to grey", name, image.channels());
+    moments.warnings.push_back(colour_conversion_warning(name, image.channels()));
     cv::cvtColor(image, grey, image.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
   } else if (image.channels() != 1) {
     throw std::invalid_argument(fmt::format("{}: {} channels, expected grey or colour", name, image.channels()));
@@ -57,7 +57,9 @@ GreyMoments grey_moments(const cv::Mat& image, const std::string& name) {
   cv::Scalar mean, std_dev;
   cv::meanStdDev(grey, mean, std_dev);  // population σ, accumulated in double
   const double n = double(grey.total());
-  return {mean[0] / scale, n > 1 ? std_dev[0] / scale * std::sqrt(n / (n - 1)) : 0.0};
+  moments.mean = mean[0] / scale;
+  moments.std = n > 1 ? std_dev[0] / scale * std::sqrt(n / (n - 1)) : 0.0;
+  return moments;
 }
 
 QualityIndex modified_quality_index(const GreyMoments& image, const GreyMoments& reference) {
@@ -79,12 +81,17 @@ QualityIndex modified_quality_index(const cv::Mat& image, const cv::Mat& referen
 QualityReport assess_quality(const cv::Mat& image, const cv::Mat& reference, const QualityOptions& options) {
   if (const auto problem = options.Validate(); !problem.empty()) throw std::invalid_argument(problem);
   QualityReport report;
-  report.global = modified_quality_index(image, reference);
-  const cv::Mat x = to_grey_unit_float(image, "image");
-  cv::Mat y = to_grey_unit_float(reference, "reference");
+  const GreyMoments image_moments = grey_moments(image, "image");
+  const GreyMoments reference_moments = grey_moments(reference, "reference");
+  report.global = modified_quality_index(image_moments, reference_moments);
+  for (const GreyMoments* m : {&image_moments, &reference_moments}) {
+    report.warnings.insert(report.warnings.end(), m->warnings.begin(), m->warnings.end());
+  }
+  const cv::Mat x = to_grey_unit_float(image, "image", &report.warnings);
+  cv::Mat y = to_grey_unit_float(reference, "reference", &report.warnings);
   if (y.size() != x.size()) {
-    spdlog::warn("reference {}x{} resized to the image's {}x{} for the sliding-window indices", y.cols, y.rows, x.cols,
-                 x.rows);
+    report.warnings.push_back(fmt::format("reference {}x{} resized to the image's {}x{} for the sliding-window indices",
+                                          y.cols, y.rows, x.cols, x.rows));
     cv::resize(y, y, x.size(), 0, 0, cv::INTER_AREA);
   }
   const int w = options.window_px;

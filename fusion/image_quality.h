@@ -18,6 +18,7 @@
 
 #include <opencv2/core.hpp>
 #include <string>
+#include <vector>
 
 namespace bosfuse::fusion {
 
@@ -39,6 +40,9 @@ struct QualityOptions {
 
 struct QualityReport {
   QualityIndex global;
+  // Colour images converted, a reference resized: for the caller to log
+  // (fusion/ logs nothing), in the order they arose.
+  std::vector<std::string> warnings;
   double universal_index = 0;  // Wang–Bovik Q, mean over sliding windows
   double mean_local_q_mod = 0;
   cv::Mat local_q_mod;  // CV_64F, one value per window position ((rows−w+1)×(cols−w+1))
@@ -54,6 +58,7 @@ QualityIndex modified_quality_index(const cv::Mat& image, const cv::Mat& referen
 struct GreyMoments {
   double mean = 0;
   double std = 0;
+  std::vector<std::string> warnings;  // a colour image's conversion, for the caller to log
 };
 GreyMoments grey_moments(const cv::Mat& image, const std::string& name = "image");
 QualityIndex modified_quality_index(const GreyMoments& image, const GreyMoments& reference);

@@ -1,14 +1,10 @@
 #include "fusion/memory_budget.h"
 
 #include <fmt/format.h>
-#include <spdlog/spdlog.h>
-#include <sys/resource.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
-#include <cstdlib>
-#include <fstream>
-#include <sstream>
 #include <opencv2/core/utility.hpp>
 #include <utility>
 
@@ -111,132 +107,17 @@ std::string flow_settings(const FlowOptions& options) {
   return fmt::format("{}, window {} px", method, options.window_px);
 }
 
-bool check_enabled() {
-  const char* value = std::getenv("BOSFUSE_MEMORY_CHECK");
-  if (!value || !*value) return true;
-  const std::string text = value;
-  if (text == "on" || text == "1") return true;
-  if (text == "off" || text == "0") return false;
-  throw std::invalid_argument("BOSFUSE_MEMORY_CHECK must be on or off, not '" + text + "'");
-}
-
-// --- reading the system -----------------------------------------------------
-
-std::optional<Bytes> read_number(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  std::string text;
-  if (!(in >> text)) return std::nullopt;
-  if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos) return std::nullopt;  // "max"
-  try {
-    return std::stoull(text);
-  } catch (const std::exception&) {
-    return std::nullopt;
-  }
-}
-
-// The value of `key` in a "key value" or "key: value kB" file (meminfo,
-// status, memory.stat), in bytes when the line says kB.
-std::optional<Bytes> read_keyed(const std::filesystem::path& file, const std::string& key) {
-  std::ifstream in(file);
-  for (std::string line; std::getline(in, line);) {
-    std::istringstream fields(line);
-    std::string name, unit;
-    Bytes value = 0;
-    if (!(fields >> name >> value)) continue;
-    if (!name.empty() && name.back() == ':') name.pop_back();
-    if (name != key) continue;
-    fields >> unit;
-    return unit == "kB" ? value * 1024 : value;
-  }
-  return std::nullopt;
-}
-
-struct CgroupMount {
-  std::filesystem::path mount_point;
-  std::string root;  // the cgroup the mount shows at its mount point
-};
-
-// The memory cgroup mounts: cgroup2, and v1's with the memory controller.
-std::vector<std::pair<CgroupMount, bool>> memory_cgroup_mounts(const std::filesystem::path& mountinfo) {
-  std::vector<std::pair<CgroupMount, bool>> mounts;  // bool: v2
-  std::ifstream in(mountinfo);
-  for (std::string line; std::getline(in, line);) {
-    const auto dash = line.find(" - ");
-    if (dash == std::string::npos) continue;
-    std::istringstream before(line.substr(0, dash)), after(line.substr(dash + 3));
-    std::string id, parent, device, root, mount_point, fstype, source, super_options;
-    if (!(before >> id >> parent >> device >> root >> mount_point)) continue;
-    if (!(after >> fstype >> source >> super_options)) continue;
-    const bool v2 = fstype == "cgroup2";
-    const bool v1_memory = fstype == "cgroup" && ("," + super_options + ",").find(",memory,") != std::string::npos;
-    if (v2 || v1_memory) mounts.push_back({{mount_point, root}, v2});
-  }
-  return mounts;
-}
-
-// This process's cgroup path in the v2 hierarchy (line "0::path") or the
-// v1 memory hierarchy (a line whose controllers include memory).
-std::optional<std::string> cgroup_path(const std::filesystem::path& cgroup_file, bool v2) {
-  std::ifstream in(cgroup_file);
-  for (std::string line; std::getline(in, line);) {
-    const auto first = line.find(':'), second = line.find(':', first + 1);
-    if (first == std::string::npos || second == std::string::npos) continue;
-    const std::string controllers = line.substr(first + 1, second - first - 1);
-    const bool match = v2 ? line.substr(0, first) == "0" && controllers.empty()
-                          : ("," + controllers + ",").find(",memory,") != std::string::npos;
-    if (match) return line.substr(second + 1);
-  }
-  return std::nullopt;
-}
-
-// Limit minus usage at each level from the process's cgroup up to the
-// mount's root, the least of them; page cache the cgroup could drop
-// (inactive file pages) counts as free, as the kernel would reclaim it
-// before failing an allocation.
-std::optional<Bytes> cgroup_headroom(const CgroupMount& mount, bool v2, const std::string& path,
-                                     const std::filesystem::path& root) {
-  std::string relative = path;
-  const bool below_root =
-      relative.starts_with(mount.root) && (relative.size() == mount.root.size() || relative[mount.root.size()] == '/');
-  if (mount.root != "/" && below_root) relative = relative.substr(mount.root.size());
-  const std::filesystem::path top = root / std::filesystem::path(mount.mount_point).relative_path();
-  std::filesystem::path dir = top;
-  for (const auto& part : std::filesystem::path(relative).relative_path()) {
-    // A cgroup outside this namespace's view ("/../..") has no files here to read.
-    if (part == "..") return std::nullopt;
-    if (!part.empty()) dir /= part;
-  }
-  const char* limit_file = v2 ? "memory.max" : "memory.limit_in_bytes";
-  const char* usage_file = v2 ? "memory.current" : "memory.usage_in_bytes";
-  std::optional<Bytes> least;
-  for (int level = 0; level < 64; ++level) {  // a path has fewer levels than that
-    const auto limit = read_number(dir / limit_file);
-    const auto usage = read_number(dir / usage_file);
-    // v1 writes "no limit" as the largest page-aligned long.
-    if (limit && usage && *limit < (Bytes{1} << 60)) {
-      const Bytes reclaimable =
-          read_keyed(dir / "memory.stat", v2 ? "inactive_file" : "total_inactive_file").value_or(0);
-      const Bytes used = *usage > reclaimable ? *usage - reclaimable : 0;
-      const Bytes headroom = *limit > used ? *limit - used : 0;
-      least = least ? std::min(*least, headroom) : headroom;
-    }
-    if (dir == top || dir.parent_path() == dir) break;
-    dir = dir.parent_path();
-  }
-  return least;
-}
-
-std::optional<Bytes> rlimit_headroom(int resource, const std::filesystem::path& status, const std::string& key) {
-  rlimit limit{};
-  if (getrlimit(resource, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return std::nullopt;
-  const Bytes used = read_keyed(status, key).value_or(0);
-  return limit.rlim_cur > used ? Bytes(limit.rlim_cur) - used : 0;
-}
-
 std::optional<Bytes> least(std::optional<Bytes> a, std::optional<Bytes> b) {
   if (!a) return b;
   if (!b) return a;
   return std::min(*a, *b);
+}
+
+std::atomic<AvailableMemoryProbe> installed_probe{nullptr};
+
+std::optional<AvailableMemory> probe_available_memory() {
+  const AvailableMemoryProbe probe = installed_probe.load();
+  return probe ? probe() : std::nullopt;
 }
 
 std::string describe_sources(const AvailableMemory& m) {
@@ -323,27 +204,14 @@ std::string AvailableMemory::limited_by() const {
   return "ulimit -d";
 }
 
-AvailableMemory available_memory(const MemorySources& sources) {
-  AvailableMemory m;
-  m.mem_available_bytes = read_keyed(sources.proc / "meminfo", "MemAvailable");
-  for (const auto& [mount, v2] : memory_cgroup_mounts(sources.proc / "self" / "mountinfo")) {
-    const auto path = cgroup_path(sources.proc / "self" / "cgroup", v2);
-    if (path) m.cgroup_bytes = least(m.cgroup_bytes, cgroup_headroom(mount, v2, *path, sources.root));
-  }
-  if (sources.read_rlimits) {
-    const auto status = sources.proc / "self" / "status";
-    m.address_space_bytes = rlimit_headroom(RLIMIT_AS, status, "VmSize");
-    m.data_bytes = rlimit_headroom(RLIMIT_DATA, status, "VmData");
-  }
-  return m;
-}
+void install_available_memory_probe(AvailableMemoryProbe probe) { installed_probe.store(probe); }
 
-void check_memory(const MemoryRequest& request, const AvailableMemory& available) {
+std::string check_memory(const MemoryRequest& request, const AvailableMemory& available) {
   const auto bytes = available.bytes();
-  spdlog::debug("memory: {}x{} pair needs {} ({}); available {} ({})", request.size.width, request.size.height,
-                format_bytes(request.needed_bytes), request.settings, bytes ? format_bytes(*bytes) : "unknown",
-                describe_sources(available));
-  if (!bytes || request.needed_bytes <= *bytes) return;
+  std::string account = fmt::format("memory: {}x{} pair needs {} ({}); available {} ({})", request.size.width,
+                                    request.size.height, format_bytes(request.needed_bytes), request.settings,
+                                    bytes ? format_bytes(*bytes) : "unknown", describe_sources(available));
+  if (!bytes || request.needed_bytes <= *bytes) return account;
   throw InsufficientMemory(fmt::format(
       "a {}×{} pair needs {} to evaluate with these settings ({}); {} are available to this process (the least of "
       "{}); {}",
@@ -351,10 +219,11 @@ void check_memory(const MemoryRequest& request, const AvailableMemory& available
       format_bytes(*bytes), describe_sources(available), join_remedies(request.remedies)));
 }
 
-void check_xcorr_memory(const cv::Mat& reference, const cv::Mat& mask, const XcorrOptions& options) {
-  if (!check_enabled()) return;
+std::string check_xcorr_memory(const cv::Mat& reference, const cv::Mat& mask, const XcorrOptions& options) {
+  const std::optional<AvailableMemory> probed = probe_available_memory();
+  if (!probed) return {};
+  const AvailableMemory& available = *probed;
   const PairShape pair = PairShape::of(reference, mask);
-  const AvailableMemory available = available_memory();
   MemoryRequest request{pair.size, xcorr_bytes_needed(pair, options), xcorr_settings(options), {}};
   // A region only helps when the whole-image float copies fit on their own.
   XcorrOptions smallest_region = options;
@@ -365,13 +234,14 @@ void check_xcorr_memory(const cv::Mat& reference, const cv::Mat& mask, const Xco
     request.remedies.push_back("evaluate a region (--roi)");
   request.remedies.push_back("use probe mode (--probe)");
   request.remedies.push_back("a machine with more memory");
-  check_memory(request, available);
+  return check_memory(request, available);
 }
 
-void check_flow_memory(const cv::Mat& reference, const cv::Mat& mask, const FlowOptions& options) {
-  if (!check_enabled()) return;
+std::string check_flow_memory(const cv::Mat& reference, const cv::Mat& mask, const FlowOptions& options) {
+  const std::optional<AvailableMemory> probed = probe_available_memory();
+  if (!probed) return {};
+  const AvailableMemory& available = *probed;
   const PairShape pair = PairShape::of(reference, mask);
-  const AvailableMemory available = available_memory();
   MemoryRequest request{pair.size, flow_bytes_needed(pair, options), flow_settings(options), {}};
   const auto fits = [&](Bytes needed) { return available.bytes() && needed < *available.bytes(); };
   if (options.algorithm == FlowAlgorithm::kDis && options.dis_preset != DisPreset::kUltrafast) {
@@ -389,7 +259,7 @@ void check_flow_memory(const cv::Mat& reference, const cv::Mat& mask, const Flow
     request.remedies.push_back("cross-correlation (--method xcorr, needs " + format_bytes(needed) + ")");
   }
   request.remedies.push_back("a machine with more memory");
-  check_memory(request, available);
+  return check_memory(request, available);
 }
 
 std::string format_bytes(std::uint64_t bytes) {

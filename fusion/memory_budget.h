@@ -18,17 +18,13 @@
 // within 20 %). Probe mode of cross-correlation works on crops around the
 // probes and is never refused.
 //
-// What is available is the least of MemAvailable (/proc/meminfo), the memory
-// cgroup's limit minus its usage (cgroup v2 memory.max − memory.current, v1
-// memory.limit_in_bytes − memory.usage_in_bytes, page cache it could drop
-// counted as free, each level up to the root), and the address-space and
-// data limits (ulimit -v, -d) minus what the process has mapped. This is the
-// one part of fusion/ that reads the system (/proc, /sys, getrlimit), and
-// only to read. BOSFUSE_MEMORY_CHECK=off skips the check (swap is not
-// counted as available, for example).
+// What is available is the least of the sources AvailableMemory holds
+// (MemAvailable, the memory cgroup's headroom, ulimit -v and -d). fusion/
+// does not read the system: the program installs a probe at its start
+// (pipeline/available_memory.h reads /proc, /sys and getrlimit, and honours
+// BOSFUSE_MEMORY_CHECK=off), and without one nothing is checked.
 
 #include <cstdint>
-#include <filesystem>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -67,14 +63,13 @@ struct AvailableMemory {
   std::string limited_by() const;
 };
 
-// Where available_memory() reads; tests point it at a fake tree.
-struct MemorySources {
-  std::filesystem::path proc = "/proc";  // meminfo, self/status, self/cgroup, self/mountinfo
-  std::filesystem::path root = "/";      // prefix of the cgroup mount points mountinfo names
-  bool read_rlimits = true;              // getrlimit(RLIMIT_AS, RLIMIT_DATA)
-};
+// What this process can still get, asked before each full-field
+// evaluation; nullopt when the memory is not to be checked.
+using AvailableMemoryProbe = std::optional<AvailableMemory> (*)();
 
-AvailableMemory available_memory(const MemorySources& sources = {});
+// Installs the probe check_*_memory ask; nullptr (the default) checks
+// nothing. Install once at start-up, before evaluations run.
+void install_available_memory_probe(AvailableMemoryProbe probe);
 
 // An evaluation that would need more memory than the process can get.
 class InsufficientMemory : public std::invalid_argument {
@@ -93,12 +88,16 @@ struct MemoryRequest {
 
 // Throws InsufficientMemory when `request` needs more than `available`
 // holds; does nothing when nothing is known of the available memory.
-void check_memory(const MemoryRequest& request, const AvailableMemory& available);
+// Returns the account of both ("memory: 4000x3000 pair needs ..."), for the
+// caller's log at debug level.
+std::string check_memory(const MemoryRequest& request, const AvailableMemory& available);
 
-// check_memory for an evaluation of this pair with these options, unless
-// BOSFUSE_MEMORY_CHECK is "off" (or "0"). Allocates nothing of image size.
-void check_xcorr_memory(const cv::Mat& reference, const cv::Mat& mask, const XcorrOptions& options);
-void check_flow_memory(const cv::Mat& reference, const cv::Mat& mask, const FlowOptions& options);
+// check_memory for an evaluation of this pair with these options, against
+// what the installed probe says is available (nothing checked without a
+// probe or when it says so). Allocates nothing of image size. Returns
+// check_memory's account, empty when nothing was checked.
+std::string check_xcorr_memory(const cv::Mat& reference, const cv::Mat& mask, const XcorrOptions& options);
+std::string check_flow_memory(const cv::Mat& reference, const cv::Mat& mask, const FlowOptions& options);
 
 // "6.4 GB", "512 MB": decimal units, as `free -h` and the message use them.
 std::string format_bytes(std::uint64_t bytes);

@@ -93,9 +93,9 @@ std::string FlowOptions::Validate() const {
 }
 
 cv::Mat dense_flow(const cv::Mat& reference, const cv::Mat& measurement, FlowAlgorithm algorithm,
-                   DisPreset dis_preset) {
-  const cv::Mat ref8 = to_8bit(to_grey_unit_float(reference, "reference"));
-  const cv::Mat meas8 = to_8bit(to_grey_unit_float(measurement, "measurement"));
+                   DisPreset dis_preset, std::vector<std::string>* warnings) {
+  const cv::Mat ref8 = to_8bit(to_grey_unit_float(reference, "reference", warnings));
+  const cv::Mat meas8 = to_8bit(to_grey_unit_float(measurement, "measurement", warnings));
   cv::Mat flow(ref8.size(), CV_32FC2, cv::Scalar(0, 0));
   switch (algorithm) {
     case FlowAlgorithm::kDis: {
@@ -129,9 +129,13 @@ EvaluationResult evaluate_flow(const cv::Mat& reference, const cv::Mat& measurem
   check_image_pair(reference, measurement, mask);
   const cv::Rect roi = effective_roi(options.roi, reference.size());
   check_window_fits(options.window_px, roi.size());
-  check_flow_memory(reference, mask, options);
-  const cv::Mat ref_unit = to_grey_unit_float(reference, "reference");
-  const cv::Mat flow = dense_flow(reference, measurement, options.algorithm, options.dis_preset);
+  EvaluationResult result;
+  if (std::string account = check_flow_memory(reference, mask, options); !account.empty()) {
+    result.summary.notes.push_back(std::move(account));
+  }
+  const cv::Mat ref_unit = to_grey_unit_float(reference, "reference", &result.summary.warnings);
+  const cv::Mat flow =
+      dense_flow(reference, measurement, options.algorithm, options.dis_preset, &result.summary.warnings);
   cv::Mat channels[2], sum_u, sum_v, sum_ref, sum_ref_sq, sum_mask;
   cv::split(flow, channels);
   cv::integral(channels[0], sum_u, CV_64F);
@@ -143,7 +147,6 @@ EvaluationResult evaluate_flow(const cv::Mat& reference, const cv::Mat& measurem
     excluded.convertTo(ones, CV_8U, 1.0 / 255.0);
     cv::integral(ones, sum_mask, CV_64F);
   }
-  EvaluationResult result;
   result.summary.method = "flow-" + to_string(options.algorithm);
   const GridGeometry grid = evaluation_grid(roi, options.window_px, options.step_px);
   result.field = field_on_grid(grid);

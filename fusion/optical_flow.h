@@ -61,7 +61,8 @@ EvaluationResult evaluate_flow(const cv::Mat& reference, const cv::Mat& measurem
                                const cv::Mat& mask = {});
 
 // The dense flow (CV_32FC2, u then v) of a pair, for maps and tests.
+// A colour pair's conversion is warned of into `warnings` (nullptr: silently).
 cv::Mat dense_flow(const cv::Mat& reference, const cv::Mat& measurement, FlowAlgorithm algorithm,
-                   DisPreset dis_preset = DisPreset::kMedium);
+                   DisPreset dis_preset = DisPreset::kMedium, std::vector<std::string>* warnings = nullptr);
 
 }  // namespace bosfuse::fusion

@@ -28,9 +28,9 @@ struct Weighted {
   cv::Mat weight;  // CV_32F; empty without a mask
 };
 
-Weighted weighted_input(const cv::Mat& image, const cv::Mat& mask) {
+Weighted weighted_input(const cv::Mat& image, const cv::Mat& mask, std::vector<std::string>* warnings) {
   Weighted in;
-  in.image = to_grey_unit_float(image, "image to preprocess");
+  in.image = to_grey_unit_float(image, "image to preprocess", warnings);
   if (mask.empty()) return in;
   if (mask.size() != image.size()) {
     throw std::invalid_argument(fmt::format("preprocessing: mask size {}x{} differs from the image size {}x{}",
@@ -160,10 +160,11 @@ std::string PreprocessOptions::Validate() const {
   return {};
 }
 
-cv::Mat preprocess(const cv::Mat& image, const PreprocessOptions& options, const cv::Mat& mask) {
+cv::Mat preprocess(const cv::Mat& image, const PreprocessOptions& options, const cv::Mat& mask,
+                   std::vector<std::string>* warnings) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw std::invalid_argument(problem);
   if (options.method == Preprocessing::kNone) return image;
-  const Weighted in = weighted_input(image, mask);
+  const Weighted in = weighted_input(image, mask, warnings);
   switch (options.method) {
     case Preprocessing::kNormalize:
       return normalize_contrast(in, options);

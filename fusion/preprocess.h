@@ -28,6 +28,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace bosfuse::fusion {
 
@@ -54,7 +55,9 @@ struct PreprocessOptions {
 
 // `image`: 8- or 16-bit or float (as image_input.h takes them), grey or
 // colour. With kNone the image is returned as it is (no copy). Throws
-// std::invalid_argument on bad options or a mask of another size.
-cv::Mat preprocess(const cv::Mat& image, const PreprocessOptions& options, const cv::Mat& mask = {});
+// std::invalid_argument on bad options or a mask of another size. A colour
+// image's conversion is warned of into `warnings` (nullptr: silently).
+cv::Mat preprocess(const cv::Mat& image, const PreprocessOptions& options, const cv::Mat& mask = {},
+                   std::vector<std::string>* warnings = nullptr);
 
 }  // namespace bosfuse::fusion

@@ -47,7 +47,7 @@ cv::Mat blurred_region(const cv::Mat& image, cv::Rect region, double sigma_px) {
   const int margin = static_cast<int>(std::ceil(3 * sigma_px));
   const cv::Rect padded =
       (region + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) & cv::Rect(0, 0, image.cols, image.rows);
-  cv::Mat grey = to_grey_unit_float(image(padded), "image", false);
+  cv::Mat grey = to_grey_unit_float(image(padded), "image");
   if (sigma_px > 0) cv::GaussianBlur(grey, grey, cv::Size(), sigma_px, sigma_px, cv::BORDER_REFLECT);
   return grey(region - padded.tl()).clone();
 }
@@ -162,7 +162,10 @@ SceneMatcher::SceneMatcher(const cv::Mat& reference, const SceneMatchOptions& op
 SceneMatch SceneMatcher::match(const cv::Mat& image) const {
   SceneMatch out;
   out.options = options_;
-  out.quality = modified_quality_index(grey_moments(image, "image"), reference_moments_);
+  if (!reference_warned_.exchange(true)) out.warnings = reference_moments_.warnings;
+  const GreyMoments image_moments = grey_moments(image, "image");
+  out.warnings.insert(out.warnings.end(), image_moments.warnings.begin(), image_moments.warnings.end());
+  out.quality = modified_quality_index(image_moments, reference_moments_);
   cv::Mat reference = reference_;
   if (reference.size() != image.size()) cv::resize(reference_, reference, image.size(), 0, 0, cv::INTER_AREA);
   const TileLayout layout = tile_layout(image.size(), options_);

@@ -36,8 +36,10 @@
 //                       reported values near their geometric means:
 //                       good ≥ 0.5, usable ≥ 0.1, poor below.
 
+#include <atomic>
 #include <opencv2/core.hpp>
 #include <string>
+#include <vector>
 
 #include "fusion/evaluation.h"
 #include "fusion/image_quality.h"
@@ -70,6 +72,9 @@ struct SceneMatch {
   int tiles = 0;              // tiles correlated (textured in the reference)
   QualityIndex quality;       // global Q_L, Q_C, Q_mod and the moments
   SceneMatchOptions options;  // the thresholds the verdict used
+  // Colour images converted (the reference's with the first match), for
+  // the caller to log: fusion/ logs nothing.
+  std::vector<std::string> warnings;
 
   bool same_scene() const { return verdict != SceneVerdict::kNotSameScene && verdict != SceneVerdict::kNoTexture; }
   // One line: the verdict and the number that decided it against its threshold.
@@ -88,6 +93,7 @@ class SceneMatcher {
   cv::Mat reference_;
   GreyMoments reference_moments_;
   SceneMatchOptions options_;
+  mutable std::atomic<bool> reference_warned_{false};  // its warnings went with a match
 };
 
 SceneMatch match_scene(const cv::Mat& image, const cv::Mat& reference, const SceneMatchOptions& options = {});

@@ -60,8 +60,8 @@ EvaluationResult evaluate_defaults(const sim::SyntheticPair& pair) {
 
 // The sample alone, on the images as the evaluator converts them.
 SearchRange search_of(const sim::SyntheticPair& pair) {
-  const cv::Mat reference = to_grey_unit_float(pair.reference, "reference", false);
-  const cv::Mat measurement = to_grey_unit_float(pair.measurement, "measurement", false);
+  const cv::Mat reference = to_grey_unit_float(pair.reference, "reference");
+  const cv::Mat measurement = to_grey_unit_float(pair.measurement, "measurement");
   return find_search_range(reference, measurement, cv::Rect({0, 0}, reference.size()), {}, SearchStart{},
                            SearchRangeOptions{});
 }

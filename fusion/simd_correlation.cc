@@ -13,7 +13,6 @@
 #include "hwy/cache_control.h"
 // clang-format on
 
-#include "fusion/simd_dispatch.h"
 #include "fusion/simd_kernels.h"
 
 // After foreach_target.h too, so that each target sees them.
@@ -670,7 +669,6 @@ HWY_EXPORT(CorrelationStatisticsSums);
 
 void accumulate_products(const float* reference, const float* patch, std::size_t patch_stride, int n, int side,
                          double* products) {
-  apply_environment_once();
   HWY_DYNAMIC_DISPATCH(AccumulateProducts)(reference, patch, patch_stride, n, side, products);
 }
 
@@ -693,7 +691,6 @@ void scalar_accumulate_products(const float* reference, const float* patch, std:
 }
 
 void window_mean_energy(const float* window, std::size_t stride, int n, double* mean, double* energy) {
-  apply_environment_once();
   HWY_DYNAMIC_DISPATCH(WindowMeanEnergy)(window, stride, n, mean, energy);
 }
 
@@ -714,7 +711,6 @@ void scalar_window_mean_energy(const float* window, std::size_t stride, int n, d
 }
 
 void centre_window(const float* window, std::size_t stride, int n, double mean, float* out) {
-  apply_environment_once();
   HWY_DYNAMIC_DISPATCH(CentreWindow)(window, stride, n, mean, out);
 }
 
@@ -725,7 +721,6 @@ void scalar_centre_window(const float* window, std::size_t stride, int n, double
 }
 
 void centred_periodic_tile(const float* window, std::size_t stride, int n, int radius, float mean, float* out) {
-  apply_environment_once();
   HWY_DYNAMIC_DISPATCH(CentredPeriodicTile)(window, stride, n, radius, mean, out);
 }
 
@@ -741,7 +736,6 @@ void scalar_centred_periodic_tile(const float* window, std::size_t stride, int n
 bool equal_window_products(const float* reference, std::size_t reference_stride, double reference_mean,
                            const float* window, std::size_t stride, int n, int radius, double* products, double* mean,
                            double* energy) {
-  apply_environment_once();
   return HWY_DYNAMIC_DISPATCH(EqualWindowProducts)(reference, reference_stride, reference_mean, window, stride, n,
                                                    radius, products, mean, energy);
 }
@@ -760,7 +754,6 @@ void scalar_equal_window_products(const float* reference, std::size_t reference_
 
 void patch_box_sums(const float* patch, std::size_t stride, int p, int n, double* column_scratch, double* sums,
                     double* squares) {
-  apply_environment_once();
   HWY_DYNAMIC_DISPATCH(PatchBoxSums)(patch, stride, p, n, column_scratch, sums, squares);
 }
 
@@ -784,7 +777,6 @@ void scalar_patch_box_sums(const float* patch, std::size_t stride, int p, int n,
 
 void normalise_by_energies(const double* products, const double* sums, const double* squares, std::size_t count,
                            double window_pixels, double reference_energy, double min_energy, double* out) {
-  apply_environment_once();
   HWY_DYNAMIC_DISPATCH(NormaliseByEnergies)
   (products, sums, squares, count, window_pixels, reference_energy, min_energy, out);
 }
@@ -800,7 +792,6 @@ void scalar_normalise_by_energies(const double* products, const double* sums, co
 }
 void correlation_statistics_sums(const float* a, std::size_t a_stride, const float* b, std::size_t b_stride, int n,
                                  double* sums) {
-  apply_environment_once();
   HWY_DYNAMIC_DISPATCH(CorrelationStatisticsSums)(a, a_stride, b, b_stride, n, sums);
 }
 

@@ -1,6 +1,5 @@
-// The SIMD kernels' shared set-up: which target dispatch may pick (the
-// BOSFUSE_SIMD cap, applied once before the first kernel call) and the name
-// of the one it picked. The kernels themselves are one file per family:
+// The SIMD kernels' shared set-up: which target dispatch may pick (the cap
+// limit_simd_targets sets) and the name of the one it picked. The kernels themselves are one file per family:
 // simd_correlation.cc, simd_medians.cc, simd_resampling.cc.
 // Highway compiles this file once per target: foreach_target.h includes it
 // again for each, with HWY_NAMESPACE naming the target; the code after
@@ -14,7 +13,6 @@
 #include "hwy/cache_control.h"
 // clang-format on
 
-#include "fusion/simd_dispatch.h"
 #include "fusion/simd_kernels.h"
 
 // After foreach_target.h too, so that each target sees them.
@@ -36,12 +34,9 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 
-#include <spdlog/spdlog.h>
-
 #include <array>
 #include <cmath>
 #include <cstdlib>
-#include <mutex>
 #include <vector>
 
 namespace bosfuse::fusion {
@@ -49,8 +44,6 @@ namespace bosfuse::fusion {
 HWY_EXPORT(TargetName);
 
 namespace {
-
-std::once_flag environment_applied;
 
 // The targets a limit rules out. Targets the CPU lacks are ruled out anyway.
 std::int64_t disabled_targets(SimdLimit limit) {
@@ -69,8 +62,6 @@ std::int64_t disabled_targets(SimdLimit limit) {
 
 }  // namespace
 
-void apply_environment_once() { std::call_once(environment_applied, apply_simd_environment); }
-
 std::optional<SimdLimit> parse_simd_limit(std::string_view text) {
   if (text.empty() || text == "auto") return SimdLimit::kAuto;
   if (text == "avx2") return SimdLimit::kAvx2;
@@ -80,22 +71,11 @@ std::optional<SimdLimit> parse_simd_limit(std::string_view text) {
 }
 
 void limit_simd_targets(SimdLimit limit) {
-  // Afterwards, so that a later first kernel call does not undo this limit.
-  apply_environment_once();
   // DisableTargets also makes the next dispatch choose again.
   hwy::DisableTargets(disabled_targets(limit));
 }
 
-void apply_simd_environment() {
-  const char* text = std::getenv("BOSFUSE_SIMD");
-  const auto limit = parse_simd_limit(text ? text : "");
-  // A typo must not stop a run that would give the same results anyway.
-  if (!limit) spdlog::warn("BOSFUSE_SIMD='{}' is not auto, avx2, sse4 or portable; using auto", text);
-  hwy::DisableTargets(disabled_targets(limit.value_or(SimdLimit::kAuto)));
-}
-
 std::string simd_target_name() {
-  apply_environment_once();
   return HWY_DYNAMIC_DISPATCH(TargetName)();
 }
 

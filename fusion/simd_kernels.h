@@ -7,15 +7,15 @@
 // vectorised loop inline; each kernel has a scalar reference beside it that
 // states its contract and that the tests hold it to.
 //
-// Choosing the target: the environment variable BOSFUSE_SIMD, read once at
-// the first kernel call, caps what the dispatch may pick:
-//   unset, "" or "auto"  the best target the CPU has;
-//   "avx2", "sse4"       at most that target (lower if the CPU lacks it);
-//   "portable"           Highway's portable C++ target, no intrinsics
-//                        ("SCALAR" with GCC < 12.3, else "EMU128").
-// An unknown value is reported on stderr and treated as "auto". It is for
-// comparing targets on one machine and for ruling out a SIMD path when
-// results look wrong; results of all targets agree to float rounding.
+// Choosing the target: limit_simd_targets caps what the dispatch may pick
+// (the program sets it from the environment variable BOSFUSE_SIMD at its
+// start, pipeline/simd_environment.h, whose values parse_simd_limit reads):
+//   "" or "auto"    the best target the CPU has (also without a cap);
+//   "avx2", "sse4"  at most that target (lower if the CPU lacks it);
+//   "portable"      Highway's portable C++ target, no intrinsics
+//                   ("SCALAR" with GCC < 12.3, else "EMU128").
+// It is for comparing targets on one machine and for ruling out a SIMD path
+// when results look wrong; results of all targets agree to float rounding.
 // The cap is process-wide (Highway keeps one chosen target per process).
 
 #include <cstddef>
@@ -217,19 +217,15 @@ void correlation_statistics_sums(const float* a, std::size_t a_stride, const flo
 void scalar_correlation_statistics_sums(const float* a, std::size_t a_stride, const float* b, std::size_t b_stride,
                                         int n, double* sums);
 
-// The most capable target the kernels may use (see BOSFUSE_SIMD above).
+// The most capable target the kernels may use (see choosing the target above).
 enum class SimdLimit { kAuto, kAvx2, kSse4, kPortable };
 
 // Parses a BOSFUSE_SIMD value; nullopt when it is not one of the above.
 std::optional<SimdLimit> parse_simd_limit(std::string_view text);
 
-// Caps the kernels' targets from now on, overriding BOSFUSE_SIMD. For tests
-// and benchmarks; not thread-safe against kernels running at the same time.
+// Caps the kernels' targets from now on, replacing an earlier cap. Not
+// thread-safe against kernels running at the same time.
 void limit_simd_targets(SimdLimit limit);
-
-// Reads BOSFUSE_SIMD again and applies it (the first kernel call does this
-// by itself).
-void apply_simd_environment();
 
 // Highway's name of the target the kernels run on now: "AVX3" (AVX-512),
 // "AVX2", "SSE4", "SSSE3", "EMU128" or "SCALAR" (the last two portable).

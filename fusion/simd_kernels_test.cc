@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "fusion/field_warp.h"
+#include "pipeline/simd_environment.h"
 
 namespace bosfuse::fusion {
 namespace {
@@ -629,7 +630,7 @@ TEST_F(SimdKernels, BoxSumsAreTheSameOnEveryTargetOfThisCpu) {
 
 TEST_F(SimdKernels, TheEnvironmentForcesThePortableTarget) {
   ASSERT_EQ(setenv("BOSFUSE_SIMD", "portable", 1), 0);
-  apply_simd_environment();
+  pipeline::apply_simd_environment();
   const std::string name = simd_target_name();
   EXPECT_TRUE(name == "SCALAR" || name == "EMU128") << name;
   expect_all_sizes_match();
@@ -642,7 +643,7 @@ TEST_F(SimdKernels, TheEnvironmentForcesThePortableTarget) {
   expect_all_samplings_match();
   expect_warp_matches_reference();
   ASSERT_EQ(unsetenv("BOSFUSE_SIMD"), 0);
-  apply_simd_environment();
+  pipeline::apply_simd_environment();
   EXPECT_EQ(simd_target_name(), hwy::TargetName(hwy::SupportedAndGeneratedTargets().front()));
 }
 

@@ -12,7 +12,6 @@
 #include "hwy/cache_control.h"
 // clang-format on
 
-#include "fusion/simd_dispatch.h"
 #include "fusion/simd_kernels.h"
 
 // After foreach_target.h too, so that each target sees them.
@@ -93,7 +92,6 @@ HWY_EXPORT(MediansOfEight);
 HWY_EXPORT(NormalisedResidualsOfEight);
 
 void medians_of_eight(const double* values, std::size_t stride, std::size_t count, double* medians) {
-  apply_environment_once();
   HWY_DYNAMIC_DISPATCH(MediansOfEight)(values, stride, count, medians);
 }
 
@@ -118,7 +116,6 @@ void scalar_medians_of_eight(const double* values, std::size_t stride, std::size
 
 void normalised_residuals_of_eight(const double* values, std::size_t stride, std::size_t count, const double* centres,
                                    double epsilon, double* residuals) {
-  apply_environment_once();
   HWY_DYNAMIC_DISPATCH(NormalisedResidualsOfEight)(values, stride, count, centres, epsilon, residuals);
 }
 void scalar_normalised_residuals_of_eight(const double* values, std::size_t stride, std::size_t count,

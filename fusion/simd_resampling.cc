@@ -13,7 +13,6 @@
 #include "hwy/cache_control.h"
 // clang-format on
 
-#include "fusion/simd_dispatch.h"
 #include "fusion/simd_kernels.h"
 
 // After foreach_target.h too, so that each target sees them.
@@ -297,7 +296,6 @@ HWY_EXPORT(WeightedSum);
 HWY_EXPORT(SampleSeparablePoints);
 
 void weighted_sum(const double* const* inputs, int taps, const double* weights, std::size_t count, double* out) {
-  apply_environment_once();
   HWY_DYNAMIC_DISPATCH(WeightedSum)(inputs, taps, weights, count, out);
 }
 
@@ -319,7 +317,6 @@ void tabulated_weights(const TabulatedKernel& kernel, double t, float* weights) 
 
 void sample_separable(const float* image, std::size_t stride, int cols, int rows, const TabulatedKernel& kernel,
                       const double* x, const double* y, int count, float* out) {
-  apply_environment_once();
   HWY_DYNAMIC_DISPATCH(SampleSeparablePoints)(image, stride, cols, rows, kernel, x, y, count, out);
 }
 

@@ -19,7 +19,6 @@
 #include <type_traits>
 
 #include "fusion/evaluation.h"
-#include "fusion/field_csv.h"
 
 namespace bosfuse::fusion {
 namespace {
@@ -777,23 +776,6 @@ std::optional<double> TemperatureFieldSolver::average_sigma_c(const Displacement
   const double variance = noise_variance_along(z, state.unknown, displacement.rows, displacement.cols, measured,
                                                edge_weight, sigmas, target_per_px);
   return std::sqrt(std::max(variance, 0.0));
-}
-
-void write_csv(const TemperatureField& field, const std::filesystem::path& path) {
-  FieldCsvWriter csv(kTemperatureColumns, static_cast<std::size_t>(field.rows) * field.cols);
-  for (int r = 0; r < field.rows; ++r) {
-    for (int c = 0; c < field.cols; ++c) {
-      const std::size_t i = field.index(r, c);
-      const double t = field.temperature_c[i];
-      csv.fixed(field.x0_px + c * field.step_px, 1);
-      csv.fixed(field.y0_px + r * field.step_px, 1);
-      csv.fixed(t, 4);  // NaN as "nan"
-      csv.integer(int{field.measured[i]});
-      csv.fixed(i < field.sigma_c.size() ? field.sigma_c[i] : std::numeric_limits<double>::quiet_NaN(), 5);
-      csv.end_line();
-    }
-  }
-  csv.save(path);
 }
 
 }  // namespace bosfuse::fusion

@@ -91,7 +91,6 @@
 // recover_temperature_field is the one-shot form.
 
 #include <cstdint>
-#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -241,10 +240,5 @@ class TemperatureFieldSolver {
   TemperatureFieldOptions options_;
   std::unique_ptr<State> state_;
 };
-
-// CSV with the header `x,y,temperature_c,measured,sigma_c` (field_csv.h);
-// NaN written as `nan`, the `measured` flag saying whether the node's value
-// is a measurement's.
-void write_csv(const TemperatureField& field, const std::filesystem::path& path);
 
 }  // namespace bosfuse::fusion

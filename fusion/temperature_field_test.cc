@@ -197,24 +197,6 @@ TEST(TemperatureField, InwardDisplacementFromImagesIsAHotSpot) {
   EXPECT_NEAR(*centre - 20, expected_rise, 0.15 * expected_rise);
 }
 
-TEST(TemperatureField, TheCsvHasANodePerLineItsSigmaAndNanWhereNoValueExists) {
-  TemperatureField field;
-  field.rows = 1;
-  field.cols = 2;
-  field.x0_px = 7.5;
-  field.y0_px = 7.5;
-  field.step_px = 8;
-  field.temperature_c = {25.5, std::nan("")};
-  field.measured = {1, 0};
-  field.sigma_c = {0.0123456, std::nan("")};
-  const auto path = std::filesystem::temp_directory_path() / "bosfuse-temperature-csv-test.csv";
-  write_csv(field, path);
-  std::ifstream in(path);
-  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  std::filesystem::remove(path);
-  EXPECT_EQ(text, "x,y,temperature_c,measured,sigma_c\n7.5,7.5,25.5000,1,0.01235\n15.5,7.5,nan,0,nan\n");
-}
-
 }  // namespace
 }  // namespace bosfuse::fusion
 

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "fusion/image_input.h"
+#include "pipeline/evaluation_log.h"
 #include "pipeline/process_frame.h"
 #include "pipeline/processing_settings.h"
 #include "pipeline/run_selection.h"
@@ -80,6 +81,7 @@ LiveProbes::LiveProbes(const fs::path& run_dir, LiveProbeOptions options) {
   frame.calibration = stored_calibration(storage::ProcessingStore(run_dir));
   load_frame_context(frame);
   ctx->reference_moments = fusion::grey_moments(frame.reference, "reference frame");
+  log_warnings(ctx->reference_moments.warnings);
   camera_offset_s_ = frame.settings.geometry.camera_offset_s;
   temperature_source_ = pipeline::temperature_source(frame);
   context_ = std::move(ctx);
@@ -100,7 +102,9 @@ LiveFrame LiveProbes::evaluate(const storage::FrameRecord& frame) const {
     out.probes.push_back({channels_[p].id, channels_[p].name, ctx.frame.points[p], s.u_px, s.v_px, s.shift_px, s.valid,
                           s.temperature_c, s.sigma_shift_px, s.sigma_random_c, s.sigma_systematic_c});
   }
-  out.quality = fusion::modified_quality_index(fusion::grey_moments(measurement, "frame"), ctx.reference_moments);
+  const fusion::GreyMoments moments = fusion::grey_moments(measurement, "frame");
+  log_warnings(moments.warnings);
+  out.quality = fusion::modified_quality_index(moments, ctx.reference_moments);
   out.thumbnail = thumbnail(measurement, ctx.options.thumbnail_width_px);
   out.evaluate_seconds = seconds_since(start);
   return out;

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include "fusion/scene_match.h"
+#include "pipeline/evaluation_log.h"
 #include "pipeline/image_io.h"
 
 namespace bosfuse::pipeline {
@@ -23,7 +24,10 @@ fusion::EvaluationResult evaluate_image_pair(const ImagePair& pair, const fusion
   fusion::EvaluationResult result =
       probes.empty() ? fusion::evaluate_displacement(pair.reference, pair.measurement, options, pair.mask)
                      : fusion::probe_displacement(pair.reference, pair.measurement, probes, options, pair.mask);
-  if (const auto scene = fusion::match_scene(pair.measurement, pair.reference); !scene.same_scene()) {
+  log_evaluation(result.summary);
+  const auto scene = fusion::match_scene(pair.measurement, pair.reference);
+  log_warnings(scene.warnings);
+  if (!scene.same_scene()) {
     fusion::refuse_vectors(result);  // a pair of two scenes supports no vector
     spdlog::warn("{} against {}: {}; no vector is marked valid", pair.measurement_path, pair.reference_path,
                  scene.Describe());

@@ -6,6 +6,8 @@
 
 #include "fitting/fit_json.h"
 #include "fusion/temperature_budget.h"
+#include "pipeline/evaluation_log.h"
+#include "pipeline/field_csv.h"
 #include "pipeline/run_selection.h"
 
 namespace bosfuse::pipeline {
@@ -240,10 +242,10 @@ std::vector<storage::FieldRecord> write_fields(const FrameContext& ctx, const Fr
                                                const json& summary, ProcessTimes& times) {
   const std::string stem = fmt::format("{}/frame_{:06d}", ctx.fields_dir, frame.id);
   std::vector<storage::FieldRecord> fields;
-  timed(times.csv_s, [&] { fusion::write_csv(evaluated.field, ctx.run_dir / (stem + "_displacement.csv")); });
+  timed(times.csv_s, [&] { write_csv(evaluated.field, ctx.run_dir / (stem + "_displacement.csv")); });
   fields.push_back({0, frame.id, "displacement", stem + "_displacement.csv", summary.dump()});
   if (!result.temperature) return fields;
-  timed(times.csv_s, [&] { fusion::write_csv(result.temperature->field, ctx.run_dir / (stem + "_temperature.csv")); });
+  timed(times.csv_s, [&] { write_csv(result.temperature->field, ctx.run_dir / (stem + "_temperature.csv")); });
   const auto& s = result.temperature->summary;
   fields.push_back({0, frame.id, "temperature", stem + "_temperature.csv",
                     json{{"min_c", fitting::number_or_null(s.min_c)},
@@ -307,10 +309,13 @@ std::vector<storage::ProbeSampleRecord> samples_of(const FrameContext& ctx, cons
 CheckedEvaluation FrameContext::evaluate(const cv::Mat& measurement) const {
   CheckedEvaluation out;
   if (scene) {
-    if (auto match = scene->match(measurement); !match.same_scene()) out.refused = std::move(match);
+    auto match = scene->match(measurement);
+    log_warnings(match.warnings);
+    if (!match.same_scene()) out.refused = std::move(match);
   }
   static_cast<fusion::EvaluationResult&>(out) =
       settings.probes_only ? evaluator->probe(measurement, points) : evaluator->evaluate(measurement);
+  log_evaluation(out.summary);
   if (out.refused) fusion::refuse_vectors(out);
   return out;
 }

@@ -1,6 +1,7 @@
 #include "pipeline/sequence_evaluation.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <cstring>
 #include <nlohmann/json.hpp>
@@ -10,6 +11,7 @@
 #include "acquisition/image_file.h"
 #include "fusion/evaluation.h"
 #include "fusion/image_input.h"
+#include "pipeline/evaluation_log.h"
 #include "pipeline/image_io.h"
 
 namespace bosfuse::pipeline {
@@ -50,7 +52,7 @@ SequenceEvaluator::SequenceEvaluator(const std::string& reference_path, fusion::
   fusion::check_window_fits(first_window_px(options_), roi.size());
   grid_ = fusion::evaluation_grid(roi, options_.xcorr.window_px, options_.xcorr.step_px);
   evaluator_.emplace(reference_, options_, mask_);
-  evaluator_->check_memory();
+  if (const std::string account = evaluator_->check_memory(); !account.empty()) spdlog::debug("{}", account);
   scene_.emplace(reference_);
 }
 
@@ -68,8 +70,11 @@ SequenceFrameResult SequenceEvaluator::evaluate(const std::string& frame_path) {
                                            image.rows, reference_.cols, reference_.rows));
     }
     // Another scene supports no vector: the frame's status says so, as for an unreadable one.
-    if (const auto scene = scene_->match(image); !scene.same_scene()) throw std::runtime_error(scene.Describe());
+    const auto scene = scene_->match(image);
+    log_warnings(scene.warnings);
+    if (!scene.same_scene()) throw std::runtime_error(scene.Describe());
     fusion::EvaluationResult evaluated = evaluator_->evaluate(image);
+    log_evaluation(evaluated.summary);
     if (evaluated.field.rows != grid_.rows || evaluated.field.cols != grid_.cols) {
       throw std::logic_error(fmt::format("the field has {}x{} nodes, not the {}x{} of the sequence's grid",
                                          evaluated.field.cols, evaluated.field.rows, grid_.cols, grid_.rows));

@@ -10,7 +10,7 @@
 #include <string_view>
 
 #include "acquisition/clock.h"
-#include "fusion/field_csv.h"
+#include "pipeline/field_csv.h"
 #include "report/field_conventions.h"
 #include "report/hdf5_writer.h"
 #include "report/xdmf_sidecar.h"
@@ -70,9 +70,9 @@ struct Kind {
 };
 
 const Kind kKinds[] = {
-    {"displacement", fusion::kDisplacementColumns, kDisplacementQuantities, "valid",
+    {"displacement", pipeline::kDisplacementColumns, kDisplacementQuantities, "valid",
      "displacement fields of the measurement frames against the reference frame, one group per frame"},
-    {"temperature", fusion::kTemperatureColumns, kTemperatureQuantities, "measured",
+    {"temperature", pipeline::kTemperatureColumns, kTemperatureQuantities, "measured",
      "temperature fields recovered from the displacement fields, one group per frame"},
 };
 
@@ -118,7 +118,7 @@ std::vector<std::uint8_t> as_flags(const cv::Mat& values) {
   return out;
 }
 
-std::size_t grid_of(const fusion::StoredFieldGrid& field, std::vector<Grid>& grids, hdf5::Writer& out,
+std::size_t grid_of(const pipeline::StoredFieldGrid& field, std::vector<Grid>& grids, hdf5::Writer& out,
                     std::optional<double> px_per_mm) {
   for (std::size_t i = 0; i < grids.size(); ++i) {
     if (grids[i].x_px == field.x_px && grids[i].y_px == field.y_px) return i;
@@ -248,7 +248,7 @@ struct ExportState {
 };
 
 // The frame's quantities as 2-D datasets of `group`: flags as 0/1, values NaN where nothing was measured.
-void write_quantities(hdf5::Writer& out, const Kind& kind, const fusion::StoredFieldGrid& field,
+void write_quantities(hdf5::Writer& out, const Kind& kind, const pipeline::StoredFieldGrid& field,
                       const std::string& group) {
   for (const auto& q : kind.quantities) {
     const std::string path = group + "/" + std::string(q.dataset);
@@ -267,9 +267,9 @@ void write_quantities(hdf5::Writer& out, const Kind& kind, const fusion::StoredF
 // One stored field as its frame's group, linked to its grid's coordinates.
 ExportedFrame write_frame(hdf5::Writer& out, ExportState& state, const Kind& kind, const storage::FieldRecord& row) {
   const auto& frame = state.frame_by_id.at(row.frame_id);
-  fusion::StoredFieldGrid field;
+  pipeline::StoredFieldGrid field;
   try {
-    field = fusion::read_stored_field(storage::resolve_in_run(state.store.dir(), row.path), kind.columns);
+    field = pipeline::read_stored_field(storage::resolve_in_run(state.store.dir(), row.path), kind.columns);
   } catch (const std::exception& e) {
     throw std::runtime_error(fmt::format("stored {} field of frame {}: {}", kind.name, frame.id, e.what()));
   }

@@ -8,7 +8,7 @@
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 
-#include "fusion/field_csv.h"
+#include "pipeline/field_csv.h"
 #include "pipeline/process.h"
 #include "storage/experiment_clock.h"
 #include "report/hdf5_writer.h"
@@ -341,8 +341,8 @@ TEST_F(FieldExport, AHeaterFilledInByTheSolveIsNaNAndFlaggedInTheHdf5) {
   int filled_under_holder = 0, invalid_vectors = 0;
   for (const auto& row : results.fields()) {
     const bool temperature = row.kind == "temperature";
-    const auto stored = temperature ? fusion::read_stored_field(run() / row.path, fusion::kTemperatureColumns)
-                                    : fusion::read_stored_field(run() / row.path, fusion::kDisplacementColumns);
+    const auto stored = temperature ? pipeline::read_stored_field(run() / row.path, pipeline::kTemperatureColumns)
+                                    : pipeline::read_stored_field(run() / row.path, pipeline::kDisplacementColumns);
     const std::string group = fmt::format("/{}/frame_{:06d}", row.kind, row.frame_id);
     const auto value = read_array(file.get(), group + (temperature ? "/temperature_c" : "/u_px"));
     const auto flag = read_array(file.get(), group + (temperature ? "/measured" : "/valid"), H5T_NATIVE_UINT8);

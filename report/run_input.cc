@@ -10,7 +10,7 @@
 #include <set>
 
 #include "fitting/fit_json.h"
-#include "fusion/field_csv.h"
+#include "pipeline/field_csv.h"
 #include "pipeline/process.h"
 #include "pipeline/processing_settings.h"
 #include "pipeline/quality_json.h"
@@ -36,11 +36,11 @@ fitting::NewtonFit stored_fit(const storage::FitRecord& record, const storage::E
   return fit;
 }
 
-// A stored field (fusion/field_csv.h) as a map on its grid: `value` at the
+// A stored field (pipeline/field_csv.h) as a map on its grid: `value` at the
 // nodes where `measured` is non-zero and finite; NaN and masked elsewhere, so
 // that no value the solve filled in (or a replaced outlier's neighbour median)
 // reaches a map's CSV, figure or contours as if it were a measurement.
-MapField map_from_stored(const fusion::StoredFieldGrid& grid, const cv::Mat& value, const cv::Mat& measured) {
+MapField map_from_stored(const pipeline::StoredFieldGrid& grid, const cv::Mat& value, const cv::Mat& measured) {
   MapField map;
   map.values = cv::Mat(grid.rows(), grid.cols(), CV_64F, cv::Scalar(std::numeric_limits<double>::quiet_NaN()));
   map.mask = cv::Mat(grid.rows(), grid.cols(), CV_8U, cv::Scalar(255));
@@ -62,7 +62,7 @@ MapField map_from_stored(const fusion::StoredFieldGrid& grid, const cv::Mat& val
 // Nodes the solve filled in (`measured` 0: masked, no texture, no peak) and
 // unphysical ones (no temperature) are not measurements.
 MapField read_temperature_csv(const fs::path& path) {
-  const auto grid = fusion::read_stored_field(path, fusion::kTemperatureColumns);
+  const auto grid = pipeline::read_stored_field(path, pipeline::kTemperatureColumns);
   MapField map = map_from_stored(grid, grid.column("temperature_c"), grid.column("measured"));
   map.quantity = "temperature";
   map.unit = "°C";
@@ -71,7 +71,7 @@ MapField read_temperature_csv(const fs::path& path) {
 
 // `valid` is 1 for kOk vectors only: a replaced outlier is not shown either.
 MapField read_displacement_csv(const fs::path& path) {
-  const auto grid = fusion::read_stored_field(path, fusion::kDisplacementColumns);
+  const auto grid = pipeline::read_stored_field(path, pipeline::kDisplacementColumns);
   cv::Mat magnitude;
   cv::magnitude(grid.column("u"), grid.column("v"), magnitude);
   MapField map = map_from_stored(grid, magnitude, grid.column("valid"));

@@ -8,7 +8,7 @@
 #include <sstream>
 #include <opencv2/imgcodecs.hpp>
 
-#include "fusion/field_csv.h"
+#include "pipeline/field_csv.h"
 #include "report/report.h"
 #include "pipeline/process.h"
 #include "tests/support/synthetic_run.h"
@@ -205,10 +205,10 @@ TEST(RunInput, AHeaterFilledInByTheSolveIsNotMeasuredInTheTemperatureMapOrItsCsv
 
   // What the solve stored: finite temperatures it filled in under the holder.
   const storage::ProcessingStore results(dir / "run");
-  std::optional<fusion::StoredFieldGrid> stored;
+  std::optional<pipeline::StoredFieldGrid> stored;
   for (const auto& f : results.fields()) {
     if (f.kind == "temperature" && map.source.find(f.path) != std::string::npos) {
-      stored = fusion::read_stored_field(dir / "run" / f.path, fusion::kTemperatureColumns);
+      stored = pipeline::read_stored_field(dir / "run" / f.path, pipeline::kTemperatureColumns);
     }
   }
   ASSERT_TRUE(stored) << map.source;

@@ -1,4 +1,4 @@
-#include "fusion/field_csv.h"
+#include "pipeline/field_csv.h"
 
 #include <gtest/gtest.h>
 
@@ -7,12 +7,30 @@
 #include <fstream>
 #include <limits>
 #include <random>
+#include <sstream>
 
 #include "fusion/displacement_field.h"
+#include "fusion/temperature_field.h"
 #include "tests/support/temp_dir.h"
 
-namespace bosfuse::fusion {
+namespace bosfuse::pipeline {
 namespace {
+
+// A field of one row of two vectors.
+fusion::DisplacementField row_of_two(const fusion::DisplacementVector& first,
+                                     const fusion::DisplacementVector& second) {
+  fusion::DisplacementField field;
+  field.rows = 1;
+  field.cols = 2;
+  field.vectors = {first, second};
+  return field;
+}
+
+// `field` written to a file in `dir` and read back.
+StoredFieldGrid written_back(const fusion::DisplacementField& field, const std::filesystem::path& dir) {
+  write_csv(field, dir / "d.csv");
+  return read_stored_field(dir / "d.csv", kDisplacementColumns);
+}
 
 std::string error_of(const std::filesystem::path& path, std::span<const std::string_view> columns) {
   try {
@@ -114,13 +132,9 @@ TEST(FieldCsv, ReadsTheGridInRowOrderWhateverTheLineOrder) {
 
 TEST(FieldCsv, ReadsTheUncertaintyColumnsWrittenBack) {
   testing::TempDir dir;
-  DisplacementField field;
-  field.rows = 1;
-  field.cols = 2;
-  field.vectors = {{7.5, 7.5, 0.25, -1.5, 3.2, VectorFlag::kOk, false, 0.0123, 0.0045},
-                   {15.5, 7.5, 0, 0, 0, VectorFlag::kMasked}};
-  write_csv(field, dir / "d.csv");
-  const auto grid = read_stored_field(dir / "d.csv", kDisplacementColumns);
+  const auto grid = written_back(row_of_two({7.5, 7.5, 0.25, -1.5, 3.2, fusion::VectorFlag::kOk, false, 0.0123, 0.0045},
+                                            {15.5, 7.5, 0, 0, 0, fusion::VectorFlag::kMasked}),
+                                 dir.path());
   EXPECT_EQ(grid.column("sigma_u").at<double>(0, 0), 0.0123);
   EXPECT_EQ(grid.column("sigma_v").at<double>(0, 0), 0.0045);
   EXPECT_EQ(grid.column("sigma_u").at<double>(0, 1), 0.0) << "not estimated";
@@ -128,12 +142,9 @@ TEST(FieldCsv, ReadsTheUncertaintyColumnsWrittenBack) {
 
 TEST(FieldCsv, ReadsTheFlagColumnWrittenBackByName) {
   testing::TempDir dir;
-  DisplacementField field;
-  field.rows = 1;
-  field.cols = 2;
-  field.vectors = {{7.5, 7.5, 0.25, -1.5, 3.2, VectorFlag::kOk}, {15.5, 7.5, 0, 0, 0, VectorFlag::kBeyondSearch}};
-  write_csv(field, dir / "d.csv");
-  const auto grid = read_stored_field(dir / "d.csv", kDisplacementColumns);
+  const auto grid = written_back(row_of_two({7.5, 7.5, 0.25, -1.5, 3.2, fusion::VectorFlag::kOk},
+                                            {15.5, 7.5, 0, 0, 0, fusion::VectorFlag::kBeyondSearch}),
+                                 dir.path());
   EXPECT_EQ(grid.column("flag").at<double>(0, 0), 0.0);
   EXPECT_EQ(grid.column("flag").at<double>(0, 1), 6.0);
   EXPECT_EQ(grid.column("peak_ratio").at<double>(0, 0), 3.2) << "the columns after flag stay in place";
@@ -189,5 +200,37 @@ TEST(FieldCsv, MistakesNameTheFileAndLine) {
   EXPECT_NE(error_of(dir / "none.csv", kTemperatureColumns).find("cannot read"), std::string::npos);
 }
 
+TEST(DisplacementField, CsvHasTheHeaderAndOneLinePerVector) {
+  const fusion::DisplacementField field =
+      row_of_two({7.5, 7.5, 0.25, -1.5, 3.2, fusion::VectorFlag::kOk, false, 0.0123, 0.00456},
+                 {15.5, 7.5, 0, 0, 0, fusion::VectorFlag::kMasked});
+  std::ostringstream out;
+  write_csv(field, out);
+  EXPECT_EQ(out.str(),
+            "x,y,u,v,valid,flag,peak_ratio,sigma_u,sigma_v\n"
+            "7.5,7.5,0.25000,-1.50000,1,ok,3.200,0.01230,0.00456\n"
+            "15.5,7.5,0.00000,0.00000,0,masked,0.000,0.00000,0.00000\n");
+  EXPECT_EQ(field.count_valid(), 1u);
+  EXPECT_EQ(field.count(fusion::VectorFlag::kMasked), 1u);
+}
+
+TEST(TemperatureField, TheCsvHasANodePerLineItsSigmaAndNanWhereNoValueExists) {
+  fusion::TemperatureField field;
+  field.rows = 1;
+  field.cols = 2;
+  field.x0_px = 7.5;
+  field.y0_px = 7.5;
+  field.step_px = 8;
+  field.temperature_c = {25.5, std::nan("")};
+  field.measured = {1, 0};
+  field.sigma_c = {0.0123456, std::nan("")};
+  const auto path = std::filesystem::temp_directory_path() / "bosfuse-temperature-csv-test.csv";
+  write_csv(field, path);
+  std::ifstream in(path);
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  std::filesystem::remove(path);
+  EXPECT_EQ(text, "x,y,temperature_c,measured,sigma_c\n7.5,7.5,25.5000,1,0.01235\n15.5,7.5,nan,0,nan\n");
+}
+
 }  // namespace
-}  // namespace bosfuse::fusion
+}  // namespace bosfuse::pipeline

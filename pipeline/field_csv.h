@@ -1,10 +1,13 @@
 #pragma once
-// A field file (docs/SCHEMA.md, table `fields`) as write_csv() writes it
-// (displacement_field.h, temperature_field.h), read back onto its grid:
-// displacement `x,y,u,v,valid,flag,peak_ratio,sigma_u,sigma_v` or temperature
-// `x,y,temperature_c,measured,sigma_c`, one line per grid node. The writers and this
-// one reader share the column names below, so the layout cannot drift
-// between them; the report's maps and the HDF5 export read through it.
+// A field file (docs/SCHEMA.md, table `fields`): a displacement or
+// temperature field (fusion/displacement_field.h, fusion/temperature_field.h)
+// written as CSV by write_csv() and read back onto its grid: displacement
+// `x,y,u,v,valid,flag,peak_ratio,sigma_u,sigma_v` or temperature
+// `x,y,temperature_c,measured,sigma_c`, one line per grid node. Processing
+// and `bosfuse evaluate` write through it; the writers and this one reader
+// share the column names below, so the layout cannot drift between them;
+// the report's maps and the HDF5 export read through it. It lives here, not
+// in fusion/, because fusion/ opens no files.
 //
 // The grid is whatever distinct x and y values the file holds (ascending),
 // so it needs no step to be declared and a file with missing nodes still
@@ -12,6 +15,7 @@
 // (a temperature the field could not give) are NaN too.
 
 #include <filesystem>
+#include <iosfwd>
 #include <opencv2/core.hpp>
 #include <span>
 #include <string>
@@ -19,6 +23,11 @@
 #include <vector>
 
 namespace bosfuse::fusion {
+struct DisplacementField;
+struct TemperatureField;
+}  // namespace bosfuse::fusion
+
+namespace bosfuse::pipeline {
 
 struct StoredFieldGrid {
   std::vector<double> x_px;          // column positions, ascending (image coordinates, DESIGN.md)
@@ -35,7 +44,7 @@ struct StoredFieldGrid {
 
 // `flag` holds the flag's name (displacement_field.h: ok, no-peak,
 // beyond-search, ...); it is read as the flag's value.
-inline constexpr std::string_view kDisplacementColumns[] = {"u",    "v",          "valid",   "flag",
+inline constexpr std::string_view kDisplacementColumns[] = {"u",          "v",       "valid",  "flag",
                                                             "peak_ratio", "sigma_u", "sigma_v"};
 inline constexpr std::string_view kTemperatureColumns[] = {"temperature_c", "measured", "sigma_c"};
 // Columns a field file written before they existed lacks (σ came with
@@ -76,4 +85,14 @@ class FieldCsvWriter {
 // holds no node.
 StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<const std::string_view> value_columns);
 
-}  // namespace bosfuse::fusion
+// CSV with the header `x,y,u,v,valid,flag,peak_ratio,sigma_u,sigma_v`, one
+// vector per line (flag by its name, σ 0 where not estimated).
+void write_csv(const fusion::DisplacementField& field, std::ostream& out);
+void write_csv(const fusion::DisplacementField& field, const std::filesystem::path& path);
+
+// CSV with the header `x,y,temperature_c,measured,sigma_c`; NaN written as
+// `nan`, the `measured` flag saying whether the node's value is a
+// measurement's.
+void write_csv(const fusion::TemperatureField& field, const std::filesystem::path& path);
+
+}  // namespace bosfuse::pipeline

@@ -1,4 +1,4 @@
-#include "fusion/field_csv.h"
+#include "pipeline/field_csv.h"
 
 #include <fmt/format.h>
 
@@ -9,11 +9,13 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <ostream>
 #include <stdexcept>
 
 #include "fusion/displacement_field.h"
+#include "fusion/temperature_field.h"
 
-namespace bosfuse::fusion {
+namespace bosfuse::pipeline {
 namespace {
 
 std::vector<std::string_view> split(std::string_view line) {
@@ -165,11 +167,11 @@ std::vector<std::size_t> column_positions(const std::string& header, std::span<c
 }
 
 // A cell of column `name`: a number, or for `flag` a flag's name
-// (displacement_field.h), read as its value.
+// (fusion/displacement_field.h), read as its value.
 bool parse_cell(std::string_view name, std::string_view cell, double& out) {
   if (name != "flag") return parse_number(cell, out);
-  VectorFlag flag{};
-  if (!parse_vector_flag(cell, flag)) return false;
+  fusion::VectorFlag flag{};
+  if (!fusion::parse_vector_flag(cell, flag)) return false;
   out = static_cast<double>(flag);
   return true;
 }
@@ -243,4 +245,53 @@ StoredFieldGrid read_stored_field(const std::filesystem::path& path, std::span<c
   return grid;
 }
 
-}  // namespace bosfuse::fusion
+namespace {
+
+FieldCsvWriter field_text(const fusion::DisplacementField& field) {
+  FieldCsvWriter csv(kDisplacementColumns, field.vectors.size());
+  for (const auto& v : field.vectors) {
+    // Enough digits for 0.001 px work; the centre is exact in half pixels.
+    csv.fixed(v.x_px, 1);
+    csv.fixed(v.y_px, 1);
+    csv.fixed(v.u_px, 5);
+    csv.fixed(v.v_px, 5);
+    csv.integer(v.valid() ? 1 : 0);
+    csv.text(to_string(v.flag));
+    csv.fixed(v.peak_ratio, 3);
+    csv.fixed(v.sigma_u_px, 5);
+    csv.fixed(v.sigma_v_px, 5);
+    csv.end_line();
+  }
+  return csv;
+}
+
+}  // namespace
+
+void write_csv(const fusion::DisplacementField& field, std::ostream& out) {
+  const FieldCsvWriter csv = field_text(field);
+  const std::string_view text = csv.text();
+  out.write(text.data(), static_cast<std::streamsize>(text.size()));
+}
+
+void write_csv(const fusion::DisplacementField& field, const std::filesystem::path& path) {
+  field_text(field).save(path);
+}
+
+void write_csv(const fusion::TemperatureField& field, const std::filesystem::path& path) {
+  FieldCsvWriter csv(kTemperatureColumns, static_cast<std::size_t>(field.rows) * field.cols);
+  for (int r = 0; r < field.rows; ++r) {
+    for (int c = 0; c < field.cols; ++c) {
+      const std::size_t i = field.index(r, c);
+      const double t = field.temperature_c[i];
+      csv.fixed(field.x0_px + c * field.step_px, 1);
+      csv.fixed(field.y0_px + r * field.step_px, 1);
+      csv.fixed(t, 4);  // NaN as "nan"
+      csv.integer(int{field.measured[i]});
+      csv.fixed(i < field.sigma_c.size() ? field.sigma_c[i] : std::numeric_limits<double>::quiet_NaN(), 5);
+      csv.end_line();
+    }
+  }
+  csv.save(path);
+}
+
+}  // namespace bosfuse::pipeline
