@@ -8,23 +8,15 @@
 
 #include <glog/logging.h>
 
-#include <algorithm>
-#include <cctype>
 #include <cmath>
-#include <ctime>
 #include <fstream>
-#include <iomanip>
 #include <iostream>
-#include <nlohmann/json.hpp>
 #include <optional>
-#include <sstream>
 
-#include "acquisition/clock.h"
 #include "app/command.h"
 #include "app/output_stream.h"
-#include "fitting/fit_json.h"
 #include "fitting/newton_fit.h"
-#include "report/sample_csv.h"
+#include "report/csv_fit.h"
 
 namespace bosfuse::app {
 namespace {
@@ -59,16 +51,6 @@ RobustLoss parse_loss(const std::string& text) {
   throw std::runtime_error("--loss '" + text + "': expected none, huber:SCALE or cauchy:SCALE (°C)");
 }
 
-// The shared fit layout plus where the data came from.
-nlohmann::ordered_json fit_json(const NewtonFit& fit, const CsvSeries& series, const std::string& file) {
-  nlohmann::ordered_json j = fitting::to_json(fit);
-  j["input"] = {{"file", file}, {"time_column", series.time_name}, {"temperature_column", series.temperature_name}};
-  if (series.time_scale) j["input"]["time_scale"] = *series.time_scale;
-  if (series.iso_origin_ns) j["origin_time_utc"] = acquisition::format_iso8601_utc(*series.iso_origin_ns, 6);
-  j["diagnostics"]["empty_rows_skipped"] = series.empty_rows;
-  return j;
-}
-
 struct FitArgs {
   std::string file;
   std::string time_column;
@@ -90,37 +72,6 @@ NewtonFitOptions fit_options(const FitArgs& args) {
   return options;
 }
 
-void print_header(std::ostream& out, const CsvSeries& series, const std::string& file, double origin_s) {
-  out << (file == "-" ? "standard input" : file) << ": '" << series.temperature_name << "' against '"
-      << series.time_name << "'";
-  if (series.iso_origin_ns) {
-    out << " (t = 0 at " << acquisition::format_iso8601_utc(*series.iso_origin_ns, 6);
-    if (series.time_scale && *series.time_scale != 1) {
-      out << "; experiment seconds: the recorded times × " << *series.time_scale << ", the file's time_scale";
-    }
-    out << ")";
-  } else if (origin_s != 0.0) {
-    out << " (t = 0 at " << series.time_name << " = " << std::setprecision(15) << origin_s << std::setprecision(6)
-        << ")";
-  }
-  if (series.empty_rows) out << "; " << series.empty_rows << " rows with an empty cell skipped";
-  out << "\n";
-}
-
-// t = 0 of the fit: the file's own t = 0 (an export's experiment seconds, so
-// T0 is the temperature at the experiment's origin; ISO-8601 times count
-// from the earliest), unless the times are epoch-scale seconds, which the
-// fit counts from the earliest sample.
-NewtonFitOptions with_origin(NewtonFitOptions options, const CsvSeries& series) {
-  constexpr double kYear_s = 365.25 * 86400;
-  double earliest = INFINITY;
-  for (double t : series.time_s) {
-    if (std::isfinite(t)) earliest = std::min(earliest, t);
-  }
-  if (std::abs(earliest) < kYear_s) options.origin_s = 0.0;
-  return options;
-}
-
 void run_fit(const FitArgs& args) {
   FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres logs rank deficiency itself; the summary says it better
   const NewtonFitOptions options = fit_options(args);
@@ -132,13 +83,13 @@ void run_fit(const FitArgs& args) {
   }
   const CsvSeries series =
       report::read_csv_series(args.file == "-" ? std::cin : file, args.time_column, args.temperature_column);
-  const NewtonFit fit = fitting::fit_newton(series.time_s, series.temperature_c, with_origin(options, series));
+  const NewtonFit fit = fitting::fit_newton(series.time_s, series.temperature_c, report::with_csv_origin(options, series));
   std::ostream& text = text_stream(names_standard_output(args.json));
-  print_header(text, series, args.file, fit.origin_s);
+  report::print_csv_fit_header(text, series, args.file, fit.origin_s);
   text << fit.brief_report() << std::flush;
   if (!args.json.empty()) {
     OutputStream out(args.json, "--json");
-    out.stream() << fit_json(fit, series, args.file).dump(2) << "\n";
+    out.stream() << report::csv_fit_json(fit, series, args.file).dump(2) << "\n";
     out.close();
   }
   if (!fit.ok()) throw std::runtime_error("no fit: " + fit.summary.message);

@@ -1,12 +1,19 @@
-# bosfuse_library(NAME [DEPS ...])
-#   Builds bosfuse::NAME from the folder's *.cc files (tests excluded) and,
-#   when the folder has *_test.cc files, a test binary NAME_test registered
-#   with ctest. Tests sit next to the concept they test (foo.h, foo.cc,
+# bosfuse_library(NAME [ROOMS ...] [DEPS ...] [TEST_DEPS ...])
+#   Builds bosfuse::NAME from the folder's *.cc files, and those of its ROOMS
+#   (subfolders that split a large library by subject), tests excluded, and,
+#   when they have *_test.cc files, a test binary NAME_test registered with
+#   ctest. Tests sit next to the concept they test (foo.h, foo.cc,
 #   foo_test.cc); new files are picked up at the next configure.
 function(bosfuse_library name)
-  cmake_parse_arguments(ARG "" "" "DEPS;TEST_DEPS" ${ARGN})
-  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cc)
-  file(GLOB tests CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*_test.cc)
+  cmake_parse_arguments(ARG "" "" "ROOMS;DEPS;TEST_DEPS" ${ARGN})
+  set(sources)
+  set(tests)
+  foreach(dir . ${ARG_ROOMS})
+    file(GLOB dir_sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${dir}/*.cc)
+    file(GLOB dir_tests CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${dir}/*_test.cc)
+    list(APPEND sources ${dir_sources})
+    list(APPEND tests ${dir_tests})
+  endforeach()
   if(tests)
     list(REMOVE_ITEM sources ${tests})
   endif()

@@ -6,7 +6,7 @@
 // work is partly single-threaded: a 16 MP frame decodes its PNG, solves its
 // temperature field and writes its field files on one core each, so one
 // frame at a time leaves cores idle that frames side by side keep busy
-// (docs/BENCHMARKS.md, "Frames side by side"). Each thread holds a
+// (docs/BENCHMARKS.md, "A 16 MP run"). Each thread holds a
 // context's memory (~600 MB at 16 MP).
 //
 // The first thread runs the job's own `local` work (the caller's context);

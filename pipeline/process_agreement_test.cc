@@ -56,7 +56,7 @@ TEST(ProcessAgreement, TheSimulatorsLagIsWhatTheAgreementEstimates) {
 }
 
 TEST(ProcessAgreement, TheDemosStatedLagIsRemovedNotReportedAsDisagreement) {
-  const SimulatedPair p = simulated_pair(0.5);  // the demo's thermocouples (app/cmd_demo.cc)
+  const SimulatedPair p = simulated_pair(0.5);  // the demo's thermocouples (sim/demo_setup.h)
   fitting::AgreementOptions given;
   given.a_time_constant_s = 0.5;
   const auto result = fitting::compare_fits(p.tc_fit, p.air_fit, p.tc, p.air, given);
