@@ -7,9 +7,9 @@
 #include <thread>
 
 #include "acquisition/clock.h"
-#include "acquisition/recorded_frame_source.h"
-#include "acquisition/video_capture_source.h"
-#include "acquisition/watched_folder_source.h"
+#include "acquisition/cameras/recorded_frame_source.h"
+#include "acquisition/cameras/video_capture_source.h"
+#include "acquisition/cameras/watched_folder_source.h"
 
 namespace bosfuse::acquisition {
 namespace {

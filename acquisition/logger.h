@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "acquisition/device_poller.h"
-#include "acquisition/experiment_config.h"
+#include "acquisition/config/experiment_config.h"
 #include "storage/disk_space.h"
 #include "storage/run_store.h"
 #include "storage/run_writer.h"

@@ -5,7 +5,7 @@
 #include <iostream>
 
 #include "acquisition/clock.h"
-#include "acquisition/experiment_config.h"
+#include "acquisition/config/experiment_config.h"
 #include "acquisition/logger.h"
 #include "app/command.h"
 #include "app/output_stream.h"

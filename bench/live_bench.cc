@@ -5,7 +5,7 @@
 //            apart; median and 95th percentile
 //   probes   LiveProbes::evaluate on a 16-megapixel frame (4928×3264, the
 //            paper's camera, 8-bit PNG as the logger records it:
-//            acquisition/frame_png.h) with 4 thermocouples: decoding,
+//            acquisition/cameras/frame_png.h) with 4 thermocouples: decoding,
 //            the full field and its temperature field (as `process`),
 //            quality index and view; median of 5
 //   jitter   the logger's poll schedule (a simulated Modbus TCP module
@@ -31,8 +31,8 @@
 #include <thread>
 #include <vector>
 
-#include "acquisition/experiment_config.h"
-#include "acquisition/frame_png.h"
+#include "acquisition/config/experiment_config.h"
+#include "acquisition/cameras/frame_png.h"
 #include "acquisition/logger.h"
 #include "pipeline/live_probes.h"
 #include "sim/convection_scene.h"

@@ -19,7 +19,7 @@
 // one frame at a time (/at_once:1); and two frames side by side
 // (/at_once:2, the default on two cores: pipeline/frame_threads.h). The
 // frames are PNGs as bosfuse's recorder writes them (/png:0: unfiltered and
-// uncompressed, acquisition/frame_png.h), or, for comparison, as OpenCV
+// uncompressed, acquisition/cameras/frame_png.h), or, for comparison, as OpenCV
 // writes a PNG by default (/png:1: compressed, filtered rows), as frames
 // from other software may come; the pixels are the same.
 // Counters: frames per second (wall); the peak resident memory of the
@@ -62,8 +62,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/frame_png.h"
-#include "acquisition/image_file.h"
+#include "acquisition/cameras/frame_png.h"
+#include "acquisition/cameras/image_file.h"
 #include "fusion/bos_geometry.h"
 #include "fusion/displacement_evaluator.h"
 #include "fusion/temperature_field.h"
@@ -195,7 +195,7 @@ cv::Point2d plume_shift_px(double x_px, double y_px, double peak_px) {
 double plume_peak_px(int frame) { return -1.5 * std::exp(-0.1 * frame); }
 
 // How the run's frames are written: 0, as bosfuse's recorder writes them
-// (acquisition/frame_png.h: unfiltered, uncompressed); 1, as OpenCV writes
+// (acquisition/cameras/frame_png.h: unfiltered, uncompressed); 1, as OpenCV writes
 // a PNG by default (zlib level 1, libpng's adaptive row filters), as frames
 // from other software may come.
 enum FramePng { kAsRecorded = 0, kOpenCvDefault = 1 };

@@ -9,7 +9,7 @@
 #include <random>
 #include <thread>
 
-#include "acquisition/modbus_device.h"
+#include "acquisition/drivers/modbus_device.h"
 #include "sim/modbus_server.h"
 #include "storage/run_store.h"
 #include "storage/run_writer.h"

@@ -16,7 +16,7 @@ pkg_check_modules(PLPLOT REQUIRED IMPORTED_TARGET plplot)
 pkg_check_modules(HDF5 REQUIRED IMPORTED_TARGET hdf5)
 find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs videoio video)
 # The codecs' own libraries, to read an image's declared size from its header
-# before OpenCV decodes it (acquisition/image_file.h). libopencv-dev brings
+# before OpenCV decodes it (acquisition/cameras/image_file.h). libopencv-dev brings
 # their -dev packages.
 find_package(PNG REQUIRED)
 find_package(JPEG REQUIRED)

@@ -1,7 +1,7 @@
 #pragma once
 // The memory an evaluation will need, set against the memory this process
 // can still get, checked before the evaluation allocates anything. Decoding
-// refuses images over 100 megapixels (acquisition/image_file.h), but a pair
+// refuses images over 100 megapixels (acquisition/cameras/image_file.h), but a pair
 // under that limit can still need more than the machine or the process's
 // limits allow — a 100 MP pair needs 400 MB for each float copy, and DIS
 // optical flow over 200 bytes a pixel — and that would end in

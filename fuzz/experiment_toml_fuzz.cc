@@ -17,8 +17,8 @@
 #include <string>
 #include <string_view>
 
-#include "acquisition/experiment_config.h"
-#include "acquisition/folder_name.h"
+#include "acquisition/config/experiment_config.h"
+#include "acquisition/config/folder_name.h"
 #include "fuzz/fuzz_support.h"
 
 using namespace bosfuse::acquisition;

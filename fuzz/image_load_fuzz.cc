@@ -28,8 +28,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/exif_time.h"
-#include "acquisition/image_header.h"
+#include "acquisition/cameras/exif_time.h"
+#include "acquisition/cameras/image_header.h"
 #include "fuzz/fuzz_support.h"
 #include "pipeline/image_io.h"
 

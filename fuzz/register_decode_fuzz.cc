@@ -22,9 +22,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "acquisition/modbus_channel.h"
-#include "acquisition/modbus_device.h"
-#include "acquisition/register_codec.h"
+#include "acquisition/drivers/modbus_channel.h"
+#include "acquisition/drivers/modbus_device.h"
+#include "acquisition/drivers/register_codec.h"
 #include "fuzz/fuzz_support.h"
 
 using namespace bosfuse::acquisition;

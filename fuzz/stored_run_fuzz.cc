@@ -23,7 +23,7 @@
 #include <set>
 #include <string>
 
-#include "acquisition/experiment_config.h"
+#include "acquisition/config/experiment_config.h"
 #include "fuzz/fuzz_support.h"
 #include "sim/replay.h"
 #include "storage/run_store.h"

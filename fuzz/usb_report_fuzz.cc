@@ -22,8 +22,8 @@
 #include <cstring>
 #include <vector>
 
-#include "acquisition/hid_protocol.h"
-#include "acquisition/usb_tc32_protocol.h"
+#include "acquisition/drivers/hid_protocol.h"
+#include "acquisition/drivers/usb_tc32_protocol.h"
 #include "fuzz/fuzz_support.h"
 
 using namespace bosfuse::acquisition;

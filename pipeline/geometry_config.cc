@@ -3,7 +3,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "acquisition/toml_reader.h"
+#include "acquisition/config/toml_reader.h"
 
 namespace bosfuse::pipeline {
 namespace {

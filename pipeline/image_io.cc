@@ -1,6 +1,6 @@
 #include "pipeline/image_io.h"
 
-#include "acquisition/image_file.h"
+#include "acquisition/cameras/image_file.h"
 
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>

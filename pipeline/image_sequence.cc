@@ -6,8 +6,8 @@
 #include <memory>
 #include <stdexcept>
 
-#include "acquisition/exif_time.h"
-#include "acquisition/watched_folder_source.h"
+#include "acquisition/cameras/exif_time.h"
+#include "acquisition/cameras/watched_folder_source.h"
 
 namespace bosfuse::pipeline {
 namespace {

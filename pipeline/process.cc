@@ -12,7 +12,7 @@
 #include <set>
 
 #include "acquisition/clock.h"
-#include "acquisition/experiment_config.h"
+#include "acquisition/config/experiment_config.h"
 #include "fitting/agreement.h"
 #include "fitting/fit_json.h"
 #include "fitting/newton_fit.h"

@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "acquisition/clock.h"
-#include "acquisition/toml_reader.h"
+#include "acquisition/config/toml_reader.h"
 #include "storage/processing_store.h"
 #include "storage/run_paths.h"
 #include "storage/run_store.h"

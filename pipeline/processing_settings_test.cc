@@ -6,7 +6,7 @@
 
 #include <fstream>
 
-#include "acquisition/toml_reader.h"
+#include "acquisition/config/toml_reader.h"
 #include "tests/support/temp_dir.h"
 
 namespace bosfuse::pipeline {

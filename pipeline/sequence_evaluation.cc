@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "acquisition/image_file.h"
+#include "acquisition/cameras/image_file.h"
 #include "fusion/evaluation.h"
 #include "fusion/image_input.h"
 #include "pipeline/evaluation_log.h"
@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 // The frame's bytes, read whole only once its size and header pass the
-// image limits (acquisition/image_file.h); empty for a file of no image
+// image limits (acquisition/cameras/image_file.h); empty for a file of no image
 // format bosfuse reads. `time` is the frame's time even when it is refused.
 std::vector<std::uint8_t> read_frame_bytes(const std::string& path, FrameTime& time) {
   std::error_code error;

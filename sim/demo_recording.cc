@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "acquisition/clock.h"
-#include "acquisition/experiment_config.h"
+#include "acquisition/config/experiment_config.h"
 #include "sim/virtual_devices.h"
 #include "storage/run_store.h"
 

@@ -24,7 +24,7 @@
 #include <thread>
 #include <vector>
 
-#include "acquisition/modbus_device.h"
+#include "acquisition/drivers/modbus_device.h"
 #include "sim/unique_fd.h"
 
 // libmodbus's register map, declared as <modbus/modbus.h> declares it, so

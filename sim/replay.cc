@@ -9,7 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "acquisition/experiment_config.h"
+#include "acquisition/config/experiment_config.h"
 #include "storage/database.h"
 #include "storage/record_rows.h"
 #include "storage/run_paths.h"

@@ -16,7 +16,7 @@
 #include <thread>
 #include <vector>
 
-#include "acquisition/experiment_config.h"
+#include "acquisition/config/experiment_config.h"
 #include "acquisition/logger.h"
 #include "sim/replay.h"
 #include "storage/run_store.h"

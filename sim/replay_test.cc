@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "acquisition/experiment_config.h"
+#include "acquisition/config/experiment_config.h"
 #include "storage/run_store.h"
 #include "tests/support/temp_dir.h"
 

@@ -19,7 +19,7 @@
 #include <optional>
 #include <vector>
 
-#include "acquisition/frame_source.h"
+#include "acquisition/cameras/frame_source.h"
 #include "sim/convection_scene.h"
 #include "sim/modbus_server.h"
 

@@ -10,7 +10,7 @@
 #include <map>
 
 #include "acquisition/clock.h"
-#include "acquisition/experiment_config.h"
+#include "acquisition/config/experiment_config.h"
 #include "acquisition/logger.h"
 #include "sim/modbus_server.h"
 #include "storage/run_store.h"

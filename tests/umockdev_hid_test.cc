@@ -11,7 +11,7 @@
 #include <thread>
 
 #include "acquisition/device_poller.h"
-#include "acquisition/experiment_config.h"
+#include "acquisition/config/experiment_config.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/umockdev_bed.h"
 

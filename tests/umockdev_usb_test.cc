@@ -1,14 +1,14 @@
 // The libusb path of the USB-TC-32 reader against umockdev. Debian 12's
 // umockdev (0.17) cannot complete a control transfer through libusb (a
 // synchronous transfer never returns), so the readings themselves are tested
-// on recorded bytes in acquisition/usb_tc32_protocol_test.cc; here libusb's
+// on recorded bytes in acquisition/drivers/usb_tc32_protocol_test.cc; here libusb's
 // real enumeration and hot-plug notices are exercised.
 
 #include <gtest/gtest.h>
 
 #include <thread>
 
-#include "acquisition/usb_tc32_device.h"
+#include "acquisition/drivers/usb_tc32_device.h"
 #include "tests/support/umockdev_bed.h"
 
 namespace bosfuse::acquisition {

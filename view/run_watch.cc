@@ -2,7 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "acquisition/experiment_config.h"
+#include "acquisition/config/experiment_config.h"
 #include "view/thread_priority.h"
 
 namespace bosfuse::view {
