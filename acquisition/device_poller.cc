@@ -29,7 +29,7 @@ AlarmMonitor watch_alarms(const std::string& device, const std::vector<storage::
 
 }  // namespace
 
-std::string DevicePoller::Options::Validate() const {
+std::string DevicePollerOptions::Validate() const {
   if (period <= std::chrono::nanoseconds::zero()) return "poll period must be positive";
   if (poll_count && *poll_count < 1) return "poll count must be at least 1";
   if (skipped_event_interval <= std::chrono::nanoseconds::zero()) return "skipped-poll event interval must be positive";
@@ -38,7 +38,7 @@ std::string DevicePoller::Options::Validate() const {
 }
 
 DevicePoller::DevicePoller(std::unique_ptr<ThermocoupleSource> source, std::int64_t device_id,
-                           std::vector<std::int64_t> channel_ids, storage::RunWriter& writer, Options options)
+                           std::vector<std::int64_t> channel_ids, storage::RunWriter& writer, DevicePollerOptions options)
     : DeviceWorker(source->device_info().name, device_id, writer),
       source_(std::move(source)),
       channel_ids_(std::move(channel_ids)),

@@ -7,7 +7,7 @@
 // when the link broke, bad-reply when the device answered nonsense); the
 // outage is recorded once and retried with exponential backoff, and its end
 // is recorded with the length of the gap and its failed polls, once the
-// device has answered Options::recovery_polls polls in a row: a device that
+// device has answered DevicePollerOptions::recovery_polls polls in a row: a device that
 // fails every other poll is one outage, not an event pair per poll. Polls skipped because one overran
 // are recorded too ("skipped" events), gathered so that a device always too
 // slow for its period adds one event per interval, not one per poll. One
@@ -19,7 +19,7 @@
 // poll attempt and at least once a second in between, so a device that
 // fails, or is waiting out a reconnection backoff, still goes stale on
 // time. Each alarm raised or cleared is an "alarm" or "alarm-cleared"
-// event and a line to Options::on_alarm.
+// event and a line to DevicePollerOptions::on_alarm.
 
 #include <chrono>
 #include <cstdint>
@@ -38,27 +38,28 @@
 
 namespace bosfuse::acquisition {
 
+// What a DevicePoller is set up with.
+struct DevicePollerOptions {
+  std::chrono::nanoseconds period = std::chrono::seconds(1);
+  std::chrono::milliseconds backoff_initial{250};
+  std::chrono::milliseconds backoff_max{10'000};
+  std::optional<std::int64_t> poll_count;  // stop after this many polls (ok or failed)
+  // At most one "skipped" event per interval, with the count since the
+  // last; the rest when the poller stops.
+  std::chrono::nanoseconds skipped_event_interval = std::chrono::seconds(10);
+  // One per channel, in channel_infos() order; empty when none has any.
+  std::vector<AlarmLimits> alarms = {};
+  // Called on the device's thread with "<device>: <event message>" for
+  // each alarm raised or cleared; never once the poller is abandoned.
+  std::function<void(const std::string&)> on_alarm = {};
+  // Polls in a row that must work before an outage is declared over; a
+  // failure among them continues the outage.
+  int recovery_polls = 3;
+  std::string Validate() const;
+};
+
 class DevicePoller : public DeviceWorker {
  public:
-  struct Options {
-    std::chrono::nanoseconds period = std::chrono::seconds(1);
-    std::chrono::milliseconds backoff_initial{250};
-    std::chrono::milliseconds backoff_max{10'000};
-    std::optional<std::int64_t> poll_count;  // stop after this many polls (ok or failed)
-    // At most one "skipped" event per interval, with the count since the
-    // last; the rest when the poller stops.
-    std::chrono::nanoseconds skipped_event_interval = std::chrono::seconds(10);
-    // One per channel, in channel_infos() order; empty when none has any.
-    std::vector<AlarmLimits> alarms = {};
-    // Called on the device's thread with "<device>: <event message>" for
-    // each alarm raised or cleared; never once the poller is abandoned.
-    std::function<void(const std::string&)> on_alarm = {};
-    // Polls in a row that must work before an outage is declared over; a
-    // failure among them continues the outage.
-    int recovery_polls = 3;
-    std::string Validate() const;
-  };
-
   struct Stats {
     std::int64_t polls_ok = 0;
     std::int64_t polls_failed = 0;
@@ -72,7 +73,7 @@ class DevicePoller : public DeviceWorker {
   // `channel_ids` are the run store ids of source->channel_infos(), in order.
   // Own it in a std::shared_ptr (std::make_shared) before start().
   DevicePoller(std::unique_ptr<ThermocoupleSource> source, std::int64_t device_id,
-               std::vector<std::int64_t> channel_ids, storage::RunWriter& writer, Options options);
+               std::vector<std::int64_t> channel_ids, storage::RunWriter& writer, DevicePollerOptions options);
 
   Stats stats() const;
   const std::vector<storage::ChannelInfo>& channels() const { return channels_; }
@@ -96,7 +97,7 @@ class DevicePoller : public DeviceWorker {
   std::unique_ptr<ThermocoupleSource> source_;
   std::vector<std::int64_t> channel_ids_;
   std::vector<storage::ChannelInfo> channels_;
-  Options options_;
+  DevicePollerOptions options_;
   SteadyTime schedule_origin_;
   ConnectionKeeper connection_;  // used on the worker thread only
   std::int64_t skipped_unreported_ = 0;  // worker thread only, like the next two

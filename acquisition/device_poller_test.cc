@@ -80,7 +80,7 @@ struct Harness {
   std::vector<std::int64_t> channels = {store.add_channel({0, device, "a", "thermocouple", "degC", "K", {}, {}}),
                                         store.add_channel({0, device, "b", "thermocouple", "degC", "K", {}, {}})};
 
-  DevicePoller::Stats run(std::unique_ptr<ScriptedSource> source, DevicePoller::Options options,
+  DevicePoller::Stats run(std::unique_ptr<ScriptedSource> source, DevicePollerOptions options,
                           std::chrono::milliseconds duration) {
     storage::RunWriter writer(store, {20ms, 10'000});
     const auto poller = std::make_shared<DevicePoller>(std::move(source), device, channels, writer, options);
@@ -161,7 +161,7 @@ TEST(DevicePoller, SkippedPollEventsAreSpacedByTheirInterval) {
   Harness h;
   auto source = std::make_unique<ScriptedSource>();
   source->read_time = 25ms;
-  DevicePoller::Options options{10ms, 250ms, 10s, {}};
+  DevicePollerOptions options{10ms, 250ms, 10s, {}};
   options.skipped_event_interval = 200ms;
   const auto stats = h.run(std::move(source), options, 1100ms);
   std::vector<std::int64_t> times_ns;
@@ -206,7 +206,7 @@ std::vector<std::string> alarm_events(const storage::RunStore& store) {
 TEST(DevicePoller, AlarmsAreRunEventsAndLinesToTheCallback) {
   Harness h;
   AlarmLines lines;
-  DevicePoller::Options options{20ms, 250ms, 10s, {}};
+  DevicePollerOptions options{20ms, 250ms, 10s, {}};
   options.alarms = {AlarmLimits{{}, 5.0, {}, {}}, AlarmLimits{{}, {}, {}, 0.2}};
   options.on_alarm = lines.callback();
   h.run(std::make_unique<ScriptedSource>(), options, 500ms);
@@ -231,7 +231,7 @@ TEST(DevicePoller, AChannelGoesStaleWhileItsDeviceCannotBeReached) {
   auto source = std::make_unique<ScriptedSource>();
   source->connect_failures_left = 1000;
   AlarmLines lines;
-  DevicePoller::Options options{20ms, 2s, 2s, {}};
+  DevicePollerOptions options{20ms, 2s, 2s, {}};
   options.alarms = {AlarmLimits{{}, {}, {}, 0.3}, AlarmLimits{}};
   options.on_alarm = lines.callback();
   const auto stats = h.run(std::move(source), options, 1500ms);
@@ -245,7 +245,7 @@ TEST(DevicePoller, AChannelGoesStaleWhileItsDeviceCannotBeReached) {
 TEST(DevicePoller, AlarmLimitsMustFitTheChannels) {
   Harness h;
   storage::RunWriter writer(h.store);
-  DevicePoller::Options options{20ms, 20ms, 80ms, {}};
+  DevicePollerOptions options{20ms, 20ms, 80ms, {}};
   options.alarms = {AlarmLimits{{}, 5.0, {}, {}}};  // two channels
   EXPECT_THROW(DevicePoller(std::make_unique<ScriptedSource>(), h.device, h.channels, writer, options),
                std::invalid_argument);
@@ -329,7 +329,7 @@ TEST(DevicePoller, ADeviceFailingEveryOtherPollIsOneOutage) {
   Harness h;
   auto source = std::make_unique<ScriptedSource>();
   source->alternating_until = 20;  // reads 1, 3, ... 19 fail
-  DevicePoller::Options options{10ms, 10ms, 80ms, 26};
+  DevicePollerOptions options{10ms, 10ms, 80ms, 26};
   options.recovery_polls = 3;
   const auto stats = h.run(std::move(source), options, 1500ms);
   EXPECT_EQ(stats.polls_ok + stats.polls_failed, 26);
@@ -355,7 +355,7 @@ TEST(DevicePoller, WithoutTheDebounceEveryFailedPollIsAnOutage) {
   Harness h;
   auto source = std::make_unique<ScriptedSource>();
   source->alternating_until = 20;
-  DevicePoller::Options options{10ms, 10ms, 80ms, 26};
+  DevicePollerOptions options{10ms, 10ms, 80ms, 26};
   options.recovery_polls = 1;
   h.run(std::move(source), options, 1500ms);
   const auto kinds = h.event_kinds();
@@ -370,7 +370,7 @@ TEST(DevicePoller, AnOutageEndingAtTheStopIsClosedAtItsFirstGoodPoll) {
   auto source = std::make_unique<ScriptedSource>();
   source->reads_failing_from = 4;
   source->reads_failing_count = 1;
-  DevicePoller::Options options{10ms, 10ms, 80ms, 6};  // reads 0-5: one good read after the failure
+  DevicePollerOptions options{10ms, 10ms, 80ms, 6};  // reads 0-5: one good read after the failure
   options.recovery_polls = 3;
   const auto stats = h.run(std::move(source), options, 800ms);
   EXPECT_EQ(stats.polls_failed, 1);
@@ -426,7 +426,7 @@ TEST(DevicePoller, AStuckReadIsAbandonedAtTheStop) {
   source->read_time = 3s;
   storage::RunWriter writer(h.store, {20ms, 10'000});
   const auto poller = std::make_shared<DevicePoller>(std::move(source), h.device, h.channels, writer,
-                                                     DevicePoller::Options{20ms, 20ms, 80ms, {}});
+                                                     DevicePollerOptions{20ms, 20ms, 80ms, {}});
   poller->start();
   std::this_thread::sleep_for(100ms);
   const auto before = std::chrono::steady_clock::now();
@@ -454,7 +454,7 @@ TEST(DevicePoller, StopsAfterItsPollCount) {
 }
 
 TEST(DevicePoller, InvalidOptionsAreRefused) {
-  DevicePoller::Options no_recovery;
+  DevicePollerOptions no_recovery;
   no_recovery.recovery_polls = 0;
   EXPECT_NE(no_recovery.Validate(), "");
   Harness h;

@@ -123,7 +123,7 @@ void Logger::watch_disk(storage::DiskFillWatch& watch, storage::RunWriter& write
   }
 }
 
-Logger::Logger(storage::RunStore& store, Options options) : store_(store), options_(std::move(options)) {}
+Logger::Logger(storage::RunStore& store, LoggerOptions options) : store_(store), options_(std::move(options)) {}
 
 void Logger::add_source(std::unique_ptr<ThermocoupleSource> source, std::chrono::nanoseconds period,
                         std::optional<std::int64_t> poll_count, std::vector<AlarmLimits> alarms) {
@@ -154,13 +154,13 @@ void Logger::add_devices(const ExperimentConfig& config) {
     } else {
       source = std::make_unique<WatchedFolderSource>(c.folder);
     }
-    FrameRecorder::Options options = c.recorder;
+    FrameRecorderOptions options = c.recorder;
     options.reference_flag = c.reference_flag.is_absolute() ? c.reference_flag : store_.dir() / c.reference_flag;
     add_camera(std::move(source), c.name, options);
   }
 }
 
-void Logger::add_camera(std::unique_ptr<FrameSource> source, std::string name, FrameRecorder::Options options) {
+void Logger::add_camera(std::unique_ptr<FrameSource> source, std::string name, FrameRecorderOptions options) {
   cameras_.push_back({std::move(source), std::move(name), std::move(options)});
 }
 
@@ -199,7 +199,7 @@ std::vector<std::shared_ptr<DevicePoller>> Logger::make_pollers(storage::RunWrit
       channel.device_id = device_id;
       channel_ids.push_back(store_.add_channel(channel));
     }
-    DevicePoller::Options poll_options{pending.period, options_.backoff_initial, options_.backoff_max,
+    DevicePollerOptions poll_options{pending.period, options_.backoff_initial, options_.backoff_max,
                                        pending.poll_count};
     poll_options.alarms = std::move(pending.alarms);
     poll_options.on_alarm = options_.on_alarm;

@@ -28,29 +28,30 @@
 
 namespace bosfuse::acquisition {
 
+// What a Logger is set up with.
+struct LoggerOptions {
+  std::optional<std::chrono::nanoseconds> duration;  // none: until stopped
+  storage::RunWriterOptions writer;
+  std::chrono::milliseconds backoff_initial{250};
+  std::chrono::milliseconds backoff_max{10'000};
+  // Called every progress_interval with a one-line account of the latest
+  // readings, so a user watching the run sees it is alive.
+  std::function<void(const std::string&)> on_progress;
+  std::chrono::milliseconds progress_interval{5'000};
+  // Called, from the devices' threads, with one line for each alarm raised
+  // or cleared ("adam: T1: high 85.2 degC above the limit 80 degC"); the
+  // run has them as "alarm" and "alarm-cleared" events either way.
+  std::function<void(const std::string&)> on_alarm;
+  // Called with one line when the run's disk begins, and ends, to run
+  // short of space (also a `disk-low` / `disk-ok` event); unset: a spdlog
+  // warning. Checked every disk_check_interval.
+  std::function<void(const std::string&)> on_disk_warning;
+  std::chrono::milliseconds disk_check_interval{5'000};
+  storage::DiskFillWatchOptions disk;
+};
+
 class Logger {
  public:
-  struct Options {
-    std::optional<std::chrono::nanoseconds> duration;  // none: until stopped
-    storage::RunWriter::Options writer;
-    std::chrono::milliseconds backoff_initial{250};
-    std::chrono::milliseconds backoff_max{10'000};
-    // Called every progress_interval with a one-line account of the latest
-    // readings, so a user watching the run sees it is alive.
-    std::function<void(const std::string&)> on_progress;
-    std::chrono::milliseconds progress_interval{5'000};
-    // Called, from the devices' threads, with one line for each alarm raised
-    // or cleared ("adam: T1: high 85.2 degC above the limit 80 degC"); the
-    // run has them as "alarm" and "alarm-cleared" events either way.
-    std::function<void(const std::string&)> on_alarm;
-    // Called with one line when the run's disk begins, and ends, to run
-    // short of space (also a `disk-low` / `disk-ok` event); unset: a spdlog
-    // warning. Checked every disk_check_interval.
-    std::function<void(const std::string&)> on_disk_warning;
-    std::chrono::milliseconds disk_check_interval{5'000};
-    storage::DiskFillWatch::Options disk;
-  };
-
   struct DeviceSummary {
     std::string name;
     DevicePoller::Stats stats;
@@ -74,7 +75,7 @@ class Logger {
     bool complete() const { return writer.lost() == 0 && writer.status_written; }
   };
 
-  Logger(storage::RunStore& store, Options options);
+  Logger(storage::RunStore& store, LoggerOptions options);
 
   // Adds a device polled every `period`, `poll_count` times when given,
   // its channels watched against `alarms` (one per channel, in
@@ -82,7 +83,7 @@ class Logger {
   void add_source(std::unique_ptr<ThermocoupleSource> source, std::chrono::nanoseconds period,
                   std::optional<std::int64_t> poll_count = std::nullopt, std::vector<AlarmLimits> alarms = {});
   // Adds a camera whose frames are stored under frames/<name>/. Call before run().
-  void add_camera(std::unique_ptr<FrameSource> source, std::string name, FrameRecorder::Options options);
+  void add_camera(std::unique_ptr<FrameSource> source, std::string name, FrameRecorderOptions options);
   // Adds every device and camera of an experiment file.
   void add_devices(const ExperimentConfig& config);
 
@@ -106,11 +107,11 @@ class Logger {
   std::vector<std::shared_ptr<DevicePoller>> make_pollers(storage::RunWriter& writer);
 
   storage::RunStore& store_;
-  Options options_;
+  LoggerOptions options_;
   struct PendingCamera {
     std::unique_ptr<FrameSource> source;
     std::string name;
-    FrameRecorder::Options options;
+    FrameRecorderOptions options;
   };
 
   std::vector<std::shared_ptr<FrameRecorder>> make_recorders(storage::RunWriter& writer);

@@ -63,7 +63,7 @@ void acquire(const AcquireArgs& args) {
   acquisition::check_hosts_resolve(config);
   acquisition::check_replayed_runs(config);
   acquisition::check_free_space(config, args.out);
-  acquisition::Logger::Options options;
+  acquisition::LoggerOptions options;
   options.disk.min_free_bytes = static_cast<std::uint64_t>(config.min_free_mb) << 20;
   if (!args.duration.empty()) options.duration = parse_duration(args.duration);
   options.on_progress = [](const std::string& line) { spdlog::info("{}", line); };

@@ -262,7 +262,7 @@ Jitter poll_jitter(const fs::path& run, int clients) {
       "jitter.toml");
   auto store =
       storage::RunStore::create(run, acquisition::run_info(config, 1'000'000'000), storage::RunStore::CreateMode::kNew);
-  acquisition::Logger::Options options;
+  acquisition::LoggerOptions options;
   options.duration = 10s;
   acquisition::Logger logger(store, options);
   logger.add_devices(config);

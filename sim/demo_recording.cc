@@ -23,7 +23,7 @@ void add_scene_camera(acquisition::Logger& logger, const DemoOptions& options, c
   pattern.height_px = setup.scene.height_px;
   pattern.dot_diameter_px = 3;
   pattern.seed = seed;
-  acquisition::FrameRecorder::Options camera;
+  acquisition::FrameRecorderOptions camera;
   camera.interval = wall_time(options.frame_interval_s, options.speed);
   logger.add_camera(std::make_unique<SceneCamera>(setup.model, generate_pattern(pattern), CameraModel{}, options.speed,
                                                   1, scene_start),
@@ -55,7 +55,7 @@ acquisition::Logger::Summary record_demo(const DemoOptions& options, const DemoS
   // The scene's t = 0, when the heater is switched off: the run's declared origin.
   const storage::Event heater_off{0, std::nullopt, started_ns, "marker", "heater off"};
   store.write_events({&heater_off, 1});
-  acquisition::Logger::Options logger_options;
+  acquisition::LoggerOptions logger_options;
   logger_options.duration = wall_time(options.experiment_s, options.speed);
   logger_options.on_progress = note;
   acquisition::Logger logger(store, logger_options);

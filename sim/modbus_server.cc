@@ -49,7 +49,7 @@ void ModbusSimServer::MappingFree::operator()(modbus_mapping_t* mapping) const n
   modbus_mapping_free(mapping);
 }
 
-std::string ModbusSimServer::Options::Validate() const {
+std::string ModbusSimServerOptions::Validate() const {
   if (channels.empty()) return "the simulated module needs at least one channel";
   if (!temperature_c) return "no temperature function";
   for (const auto& c : channels) {
@@ -60,7 +60,7 @@ std::string ModbusSimServer::Options::Validate() const {
   return {};
 }
 
-ModbusSimServer::ModbusSimServer(Options options)
+ModbusSimServer::ModbusSimServer(ModbusSimServerOptions options)
     : options_(std::move(options)),
       draws_(options_.channels.size(), 0),
       open_circuit_(options_.channels.size(), false) {
@@ -354,7 +354,7 @@ std::vector<acquisition::ModbusChannel> module_channels(std::string_view profile
   return channels;
 }
 
-ModbusSimServer::TemperatureFunction cooling_temperatures(const CoolingSignal& signal,
+TemperatureFunction cooling_temperatures(const CoolingSignal& signal,
                                                           const std::vector<acquisition::ModbusChannel>& channels) {
   if (const std::string problem = signal.Validate(); !problem.empty()) {
     throw std::invalid_argument("cooling signal: " + problem);
@@ -369,7 +369,7 @@ ModbusSimServer::TemperatureFunction cooling_temperatures(const CoolingSignal& s
   };
 }
 
-void use_profile_register_map(ModbusSimServer::Options& options, std::string_view profile) {
+void use_profile_register_map(ModbusSimServerOptions& options, std::string_view profile) {
   const acquisition::ModbusProfile* p = acquisition::find_modbus_profile(profile);
   if (!p || p->input_count == 0) return;  // generic: no map of its own
   const auto all = module_channels(profile, p->input_count, "K");
@@ -377,8 +377,8 @@ void use_profile_register_map(ModbusSimServer::Options& options, std::string_vie
   options.input_registers = std::max(options.input_registers, mapping_size(all, RegisterKind::kInput));
 }
 
-ModbusSimServer::Options module_server_options(const SimulatedModule& module, acquisition::ModbusEndpoint endpoint) {
-  ModbusSimServer::Options options;
+ModbusSimServerOptions module_server_options(const SimulatedModule& module, acquisition::ModbusEndpoint endpoint) {
+  ModbusSimServerOptions options;
   options.endpoint = std::move(endpoint);
   options.channels = module_channels(module.profile, module.inputs, module.tc_type);
   use_profile_register_map(options, module.profile);

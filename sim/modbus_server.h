@@ -33,24 +33,26 @@ typedef struct _modbus_mapping_t modbus_mapping_t;
 
 namespace bosfuse::sim {
 
+// Temperature (degC) of `channel` at `t_s` seconds since start; `draw`
+// counts the values produced for that channel.
+using TemperatureFunction = std::function<double(int channel, double t_s, std::uint64_t draw)>;
+
+// What a ModbusSimServer is set up with.
+struct ModbusSimServerOptions {
+  acquisition::ModbusEndpoint endpoint;  // TCP: port 0 picks a free port
+  std::vector<acquisition::ModbusChannel> channels;
+  TemperatureFunction temperature_c;
+  // How often served values change; zero: a new value for every request.
+  std::chrono::nanoseconds update_period{0};
+  // At least this many registers of each kind are served (as a real
+  // module serves its whole map), besides those of `channels`.
+  int holding_registers = 0;
+  int input_registers = 0;
+  std::string Validate() const;
+};
+
 class ModbusSimServer {
  public:
-  // Temperature (degC) of `channel` at `t_s` seconds since start; `draw`
-  // counts the values produced for that channel.
-  using TemperatureFunction = std::function<double(int channel, double t_s, std::uint64_t draw)>;
-
-  struct Options {
-    acquisition::ModbusEndpoint endpoint;  // TCP: port 0 picks a free port
-    std::vector<acquisition::ModbusChannel> channels;
-    TemperatureFunction temperature_c;
-    // How often served values change; zero: a new value for every request.
-    std::chrono::nanoseconds update_period{0};
-    // At least this many registers of each kind are served (as a real
-    // module serves its whole map), besides those of `channels`.
-    int holding_registers = 0;
-    int input_registers = 0;
-    std::string Validate() const;
-  };
 
   struct ServedValue {
     std::int64_t t_ns = 0;
@@ -58,7 +60,7 @@ class ModbusSimServer {
     acquisition::ChannelReading reading;  // what a correct reader decodes
   };
 
-  explicit ModbusSimServer(Options options);
+  explicit ModbusSimServer(ModbusSimServerOptions options);
   ~ModbusSimServer();  // stops; never throws
   ModbusSimServer(const ModbusSimServer&) = delete;
   ModbusSimServer& operator=(const ModbusSimServer&) = delete;
@@ -112,7 +114,7 @@ class ModbusSimServer {
   void refresh_registers(int function, int address, int count);
   std::vector<std::uint16_t> registers_for(int channel, double t_s, std::uint64_t draw);
 
-  Options options_;
+  ModbusSimServerOptions options_;
   acquisition::ModbusHandle ctx_;
   std::unique_ptr<modbus_mapping_t, MappingFree> mapping_;
   UniqueFd listen_socket_;
@@ -149,7 +151,7 @@ std::vector<acquisition::ModbusChannel> module_channels(std::string_view profile
 // Sizes `options`' register map to the whole map of a real `profile`
 // module (every input and the cold junction), so a client reading all of a
 // module's registers gets them even when fewer channels are simulated.
-void use_profile_register_map(ModbusSimServer::Options& options, std::string_view profile);
+void use_profile_register_map(ModbusSimServerOptions& options, std::string_view profile);
 
 // What a simulated module is: its profile, how many thermocouple inputs it
 // serves (by default all: both built-in profiles have 8), and the cooling
@@ -164,9 +166,9 @@ struct SimulatedModule {
 
 // Thermocouple channels follow `signal` (each with its own noise stream);
 // a cold-junction channel reads the ambient temperature with the same noise.
-ModbusSimServer::TemperatureFunction cooling_temperatures(const CoolingSignal& signal,
+TemperatureFunction cooling_temperatures(const CoolingSignal& signal,
                                                           const std::vector<acquisition::ModbusChannel>& channels);
 
-ModbusSimServer::Options module_server_options(const SimulatedModule& module, acquisition::ModbusEndpoint endpoint);
+ModbusSimServerOptions module_server_options(const SimulatedModule& module, acquisition::ModbusEndpoint endpoint);
 
 }  // namespace bosfuse::sim

@@ -31,7 +31,7 @@ ModbusEndpoint loopback(int port = 0) {
   return endpoint;
 }
 
-ModbusSimServer::Options adam_options(ModbusEndpoint endpoint = loopback()) {
+ModbusSimServerOptions adam_options(ModbusEndpoint endpoint = loopback()) {
   SimulatedModule module;
   module.signal = CoolingSignal{22.0, 85.0, 0.2, 0.3, 7};
   return module_server_options(module, std::move(endpoint));

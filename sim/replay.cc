@@ -184,8 +184,8 @@ RecordedRun inspect_recorded_run(const fs::path& dir) {
   return recorded;
 }
 
-ModbusSimServer::Options replay_module_options(const ReplayDevice& device, int port) {
-  ModbusSimServer::Options options;
+ModbusSimServerOptions replay_module_options(const ReplayDevice& device, int port) {
+  ModbusSimServerOptions options;
   options.endpoint.host = "127.0.0.1";
   options.endpoint.port = port;
   for (std::size_t i = 0; i < device.channels.size(); ++i) {

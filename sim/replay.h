@@ -48,7 +48,7 @@ RecordedRun inspect_recorded_run(const std::filesystem::path& dir);
 
 // The module that serves `device`'s samples: float32 holding registers, two
 // per channel, -9999 for open-circuit, -8888 for out-of-range, NaN otherwise.
-ModbusSimServer::Options replay_module_options(const ReplayDevice& device, int port);
+ModbusSimServerOptions replay_module_options(const ReplayDevice& device, int port);
 
 // The experiment file of a replay at `speed` with the devices' modules on
 // `ports` (same order as run.devices). It keeps what makes the replay the

@@ -107,7 +107,7 @@ ReplaySession::~ReplaySession() {
 acquisition::Logger::Summary ReplaySession::run(const std::atomic<bool>& interrupted) {
   if (ran_) throw std::logic_error("a replay session runs once");
   ran_ = true;
-  acquisition::Logger::Options options;
+  acquisition::LoggerOptions options;
   options.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
   acquisition::Logger logger(store_, options);
   logger.add_devices(config_);

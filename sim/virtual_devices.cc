@@ -35,10 +35,10 @@ double SceneThermocoupleTable::temperature_c(int channel, double t_s, std::uint6
                     hashed_normal(seed_, static_cast<std::uint64_t>(channel), draw);
 }
 
-ModbusSimServer::Options scene_module_options(std::shared_ptr<const SceneThermocoupleTable> table,
+ModbusSimServerOptions scene_module_options(std::shared_ptr<const SceneThermocoupleTable> table,
                                               const std::string& profile, double ambient_c, int port,
                                               std::optional<std::chrono::steady_clock::time_point> scene_start) {
-  ModbusSimServer::Options options;
+  ModbusSimServerOptions options;
   options.endpoint.host = "127.0.0.1";
   options.endpoint.port = port;
   options.channels = module_channels(profile, static_cast<int>(table->size()), "K");

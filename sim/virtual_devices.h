@@ -45,7 +45,7 @@ class SceneThermocoupleTable {
 // An ADAM-6018-like module on loopback serving the table; its cold junction
 // (when the profile has one) reads the ambient temperature.
 // `scene_start`: the instant of the scene's t = 0; none: the server's start.
-ModbusSimServer::Options scene_module_options(
+ModbusSimServerOptions scene_module_options(
     std::shared_ptr<const SceneThermocoupleTable> table, const std::string& profile, double ambient_c, int port,
     std::optional<std::chrono::steady_clock::time_point> scene_start = std::nullopt);
 

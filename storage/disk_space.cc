@@ -38,13 +38,13 @@ std::string bytes_text(std::uint64_t bytes) {
   return text;
 }
 
-std::string DiskFillWatch::Options::Validate() const {
+std::string DiskFillWatchOptions::Validate() const {
   if (warn_within.count() < 0) return "warn_within must not be negative";
   if (window.count() <= 0) return "window must be positive";
   return {};
 }
 
-DiskFillWatch::DiskFillWatch(Options options) : options_(options) {}
+DiskFillWatch::DiskFillWatch(DiskFillWatchOptions options) : options_(options) {}
 
 std::optional<DiskFillWatch::Change> DiskFillWatch::add(std::chrono::steady_clock::time_point now,
                                                         std::uint64_t free) {

@@ -23,6 +23,14 @@ std::uint64_t free_bytes(const std::filesystem::path& path);
 // "1.4 GB", "830 MB", "12 KB" (powers of 1024, as df -h counts): for messages.
 std::string bytes_text(std::uint64_t bytes);
 
+// What a DiskFillWatch is set up with.
+struct DiskFillWatchOptions {
+  std::uint64_t min_free_bytes = 100ull << 20;
+  std::chrono::seconds warn_within{3600};
+  std::chrono::seconds window{60};
+  std::string Validate() const;  // empty when valid, else what is wrong
+};
+
 // Watches samples of a disk's free space. It says, once, when the disk
 // begins to run short — less than `min_free_bytes` left, or full within
 // `warn_within` at the rate it has been filling over the last `window` —
@@ -30,19 +38,12 @@ std::string bytes_text(std::uint64_t bytes);
 // hovers about the threshold does not repeat itself).
 class DiskFillWatch {
  public:
-  struct Options {
-    std::uint64_t min_free_bytes = 100ull << 20;
-    std::chrono::seconds warn_within{3600};
-    std::chrono::seconds window{60};
-    std::string Validate() const;  // empty when valid, else what is wrong
-  };
-
   struct Change {
     bool short_of_space;  // true: it began; false: it ended
     std::string message;  // "the disk of the run has 80 MB free and is filling at 2 MB/s: full in about 40 s"
   };
 
-  explicit DiskFillWatch(Options options);
+  explicit DiskFillWatch(DiskFillWatchOptions options);
 
   // One sample: `free` bytes at `now`. Returns a change of state, if any.
   std::optional<Change> add(std::chrono::steady_clock::time_point now, std::uint64_t free);
@@ -60,7 +61,7 @@ class DiskFillWatch {
   std::string describe() const;
   std::string time_left_text() const;  // "40 s", "12 min", "3.2 h"
 
-  Options options_;
+  DiskFillWatchOptions options_;
   std::deque<Reading> readings_;
   bool short_ = false;
 };

@@ -96,7 +96,7 @@ void requeue(std::vector<T>& taken, std::vector<T>& pending) {
 
 }  // namespace
 
-std::string RunWriter::Options::Validate() const {
+std::string RunWriterOptions::Validate() const {
   if (flush_interval.count() <= 0) return "flush_interval must be positive";
   if (max_batch_samples == 0) return "max_batch_samples must be positive";
   if (retry_initial.count() <= 0) return "retry_initial must be positive";
@@ -106,12 +106,12 @@ std::string RunWriter::Options::Validate() const {
   return {};
 }
 
-RunWriter::RunWriter(RunStore& store, Options options)
+RunWriter::RunWriter(RunStore& store, RunWriterOptions options)
     : owned_sink_(std::make_unique<StoreSink>(store)), sink_(owned_sink_.get()), options_(std::move(options)) {
   start();
 }
 
-RunWriter::RunWriter(Sink& sink, Options options) : sink_(&sink), options_(std::move(options)) { start(); }
+RunWriter::RunWriter(Sink& sink, RunWriterOptions options) : sink_(&sink), options_(std::move(options)) { start(); }
 
 void RunWriter::start() {
   if (const std::string problem = options_.Validate(); !problem.empty()) {

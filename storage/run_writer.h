@@ -14,9 +14,9 @@
 // `store-error` event and one warning when it starts, a `store-recovered`
 // event and warning when it ends, and the commit is retried with an
 // exponential backoff that costs no CPU meanwhile. Records wait in memory up
-// to a stated bound (Options::max_queued_bytes); beyond it they are dropped
+// to a stated bound (RunWriterOptions::max_queued_bytes); beyond it they are dropped
 // and counted. A stop is bounded in time whatever the store does
-// (Options::stop_timeout): what cannot be committed by then is counted in
+// (RunWriterOptions::stop_timeout): what cannot be committed by then is counted in
 // Stats and in a `records-lost` event, and close_run() marks the run
 // `interrupted`. On a full disk the stop first deletes the run's
 // SpaceReserve, so that event and the status still fit.
@@ -42,6 +42,32 @@
 
 namespace bosfuse::storage {
 
+// What a RunWriter is set up with.
+struct RunWriterOptions {
+  // The longest a pushed record waits to be committed: what a kill -9 can
+  // lose. WAL with synchronous=NORMAL keeps frequent commits cheap.
+  std::chrono::milliseconds flush_interval{50};
+  std::size_t max_batch_samples = 100'000;
+  // After a failed commit the next try waits retry_initial, doubling at
+  // each failure up to retry_max.
+  std::chrono::milliseconds retry_initial{100};
+  std::chrono::milliseconds retry_max{2'000};
+  // Records waiting for a store that cannot be written are kept up to this
+  // much memory (about 70 bytes a sample: 64 MiB is a million samples,
+  // hours of a typical run); beyond it new records are dropped, counted.
+  std::size_t max_queued_bytes = 64u << 20;
+  // How long a stop goes on committing against a failing store (waits for
+  // another connection's lock included); the run's status gets one second
+  // more (kStatusLockWait).
+  std::chrono::milliseconds stop_timeout{3'000};
+  // The size of the run's SpaceReserve; 0: none.
+  std::size_t reserve_bytes = 256u << 10;
+  // One line when an outage starts, changes and ends, from the writer's
+  // thread; unset: a spdlog warning.
+  std::function<void(const std::string&)> on_fault{};
+  std::string Validate() const;  // empty when valid, else what is wrong
+};
+
 class RunWriter {
  public:
   // What the writer commits into: the run's RunStore, or in a test a store
@@ -60,30 +86,6 @@ class RunWriter {
     virtual std::filesystem::path dir() const = 0;  // the run folder (its reserve)
   };
 
-  struct Options {
-    // The longest a pushed record waits to be committed: what a kill -9 can
-    // lose. WAL with synchronous=NORMAL keeps frequent commits cheap.
-    std::chrono::milliseconds flush_interval{50};
-    std::size_t max_batch_samples = 100'000;
-    // After a failed commit the next try waits retry_initial, doubling at
-    // each failure up to retry_max.
-    std::chrono::milliseconds retry_initial{100};
-    std::chrono::milliseconds retry_max{2'000};
-    // Records waiting for a store that cannot be written are kept up to this
-    // much memory (about 70 bytes a sample: 64 MiB is a million samples,
-    // hours of a typical run); beyond it new records are dropped, counted.
-    std::size_t max_queued_bytes = 64u << 20;
-    // How long a stop goes on committing against a failing store (waits for
-    // another connection's lock included); the run's status gets one second
-    // more (kStatusLockWait).
-    std::chrono::milliseconds stop_timeout{3'000};
-    // The size of the run's SpaceReserve; 0: none.
-    std::size_t reserve_bytes = 256u << 10;
-    // One line when an outage starts, changes and ends, from the writer's
-    // thread; unset: a spdlog warning.
-    std::function<void(const std::string&)> on_fault{};
-    std::string Validate() const;  // empty when valid, else what is wrong
-  };
 
   static constexpr std::chrono::milliseconds kStatusLockWait{1'000};
 
@@ -106,9 +108,9 @@ class RunWriter {
   };
 
   // `store` must outlive the writer and not be used by anyone else meanwhile.
-  RunWriter(RunStore& store, Options options);
-  explicit RunWriter(RunStore& store) : RunWriter(store, Options{}) {}
-  RunWriter(Sink& sink, Options options);
+  RunWriter(RunStore& store, RunWriterOptions options);
+  explicit RunWriter(RunStore& store) : RunWriter(store, RunWriterOptions{}) {}
+  RunWriter(Sink& sink, RunWriterOptions options);
   ~RunWriter();  // stops and commits what is queued; never throws
   RunWriter(const RunWriter&) = delete;
   RunWriter& operator=(const RunWriter&) = delete;
@@ -166,7 +168,7 @@ class RunWriter {
 
   std::unique_ptr<Sink> owned_sink_;  // the adapter over a RunStore
   Sink* sink_;
-  Options options_;
+  RunWriterOptions options_;
   std::optional<SpaceReserve> reserve_;
   mutable std::mutex mutex_;
   std::condition_variable wake_writer_;

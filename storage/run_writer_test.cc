@@ -150,8 +150,8 @@ struct Warnings {
   std::vector<std::string> said;
 };
 
-RunWriter::Options fault_options(Warnings& warnings) {
-  RunWriter::Options options;
+RunWriterOptions fault_options(Warnings& warnings) {
+  RunWriterOptions options;
   options.flush_interval = 5ms;
   options.retry_initial = 20ms;
   options.retry_max = 160ms;
@@ -343,11 +343,11 @@ TEST(RunWriter, AReserveIsKeptWhileTheRunIsRecordedAndGoneAfter) {
   {
     RunWriter writer(f.store, {10ms, 100'000});
     ASSERT_TRUE(std::filesystem::exists(reserve));
-    EXPECT_EQ(std::filesystem::file_size(reserve), RunWriter::Options{}.reserve_bytes);
+    EXPECT_EQ(std::filesystem::file_size(reserve), RunWriterOptions{}.reserve_bytes);
     writer.close_run(1);
     EXPECT_FALSE(std::filesystem::exists(reserve));
   }
-  RunWriter::Options none;
+  RunWriterOptions none;
   none.reserve_bytes = 0;
   RunWriter writer(f.store, none);
   EXPECT_FALSE(std::filesystem::exists(reserve));

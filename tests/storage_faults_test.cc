@@ -250,7 +250,7 @@ TEST_F(StorageFaults, AFillingDiskIsSaidBeforeItIsFullWithTheTimeLeft) {
   TmpfsMount disk(dir_ / "filling", "24m");
   const std::string toml = tcp_device_toml("adam", server_.port(), kChannels, 0.05);
   auto store = storage::RunStore::create(disk / "run", run_info(toml), storage::RunStore::CreateMode::kNew);
-  acquisition::Logger::Options options;
+  acquisition::LoggerOptions options;
   options.duration = 3s;
   options.disk_check_interval = 100ms;
   options.disk.min_free_bytes = 0;

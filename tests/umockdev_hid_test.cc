@@ -177,7 +177,7 @@ TEST(UmockdevHid, UnplugAndReplugAreEventsAndTheRunGoesOn) {
   }
   {
     storage::RunWriter writer(store, {20ms, 10'000});
-    DevicePoller::Options options{100ms, 50ms, 200ms, {}};
+    DevicePollerOptions options{100ms, 50ms, 200ms, {}};
     // One poll is scripted after the replug: it ends the outage here (the
     // debounce of several good polls is tested in device_poller_test.cc).
     options.recovery_polls = 1;

@@ -35,14 +35,14 @@ TEST(VirtualExperiment, SceneThermocouplesAndFramesAreRecordedThroughTheRealPath
 
   const std::string toml = testing::tcp_device_toml("module", server.port(), 2, 0.05);
   auto store = storage::RunStore::create(dir / "run", testing::run_info(toml), storage::RunStore::CreateMode::kNew);
-  acquisition::Logger::Options logger_options;
+  acquisition::LoggerOptions logger_options;
   logger_options.duration = 2s;
   acquisition::Logger logger(store, logger_options);
   logger.add_devices(acquisition::parse_experiment(toml, "virtual.toml"));
   sim::PatternOptions pattern;
   pattern.width_px = options.width_px;
   pattern.height_px = options.height_px;
-  acquisition::FrameRecorder::Options camera_options;
+  acquisition::FrameRecorderOptions camera_options;
   camera_options.interval = 250ms;
   logger.add_camera(
       std::make_unique<sim::SceneCamera>(scene, sim::generate_pattern(pattern), sim::CameraModel{}, speed, 1), "camera",

@@ -21,7 +21,7 @@ std::string frame_file_name(std::int64_t index) {
 
 }  // namespace
 
-std::string FrameRecorder::Options::Validate() const {
+std::string FrameRecorderOptions::Validate() const {
   if (interval < std::chrono::nanoseconds::zero()) return "frame interval must not be negative";
   if (reference_frames < 0) return "reference_frames must not be negative";
   if (recovery_frames < 1) return "recovery_frames must be at least 1";
@@ -29,7 +29,7 @@ std::string FrameRecorder::Options::Validate() const {
 }
 
 FrameRecorder::FrameRecorder(std::unique_ptr<FrameSource> source, std::string name, std::int64_t device_id,
-                             fs::path run_dir, storage::RunWriter& writer, Options options)
+                             fs::path run_dir, storage::RunWriter& writer, FrameRecorderOptions options)
     : DeviceWorker(std::move(name), device_id, writer),
       source_(std::move(source)),
       run_dir_(std::move(run_dir)),

@@ -22,19 +22,20 @@
 
 namespace bosfuse::acquisition {
 
+// What a FrameRecorder is set up with.
+struct FrameRecorderOptions {
+  std::chrono::nanoseconds interval{0};  // 0: take frames as they come
+  int reference_frames = 1;              // the first N frames are references
+  std::filesystem::path reference_flag;  // frames are references while this file exists
+  ConnectionKeeper::Backoff backoff;
+  // Frames in a row that must arrive before an outage is declared over,
+  // as for a thermocouple reader (DevicePollerOptions::recovery_polls).
+  int recovery_frames = 3;
+  std::string Validate() const;
+};
+
 class FrameRecorder : public DeviceWorker {
  public:
-  struct Options {
-    std::chrono::nanoseconds interval{0};  // 0: take frames as they come
-    int reference_frames = 1;              // the first N frames are references
-    std::filesystem::path reference_flag;  // frames are references while this file exists
-    ConnectionKeeper::Backoff backoff;
-    // Frames in a row that must arrive before an outage is declared over,
-    // as for a thermocouple reader (DevicePoller::Options::recovery_polls).
-    int recovery_frames = 3;
-    std::string Validate() const;
-  };
-
   struct Stats {
     std::int64_t frames = 0;
     std::int64_t reference_frames = 0;
@@ -46,7 +47,7 @@ class FrameRecorder : public DeviceWorker {
   // `name` names the camera's folder under frames/ (letters, digits, - and _).
   // Own it in a std::shared_ptr (std::make_shared) before start().
   FrameRecorder(std::unique_ptr<FrameSource> source, std::string name, std::int64_t device_id,
-                std::filesystem::path run_dir, storage::RunWriter& writer, Options options);
+                std::filesystem::path run_dir, storage::RunWriter& writer, FrameRecorderOptions options);
 
   Stats stats() const;
 
@@ -62,7 +63,7 @@ class FrameRecorder : public DeviceWorker {
   std::unique_ptr<FrameSource> source_;
   std::filesystem::path run_dir_;
   std::filesystem::path frame_dir_;  // relative to run_dir_
-  Options options_;
+  FrameRecorderOptions options_;
   ConnectionKeeper connection_;  // used on the worker thread only
 
   mutable std::mutex stats_mutex_;

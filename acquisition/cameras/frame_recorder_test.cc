@@ -51,7 +51,7 @@ struct Harness {
                                 storage::RunStore::CreateMode::kNew);
   std::int64_t device = store.add_device({0, "cam", "camera", "virtual", ""});
 
-  FrameRecorder::Stats record(std::unique_ptr<ScriptedCamera> camera, FrameRecorder::Options options,
+  FrameRecorder::Stats record(std::unique_ptr<ScriptedCamera> camera, FrameRecorderOptions options,
                               std::size_t expected_frames) {
     storage::RunWriter writer(store, {20ms, 10'000});
     const auto recorder =
@@ -66,8 +66,8 @@ struct Harness {
   }
 };
 
-FrameRecorder::Options fast_options() {
-  FrameRecorder::Options options;
+FrameRecorderOptions fast_options() {
+  FrameRecorderOptions options;
   options.interval = 20ms;
   options.backoff = {20ms, 100ms};
   return options;
@@ -118,7 +118,7 @@ TEST(FrameRecorder, FramesTakenWhileFlaggedAreReferences) {
   Harness h;
   auto camera = std::make_unique<ScriptedCamera>();
   camera->frames = {testing::textured_frame(0), testing::textured_frame(1)};
-  FrameRecorder::Options options = fast_options();
+  FrameRecorderOptions options = fast_options();
   options.reference_frames = 0;
   options.reference_flag = h.dir.path() / "reference.flag";
   testing::write_file(options.reference_flag, {});

@@ -83,7 +83,7 @@ struct CameraConfig {
   std::string run_key;        // replay: where `run` is in the file, for check_replayed_runs
   double replay_speed = 1;
   WatchedFolderOptions folder;
-  FrameRecorder::Options recorder;
+  FrameRecorderOptions recorder;
   std::filesystem::path reference_flag;  // relative paths are relative to the run folder
 };
 

@@ -23,7 +23,7 @@ inline storage::RunInfo run_info(const std::string& config_text) {
   return {0, "test-run", acquisition::utc_now_ns(), std::nullopt, config_text, storage::RunStatus::kRunning, 1.0, std::nullopt};
 }
 
-inline sim::ModbusSimServer::Options module_options(const std::string& profile, int inputs, ModbusEndpoint endpoint) {
+inline sim::ModbusSimServerOptions module_options(const std::string& profile, int inputs, ModbusEndpoint endpoint) {
   return sim::module_server_options({profile, inputs, "K", sim::CoolingSignal{22.0, 85.0, 0.2, 0.3, 7}, {}},
                                     std::move(endpoint));
 }
@@ -39,7 +39,7 @@ inline acquisition::Logger::Summary log_for(storage::RunStore& store, const acqu
                                             std::chrono::milliseconds duration,
                                             std::function<void(const std::string&)> on_progress = {},
                                             std::function<void(const std::string&)> on_alarm = {}) {
-  acquisition::Logger::Options options;
+  acquisition::LoggerOptions options;
   options.duration = duration;
   options.writer.flush_interval = 50ms;
   options.backoff_initial = 50ms;
