@@ -53,24 +53,32 @@ std::string sigma_columns() {
   return columns;
 }
 
+// As many NULLs as there are σ columns, for a store from before them.
+std::string null_sigma_columns() {
+  std::string nulls;
+  for (std::size_t i = 0; i < kProbeSampleSigmaColumns.size(); ++i) nulls += i ? ", NULL" : "NULL";
+  return nulls;
+}
+
 std::string sample_columns() { return std::string(kSampleValueColumns) + ", " + sigma_columns(); }
 
-// "INSERT INTO table (owner, columns) VALUES (?, ...)" for one row of `count` columns after the owner.
-std::string insert_row(const char* table, const char* owner, const char* columns, int count) {
+// "INSERT INTO table (columns) VALUES (?, ...)", one placeholder a column.
+std::string insert_row(std::string_view table, std::string_view columns) {
   std::string marks = "?";
-  for (int i = 0; i < count; ++i) marks += ", ?";
-  return fmt::format("INSERT INTO {} ({}, {}) VALUES ({})", table, owner, columns, marks);
+  for (const char c : columns) {
+    if (c == ',') marks += ", ?";
+  }
+  return fmt::format("INSERT INTO {} ({}) VALUES ({})", table, columns, marks);
 }
 
 std::string probe_sample_select(const char* table, bool with_sigmas) {
   return std::string("SELECT ") + kSampleValueColumns + ", " +
-         (with_sigmas ? sigma_columns() : std::string("NULL, NULL, NULL, NULL, NULL")) + " FROM " + table +
+         (with_sigmas ? sigma_columns() : null_sigma_columns()) + " FROM " + table +
          " WHERE probe_id = ? ORDER BY t_ns, frame_id";
 }
 
 void insert_probe_samples(Database& db, const char* table, std::span<const ProbeSampleRecord> samples) {
-  auto stmt = db.prepare(fmt::format("INSERT INTO {} ({}) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", table,
-                                     sample_columns()));
+  auto stmt = db.prepare(insert_row(table, sample_columns()));
   for (const ProbeSampleRecord& s : samples) {
     stmt.bind_all(s.probe_id, s.frame_id, s.t_ns, s.u_px, s.v_px, s.shift_px, s.temperature_c, s.valid ? 1 : 0,
                   s.sigma_u_px, s.sigma_v_px, s.sigma_shift_px, s.sigma_random_c, s.sigma_systematic_c);
@@ -126,7 +134,7 @@ void ProcessingStore::clear_results() {
 }
 
 std::int64_t ProcessingStore::add_probe(const ProbeSeriesRecord& p) {
-  db_.prepare(insert_row("probe_series", "run_id", kProbeSeriesColumns, 4))
+  db_.prepare(insert_row("probe_series", std::string("run_id, ") + kProbeSeriesColumns))
       .bind_all(run_id_, p.channel_id, p.name, p.x_px, p.y_px)
       .run();
   return db_.last_insert_rowid();
@@ -158,7 +166,7 @@ std::int64_t ProcessingStore::add_calibration(const CalibrationRecord& c) {
 }
 
 std::int64_t ProcessingStore::add_field(const FieldRecord& f) {
-  db_.prepare(insert_row("fields", "run_id", kFieldColumns, 4) +
+  db_.prepare(insert_row("fields", std::string("run_id, ") + kFieldColumns) +
               " ON CONFLICT (frame_id, kind) DO UPDATE SET path = excluded.path, json = excluded.json")
       .bind_all(run_id_, f.frame_id, f.kind, f.path, f.json)
       .run();
@@ -235,7 +243,7 @@ void ProcessingStore::abandon_processing(std::int64_t processing_id) {
 std::int64_t ProcessingStore::stage_probe(std::int64_t processing_id, const ProbeSeriesRecord& p) {
   auto existing = db_.prepare("SELECT id FROM staged_probe_series WHERE processing_id = ? AND name = ?");
   if (existing.bind_all(processing_id, p.name).step()) return existing.column_int64(0);
-  db_.prepare(insert_row("staged_probe_series", "processing_id", kProbeSeriesColumns, 4))
+  db_.prepare(insert_row("staged_probe_series", std::string("processing_id, ") + kProbeSeriesColumns))
       .bind_all(processing_id, p.channel_id, p.name, p.x_px, p.y_px)
       .run();
   return db_.last_insert_rowid();
@@ -266,7 +274,7 @@ void ProcessingStore::stage_frame(std::int64_t processing_id, std::int64_t frame
                                   std::span<const ProbeSampleRecord> samples, std::span<const FieldRecord> fields) {
   Transaction transaction(db_);
   insert_probe_samples(db_, "staged_probe_samples", samples);
-  auto field = db_.prepare(insert_row("staged_fields", "processing_id", kFieldColumns, 4));
+  auto field = db_.prepare(insert_row("staged_fields", std::string("processing_id, ") + kFieldColumns));
   for (const FieldRecord& f : fields) {
     field.bind_all(processing_id, frame_id, f.kind, f.path, f.json);
     field.run();

@@ -107,11 +107,17 @@ constexpr std::string_view kFieldColumns = R"sql(
   path     TEXT    NOT NULL,
   json     TEXT    NOT NULL,)sql";
 
-std::string probe_series_table(std::string_view table, std::string_view owner) {
-  return fmt::format("CREATE TABLE {} (\n  id INTEGER PRIMARY KEY,\n  {}{}\n  UNIQUE ({}, name)\n);\n", table,
-                     owner == "run_id" ? "run_id INTEGER NOT NULL REFERENCES runs(id),"
-                                       : "processing_id INTEGER NOT NULL REFERENCES processings(id),",
-                     kProbeSeriesColumns, owner);
+// What keys a row: its run (a result) or its processing (a staged row).
+struct Owner {
+  std::string_view column;  // the key column's definition
+  std::string_view key;     // its name
+};
+constexpr Owner kRunOwner{"run_id INTEGER NOT NULL REFERENCES runs(id)", "run_id"};
+constexpr Owner kProcessingOwner{"processing_id INTEGER NOT NULL REFERENCES processings(id)", "processing_id"};
+
+std::string probe_series_table(std::string_view table, const Owner& owner) {
+  return fmt::format("CREATE TABLE {} (\n  id INTEGER PRIMARY KEY,\n  {},{}\n  UNIQUE ({}, name)\n);\n", table,
+                     owner.column, kProbeSeriesColumns, owner.key);
 }
 
 std::string probe_samples_table(std::string_view table, std::string_view series) {
@@ -119,15 +125,16 @@ std::string probe_samples_table(std::string_view table, std::string_view series)
                      series, kProbeSampleColumns);
 }
 
-std::string fields_table(std::string_view table, std::string_view key_and_owner) {
-  return fmt::format("CREATE TABLE {} ({}{}\n  {}\n);\n", table, key_and_owner, kFieldColumns,
-                     table == "fields" ? "UNIQUE (frame_id, kind)" : "PRIMARY KEY (processing_id, frame_id, kind)");
+// A stored field has an id of its own and one row per frame and kind; a
+// staged one is keyed by its processing, frame and kind.
+std::string fields_table(std::string_view table, std::string_view leading_columns, std::string_view key) {
+  return fmt::format("CREATE TABLE {} ({}{}\n  {}\n);\n", table, leading_columns, kFieldColumns, key);
 }
 
 // Version 2: results of `bosfuse process` and `bosfuse calibrate`. Numbers,
 // JSON text and paths only; fields themselves are files under RUN/fields/.
 std::string schema_v2() {
-  return probe_series_table("probe_series", "run_id") + probe_samples_table("probe_samples", "probe_series") +
+  return probe_series_table("probe_series", kRunOwner) + probe_samples_table("probe_samples", "probe_series") +
          R"sql(CREATE TABLE fits (
   id           INTEGER PRIMARY KEY,
   run_id       INTEGER NOT NULL REFERENCES runs(id),
@@ -150,7 +157,8 @@ CREATE TABLE calibrations (
   created_ns INTEGER NOT NULL,
   json       TEXT    NOT NULL
 );
-)sql" + fields_table("fields", "\n  id       INTEGER PRIMARY KEY,\n  run_id   INTEGER NOT NULL REFERENCES runs(id),");
+)sql" + fields_table("fields", fmt::format("\n  id INTEGER PRIMARY KEY,\n  {},", kRunOwner.column),
+                      "UNIQUE (frame_id, kind)");
 }
 
 // Version 3: what a run whose logger died needs to say what is missing: the
@@ -186,9 +194,10 @@ CREATE TABLE staged_frames (
   json          TEXT    NOT NULL,
   PRIMARY KEY (processing_id, frame_id)
 );
-)sql" + probe_series_table("staged_probe_series", "processing_id") +
+)sql" + probe_series_table("staged_probe_series", kProcessingOwner) +
          probe_samples_table("staged_probe_samples", "staged_probe_series") +
-         fields_table("staged_fields", "\n  processing_id INTEGER NOT NULL REFERENCES processings(id),");
+         fields_table("staged_fields", fmt::format("\n  {},", kProcessingOwner.column),
+                      "PRIMARY KEY (processing_id, frame_id, kind)");
 }
 
 // Version 5: each probe sample carries its uncertainty, NULL where it was
