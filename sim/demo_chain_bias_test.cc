@@ -130,8 +130,9 @@ TEST(DemoChainBias, DISABLED_TheRenderedFramesThroughTheEvaluator) {
   DemoSetup setup = demo_setup(240);
   if (const char* onset = std::getenv("ZZ_ONSET")) {  // the plume's onset, m (default: the scene's step)
     setup.scene.plume_onset_m = std::atof(onset);
-    setup.model = std::make_shared<const ConvectionScene>(setup.scene);
   }
+  if (const char* scale = std::getenv("ZZ_ZD_SCALE")) setup.scene.z_d_m *= std::atof(scale);  // shifts × scale
+  setup.model = std::make_shared<const ConvectionScene>(setup.scene);
   const ConvectionScene& scene = *setup.model;
   const double noise = std::getenv("ZZ_NOISE") ? std::atof(std::getenv("ZZ_NOISE")) : 0.0;
   const int seeds = std::getenv("ZZ_SEEDS") ? std::atoi(std::getenv("ZZ_SEEDS")) : 4;
