@@ -49,6 +49,7 @@ std::string SceneOptions::Validate() const {
     return "ambient temperature and pressure must be physical";
   if (!positive(duration_s) || duration_s > 1e5) return "duration must be positive (and at most 1e5 s)";
   if (!(virtual_origin_m < diameter_m / 2)) return "the plume's virtual origin must lie below the cylinder's top";
+  if (!(plume_onset_m >= 0) || !std::isfinite(plume_onset_m)) return "the plume's onset must be 0 or positive";
   if (!positive(plume_temperature_constant) || !positive(plume_width_constant))
     return "plume constants must be positive";
   if (!positive(gladstone_dale_m3_kg) || !positive(depth_m) || !(z_d_m >= 0) || !positive(px_per_mm)) {
@@ -124,7 +125,15 @@ double ConvectionScene::centreline_excess_c(double z_m, double t_s) const {
   const double height = z_m - options_.virtual_origin_m;
   const double excess = options_.plume_temperature_constant * source * std::pow(buoyancy, -0.2) *
                         std::pow(air.viscosity_kinematic, -0.4) * std::pow(height, -0.6);
-  return std::min(excess, excess_c(t_s));
+  return plume_onset(z_m).value * std::min(excess, excess_c(t_s));
+}
+
+// 0 at the cylinder's top, 1 from plume_onset_m above it, smoothstep between.
+ConvectionScene::Onset ConvectionScene::plume_onset(double z_m) const {
+  const double w = options_.plume_onset_m;
+  if (!(w > 0)) return {z_m >= options_.diameter_m / 2 ? 1.0 : 0.0, 0.0};
+  const double x = std::clamp((z_m - options_.diameter_m / 2) / w, 0.0, 1.0);
+  return {x * x * (3 - 2 * x), 6 * x * (1 - x) / w};
 }
 
 double ConvectionScene::plume_width_m(double z_m, double t_s) const {
@@ -151,12 +160,13 @@ double ConvectionScene::refractive_index(double x_m, double z_m, double t_s) con
 // profile under the similarity laws (ΔT_c ∝ h^−3/5, δ ∝ h^2/5, h = z − z_v).
 cv::Point2d ConvectionScene::refractive_gradient_per_m(double x_m, double z_m, double t_s) const {
   const double centre = centreline_excess_c(z_m, t_s);
-  if (centre == 0 || centre >= excess_c(t_s)) return {0, 0};  // no plume, or capped (uniform) there
+  const Onset onset = plume_onset(z_m);
+  if (centre == 0 || centre >= onset.value * excess_c(t_s)) return {0, 0};  // no plume, or capped (uniform) there
   const double delta = plume_width_m(z_m, t_s);
   const double height = z_m - options_.virtual_origin_m;
   const double profile = std::exp(-(x_m / delta) * (x_m / delta));
   const double dt_dx = centre * profile * (-2 * x_m / (delta * delta));
-  const double dcentre_dz = -0.6 * centre / height;
+  const double dcentre_dz = -0.6 * centre / height + centre * onset.slope_per_m / onset.value;
   const double ddelta_dz = 0.4 * delta / height;
   const double dt_dz = dcentre_dz * profile + centre * profile * (2 * x_m * x_m / (delta * delta * delta)) * ddelta_dz;
   const double t_k = options_.ambient_c + centre * profile + kKelvin;

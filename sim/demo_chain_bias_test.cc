@@ -1,0 +1,167 @@
+// Where the demo's BOS k bias (issue 29: +0.6 % / +0.4 % over 20 seeds) is
+// made, stage by stage, with the scene's truth at hand: the demo's analytic
+// displacement (no images) through the pipeline's solve, and the demo's
+// rendered frames through the evaluator and the solve. Each probe reads the
+// solved field bilinearly; the reading is corrected with the exact
+// interpolation term and the chain's κ = 4 px² times the true ∇²T (what
+// process's window correction estimates), and k is fitted with a free ambient.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+
+#include "fusion/displacement_evaluator.h"
+#include "fusion/temperature_field.h"
+#include "sim/demo_setup.h"
+#include "sim/demo_truth.h"
+
+namespace bosfuse::sim {
+namespace {
+
+constexpr double kChainKappaPx2 = 4.0;  // fusion/temperature_budget.h: the default chain's
+
+double newton_rate(const std::vector<double>& t, const std::vector<double>& y, double k0) {
+  double best = 1e300, best_k = k0;
+  for (int i = -8000; i <= 8000; ++i) {  // ±4 % in steps of 5e-6
+    const double k = k0 * (1 + i * 5e-6), n = static_cast<double>(t.size());
+    double se = 0, see = 0, sy = 0, sye = 0;
+    for (std::size_t j = 0; j < t.size(); ++j) {
+      const double e = std::exp(-k * t[j]);
+      se += e, see += e * e, sy += y[j], sye += y[j] * e;
+    }
+    const double det = n * see - se * se, a = (sy * see - se * sye) / det, b = (n * sye - se * sy) / det;
+    double r = 0;
+    for (std::size_t j = 0; j < t.size(); ++j) r += std::pow(y[j] - a - b * std::exp(-k * t[j]), 2);
+    if (r < best) best = r, best_k = k;
+  }
+  return best_k;
+}
+
+fusion::BosGeometry demo_geometry(const DemoSetup& setup) {
+  const auto& s = setup.scene;
+  fusion::BosGeometryOptions g;
+  g.z_d_m = s.z_d_m, g.depth_m = s.depth_m, g.pixel_pitch_um = setup.pixel_pitch_um;
+  g.magnification = s.px_per_mm * setup.pixel_pitch_um * 1e-3, g.wavelength_nm = setup.wavelength_nm;
+  g.ambient_pressure_pa = s.pressure_pa, g.ambient_temperature_c = s.ambient_c;
+  return fusion::BosGeometry(g);
+}
+
+void mask_holder(const ConvectionScene& scene, fusion::DisplacementField& f) {
+  const cv::Mat mask = scene.holder_mask();
+  for (auto& v : f.vectors) {
+    for (int dy = -8; dy < 8; ++dy)
+      for (int dx = -8; dx < 8; ++dx) {
+        const int x = static_cast<int>(v.x_px) + dx, y = static_cast<int>(v.y_px) + dy;
+        if (x >= 0 && y >= 0 && x < mask.cols && y < mask.rows && mask.at<uchar>(y, x)) v.flag = fusion::VectorFlag::kMasked;
+      }
+  }
+}
+
+// The corrected probe temperature at height z: point + (BOS − bilinear truth of the nodes) − κ∇²T.
+double corrected_probe_c(const ConvectionScene& scene, const fusion::TemperatureField& tf, double z_m, double t) {
+  const cv::Point2d at = scene.image_position_px(0, z_m);
+  const double fx = (at.x - tf.x0_px) / tf.step_px, fy = (at.y - tf.y0_px) / tf.step_px;
+  const int c = static_cast<int>(fx), r = static_cast<int>(fy);
+  const double a = fx - c, b = fy - r, h = tf.step_px, x0 = tf.x0_px + c * h, y0 = tf.y0_px + r * h;
+  const auto truth = [&](double x, double y) {
+    const auto p = scene.flow_position_m(x, y);
+    return scene.temperature_c(p.x, p.y, t);
+  };
+  const auto node = [&](int dr, int dc) { return tf.temperature_c[(r + dr) * tf.cols + c + dc]; };
+  const auto bilinear = [&](auto v00, auto v01, auto v10, auto v11) {
+    return (1 - a) * (1 - b) * v00 + a * (1 - b) * v01 + (1 - a) * b * v10 + a * b * v11;
+  };
+  const double bos = bilinear(node(0, 0), node(0, 1), node(1, 0), node(1, 1));
+  const double nodes = bilinear(truth(x0, y0), truth(x0 + h, y0), truth(x0, y0 + h), truth(x0 + h, y0 + h));
+  const double laplacian = truth(at.x + 1, at.y) + truth(at.x - 1, at.y) + truth(at.x, at.y + 1) +
+                           truth(at.x, at.y - 1) - 4 * truth(at.x, at.y);
+  return scene.temperature_c(0, z_m, t) + (bos - nodes) - kChainKappaPx2 * laplacian;
+}
+
+// k of each probe (relative to the truth) from the analytic displacement on the demo's grid.
+std::pair<double, double> analytic_chain_bias(double onset_m) {
+  DemoSetup setup = demo_setup(240);
+  setup.scene.plume_onset_m = onset_m;
+  setup.model = std::make_shared<const ConvectionScene>(setup.scene);
+  const ConvectionScene& scene = *setup.model;
+  fusion::TemperatureFieldOptions o;
+  o.open_top = true;
+  std::vector<double> ts, y35, y45;
+  for (double t = 10; t <= 230; t += 10) {
+    fusion::DisplacementField f;
+    f.rows = 54, f.cols = 59;  // the demo's 16 px windows at 8 px steps over 480 × 440
+    for (int r = 0; r < f.rows; ++r)
+      for (int c = 0; c < f.cols; ++c) {
+        fusion::DisplacementVector v;
+        v.x_px = 7.5 + 8 * c, v.y_px = 7.5 + 8 * r;
+        const cv::Point2d d = scene.displacement_px(v.x_px, v.y_px, t);
+        v.u_px = d.x, v.v_px = d.y;
+        f.vectors.push_back(v);
+      }
+    mask_holder(scene, f);
+    const auto tf = fusion::recover_temperature_field(f, demo_geometry(setup), o).field;
+    ts.push_back(t), y35.push_back(corrected_probe_c(scene, tf, 0.035, t)), y45.push_back(corrected_probe_c(scene, tf, 0.045, t));
+  }
+  const double k = true_plume_cooling_rate(setup);
+  return {newton_rate(ts, y35, k) / k - 1, newton_rate(ts, y45, k) / k - 1};
+}
+
+// The solve, its boundary (Dirichlet sides, open top), the Gladstone–Dale
+// conversion and the window correction do not make the bias: noise-free and
+// exact in the displacement, k comes out within 0.25 % of the point's, and
+// below it, not above (measured −0.19 % / −0.16 % with the scene's step at
+// the plume's foot, −0.09 % / −0.08 % with a 6 mm onset).
+TEST(DemoChainBias, TheSolveAndTheCorrectionLeaveKWithinAQuarterPercent) {
+  for (const double onset_m : {0.0, 0.006}) {
+    const auto [k35, k45] = analytic_chain_bias(onset_m);
+    fmt::print("onset {} mm: k {:+.3f} % (tc-35mm) {:+.3f} % (tc-45mm)\n", onset_m * 1e3, 100 * k35, 100 * k45);
+    EXPECT_LT(std::abs(k35), 0.0025);
+    EXPECT_LT(std::abs(k45), 0.0025);
+  }
+}
+
+// Diagnostic, not in the suite (about 2 minutes): the rendered frames through
+// the evaluator. Noise-free camera (ZZ_NOISE, default 0), patterns 1..4
+// (ZZ_SEEDS): k +0.63, +1.51, −0.33, +1.37 % (tc-35mm) and +0.84, +2.06,
+// +0.53, +1.32 % (tc-45mm), so the bias is made in the images' evaluation.
+// Run: build/sim/sim_test --gtest_also_run_disabled_tests --gtest_filter='DemoChainBias.DISABLED_*'
+TEST(DemoChainBias, DISABLED_TheRenderedFramesThroughTheEvaluator) {
+  DemoSetup setup = demo_setup(240);
+  if (const char* onset = std::getenv("ZZ_ONSET")) {  // the plume's onset, m (default: the scene's step)
+    setup.scene.plume_onset_m = std::atof(onset);
+  }
+  if (const char* scale = std::getenv("ZZ_ZD_SCALE")) setup.scene.z_d_m *= std::atof(scale);  // shifts × scale
+  setup.model = std::make_shared<const ConvectionScene>(setup.scene);
+  const ConvectionScene& scene = *setup.model;
+  const double noise = std::getenv("ZZ_NOISE") ? std::atof(std::getenv("ZZ_NOISE")) : 0.0;
+  const int seeds = std::getenv("ZZ_SEEDS") ? std::atoi(std::getenv("ZZ_SEEDS")) : 4;
+  fusion::TemperatureFieldOptions o;
+  o.open_top = true;
+  o.weight_by_sigma = std::getenv("ZZ_UNWEIGHTED") == nullptr;
+  const double k = true_plume_cooling_rate(setup);
+  for (int seed = 1; seed <= seeds; ++seed) {
+    PatternOptions p;
+    p.width_px = setup.scene.width_px, p.height_px = setup.scene.height_px, p.dot_diameter_px = 3;
+    p.seed = static_cast<std::uint64_t>(seed);
+    const BackgroundPattern pattern = generate_pattern(p);
+    CameraModel camera;
+    camera.noise_std = noise;
+    CameraModel reference_camera = camera;  // ZZ_REFERENCE_NOISE: the reference's own noise
+    if (const char* r = std::getenv("ZZ_REFERENCE_NOISE")) reference_camera.noise_std = std::atof(r);
+    const cv::Mat reference = scene.render_frame(pattern, reference_camera, 0.25, false, 0);
+    std::vector<double> ts, y35, y45;
+    for (double t = 10; t <= 230; t += 10) {
+      const cv::Mat frame = scene.render_frame(pattern, camera, t, true, 1 + static_cast<std::uint64_t>(t / 10));
+      auto evaluated = fusion::evaluate_displacement(reference, frame, fusion::EvaluatorOptions{});
+      mask_holder(scene, evaluated.field);
+      const auto tf = fusion::recover_temperature_field(evaluated.field, demo_geometry(setup), o).field;
+      ts.push_back(t), y35.push_back(corrected_probe_c(scene, tf, 0.035, t)), y45.push_back(corrected_probe_c(scene, tf, 0.045, t));
+    }
+    fmt::print("pattern {}: k {:+.3f} % (tc-35mm) {:+.3f} % (tc-45mm)\n", seed, 100 * (newton_rate(ts, y35, k) / k - 1),
+               100 * (newton_rate(ts, y45, k) / k - 1));
+  }
+}
+
+}  // namespace
+}  // namespace bosfuse::sim
