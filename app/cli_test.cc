@@ -263,6 +263,32 @@ TEST_F(Cli, EverySubcommandHasHelp) {
   }
 }
 
+// A usage mistake exits with CLI11's code in every subcommand, as the README
+// says: 109 for an unknown option (named with its command), 106 for a missing
+// argument, 105 for evaluate's missing pair (a check of its own).
+TEST_F(Cli, UsageMistakesExitWithCli11sCodesInEverySubcommand) {
+  for (const char* sub : {"acquire", "runs", "export", "demo", "sim", "sim modbus", "replay", "evaluate", "quality",
+                          "background", "bench", "fit", "process", "calibrate", "report", "mark", "view"}) {
+    const auto unknown = streams(std::string(sub) + " --no-such-option");
+    EXPECT_EQ(unknown.exit_code, 109) << sub << ": " << unknown.err;
+    EXPECT_NE(unknown.err.find("unknown option '--no-such-option' of 'bosfuse " + std::string(sub) + "'"),
+              std::string::npos)
+        << unknown.err;
+    EXPECT_EQ(unknown.out, "") << sub;
+  }
+  for (const auto& [sub, message] : std::vector<std::pair<std::string, std::string>>{
+           {"acquire", "experiment is required"}, {"runs", "run is required"}, {"export", "run is required"},
+           {"process", "run is required"}, {"mark", "run is required"}, {"fit", "data is required"},
+           {"quality", "image is required"}, {"background", "--out is required"}, {"sim", "A subcommand is required"}}) {
+    const auto missing = streams(sub);
+    EXPECT_EQ(missing.exit_code, 106) << sub << ": " << missing.err;
+    EXPECT_EQ(missing.err.rfind(message, 0), 0u) << sub << ": " << missing.err;
+  }
+  const auto evaluate = streams("evaluate");
+  EXPECT_EQ(evaluate.exit_code, 105) << evaluate.err;
+  EXPECT_EQ(evaluate.err.rfind("evaluate needs REF MEAS (an image pair)", 0), 0u) << evaluate.err;
+}
+
 // Every subcommand spells an option the same way: the output is -o/--out
 // (export's --output and evaluate's --png are gone), a JSON output is
 // --json FILE|- (quality's --json was a flag), an image of a map is --map.

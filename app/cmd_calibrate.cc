@@ -61,7 +61,7 @@ void add_checks(CLI::App* cmd, CalibrateArgs& args) {
 
 void run_calibrate(CalibrateArgs& args) {
   if (args.clear) {
-    std::cout << pipeline::clear_calibration(args.run);
+    std::cerr << pipeline::clear_calibration(args.run);
     return;
   }
   auto& options = args.options;
@@ -71,7 +71,7 @@ void run_calibrate(CalibrateArgs& args) {
   options.force = args.force;
   options.checks.expected_sign = args.flow == "cooled" ? -1 : +1;
   const auto outcome = pipeline::calibrate_run(args.run, options);
-  std::cout << outcome.text;
+  std::cerr << outcome.text;  // a summary for a person: standard output holds data only
   if (!outcome.stored) {
     std::string problems;
     for (const auto& p : outcome.problems) problems += "\n  " + p;

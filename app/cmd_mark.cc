@@ -80,7 +80,7 @@ void mark(const MarkArgs& args) {
   if (!args.at.empty()) warn_outside_the_record(store, t_ns);
   const storage::Event marker{0, std::nullopt, t_ns, "marker", args.message};
   store.write_events({&marker, 1});
-  std::cout << "marked \"" << args.message << "\" at " << storage::format_iso8601_utc(marker.t_ns, 3) << " in "
+  std::cerr << "marked \"" << args.message << "\" at " << storage::format_iso8601_utc(marker.t_ns, 3) << " in "
             << args.run << "\n";
   say_what_the_origin_is(store, args, t_ns);
 }

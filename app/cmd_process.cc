@@ -50,7 +50,7 @@ void process(const ProcessArgs& args, pipeline::FrameDistributor* distributor) {
   };
   const auto report = pipeline::process_run(args.run, options);
   display.finish();
-  std::cout << report.text;
+  std::cerr << report.text;  // a summary for a person: standard output holds data only
   if (!report.complete) throw CommandFailure(kExitStopped, "processing stopped on request");
 }
 

@@ -68,15 +68,15 @@ void make_report(const ReportArgs& args) {
   const auto files = report::write_report(input, options, args.out);
   for (const auto& s : input.series) {
     if (s.fit && s.fit->ok()) {
-      std::cout << fmt::format("{}: k = {:.5g} 1/s [{:.5g}, {:.5g}], tau = {:.4g} s\n", s.name, s.fit->k_per_s.value,
+      std::cerr << fmt::format("{}: k = {:.5g} 1/s [{:.5g}, {:.5g}], tau = {:.4g} s\n", s.name, s.fit->k_per_s.value,
                                s.fit->k_per_s.low, s.fit->k_per_s.high, s.fit->tau_s.value);
     } else {
-      std::cout << fmt::format("{}: no fit ({})\n", s.name, s.fit ? s.fit->summary.message : "not fitted");
+      std::cerr << fmt::format("{}: no fit ({})\n", s.name, s.fit ? s.fit->summary.message : "not fitted");
     }
   }
-  std::cout << fmt::format("wrote {} figures (PNG and SVG), {} CSV files and {}\n", files.figures.size(),
+  std::cerr << fmt::format("wrote {} figures (PNG and SVG), {} CSV files and {}\n", files.figures.size(),
                            files.csv.size(), files.json.string());
-  std::cout << "report: " << files.html.string() << "\n";
+  std::cerr << "report: " << files.html.string() << "\n";
 }
 
 void add_report(CLI::App& root) {

@@ -6,10 +6,12 @@
 
 namespace bosfuse::app {
 
-ServedView::ServedView(const std::filesystem::path& run, const std::string& listen, bool require_token) {
+ServedView::ServedView(const std::filesystem::path& run, const std::string& listen, bool require_token,
+                       const std::string& address_option) {
   view::ViewOptions options;
   view::parse_listen_address(listen, options);
   options.require_token = require_token;
+  options.address_option = address_option;
   try {
     server_.emplace(run, options);
   } catch (const storage::StorageError& e) {
@@ -32,7 +34,7 @@ ServedView::~ServedView() {
 std::unique_ptr<ServedView> start_live_view(const std::filesystem::path& run, const std::string& listen) {
   if (listen.empty()) return nullptr;
   try {
-    auto served = std::make_unique<ServedView>(run, listen);
+    auto served = std::make_unique<ServedView>(run, listen, false, "--live HOST:PORT");
     std::cerr << "live view: " << served->url() << std::endl;
     return served;
   } catch (const std::exception& e) {

@@ -25,7 +25,9 @@ class ServedView {
   // Throws std::runtime_error with a message for the user: a folder that is
   // no readable run, a bad address, a port in use. `require_token`: the
   // URL's token also on loopback (off loopback it is always wanted).
-  ServedView(const std::filesystem::path& run, const std::string& listen, bool require_token = false);
+  // address_option: how the user gave the address, named when the port is in use.
+  ServedView(const std::filesystem::path& run, const std::string& listen, bool require_token = false,
+             const std::string& address_option = "--listen HOST:PORT");
   ~ServedView();
   ServedView(const ServedView&) = delete;
   ServedView& operator=(const ServedView&) = delete;

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "app/test_streams.h"
 #include "storage/database.h"
 #include "storage/processing_store.h"
 #include "tests/support/browser.h"
@@ -28,6 +29,9 @@ class ThermocoupleOnlyCli : public ::testing::Test {
   fs::path run() const { return dir_ / "run"; }
   testing::CommandResult bosfuse(const std::string& command, const std::string& args = "") {
     return testing::run_command(kBosfuse + " " + command + " " + shell_quote(run()) + " " + args, 120);
+  }
+  testing::StreamsResult streams(const std::string& command, const std::string& args = "") {
+    return testing::run_with_streams(kBosfuse + " " + command + " " + shell_quote(run()) + " " + args, dir_.path(), 120);
   }
   nlohmann::json report_json(const std::string& out) {
     return nlohmann::json::parse(testing::file_bytes(dir_ / out / "report.json"));
@@ -82,6 +86,30 @@ TEST_F(ThermocoupleOnlyCli, ProcessFitsEveryThermocoupleAndSaysNoBosEvaluationWa
   EXPECT_NE(calibrated.output.find("the run has no frames: a calibration compares BOS probes"), std::string::npos)
       << calibrated.output;
   EXPECT_EQ(calibrated.output.find("run `bosfuse process RUN` first"), std::string::npos) << "it was processed";
+}
+
+// Standard output holds data only: the summaries of process, calibrate,
+// report and mark are for a person and go to standard error.
+TEST_F(ThermocoupleOnlyCli, SummariesGoToStandardErrorAndStandardOutputStaysEmpty) {
+  testrun::create_run(run(), false, truth_);
+  const auto processed = streams("process");
+  ASSERT_EQ(processed.exit_code, 0) << processed.err;
+  EXPECT_EQ(processed.out, "");
+  EXPECT_NE(processed.err.find("the run has no frames: no BOS evaluation was done"), std::string::npos)
+      << processed.err;
+  const auto calibrated = streams("calibrate");
+  EXPECT_EQ(calibrated.out, "");
+  EXPECT_NE(calibrated.err.find("the run has no frames: a calibration compares BOS probes"), std::string::npos)
+      << calibrated.err;
+  const auto made = streams("report", "-o " + shell_quote(dir_ / "out"));
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  EXPECT_EQ(made.out, "");
+  EXPECT_NE(made.err.find("tc0: k = "), std::string::npos) << made.err;
+  EXPECT_NE(made.err.find("report: " + (dir_ / "out" / "report.html").string()), std::string::npos) << made.err;
+  const auto marked = streams("mark", "note --at +1s");
+  ASSERT_EQ(marked.exit_code, 0) << marked.err;
+  EXPECT_EQ(marked.out, "");
+  EXPECT_NE(marked.err.find("marked \"note\" at "), std::string::npos) << marked.err;
 }
 
 TEST_F(ThermocoupleOnlyCli, ReportOfAProcessedRunHasTheFitsAndNoBosSectionsOrProcessHint) {

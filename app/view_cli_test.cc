@@ -184,8 +184,11 @@ TEST_F(ViewCli, SaysThePortIsInUse) {
   const auto view = start_view();
   const auto second = testing::run_command(kBosfuse + " view " + run_dir() + " --listen 127.0.0.1:" +
                                            std::to_string(port_));
-  EXPECT_NE(second.exit_code, 0);
-  EXPECT_NE(second.output.find("in use"), std::string::npos) << second.output;
+  EXPECT_EQ(second.exit_code, 1);
+  EXPECT_NE(second.output.find("cannot listen on 127.0.0.1:" + std::to_string(port_) +
+                               ": the port is in use (choose another with --listen HOST:PORT)"),
+            std::string::npos)
+      << second.output;
 }
 
 TEST_F(ViewCli, RefusesAFolderThatIsNotARunOrIsDamaged) {
@@ -254,7 +257,11 @@ TEST_F(AcquireLive, APortInUseIsSaidAndTheRecordingGoesOnWithoutThePage) {
   EXPECT_EQ(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("live view not started, recording goes on without it"), std::string::npos)
       << result.output;
-  EXPECT_NE(result.output.find("in use"), std::string::npos) << result.output;
+  // The option named is the one acquire has: --live, not view's --listen.
+  EXPECT_NE(result.output.find("cannot listen on 127.0.0.1:" + std::to_string(port_) +
+                               ": the port is in use (choose another with --live HOST:PORT)"),
+            std::string::npos)
+      << result.output;
   EXPECT_FALSE(storage::RunStore::open(dir_ / "logged").read_samples(1).empty());
 }
 

@@ -85,7 +85,7 @@ bool RunStore::holds_run(const fs::path& run_dir) {
 RunStore RunStore::create(const fs::path& run_dir, const RunInfo& info, CreateMode mode) {
   const bool existing = holds_run(run_dir);
   if (existing && mode == CreateMode::kNew) {
-    throw StorageError("'" + run_dir.string() + "' already holds a run; choose another folder or ask to append to it");
+    throw StorageError("'" + run_dir.string() + "' already holds a run; choose another folder, or append to it (acquire --append)");
   }
   if (existing) refuse_newer_schema(run_dir);
   fs::create_directories(run_dir);

@@ -402,7 +402,7 @@ int LiveServer::listen() {
     if (!server.bind_to_port(options.host, options.port)) {
       const std::string address = options.host + ":" + std::to_string(options.port);
       if (errno == EADDRINUSE) {
-        throw ViewError("cannot listen on " + address + ": the port is in use (choose another with --listen)");
+        throw ViewError("cannot listen on " + address + ": the port is in use (choose another with " + options.address_option + ")");
       }
       throw ViewError("cannot listen on " + address +
                       ": the port is in use, or the address is not one of this host's (" + std::strerror(errno) + ")");

@@ -46,6 +46,8 @@ struct ViewOptions {
   std::filesystem::path chartjs_path;  // empty: Debian's libjs-chart.js
   // A token even on loopback (a machine others log into); off loopback always.
   bool require_token = false;
+  // How the user gave the address, named when the port is in use.
+  std::string address_option = "--listen HOST:PORT";
 };
 
 // 127.0.0.0/8, ::1 (also IPv4-mapped) and `localhost`: only this machine reaches it.
