@@ -122,23 +122,23 @@ TEST(DemoChainBias, TheSolveAndTheCorrectionLeaveKWithinAQuarterPercent) {
 }
 
 // Diagnostic, not in the suite (about 2 minutes): the rendered frames through
-// the evaluator. Noise-free camera (ZZ_NOISE, default 0), patterns 1..4
-// (ZZ_SEEDS): k +0.63, +1.51, −0.33, +1.37 % (tc-35mm) and +0.84, +2.06,
+// the evaluator. Noise-free camera (BOSFUSE_CHAIN_BIAS_NOISE, default 0), patterns 1..4
+// (BOSFUSE_CHAIN_BIAS_SEEDS): k +0.63, +1.51, −0.33, +1.37 % (tc-35mm) and +0.84, +2.06,
 // +0.53, +1.32 % (tc-45mm), so the bias is made in the images' evaluation.
 // Run: build/sim/sim_test --gtest_also_run_disabled_tests --gtest_filter='DemoChainBias.DISABLED_*'
 TEST(DemoChainBias, DISABLED_TheRenderedFramesThroughTheEvaluator) {
   DemoSetup setup = demo_setup(240);
-  if (const char* onset = std::getenv("ZZ_ONSET")) {  // the plume's onset, m (default: the scene's step)
+  if (const char* onset = std::getenv("BOSFUSE_CHAIN_BIAS_ONSET")) {  // the plume's onset, m (default: the scene's step)
     setup.scene.plume_onset_m = std::atof(onset);
   }
-  if (const char* scale = std::getenv("ZZ_ZD_SCALE")) setup.scene.z_d_m *= std::atof(scale);  // shifts × scale
+  if (const char* scale = std::getenv("BOSFUSE_CHAIN_BIAS_ZD_SCALE")) setup.scene.z_d_m *= std::atof(scale);  // shifts × scale
   setup.model = std::make_shared<const ConvectionScene>(setup.scene);
   const ConvectionScene& scene = *setup.model;
-  const double noise = std::getenv("ZZ_NOISE") ? std::atof(std::getenv("ZZ_NOISE")) : 0.0;
-  const int seeds = std::getenv("ZZ_SEEDS") ? std::atoi(std::getenv("ZZ_SEEDS")) : 4;
+  const double noise = std::getenv("BOSFUSE_CHAIN_BIAS_NOISE") ? std::atof(std::getenv("BOSFUSE_CHAIN_BIAS_NOISE")) : 0.0;
+  const int seeds = std::getenv("BOSFUSE_CHAIN_BIAS_SEEDS") ? std::atoi(std::getenv("BOSFUSE_CHAIN_BIAS_SEEDS")) : 4;
   fusion::TemperatureFieldOptions o;
   o.open_top = true;
-  o.weight_by_sigma = std::getenv("ZZ_UNWEIGHTED") == nullptr;
+  o.weight_by_sigma = std::getenv("BOSFUSE_CHAIN_BIAS_UNWEIGHTED") == nullptr;
   const double k = true_plume_cooling_rate(setup);
   for (int seed = 1; seed <= seeds; ++seed) {
     PatternOptions p;
@@ -147,8 +147,8 @@ TEST(DemoChainBias, DISABLED_TheRenderedFramesThroughTheEvaluator) {
     const BackgroundPattern pattern = generate_pattern(p);
     CameraModel camera;
     camera.noise_std = noise;
-    CameraModel reference_camera = camera;  // ZZ_REFERENCE_NOISE: the reference's own noise
-    if (const char* r = std::getenv("ZZ_REFERENCE_NOISE")) reference_camera.noise_std = std::atof(r);
+    CameraModel reference_camera = camera;  // BOSFUSE_CHAIN_BIAS_REFERENCE_NOISE: the reference's own noise
+    if (const char* r = std::getenv("BOSFUSE_CHAIN_BIAS_REFERENCE_NOISE")) reference_camera.noise_std = std::atof(r);
     const cv::Mat reference = scene.render_frame(pattern, reference_camera, 0.25, false, 0);
     std::vector<double> ts, y35, y45;
     for (double t = 10; t <= 230; t += 10) {
