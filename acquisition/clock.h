@@ -11,10 +11,7 @@
 
 namespace bosfuse::acquisition {
 
-inline std::int64_t utc_now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
+using storage::utc_now_ns;
 
 // The calendar years a timestamp read from a file may carry. Any two of
 // them are less than 292 years apart, so the times and their differences

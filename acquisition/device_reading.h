@@ -5,9 +5,11 @@
 // (Modbus, USB-HID, raw USB), cameras and the simulator's devices all
 // include this header and nothing of each other's.
 
+#include <algorithm>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "storage/records.h"
 
@@ -20,6 +22,12 @@ struct ChannelReading {
   double raw = 0;
   storage::SampleStatus status = storage::SampleStatus::kOk;
 };
+
+// Whether `raw` is one of the codes a device sends in place of a value
+// (an open input's -9999, a module's out-of-range code).
+inline bool is_one_of_codes(const std::vector<double>& codes, double raw) {
+  return std::find(codes.begin(), codes.end(), raw) != codes.end();
+}
 
 // A failed poll. By default a transport failure (no answer, connection
 // lost, device gone): the poller marks the poll's samples timed out and

@@ -12,7 +12,7 @@ namespace {
 
 using storage::SampleStatus;
 
-double emf(ThermocoupleType type, double t_c) { return emf_mv_at(type, t_c).emf_mv.value(); }
+double reference_emf_mv(ThermocoupleType type, double t_c) { return emf_mv_at(type, t_c).emf_mv.value(); }
 
 // A device with a millivolt input and its terminal-block temperature.
 class MillivoltModule : public ThermocoupleSource {
@@ -29,7 +29,7 @@ class MillivoltModule : public ThermocoupleSource {
 
 TEST(EmfConversion, CompensatesWithTheColdJunctionChannelInVoltage) {
   const auto k = ThermocoupleType::kK;
-  const double measured = emf(k, 300.0) - emf(k, 24.0);  // what the terminals at 24 °C see
+  const double measured = reference_emf_mv(k, 300.0) - reference_emf_mv(k, 24.0);  // what the terminals at 24 °C see
   auto module = std::make_unique<MillivoltModule>();
   module->next = {{measured, measured, SampleStatus::kOk}, {24.0, 2400, SampleStatus::kOk}};
   EmfConvertingSource source(std::move(module), {EmfInput{k, "terminals", std::nullopt}, std::nullopt});
@@ -47,7 +47,7 @@ TEST(EmfConversion, CompensatesWithTheColdJunctionChannelInVoltage) {
 TEST(EmfConversion, FixedColdJunctionAndStatuses) {
   const auto t = ThermocoupleType::kT;
   std::vector<EmfConversion> conversions = {{0, {t, "", 0.0}, std::nullopt}, {1, {t, "", 20.0}, std::nullopt}};
-  std::vector<ChannelReading> readings = {{emf(t, 55.5), 0, SampleStatus::kOk}, {100.0, 0, SampleStatus::kOk}};
+  std::vector<ChannelReading> readings = {{reference_emf_mv(t, 55.5), 0, SampleStatus::kOk}, {100.0, 0, SampleStatus::kOk}};
   convert_emf_readings(conversions, readings);
   EXPECT_NEAR(readings[0].value.value_or(NAN), 55.5, 1e-6);
   EXPECT_EQ(readings[1].status, SampleStatus::kOutOfRange);  // 100 mV is beyond type T

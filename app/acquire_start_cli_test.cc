@@ -16,7 +16,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 
 class AcquireStart : public ::testing::Test {
  protected:

@@ -22,7 +22,7 @@ using namespace std::chrono_literals;
 constexpr const char* kUnresolvableHost =
     "unresolvable-because-this-first-label-is-longer-than-sixty-three-chars.invalid";
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 
 class Cli : public ::testing::Test {
  protected:

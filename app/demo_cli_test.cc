@@ -62,7 +62,7 @@ void expect_every_number_present(const std::string& page, const fs::path& json_f
   EXPECT_TRUE(nulls.empty()) << "report.json has no number at " << ::testing::PrintToString(nulls);
 }
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 
 std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
 

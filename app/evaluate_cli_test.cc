@@ -19,7 +19,7 @@
 namespace bosfuse {
 namespace {
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 
 class EvaluateCli : public ::testing::Test {
  protected:
@@ -217,7 +217,7 @@ TEST_F(EvaluateCli, APaddedImageIsRefusedBeforeItIsReadWhole) {
 // px may come with 1.2 GB) can still need more memory than there is:
 // the error names the file and its size.
 TEST_F(EvaluateCli, RunningOutOfMemoryForAnImageIsAnErrorNamingTheFile) {
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#ifdef BOSFUSE_SANITIZED
   GTEST_SKIP() << "sanitizers reserve terabytes of address space: no ulimit -v fits them "
                   "(ImageFile.RunningOutOfMemoryWhileDecodingIsAnErrorNamingTheFile runs under them)";
 #endif
@@ -254,7 +254,7 @@ TEST_F(EvaluateCli, HalfAJpegIsRefusedNamingTheFile) {
 // Probes need only their crops and still run; with a 4 GB limit the same
 // pair is evaluated.
 TEST_F(EvaluateCli, APairTooLargeForTheMemoryLimitIsRefusedBeforeItAllocates) {
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#ifdef BOSFUSE_SANITIZED
   GTEST_SKIP() << "sanitizers reserve terabytes of address space: no ulimit -v fits them";
 #endif
   cv::Mat noise(3000, 4000, CV_32F), shifted;

@@ -29,7 +29,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using report::testreaders::sh_quoted;
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 
 class ExportCli : public ::testing::Test {
  protected:

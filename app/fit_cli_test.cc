@@ -16,7 +16,7 @@
 namespace bosfuse {
 namespace {
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 
 class FitCli : public ::testing::Test {
  protected:

@@ -1,6 +1,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <exception>
 #include <iostream>
@@ -13,8 +14,8 @@
 
 namespace bosfuse::app {
 
-std::vector<CommandAdder>& command_registry() {
-  static std::vector<CommandAdder> registry;
+std::vector<std::pair<std::string, CommandAdder>>& command_registry() {
+  static std::vector<std::pair<std::string, CommandAdder>> registry;
   return registry;
 }
 
@@ -47,7 +48,9 @@ int main(int argc, char** argv) {
       "-q,--quiet", [] { spdlog::set_level(spdlog::level::warn); }, "Only warnings and errors (on standard error)");
   root.add_flag_callback(
       "-v,--verbose", [] { spdlog::set_level(spdlog::level::debug); }, "Say more of what is done (on standard error)");
-  for (const auto& add : command_registry()) add(root);
+  auto& commands = command_registry();
+  std::sort(commands.begin(), commands.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [name, add] : commands) add(root);
   try {
     if (const auto unknown = unknown_argument(root, argc, argv)) {
       spdlog::error("{}", *unknown);

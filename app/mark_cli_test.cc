@@ -11,6 +11,7 @@
 #include "report/test_readers.h"
 #include "storage/experiment_clock.h"
 #include "storage/run_store.h"
+#include "tests/support/subprocess.h"
 #include "tests/support/synthetic_run.h"
 #include "tests/support/temp_dir.h"
 
@@ -21,7 +22,7 @@ namespace fs = std::filesystem;
 using report::testreaders::sh_quoted;
 using json = nlohmann::json;
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 constexpr int kValidationError = 105;  // CLI11's code for a value it refuses
 
 class MarkCli : public ::testing::Test {

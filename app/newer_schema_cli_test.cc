@@ -23,7 +23,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::shell_quote;
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 
 // Every file below `dir` with its bytes. SQLite's -shm index, and an empty
 // -wal, are left out: SQLite makes both for any reader of a WAL database,

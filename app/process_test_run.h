@@ -22,7 +22,7 @@
 
 namespace bosfuse::process_testing {
 
-inline const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 inline constexpr std::int64_t kOriginNs = 1'800'000'000'000'000'000;
 inline constexpr double kRate = 0.05;         // k, 1/s
 inline constexpr double kRise = 30;           // °C at t = 0

@@ -26,7 +26,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::shell_quote;
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 
 class ReportCli : public ::testing::Test {
  protected:

@@ -26,7 +26,7 @@ namespace {
 namespace fs = std::filesystem;
 using report::testreaders::sh_quoted;
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 
 // Every file and folder under `dir`, with each file's size.
 std::set<std::string> listing(const fs::path& dir) {

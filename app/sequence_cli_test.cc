@@ -28,7 +28,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using report::testreaders::sh_quoted;
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 constexpr int kWidth = 128, kHeight = 96;
 // 2026-11-23T10:00:00Z, the first frame's modification time.
 constexpr std::int64_t kFirstFrameS = 1'795'428'000;

@@ -22,7 +22,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::shell_quote;
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 
 class ThermocoupleOnlyCli : public ::testing::Test {
  protected:
@@ -50,7 +50,7 @@ class ThermocoupleOnlyCli : public ::testing::Test {
   }
 
   testing::TempDir dir_;
-  const testrun::Truth truth_;
+  const testrun::Truth truth_{};
 };
 
 double stored_k(const storage::FitRecord& fit) {

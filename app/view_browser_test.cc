@@ -40,7 +40,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 const std::string kCdpWait = std::string(BOSFUSE_SOURCE_DIR) + "/tests/support/cdp_wait.py";
 const std::string kCdpScreenshot = std::string(BOSFUSE_SOURCE_DIR) + "/tests/support/cdp_screenshot.py";
 

@@ -24,7 +24,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 
 // A loopback port free right now (the kernel's choice, released at once).
 int free_port() {

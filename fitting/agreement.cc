@@ -13,7 +13,7 @@
 namespace bosfuse::fitting {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kNoValue = std::numeric_limits<double>::quiet_NaN();
 
 template <typename... Numbers>
 std::string format_number(const char* pattern, Numbers... numbers) {
@@ -86,7 +86,7 @@ ParameterAgreement test_parameter(std::string name, Measured a, Measured b, doub
 std::pair<double, double> t0_at(const NewtonFit& b, double time_s) {
   if (b.origin_s + b.t0_reference_s == time_s) return {b.t0_c.value, b.t0_c.std_error};
   const double half_width = b.temperature_half_width_at(time_s);
-  return {b.temperature_at(time_s), b.summary.t_critical > 0 ? half_width / b.summary.t_critical : kNaN};
+  return {b.temperature_at(time_s), b.summary.t_critical > 0 ? half_width / b.summary.t_critical : kNoValue};
 }
 
 int severity(Verdict v) { return v == Verdict::kDiffer ? 2 : v == Verdict::kInconclusive ? 1 : 0; }

@@ -58,7 +58,7 @@ TEST(FitJson, TheCovarianceAndTheCurvesBandComeBack) {
   ASSERT_TRUE(written.ok() && written.covariance);
   const auto j = to_json(written);
   ASSERT_TRUE(j.contains("covariance"));
-  EXPECT_EQ(j["covariance"]["parameters"], nlohmann::json({"log_tau", "delta_c", "ambient_c"}));
+  EXPECT_EQ(j["covariance"]["parameters"], nlohmann::ordered_json({"log_tau", "delta_c", "ambient_c"}));
   const std::string text = j.dump();
   EXPECT_EQ(text.find("null"), std::string::npos) << "an ok fit has a number wherever one belongs";
   const NewtonFit read = fit_from_json(nlohmann::json::parse(text));

@@ -20,7 +20,7 @@ using testing::CoolingCurve;
 using testing::CoolingRecord;
 using testing::sample_cooling;
 
-NewtonFit fit(const CoolingRecord& r, const NewtonFitOptions& options = {}) {
+NewtonFit fit_stressed(const CoolingRecord& r, const NewtonFitOptions& options = {}) {
   return fit_newton(r.time_s, r.temperature_c, options);
 }
 
@@ -45,8 +45,8 @@ TEST(NewtonFitStress, EpochScaleTimestampsGiveTheSameFitAsRelativeOnes) {
   const auto relative = sample_cooling(curve, 600, 0.5, 0.05, 3, 0.0);
   auto epoch = relative;
   for (double& t : epoch.time_s) t += 1.8e9;  // 2027-01-15: seconds since 1970
-  const auto a = fit(relative);
-  const auto b = fit(epoch);
+  const auto a = fit_stressed(relative);
+  const auto b = fit_stressed(epoch);
   expect_correct(b, curve);
   EXPECT_EQ(b.origin_s, 1.8e9);
   // Epoch-scale doubles carry ~2e-7 s of rounding per timestamp; the fits agree far below their uncertainty.
@@ -60,11 +60,11 @@ TEST(NewtonFitStress, TemperaturesANoiseLevelAboveAmbientFitOrFailClearly) {
   NewtonFitOptions fixed;
   fixed.ambient = AmbientModel::fixed(curve.ambient_c);
   // Many points resolve it with a fixed ambient, with honest (wide) errors.
-  const auto many = fit(sample_cooling(curve, 5000, 0.1, 0.2, 8), fixed);
+  const auto many = fit_stressed(sample_cooling(curve, 5000, 0.1, 0.2, 8), fixed);
   expect_correct(many, curve);
   EXPECT_GT(many.k_per_s.std_error, 0.05 * curve.k_per_s) << "such a fit cannot be precise";
   // Few points and a free ambient cannot; they must say so or be right.
-  const auto few = fit(sample_cooling(curve, 30, 10.0, 0.2, 9));
+  const auto few = fit_stressed(sample_cooling(curve, 30, 10.0, 0.2, 9));
   if (few.ok()) {
     expect_correct(few, curve);
   } else {
@@ -75,7 +75,7 @@ TEST(NewtonFitStress, TemperaturesANoiseLevelAboveAmbientFitOrFailClearly) {
 TEST(NewtonFitStress, AMillionPointsFit) {
   const CoolingCurve curve{20.0, 60.0, 0.002};
   const auto r = sample_cooling(curve, 1'000'000, 0.002, 0.5, 10, 1.7e9);
-  const auto result = fit(r);
+  const auto result = fit_stressed(r);
   expect_correct(result, curve);
   EXPECT_EQ(result.summary.points_used, 1'000'000u);
   EXPECT_LT(result.k_per_s.std_error, 1e-3 * curve.k_per_s);
@@ -97,8 +97,8 @@ TEST(NewtonFitStress, NonFiniteSamplesAreRejectedAndCounted) {
   dirty.temperature_c.push_back(-kInf);
   dirty.time_s.insert(dirty.time_s.begin(), -kInf);  // also before everything: must not become the origin
   dirty.temperature_c.insert(dirty.temperature_c.begin(), 99.0);
-  const auto a = fit(clean);
-  const auto b = fit(dirty);
+  const auto a = fit_stressed(clean);
+  const auto b = fit_stressed(dirty);
   ASSERT_TRUE(b.ok()) << b.brief_report();
   EXPECT_EQ(b.summary.rejected_non_finite, 5u);
   EXPECT_EQ(b.summary.points_used, 300u);
@@ -118,8 +118,8 @@ TEST(NewtonFitStress, UnsortedTimesAreSortedAndDuplicatesKept) {
     shuffled.time_s[i] = sorted.time_s[order[i]];
     shuffled.temperature_c[i] = sorted.temperature_c[order[i]];
   }
-  const auto a = fit(sorted);
-  const auto b = fit(shuffled);
+  const auto a = fit_stressed(sorted);
+  const auto b = fit_stressed(shuffled);
   ASSERT_TRUE(b.ok());
   EXPECT_NEAR(b.k_per_s.value, a.k_per_s.value, 1e-10 * a.k_per_s.value);
   EXPECT_EQ(b.origin_s, 0.0);
@@ -131,7 +131,7 @@ TEST(NewtonFitStress, UnsortedTimesAreSortedAndDuplicatesKept) {
     doubled.time_s.push_back(sorted.time_s[i]);
     doubled.temperature_c.push_back(curve.at(sorted.time_s[i]) + noise(random));
   }
-  const auto c = fit(doubled);
+  const auto c = fit_stressed(doubled);
   expect_correct(c, curve);
   EXPECT_EQ(c.summary.duplicate_times, 40u);
   EXPECT_EQ(c.summary.points_used, 440u) << "duplicates are kept, not averaged";
@@ -148,7 +148,7 @@ CoolingRecord with_outliers(const CoolingRecord& r, double every, double size_c)
 TEST(NewtonFitStress, OutliersWithoutRobustLossAreFlaggedAndWidenTheErrors) {
   const CoolingCurve curve;
   const auto spoiled = with_outliers(sample_cooling(curve, 500, 1.0, 0.05, 13), 20, 5.0);
-  const auto plain = fit(spoiled);
+  const auto plain = fit_stressed(spoiled);
   ASSERT_TRUE(plain.ok()) << plain.brief_report();
   EXPECT_EQ(plain.summary.outliers, 25u);
   bool suggested = false;
@@ -165,19 +165,19 @@ TEST(NewtonFitStress, RobustLossIgnoresOutliers) {
   for (auto loss : {RobustLoss::huber(0.1), RobustLoss::cauchy(0.1)}) {
     NewtonFitOptions options;
     options.loss = loss;
-    const auto robust = fit(spoiled, options);
+    const auto robust = fit_stressed(spoiled, options);
     expect_correct(robust, curve);
-    const auto reference = fit(honest);
+    const auto reference = fit_stressed(honest);
     // Close to the fit of the data without the spikes, and much more precise than the plain fit of the spoiled data.
     EXPECT_NEAR(robust.k_per_s.value, reference.k_per_s.value, 2 * reference.k_per_s.std_error);
-    EXPECT_LT(robust.k_per_s.std_error, 0.5 * fit(spoiled).k_per_s.std_error);
+    EXPECT_LT(robust.k_per_s.std_error, 0.5 * fit_stressed(spoiled).k_per_s.std_error);
   }
 }
 
 TEST(NewtonFitStress, AFlatRecordIsAClearError) {
   const CoolingCurve flat{22.0, 22.0, 0.01};
   for (unsigned seed = 0; seed < 5; ++seed) {
-    const auto result = fit(sample_cooling(flat, 300, 1.0, 0.05, seed));
+    const auto result = fit_stressed(sample_cooling(flat, 300, 1.0, 0.05, seed));
     expect_clear_error(result);
     EXPECT_TRUE(result.summary.status == FitStatus::kNoDecay || result.summary.status == FitStatus::kRankDeficient ||
                 result.summary.status == FitStatus::kUnidentifiable)
@@ -189,7 +189,7 @@ TEST(NewtonFitStress, AFlatRecordIsAClearError) {
 
 TEST(NewtonFitStress, ARisingRecordTowardsAWarmerAmbientIsNewtonsLawToo) {
   const CoolingCurve warming{30.0, 15.0, 0.02};  // a cold probe warming up in 30 °C air
-  const auto result = fit(sample_cooling(warming, 400, 0.5, 0.05, 14));
+  const auto result = fit_stressed(sample_cooling(warming, 400, 0.5, 0.05, 14));
   expect_correct(result, warming);
   EXPECT_LT(result.t0_c.value, result.ambient_c.value);
 }
@@ -200,14 +200,14 @@ TEST(NewtonFitStress, AStraightLineWithFreeAmbientCannotGiveKAndSaysWhy) {
     line.time_s.push_back(i);
     line.temperature_c.push_back(60.0 - 0.01 * i);
   }
-  const auto result = fit(line);
+  const auto result = fit_stressed(line);
   expect_clear_error(result);
   EXPECT_NE(result.summary.message.find("fix the ambient"), std::string::npos) << result.summary.message;
   // With the ambient known the excess over ambient gives k: it falls from
   // 40 to 38.01 °C over 199 s.
   NewtonFitOptions fixed;
   fixed.ambient = AmbientModel::fixed(20.0);
-  const auto known = fit(line, fixed);
+  const auto known = fit_stressed(line, fixed);
   ASSERT_TRUE(known.ok()) << known.brief_report();
   const double expected_k = std::log(40.0 / 38.01) / 199.0;
   EXPECT_NEAR(known.k_per_s.value, expected_k, 0.01 * expected_k);
@@ -222,14 +222,14 @@ TEST(NewtonFitStress, AllSamplesAtOneTimeIsAnError) {
 
 TEST(NewtonFitStress, ADecayFasterThanTheSamplingIsAnError) {
   const CoolingCurve fast{20.0, 80.0, 5.0};  // τ = 0.2 s, sampled every 2 s
-  const auto result = fit(sample_cooling(fast, 100, 2.0, 0.05, 15));
+  const auto result = fit_stressed(sample_cooling(fast, 100, 2.0, 0.05, 15));
   expect_clear_error(result);
 }
 
 TEST(NewtonFitStress, HittingTheIterationLimitIsAnError) {
   NewtonFitOptions options;
   options.max_iterations = 1;
-  const auto result = fit(sample_cooling(CoolingCurve{}, 300, 1.0, 0.05, 16), options);
+  const auto result = fit_stressed(sample_cooling(CoolingCurve{}, 300, 1.0, 0.05, 16), options);
   EXPECT_EQ(result.summary.status, FitStatus::kNotConverged);
   expect_clear_error(result);
 }

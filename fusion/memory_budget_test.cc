@@ -16,7 +16,7 @@
 namespace bosfuse::fusion {
 namespace {
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#ifdef BOSFUSE_SANITIZED
 // Shadow memory and quarantines make resident and address-space sizes say
 // nothing about what the code allocates.
 constexpr bool kSanitized = true;

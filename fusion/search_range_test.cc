@@ -26,7 +26,7 @@ sim::SyntheticPair shifted_pair(double u_px, double v_px, int size_px = 768) {
   return sim::render_pair(options);
 }
 
-struct Accuracy {
+struct SearchAccuracy {
   double rms_px = 0;
   double interior_valid_fraction = 0;
   double worst_valid_error_px = 0;  // the largest error of any valid vector
@@ -34,8 +34,8 @@ struct Accuracy {
 };
 
 // Interior: more than one (final) window from the image's border.
-Accuracy accuracy(const DisplacementField& field, double u_px, double v_px, int size_px, int window_px = 16) {
-  Accuracy a;
+SearchAccuracy accuracy(const DisplacementField& field, double u_px, double v_px, int size_px, int window_px = 16) {
+  SearchAccuracy a;
   double sum_sq = 0;
   std::size_t interior = 0, interior_valid = 0;
   for (const auto& vec : field.vectors) {
@@ -77,7 +77,7 @@ TEST(SearchRange, ScenesWithinTheDefaultBoundKeepItAndStayAccurate) {
     EXPECT_TRUE(result.summary.search_from_scene);
     EXPECT_FALSE(result.summary.search_widened);
     EXPECT_EQ(result.summary.window_px_per_pass.front(), 16) << "no wider first window than needed";
-    const Accuracy a = accuracy(result.field, u, 0, 768);
+    const SearchAccuracy a = accuracy(result.field, u, 0, 768);
     EXPECT_LE(a.rms_px, 0.03) << u;
     EXPECT_GE(a.interior_valid_fraction, 0.99) << u;
     EXPECT_TRUE(search_bound_warning(result.summary).empty()) << search_bound_warning(result.summary);
@@ -90,7 +90,7 @@ TEST(SearchRange, ASixAndAHalfPixelShiftIsFoundWithDefaultOptions) {
   const auto result = evaluate_defaults(pair);
   EXPECT_TRUE(result.summary.search_widened) << result.summary.BriefReport();
   EXPECT_GE(result.summary.max_shift_px, 6);
-  const Accuracy a = accuracy(result.field, 5.3, -3.7, 768);
+  const SearchAccuracy a = accuracy(result.field, 5.3, -3.7, 768);
   EXPECT_LE(a.rms_px, 0.03) << result.summary.BriefReport();
   EXPECT_GE(a.interior_valid_fraction, 0.99) << result.summary.BriefReport();
   EXPECT_LE(a.worst_valid_error_px, 0.5);
@@ -102,7 +102,7 @@ TEST(SearchRange, AFourteenPixelShiftIsFoundWithDefaultOptions) {
   EXPECT_TRUE(result.summary.search_widened) << result.summary.BriefReport();
   EXPECT_GE(result.summary.max_shift_px, 14.5);
   EXPECT_GE(result.summary.first_window_px, 56);
-  const Accuracy a = accuracy(result.field, 14, 0, 768);
+  const SearchAccuracy a = accuracy(result.field, 14, 0, 768);
   EXPECT_LE(a.rms_px, 0.03) << result.summary.BriefReport();
   EXPECT_GE(a.interior_valid_fraction, 0.99) << result.summary.BriefReport();
   EXPECT_LE(a.worst_valid_error_px, 0.5);
@@ -114,7 +114,7 @@ TEST(SearchRange, AFortyPixelShiftIsReportedAndNoWrongVectorIsValid) {
   EXPECT_TRUE(result.summary.search_beyond_reach) << result.summary.BriefReport();
   const std::string warning = search_bound_warning(result.summary);
   EXPECT_NE(warning.find("exceed"), std::string::npos) << warning;
-  const Accuracy a = accuracy(result.field, 32, -24, 768);
+  const SearchAccuracy a = accuracy(result.field, 32, -24, 768);
   EXPECT_LE(a.worst_valid_error_px, 0.5) << a.valid << " valid; " << result.summary.BriefReport();
   EXPECT_GT(result.field.count(VectorFlag::kBeyondSearch), result.field.size() / 2);
 }
@@ -127,7 +127,7 @@ TEST(SearchRange, AnExplicitBoundIsKeptAndItsPeaksOnTheBoundAreNeverValid) {
   const auto result = evaluate_xcorr(pair.reference, pair.measurement, options);
   EXPECT_FALSE(result.summary.search_from_scene);
   EXPECT_EQ(result.summary.max_shift_px, 4);
-  const Accuracy a = accuracy(result.field, 5.3, -3.7, 768);
+  const SearchAccuracy a = accuracy(result.field, 5.3, -3.7, 768);
   EXPECT_LE(a.worst_valid_error_px, 0.5) << a.valid << " valid; " << result.summary.BriefReport();
   EXPECT_GT(result.summary.on_bound_fraction(), kOnBoundWarningFraction);
   const std::string warning = search_bound_warning(result.summary);

@@ -15,7 +15,7 @@
 namespace bosfuse::pipeline {
 namespace {
 
-using Bytes = std::uint64_t;
+using ByteCount = std::uint64_t;
 
 bool check_enabled() {
   const char* value = std::getenv("BOSFUSE_MEMORY_CHECK");
@@ -26,7 +26,7 @@ bool check_enabled() {
   throw std::invalid_argument("BOSFUSE_MEMORY_CHECK must be on or off, not '" + text + "'");
 }
 
-std::optional<Bytes> read_number(const std::filesystem::path& file) {
+std::optional<ByteCount> read_number(const std::filesystem::path& file) {
   std::ifstream in(file);
   std::string text;
   if (!(in >> text)) return std::nullopt;
@@ -40,12 +40,12 @@ std::optional<Bytes> read_number(const std::filesystem::path& file) {
 
 // The value of `key` in a "key value" or "key: value kB" file (meminfo,
 // status, memory.stat), in bytes when the line says kB.
-std::optional<Bytes> read_keyed(const std::filesystem::path& file, const std::string& key) {
+std::optional<ByteCount> read_keyed(const std::filesystem::path& file, const std::string& key) {
   std::ifstream in(file);
   for (std::string line; std::getline(in, line);) {
     std::istringstream fields(line);
     std::string name, unit;
-    Bytes value = 0;
+    ByteCount value = 0;
     if (!(fields >> name >> value)) continue;
     if (!name.empty() && name.back() == ':') name.pop_back();
     if (name != key) continue;
@@ -97,7 +97,7 @@ std::optional<std::string> cgroup_path(const std::filesystem::path& cgroup_file,
 // mount's root, the least of them; page cache the cgroup could drop
 // (inactive file pages) counts as free, as the kernel would reclaim it
 // before failing an allocation.
-std::optional<Bytes> cgroup_headroom(const CgroupMount& mount, bool v2, const std::string& path,
+std::optional<ByteCount> cgroup_headroom(const CgroupMount& mount, bool v2, const std::string& path,
                                      const std::filesystem::path& root) {
   std::string relative = path;
   const bool below_root =
@@ -112,16 +112,16 @@ std::optional<Bytes> cgroup_headroom(const CgroupMount& mount, bool v2, const st
   }
   const char* limit_file = v2 ? "memory.max" : "memory.limit_in_bytes";
   const char* usage_file = v2 ? "memory.current" : "memory.usage_in_bytes";
-  std::optional<Bytes> least;
+  std::optional<ByteCount> least;
   for (int level = 0; level < 64; ++level) {  // a path has fewer levels than that
     const auto limit = read_number(dir / limit_file);
     const auto usage = read_number(dir / usage_file);
     // v1 writes "no limit" as the largest page-aligned long.
-    if (limit && usage && *limit < (Bytes{1} << 60)) {
-      const Bytes reclaimable =
+    if (limit && usage && *limit < (ByteCount{1} << 60)) {
+      const ByteCount reclaimable =
           read_keyed(dir / "memory.stat", v2 ? "inactive_file" : "total_inactive_file").value_or(0);
-      const Bytes used = *usage > reclaimable ? *usage - reclaimable : 0;
-      const Bytes headroom = *limit > used ? *limit - used : 0;
+      const ByteCount used = *usage > reclaimable ? *usage - reclaimable : 0;
+      const ByteCount headroom = *limit > used ? *limit - used : 0;
       least = least ? std::min(*least, headroom) : headroom;
     }
     if (dir == top || dir.parent_path() == dir) break;
@@ -130,11 +130,11 @@ std::optional<Bytes> cgroup_headroom(const CgroupMount& mount, bool v2, const st
   return least;
 }
 
-std::optional<Bytes> rlimit_headroom(int resource, const std::filesystem::path& status, const std::string& key) {
+std::optional<ByteCount> rlimit_headroom(int resource, const std::filesystem::path& status, const std::string& key) {
   rlimit limit{};
   if (getrlimit(resource, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return std::nullopt;
-  const Bytes used = read_keyed(status, key).value_or(0);
-  return limit.rlim_cur > used ? Bytes(limit.rlim_cur) - used : 0;
+  const ByteCount used = read_keyed(status, key).value_or(0);
+  return limit.rlim_cur > used ? ByteCount(limit.rlim_cur) - used : 0;
 }
 
 }  // namespace

@@ -11,14 +11,14 @@
 namespace bosfuse::pipeline {
 namespace {
 
-Bytes bytes_of(std::size_t i) { return Bytes{static_cast<std::uint8_t>(i)}; }
+Bytes frame_bytes(std::size_t i) { return Bytes{static_cast<std::uint8_t>(i)}; }
 
 // Frame i's "work": its index as its result, later frames finishing first.
 FrameWork work_of(std::size_t count, std::size_t failing = SIZE_MAX) {
   return [count, failing](std::size_t i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2 * (count - i)));
     if (i == failing) throw std::runtime_error("frame " + std::to_string(i) + " failed");
-    return bytes_of(i);
+    return frame_bytes(i);
   };
 }
 
@@ -34,7 +34,7 @@ TEST(FrameThreads, FramesAreTakenInOrderWhicheverThreadFinishesFirst) {
   const std::size_t n = threads.run(
       Bytes{7}, count, work_of(count),
       [&](std::size_t i, const Bytes& result) {
-        EXPECT_EQ(result, bytes_of(i));
+        EXPECT_EQ(result, frame_bytes(i));
         taken.push_back(i);
       },
       nullptr);

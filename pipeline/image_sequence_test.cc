@@ -10,16 +10,12 @@
 
 #include "tests/support/temp_dir.h"
 #include "tests/support/test_images.h"
+#include "tests/support/file_bytes.h"
 
 namespace bosfuse::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::vector<std::uint8_t> file_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 void set_mtime(const fs::path& path, std::int64_t seconds, long nanoseconds) {
   const timespec times[2] = {{seconds, nanoseconds}, {seconds, nanoseconds}};
@@ -115,7 +111,7 @@ TEST_F(Sequence, TheTimeIsTheExifCaptureTimeWhenThereIsOne) {
   const auto jpeg = touch("a.jpg");
   testing::write_exif(jpeg, {"-DateTimeOriginal=2026:11:23 10:15:30", "-SubSecTimeOriginal=250"});
   set_mtime(jpeg, 1'000'000'000, 0);  // an mtime that must not be taken
-  const FrameTime t = frame_time(jpeg, file_bytes(jpeg));
+  const FrameTime t = frame_time(jpeg, testing::file_byte_vector(jpeg));
   ASSERT_TRUE(t.t_ns.has_value());
   EXPECT_EQ(*t.t_ns, utc_ns(2026, 11, 23, 10, 15, 30) + 250'000'000);
   EXPECT_EQ(t.source, TimeSource::kExif);
@@ -123,7 +119,7 @@ TEST_F(Sequence, TheTimeIsTheExifCaptureTimeWhenThereIsOne) {
 
   const auto zoned = touch("b.tif");
   testing::write_exif(zoned, {"-DateTimeOriginal=2026:11:23 11:15:30", "-OffsetTimeOriginal=+01:00"});
-  const FrameTime z = frame_time(zoned, file_bytes(zoned));
+  const FrameTime z = frame_time(zoned, testing::file_byte_vector(zoned));
   EXPECT_EQ(z.t_ns, utc_ns(2026, 11, 23, 10, 15, 30));
   EXPECT_EQ(z.source, TimeSource::kExifWithOffset);
 }
@@ -131,7 +127,7 @@ TEST_F(Sequence, TheTimeIsTheExifCaptureTimeWhenThereIsOne) {
 TEST_F(Sequence, WithoutExifTheTimeIsTheModificationTime) {
   const auto png = touch("c.png");
   set_mtime(png, 1'764'000'000, 125'000'000);
-  const FrameTime t = frame_time(png, file_bytes(png));
+  const FrameTime t = frame_time(png, testing::file_byte_vector(png));
   EXPECT_EQ(t.t_ns, 1'764'000'000'125'000'000);
   EXPECT_EQ(t.source, TimeSource::kFileModification);
   EXPECT_EQ(to_string(t.source), "mtime");

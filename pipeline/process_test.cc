@@ -24,7 +24,7 @@ namespace bosfuse::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
-using json = nlohmann::json;
+using sorted_json = nlohmann::json;
 
 ProcessReport process(const fs::path& run, SettingsOverrides overrides = {}, bool resume = false,
                       const std::atomic<bool>* stop = nullptr,
@@ -74,9 +74,9 @@ std::vector<std::int64_t> staged_frames(const fs::path& run) {
   return unfinished ? results.staged_frame_ids(unfinished->id) : std::vector<std::int64_t>{};
 }
 
-json current_settings(const fs::path& run) {
+sorted_json current_settings(const fs::path& run) {
   const auto p = storage::ProcessingStore(run).current_processing();
-  return p ? json::parse(p->settings_json) : json();
+  return p ? sorted_json::parse(p->settings_json) : sorted_json();
 }
 
 // Everything a processing stored, in a comparable form (field files by content).
@@ -138,7 +138,7 @@ TEST_F(Process, StoresItsSettingsReusesThemWithoutOptionsAndOptionsOverrideThem)
   first.mask = "holder.png";
   first.passes = 2;
   ASSERT_TRUE(process(run(), first).complete);
-  const json stored = current_settings(run());
+  const sorted_json stored = current_settings(run());
   EXPECT_EQ(stored.at("mask"), "holder.png");
   EXPECT_EQ(stored.at("passes"), 2);
   EXPECT_EQ(stored.at("window_px"), 16) << "the default";
@@ -155,7 +155,7 @@ TEST_F(Process, StoresItsSettingsReusesThemWithoutOptionsAndOptionsOverrideThem)
   SettingsOverrides step;
   step.step_px = 16;
   ASSERT_TRUE(process(run(), step).complete);
-  const json changed = current_settings(run());
+  const sorted_json changed = current_settings(run());
   EXPECT_EQ(changed.at("step_px"), 16);
   EXPECT_EQ(changed.at("mask"), "holder.png") << "what the options did not name is kept";
   EXPECT_EQ(changed.at("passes"), 2);
@@ -172,7 +172,7 @@ TEST_F(Process, StoresItsSettingsReusesThemWithoutOptionsAndOptionsOverrideThem)
 TEST_F(Process, StoredSamplesCarryTheirUncertainty) {
   ASSERT_TRUE(process(run()).complete);
   const storage::ProcessingStore results(run());
-  auto settings = settings_from_json(json::parse(results.current_processing()->settings_json));
+  auto settings = settings_from_json(sorted_json::parse(results.current_processing()->settings_json));
   const auto store = storage::RunStore::open(run());
   resolve_ambient(settings.geometry, store, positioned_channels(store.channels()), storage::experiment_clock(store),
                   split_frames(store.frames()).reference);
@@ -207,7 +207,7 @@ TEST_F(Process, AdaptiveRefinementIsASettingAndEachFieldStoresTheFractionRefined
   EXPECT_EQ(current_settings(run()).at("adaptive_refinement"), false) << "the default";
   for (const auto& f : storage::ProcessingStore(run()).fields()) {
     if (f.kind == "displacement") {
-      EXPECT_EQ(json::parse(f.json).at("refined_fraction"), 1.0);
+      EXPECT_EQ(sorted_json::parse(f.json).at("refined_fraction"), 1.0);
     }
   }
   SettingsOverrides adaptive;
@@ -219,7 +219,7 @@ TEST_F(Process, AdaptiveRefinementIsASettingAndEachFieldStoresTheFractionRefined
   std::size_t displacement_fields = 0;
   for (const auto& f : storage::ProcessingStore(run()).fields()) {
     if (f.kind != "displacement") continue;
-    const double fraction = json::parse(f.json).at("refined_fraction").get<double>();
+    const double fraction = sorted_json::parse(f.json).at("refined_fraction").get<double>();
     EXPECT_GE(fraction, 0.0);
     EXPECT_LE(fraction, 1.0);
     ++displacement_fields;
@@ -228,7 +228,7 @@ TEST_F(Process, AdaptiveRefinementIsASettingAndEachFieldStoresTheFractionRefined
   ASSERT_TRUE(process(run()).complete);
   EXPECT_EQ(current_settings(run()).at("adaptive_refinement"), true) << "kept without options";
   // Settings stored before the option existed read as off.
-  json old = current_settings(run());
+  sorted_json old = current_settings(run());
   old.erase("adaptive_refinement");
   old.erase("adaptive_threshold");
   EXPECT_FALSE(settings_from_json(old).evaluator.xcorr.adaptive_refinement);
@@ -480,7 +480,7 @@ TEST(ProcessTime, FitsAreInExperimentSecondsFromTheDeclaredOriginAndScale) {
   for (const auto& fit : results.fits()) {
     if (fit.subject != storage::FitSubject::kChannel) continue;
     const int c = fit.subject_id == channels[0].id ? 0 : 1;
-    const json j = json::parse(fit.json);
+    const sorted_json j = sorted_json::parse(fit.json);
     EXPECT_EQ(fit.origin_t_ns, heater_off_ns);
     EXPECT_NEAR(j.at("parameters").at("k_per_s").at("value").get<double>(), truth.k_per_s[c] / 10,
                 0.02 * truth.k_per_s[c] / 10);

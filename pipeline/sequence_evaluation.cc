@@ -18,7 +18,7 @@ namespace bosfuse::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
-using nlohmann::json;
+using sorted_json = nlohmann::json;  // keys sorted, unlike the ordered_json the rest of pipeline writes
 
 // The frame's bytes, read whole only once its size and header pass the
 // image limits (acquisition/cameras/image_file.h); empty for a file of no image
@@ -92,7 +92,7 @@ SequenceFrameResult SequenceEvaluator::evaluate(const std::string& frame_path) {
 namespace {
 
 // Every field, in one order both ways (ranks of one job run one build).
-json summary_json(const fusion::EvaluationSummary& s) {
+sorted_json summary_json(const fusion::EvaluationSummary& s) {
   return {s.method,        s.passes_run,         s.window_px_per_pass,  s.converged,          s.last_change_px,
           s.refined_fraction, s.vectors,         s.valid,               s.outliers_replaced,  s.no_texture,
           s.masked,        s.out_of_roi,         s.no_peak,             s.beyond_search,      s.max_shift_px,
@@ -100,7 +100,7 @@ json summary_json(const fusion::EvaluationSummary& s) {
           s.first_pass_on_bound, s.seconds};
 }
 
-fusion::EvaluationSummary summary_from_json(const json& j) {
+fusion::EvaluationSummary summary_from_json(const sorted_json& j) {
   fusion::EvaluationSummary s;
   std::size_t i = 0;
   const auto next = [&](auto& field) { j.at(i++).get_to(field); };
@@ -121,7 +121,7 @@ std::vector<std::uint8_t> vectors_binary(const std::vector<fusion::DisplacementV
   return out;
 }
 
-std::vector<fusion::DisplacementVector> vectors_from_binary(const json::binary_t& bytes) {
+std::vector<fusion::DisplacementVector> vectors_from_binary(const sorted_json::binary_t& bytes) {
   if (bytes.size() % sizeof(fusion::DisplacementVector) != 0) throw std::runtime_error("a truncated field");
   std::vector<fusion::DisplacementVector> out(bytes.size() / sizeof(fusion::DisplacementVector));
   if (!out.empty()) std::memcpy(out.data(), bytes.data(), bytes.size());
@@ -131,19 +131,19 @@ std::vector<fusion::DisplacementVector> vectors_from_binary(const json::binary_t
 }  // namespace
 
 std::vector<std::uint8_t> result_bytes(const SequenceFrameResult& r) {
-  return json::to_cbor(json{{"name", r.name},
-                            {"t_ns", r.time.t_ns ? json(*r.time.t_ns) : json(nullptr)},
+  return sorted_json::to_cbor(sorted_json{{"name", r.name},
+                            {"t_ns", r.time.t_ns ? sorted_json(*r.time.t_ns) : sorted_json(nullptr)},
                             {"time_source", static_cast<int>(r.time.source)},
                             {"status", r.status},
                             {"rows", r.field.rows},
                             {"cols", r.field.cols},
-                            {"vectors", json::binary(vectors_binary(r.field.vectors))},
+                            {"vectors", sorted_json::binary(vectors_binary(r.field.vectors))},
                             {"summary", summary_json(r.summary)}});
 }
 
 SequenceFrameResult result_from_bytes(const std::vector<std::uint8_t>& bytes) {
   try {
-    const json j = json::from_cbor(bytes);
+    const sorted_json j = sorted_json::from_cbor(bytes);
     SequenceFrameResult r;
     r.name = j.at("name").get<std::string>();
     if (!j.at("t_ns").is_null()) r.time.t_ns = j.at("t_ns").get<std::int64_t>();
@@ -157,7 +157,7 @@ SequenceFrameResult result_from_bytes(const std::vector<std::uint8_t>& bytes) {
       throw std::runtime_error("a field of another size than its grid");
     }
     return r;
-  } catch (const json::exception& e) {
+  } catch (const sorted_json::exception& e) {
     throw std::runtime_error(std::string("a sequence frame's result that cannot be read: ") + e.what());
   }
 }

@@ -12,10 +12,18 @@
 // Every command converts through experiment_clock() and nothing else, so
 // there is no second time base anywhere a user can read.
 
+#include <chrono>
 #include <cstdint>
 #include <string>
 
 namespace bosfuse::storage {
+
+// The host's UTC clock in nanoseconds since the Unix epoch: what every
+// sample, frame and event is stamped with.
+inline std::int64_t utc_now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
 
 class RunStore;
 

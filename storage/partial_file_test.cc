@@ -17,7 +17,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-RunInfo run_info(const std::string& name, std::int64_t started_ns) {
+RunInfo guarded_run_info(const std::string& name, std::int64_t started_ns) {
   RunInfo info;
   info.name = name;
   info.started_ns = started_ns;
@@ -101,7 +101,7 @@ TEST(PartialFile, ADestinationThatIsNoRegularFileIsWrittenDirectly) {
 
 TEST(PartialFile, ARunsOwnFileIsRefusedBeforeAnythingIsWritten) {
   testing::TempDir dir;
-  RunStore::create(dir / "run", run_info("guarded", 1), RunStore::CreateMode::kNew).finish(RunStatus::kComplete, 2);
+  RunStore::create(dir / "run", guarded_run_info("guarded", 1), RunStore::CreateMode::kNew).finish(RunStatus::kComplete, 2);
   const std::string before = testing::file_bytes(dir / "run/run.sqlite");
   const auto entries = names_in(dir / "run");
   EXPECT_THROW(PartialFileStream(dir / "run/run.sqlite"), OutputRefused);

@@ -12,7 +12,7 @@
 namespace bosfuse::storage {
 namespace {
 
-struct Fixture {
+struct ProcessingStoreFixture {
   testing::TempDir dir;
   std::filesystem::path run_dir = dir.path() / "run";
   RunStore store = RunStore::create(run_dir, {0, "r", 1'000, std::nullopt, "", RunStatus::kRunning, 1.0, std::nullopt},
@@ -24,7 +24,7 @@ struct Fixture {
 };
 
 TEST(ProcessingStore, WritesAndReadsEveryKindOfResult) {
-  Fixture f;
+  ProcessingStoreFixture f;
   ProcessingStore results(f.run_dir, true);
   std::int64_t probe = 0;
   results.in_transaction([&] {
@@ -59,7 +59,7 @@ TEST(ProcessingStore, WritesAndReadsEveryKindOfResult) {
 }
 
 TEST(ProcessingStore, ClearingKeepsCalibrationsAndAFailedTransactionStoresNothing) {
-  Fixture f;
+  ProcessingStoreFixture f;
   ProcessingStore results(f.run_dir, true);
   const auto probe = results.add_probe({0, std::nullopt, "p", 1, 2});
   const std::vector<ProbeSampleRecord> samples{
@@ -82,7 +82,7 @@ TEST(ProcessingStore, ClearingKeepsCalibrationsAndAFailedTransactionStoresNothin
 // nothing staged; one that failed after a frame stays resumable. Both keep
 // the error in their summary.
 TEST(ProcessingStore, AFailedProcessingIsAbandonedUnlessAFrameWasStagedAndKeepsItsError) {
-  Fixture f;
+  ProcessingStoreFixture f;
   ProcessingStore results(f.run_dir, true);
   const std::int64_t early = results.begin_processing("{}", 10);
   const std::int64_t probe = results.stage_probe(early, {0, f.channel, "tc0", 120.5, 80.0});
@@ -112,7 +112,7 @@ TEST(ProcessingStore, AFailedProcessingIsAbandonedUnlessAFrameWasStagedAndKeepsI
 }
 
 TEST(ProcessingStore, AVersionOneStoreReadsAsEmptyAndIsMigratedWhenWritten) {
-  Fixture f;
+  ProcessingStoreFixture f;
   {
     Database db((f.run_dir / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
     for (const char* table :
@@ -139,7 +139,7 @@ constexpr std::array<const char*, 5> kSigmaColumns = {"sigma_u_px", "sigma_v_px"
                                                       "sigma_systematic_c"};
 
 TEST(ProcessingStore, SampleUncertaintiesRoundTripThroughTheStagedCopy) {
-  Fixture f;
+  ProcessingStoreFixture f;
   ProcessingStore results(f.run_dir, true);
   const auto processing = results.begin_processing("{}", 1'000);
   const auto probe = results.stage_probe(processing, {0, f.channel, "tc0", 120.5, 80.0});
@@ -164,7 +164,7 @@ TEST(ProcessingStore, SampleUncertaintiesRoundTripThroughTheStagedCopy) {
 }
 
 TEST(ProcessingStore, EachStagedFrameKeepsItsSummaryUntilTheProcessingCompletes) {
-  Fixture f;
+  ProcessingStoreFixture f;
   ProcessingStore results(f.run_dir, true);
   const auto processing = results.begin_processing("{}", 1'000);
   results.stage_frame(processing, f.frame, R"({"refused":{"reason":"not the same scene"}})", {}, {});
@@ -179,7 +179,7 @@ TEST(ProcessingStore, EachStagedFrameKeepsItsSummaryUntilTheProcessingCompletes)
 // columns. Read-only it reads with every σ absent; opened for writing it is
 // migrated, the old samples' σ NULL, and new samples carry theirs.
 TEST(ProcessingStore, AVersionFourRunReadsWithoutSigmasAndMigratesWhenWritten) {
-  Fixture f;
+  ProcessingStoreFixture f;
   std::int64_t probe = 0;
   {
     ProcessingStore results(f.run_dir, true);

@@ -23,7 +23,7 @@ RunInfo test_run() {
   return info;
 }
 
-struct Fixture {
+struct RunStoreFixture {
   testing::TempDir dir;
   RunStore store = RunStore::create(dir.path() / "run", test_run(), RunStore::CreateMode::kNew);
   std::int64_t device = store.add_device({0, "adam", "modbus-tcp", "adam-6018", "127.0.0.1:502"});
@@ -31,7 +31,7 @@ struct Fixture {
 };
 
 TEST(RunStore, CreatesARunAndReadsItBack) {
-  Fixture f;
+  RunStoreFixture f;
   const RunInfo run = f.store.run();
   EXPECT_EQ(run.name, "cooling-test");
   EXPECT_EQ(run.status, RunStatus::kRunning);
@@ -45,7 +45,7 @@ TEST(RunStore, CreatesARunAndReadsItBack) {
 }
 
 TEST(RunStore, BatchedInsertAndRangeRead) {
-  Fixture f;
+  RunStoreFixture f;
   std::vector<Sample> samples;
   for (int i = 0; i < 10'000; ++i) {
     samples.push_back({f.channel, 1'000 + i * 10, std::nullopt, 20.0 + i * 0.001, std::nullopt, SampleStatus::kOk});
@@ -61,7 +61,7 @@ TEST(RunStore, BatchedInsertAndRangeRead) {
 }
 
 TEST(RunStore, NonOkSamplesStoreNoValue) {
-  Fixture f;
+  RunStoreFixture f;
   const std::vector<Sample> samples = {{f.channel, 1, std::nullopt, 999.0, 65535.0, SampleStatus::kOpenCircuit},
                                        {f.channel, 2, std::nullopt, std::nullopt, std::nullopt, SampleStatus::kTimeout},
                                        {f.channel, 3, 77, 25.0, 1200.0, SampleStatus::kOk}};
@@ -98,7 +98,7 @@ TEST(RunStore, FolderHoldingARunIsRefusedUnlessAppending) {
 }
 
 TEST(RunStore, ASecondLoggerIsKeptOutOfARunBeingRecorded) {
-  Fixture f;
+  RunStoreFixture f;
   try {
     RunStore::create(f.dir.path() / "run", test_run(), RunStore::CreateMode::kAppend);
     FAIL() << "two loggers were let into one run";
@@ -186,7 +186,7 @@ TEST(RunStore, EveryOpeningRefusesAStoreFromANewerBosfuse) {
 }
 
 TEST(RunStore, ARunBeingRecordedIsLeftRunning) {
-  Fixture f;
+  RunStoreFixture f;
   EXPECT_EQ(RunStore::open(f.dir.path() / "run").run().status, RunStatus::kRunning);
   EXPECT_TRUE(RunStore::open(f.dir.path() / "run").events().empty());
 }
@@ -194,7 +194,7 @@ TEST(RunStore, ARunBeingRecordedIsLeftRunning) {
 // Found by fuzzing: a forged store (foreign keys off) held a status code
 // no SampleStatus has, and reading it was undefined behaviour.
 TEST(RunStore, ASampleWithAnUnknownStatusCodeIsRefusedAsDamage) {
-  Fixture f;
+  RunStoreFixture f;
   {
     Database db((f.dir.path() / "run" / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
     db.execute("PRAGMA foreign_keys = OFF");
@@ -212,7 +212,7 @@ TEST(RunStore, ASampleWithAnUnknownStatusCodeIsRefusedAsDamage) {
 // Found by fuzzing: a store whose schema text was damaged no longer had the
 // CHECK that only an ok sample has a value; such a sample is refused.
 TEST(RunStore, ASampleWithAValueAndAFailedStatusIsRefusedAsDamage) {
-  Fixture f;
+  RunStoreFixture f;
   {
     Database db((f.dir.path() / "run" / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
     db.execute("PRAGMA ignore_check_constraints = ON");
@@ -238,7 +238,7 @@ TEST(RunStore, OpeningAFolderWithoutARunSaysSo) {
 }
 
 TEST(RunStore, FramesAndEventsRoundTrip) {
-  Fixture f;
+  RunStoreFixture f;
   f.store.add_frame({0, std::nullopt, 500, 499, "frames/000001.png", 640, 480, 16, true});
   f.store.add_frame({0, std::nullopt, 400, std::nullopt, "frames/000000.png", 640, 480, 16, false});
   const auto frames = f.store.frames();
@@ -255,7 +255,7 @@ TEST(RunStore, FramesAndEventsRoundTrip) {
 }
 
 TEST(Transaction, RollsBackUnlessCommitted) {
-  Fixture f;
+  RunStoreFixture f;
   Database db((f.dir.path() / "run" / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
   {
     Transaction t(db);
@@ -265,7 +265,7 @@ TEST(Transaction, RollsBackUnlessCommitted) {
 }
 
 TEST(RunWriter, CommitsEverythingPushedFromManyThreads) {
-  Fixture f;
+  RunStoreFixture f;
   const auto second = f.store.add_channel({0, f.device, "tc1", "thermocouple", "degC", "K", {}, {}});
   constexpr int kPerThread = 20'000;
   {
@@ -290,7 +290,7 @@ TEST(RunWriter, CommitsEverythingPushedFromManyThreads) {
 }
 
 TEST(RunWriter, AFailedCommitKeepsTheBatchAndRetries) {
-  Fixture f;
+  RunStoreFixture f;
   RunWriter writer(f.store, {std::chrono::milliseconds(10), 1'000});
   // A sample for a channel that does not exist violates the foreign key:
   // its batch must fail without losing the good samples queued with it.
@@ -314,7 +314,7 @@ namespace bosfuse::storage {
 namespace {
 
 TEST(RunStore, ForEachSampleStreamsInTimeOrderAcrossChannels) {
-  Fixture f;
+  RunStoreFixture f;
   const auto other = f.store.add_channel({0, f.device, "tc1", "thermocouple", "degC", "K", {}, {}});
   const std::vector<Sample> samples = {{other, 30, {}, 3.0, {}, SampleStatus::kOk},
                                        {f.channel, 10, {}, 1.0, {}, SampleStatus::kOk},

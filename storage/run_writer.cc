@@ -7,6 +7,7 @@
 #include <exception>
 #include <stdexcept>
 
+#include "storage/experiment_clock.h"
 #include "storage/disk_space.h"
 
 namespace bosfuse::storage {
@@ -29,11 +30,6 @@ class StoreSink final : public RunWriter::Sink {
  private:
   RunStore& store_;
 };
-
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 // What a queued record costs in memory, for the queue's bound.
 std::size_t bytes_of(const Sample&) { return sizeof(Sample); }
@@ -157,7 +153,7 @@ bool RunWriter::admit(std::size_t count, std::size_t bytes, std::size_t samples)
   }
   stats_.dropped_queue_full += static_cast<std::int64_t>(count);
   stats_.samples_lost += static_cast<std::int64_t>(samples);
-  if (!dropping_) dropping_ = Dropping{0, now_ns(), false};
+  if (!dropping_) dropping_ = Dropping{0, utc_now_ns(), false};
   dropping_->count += static_cast<std::int64_t>(count);
   return false;
 }
@@ -324,7 +320,7 @@ void RunWriter::give_up_on_the_rest(std::unique_lock<std::mutex>& lock) {
     if (stats_.dropped_queue_full > 0) {
       message += ", besides " + std::to_string(stats_.dropped_queue_full) + " dropped while the queue was full";
     }
-    events.push_back(Event{0, std::nullopt, now_ns(), "records-lost", message + ": " + stats_.last_error});
+    events.push_back(Event{0, std::nullopt, utc_now_ns(), "records-lost", message + ": " + stats_.last_error});
   }
   if (outage_ && outage_->kind == Kind::kDiskFull && reserve_ && reserve_->release()) stats_.reserve_released = true;
   lock.unlock();
@@ -442,14 +438,14 @@ void RunWriter::note_failure(const std::exception& error, std::chrono::steady_cl
   if (!outage_) {
     outage_ = Outage{kind, attempt_started, options_.retry_initial, now + options_.retry_initial};
     ++stats_.outages;
-    say(lock, now_ns(), event_kind(kind), description + "; " + what_happens_meanwhile());
+    say(lock, utc_now_ns(), event_kind(kind), description + "; " + what_happens_meanwhile());
     return;
   }
   outage_->retry_delay = std::min(outage_->retry_delay * 2, options_.retry_max);
   outage_->next_retry = now + outage_->retry_delay;
   if (kind != outage_->kind) {
     outage_->kind = kind;
-    say(lock, now_ns(), event_kind(kind), description + "; " + what_happens_meanwhile());
+    say(lock, utc_now_ns(), event_kind(kind), description + "; " + what_happens_meanwhile());
   }
 }
 
@@ -457,7 +453,7 @@ void RunWriter::note_recovery(std::unique_lock<std::mutex>& lock) {
   const double seconds = std::chrono::duration<double>(SteadyClock::now() - outage_->since).count();
   const std::string was = event_kind(outage_->kind);
   outage_.reset();
-  say(lock, now_ns(), "store-recovered",
+  say(lock, utc_now_ns(), "store-recovered",
       "the run store is written again after " + seconds_text(seconds) + " (" + was + ")");
 }
 

@@ -21,7 +21,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-struct Fixture {
+struct RunWriterFixture {
   testing::TempDir dir;
   RunStore store = RunStore::create(dir.path() / "run", {0, "t", 0, {}, "", RunStatus::kRunning, 1.0, std::nullopt},
                                     RunStore::CreateMode::kNew);
@@ -36,7 +36,7 @@ struct Fixture {
 // while the logger stops: the commit in flight waits, more records arrive
 // meanwhile, and all of them must be stored.
 TEST(RunWriter, StopCommitsWhatArrivedDuringASlowCommit) {
-  Fixture f;
+  RunWriterFixture f;
   Database other((f.dir.path() / "run" / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
   RunWriter writer(f.store, {10ms, 100'000});
   other.execute("BEGIN IMMEDIATE");
@@ -54,7 +54,7 @@ TEST(RunWriter, StopCommitsWhatArrivedDuringASlowCommit) {
 }
 
 TEST(RunWriter, RecordsPushedAfterTheEndAreCountedAsUncommitted) {
-  Fixture f;
+  RunWriterFixture f;
   RunWriter writer(f.store, {10ms, 100'000});
   writer.push(f.sample(1));
   writer.stop();
@@ -67,7 +67,7 @@ TEST(RunWriter, RecordsPushedAfterTheEndAreCountedAsUncommitted) {
 }
 
 TEST(RunWriter, EveryCommitMarksTheRunAlive) {
-  Fixture f;
+  RunWriterFixture f;
   {
     RunWriter writer(f.store, {10ms, 100'000});
     writer.push(f.sample(1));
@@ -175,7 +175,7 @@ std::size_t count(const std::vector<std::string>& kinds, const std::string& kind
 // the disk fills, retries 20, 40, 80, 160, 160 ms ... apart, and one of
 // each again when it has room.
 TEST(RunWriter, AFullDiskIsOneOutageSaidOnceRetriedWithBackoffAndSaidWhenItEnds) {
-  Fixture f;
+  RunWriterFixture f;
   FailingSink sink(f.store);
   Warnings warnings;
   RunWriter writer(sink, fault_options(warnings));
@@ -220,7 +220,7 @@ TEST(RunWriter, EachStorageFaultIsAnEventOfItsOwnKind) {
       {SQLITE_CORRUPT, "store-error"}};
   for (const auto& [code, kind] : faults) {
     SCOPED_TRACE(kind);
-    Fixture f;
+    RunWriterFixture f;
     FailingSink sink(f.store);
     Warnings warnings;
     {
@@ -244,7 +244,7 @@ TEST(RunWriter, EachStorageFaultIsAnEventOfItsOwnKind) {
 // The queue's bound: what does not fit is dropped and counted, said once,
 // and the count is an event of the run once the store takes records again.
 TEST(RunWriter, BeyondTheQueuesBoundRecordsAreDroppedAndCounted) {
-  Fixture f;
+  RunWriterFixture f;
   FailingSink sink(f.store);
   Warnings warnings;
   auto options = fault_options(warnings);
@@ -284,7 +284,7 @@ TEST(RunWriter, BeyondTheQueuesBoundRecordsAreDroppedAndCounted) {
 // flight gives up at the stop's deadline, whatever the lock timeout, and
 // the loss is counted.
 TEST(RunWriter, AStopUnderALockThatIsNotReleasedIsBoundedAndCountsTheLoss) {
-  Fixture f;
+  RunWriterFixture f;
   Database other((f.dir.path() / "run" / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
   Warnings warnings;
   auto options = fault_options(warnings);
@@ -307,7 +307,7 @@ TEST(RunWriter, AStopUnderALockThatIsNotReleasedIsBoundedAndCountsTheLoss) {
 // At a stop on a full disk the run's reserve is deleted, and its room
 // takes the run's account: the outage, the loss and the status.
 TEST(RunWriter, AtAStopOnAFullDiskTheReserveTakesTheRunsAccount) {
-  Fixture f;
+  RunWriterFixture f;
   FailingSink sink(f.store);
   Warnings warnings;
   RunWriter writer(sink, fault_options(warnings));
@@ -338,7 +338,7 @@ TEST(RunWriter, AtAStopOnAFullDiskTheReserveTakesTheRunsAccount) {
 }
 
 TEST(RunWriter, AReserveIsKeptWhileTheRunIsRecordedAndGoneAfter) {
-  Fixture f;
+  RunWriterFixture f;
   const auto reserve = f.dir.path() / "run" / SpaceReserve::kFileName;
   {
     RunWriter writer(f.store, {10ms, 100'000});

@@ -8,6 +8,7 @@
 #include <tuple>
 #include <type_traits>
 
+#include "storage/experiment_clock.h"
 #include "storage/records.h"
 #include "storage/transaction.h"
 
@@ -222,11 +223,6 @@ bool has_version_table(Database& db) {
   return stmt.step();
 }
 
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
 }  // namespace
 
 std::span<const Migration> schema_migrations() {
@@ -264,7 +260,7 @@ int migrate(Database& db, std::span<const Migration> migrations) {
     db.execute(migration.sql);
     db.prepare("INSERT INTO schema_version (version, applied_ns) VALUES (?, ?)")
         .bind(1, migration.version)
-        .bind(2, now_ns())
+        .bind(2, utc_now_ns())
         .run();
     transaction.commit();
   }

@@ -23,7 +23,7 @@ namespace {
 
 using namespace testing;
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 constexpr int kChannels = 2;
 constexpr std::int64_t kCommitWindowNs = 100'000'000;  // the promise: at most 100 ms lost
 

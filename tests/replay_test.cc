@@ -23,7 +23,7 @@ namespace {
 using storage::SampleStatus;
 namespace fs = std::filesystem;
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+using testing::kBosfuse;
 
 // A run as the logger leaves it: two thermocouples polled every 50 ms (with
 // an open input and an out-of-range reading among them) and three frames.

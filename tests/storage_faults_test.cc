@@ -30,8 +30,8 @@ namespace {
 
 using namespace testing;
 
-const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
-constexpr int kChannels = 2;
+using testing::kBosfuse;
+constexpr int kFaultRunChannels = 2;
 
 // User and system CPU time of a process so far, from /proc/PID/stat.
 double cpu_seconds(pid_t pid) {
@@ -60,7 +60,7 @@ class StorageFaults : public ::testing::Test {
 
   std::string experiment(const std::string& run_keys, double period_s) {
     const std::string toml = "[run]\nname = \"faults\"\n" + run_keys + "\n\n" +
-                             tcp_device_toml("adam", server_.port(), kChannels, period_s);
+                             tcp_device_toml("adam", server_.port(), kFaultRunChannels, period_s);
     const std::string path = (dir_ / ("exp-" + std::to_string(++files_) + ".toml")).string();
     std::ofstream(path) << toml;
     return path;
@@ -113,12 +113,12 @@ class StorageFaults : public ::testing::Test {
   }
 
   TempDir dir_;
-  sim::ModbusSimServer server_{module_options("adam-6018", kChannels, loopback_tcp())};
+  sim::ModbusSimServer server_{module_options("adam-6018", kFaultRunChannels, loopback_tcp())};
   std::string output_;
   int files_ = 0;
 };
 
-std::size_t count(const std::vector<std::string>& kinds, const std::string& kind) {
+std::size_t count_kind(const std::vector<std::string>& kinds, const std::string& kind) {
   return static_cast<std::size_t>(std::count(kinds.begin(), kinds.end(), kind));
 }
 
@@ -156,9 +156,9 @@ TEST_F(StorageFaults, AFullDiskIsSaidCountedAndTheRunClosedInterruptedWithExit3)
   const auto store = storage::RunStore::open(run);
   EXPECT_EQ(store.run().status, storage::RunStatus::kInterrupted);
   const auto kinds = event_kinds(store);
-  EXPECT_EQ(count(kinds, "store-full"), 1u) << "one event per outage";
-  EXPECT_EQ(count(kinds, "stopped"), 1u);
-  ASSERT_EQ(count(kinds, "records-lost"), 1u);
+  EXPECT_EQ(count_kind(kinds, "store-full"), 1u) << "one event per outage";
+  EXPECT_EQ(count_kind(kinds, "stopped"), 1u);
+  ASSERT_EQ(count_kind(kinds, "records-lost"), 1u);
   for (const auto& e : store.events()) {
     if (e.kind == "records-lost") {
       EXPECT_EQ(e.message.find(std::to_string(lost_samples) + " samples and 0 frames read were never stored"), 0u)
@@ -248,7 +248,7 @@ TEST_F(StorageFaults, ALeastFreeSpaceNoDiskHasIsRefusedAnywhere) {
 // logger says so, with the time left, and says again when it has room.
 TEST_F(StorageFaults, AFillingDiskIsSaidBeforeItIsFullWithTheTimeLeft) {
   TmpfsMount disk(dir_ / "filling", "24m");
-  const std::string toml = tcp_device_toml("adam", server_.port(), kChannels, 0.05);
+  const std::string toml = tcp_device_toml("adam", server_.port(), kFaultRunChannels, 0.05);
   auto store = storage::RunStore::create(disk / "run", run_info(toml), storage::RunStore::CreateMode::kNew);
   acquisition::LoggerOptions options;
   options.duration = 3s;
@@ -284,8 +284,8 @@ TEST_F(StorageFaults, AFillingDiskIsSaidBeforeItIsFullWithTheTimeLeft) {
   EXPECT_NE(warnings[0].find("MB/s: full in about"), std::string::npos) << warnings[0];
   EXPECT_NE(warnings[1].find("room again"), std::string::npos) << warnings[1];
   const auto kinds = event_kinds(store);
-  EXPECT_EQ(count(kinds, "disk-low"), 1u);
-  EXPECT_EQ(count(kinds, "disk-ok"), 1u);
+  EXPECT_EQ(count_kind(kinds, "disk-low"), 1u);
+  EXPECT_EQ(count_kind(kinds, "disk-ok"), 1u);
 }
 
 }  // namespace

@@ -27,10 +27,10 @@ void png_write_failed(png_structp png, png_const_charp message) {
   png_longjmp(png, 1);
 }
 
-void png_quiet(png_structp, png_const_charp) {}
+void png_write_quiet(png_structp, png_const_charp) {}
 
 bool write_rows(std::FILE* file, const cv::Mat& frame, PngError& error) {
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, png_write_failed, png_quiet);
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, png_write_failed, png_write_quiet);
   if (!png) {
     std::snprintf(error.message, sizeof error.message, "libpng could not start (out of memory)");
     return false;

@@ -11,14 +11,10 @@
 #include "acquisition/cameras/image_file.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/test_images.h"
+#include "tests/support/file_bytes.h"
 
 namespace bosfuse::acquisition {
 namespace {
-
-std::vector<std::uint8_t> file_bytes(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 std::uint32_t big_endian(const std::uint8_t* p) {
   return std::uint32_t{p[0]} << 24 | std::uint32_t{p[1]} << 16 | std::uint32_t{p[2]} << 8 | p[3];
@@ -68,7 +64,7 @@ TEST(FramePng, RowsAreUnfilteredAndTheDeflateStreamIsNotCompressed) {
   }
   const auto path = dir.path() / "ramp.png";
   write_frame_png(path, ramp);
-  const std::vector<std::uint8_t> stream = zlib_stream(file_bytes(path));
+  const std::vector<std::uint8_t> stream = zlib_stream(testing::file_byte_vector(path));
   const std::size_t row_bytes = 1 + 2 * static_cast<std::size_t>(ramp.cols);  // filter byte + samples
   const std::size_t raw_bytes = row_bytes * static_cast<std::size_t>(ramp.rows);
   EXPECT_GT(stream.size(), raw_bytes) << "stored blocks hold every byte plus their headers";

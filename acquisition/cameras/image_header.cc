@@ -57,7 +57,7 @@ void png_read_from_source(png_structp png, png_bytep out, png_size_t length) {
   }
 }
 
-void png_quiet(png_structp, png_const_charp) {}
+void png_read_quiet(png_structp, png_const_charp) {}
 void png_fail(png_structp png, png_const_charp message) {
   static_cast<PngState*>(png_get_error_ptr(png))->complaint.say(message);
   png_longjmp(png, 1);
@@ -76,7 +76,7 @@ bool png_read_size(png_structp png, png_infop info, PngState* state, DeclaredSiz
 
 ImageHeader png_header(ByteSource& source, std::uint64_t budget) {
   PngState state{{&source, 0, budget}, {}};
-  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &state, png_fail, png_quiet);
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &state, png_fail, png_read_quiet);
   if (!png) return {std::nullopt, "libpng could not start", std::nullopt};
   png_infop info = png_create_info_struct(png);
   DeclaredSize size;

@@ -19,7 +19,7 @@ constexpr std::uint8_t kMccUnitsCelsius = 0;
 // What Measurement Computing's software reports for an open input.
 constexpr double kMccOpenInputCode = -9999.0;
 
-constexpr std::array<std::string_view, 5> kTypeNames = {"int16", "uint16", "int32", "uint32", "float32"};
+constexpr std::array<std::string_view, 5> kHidValueTypeNames = {"int16", "uint16", "int32", "uint32", "float32"};
 
 int byte_count(HidValueType type) { return type == HidValueType::kInt16 || type == HidValueType::kUint16 ? 2 : 4; }
 
@@ -32,15 +32,11 @@ std::uint32_t assemble(std::span<const std::uint8_t> bytes, bool big_endian) {
   return value;
 }
 
-bool contains(const std::vector<double>& codes, double raw) {
-  return std::find(codes.begin(), codes.end(), raw) != codes.end();
-}
-
 }  // namespace
 
 std::optional<HidValueType> parse_hid_value_type(std::string_view text) {
-  for (std::size_t i = 0; i < kTypeNames.size(); ++i) {
-    if (kTypeNames[i] == text) return static_cast<HidValueType>(i);
+  for (std::size_t i = 0; i < kHidValueTypeNames.size(); ++i) {
+    if (kHidValueTypeNames[i] == text) return static_cast<HidValueType>(i);
   }
   return std::nullopt;
 }
@@ -89,7 +85,7 @@ ChannelReading HidChannel::decode(std::span<const std::uint8_t> reply) const {
   reading.raw = *raw;
   if (!std::isfinite(*raw)) {
     reading.status = SampleStatus::kInvalidValue;
-  } else if (contains(open_circuit_codes, *raw)) {
+  } else if (is_one_of_codes(open_circuit_codes, *raw)) {
     reading.status = SampleStatus::kOpenCircuit;
   } else {
     const double value = *raw * scale + offset;

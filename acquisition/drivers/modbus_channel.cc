@@ -8,10 +8,6 @@ namespace {
 
 using storage::SampleStatus;
 
-bool contains(const std::vector<double>& codes, double raw) {
-  return std::find(codes.begin(), codes.end(), raw) != codes.end();
-}
-
 }  // namespace
 
 std::string ModbusChannel::Validate() const {
@@ -51,9 +47,9 @@ ChannelReading ModbusChannel::decode(std::span<const std::uint16_t> registers) c
   reading.raw = decode_registers(registers, type, order);
   if (!std::isfinite(reading.raw)) {
     reading.status = SampleStatus::kInvalidValue;
-  } else if (contains(open_circuit_codes, reading.raw)) {
+  } else if (is_one_of_codes(open_circuit_codes, reading.raw)) {
     reading.status = SampleStatus::kOpenCircuit;
-  } else if (contains(out_of_range_codes, reading.raw)) {
+  } else if (is_one_of_codes(out_of_range_codes, reading.raw)) {
     reading.status = SampleStatus::kOutOfRange;
   } else {
     const double value = to_value(reading.raw);

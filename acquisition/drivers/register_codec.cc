@@ -11,7 +11,7 @@
 namespace bosfuse::acquisition {
 namespace {
 
-constexpr std::array<std::string_view, 5> kTypeNames = {"int16", "uint16", "int32", "uint32", "float32"};
+constexpr std::array<std::string_view, 5> kDataTypeNames = {"int16", "uint16", "int32", "uint32", "float32"};
 constexpr std::array<std::string_view, 4> kOrderNames = {"ABCD", "CDAB", "BADC", "DCBA"};
 
 bool iequals(std::string_view a, std::string_view b) {
@@ -65,7 +65,7 @@ T saturate(double value) {
 int register_count(DataType type) { return type == DataType::kInt16 || type == DataType::kUint16 ? 1 : 2; }
 
 std::optional<DataType> parse_data_type(std::string_view text) {
-  if (auto i = find_name(kTypeNames, text)) return static_cast<DataType>(*i);
+  if (auto i = find_name(kDataTypeNames, text)) return static_cast<DataType>(*i);
   return std::nullopt;
 }
 
@@ -74,7 +74,7 @@ std::optional<WordOrder> parse_word_order(std::string_view text) {
   return std::nullopt;
 }
 
-std::string_view to_string(DataType type) { return kTypeNames.at(static_cast<std::size_t>(type)); }
+std::string_view to_string(DataType type) { return kDataTypeNames.at(static_cast<std::size_t>(type)); }
 std::string_view to_string(WordOrder order) { return kOrderNames.at(static_cast<std::size_t>(order)); }
 
 double decode_registers(std::span<const std::uint16_t> registers, DataType type, WordOrder order) {

@@ -21,6 +21,11 @@ extern char** environ;
 
 namespace bosfuse::testing {
 
+#ifdef BOSFUSE_BINARY_DIR
+// The bosfuse executable of this build, for tests that run it.
+inline const std::string kBosfuse = std::string(BOSFUSE_BINARY_DIR) + "/bosfuse";
+#endif
+
 struct CommandResult {
   int exit_code = -1;
   std::string output;  // stdout and stderr
