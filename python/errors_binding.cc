@@ -5,7 +5,9 @@
 //   acquisition::DeviceError     -> bosfuse.DeviceError
 //   fusion::InsufficientMemory   -> bosfuse.MemoryError (also a MemoryError)
 //   report::NoStoredFields       -> bosfuse.NoStoredFields
-// The library's std::invalid_argument (options that do not fit, sizes that
+// Any other std::runtime_error of the library (a file it cannot read, a
+// fit that cannot be made) is a bosfuse.Error itself. The library's
+// std::invalid_argument (options that do not fit, sizes that
 // differ) stays ValueError, as pybind11 maps it; the module's own checks of
 // arrays raise ValueError too.
 #include <pybind11/pybind11.h>
@@ -46,6 +48,10 @@ void translate(std::exception_ptr p) {
     PyErr_SetString(e.memory.ptr(), x.what());
   } catch (const report::NoStoredFields& x) {
     PyErr_SetString(e.no_fields.ptr(), x.what());
+  } catch (const py::builtin_exception&) {
+    throw;  // pybind11's own (ValueError, TypeError ...): its translator's
+  } catch (const std::runtime_error& x) {
+    PyErr_SetString(e.base.ptr(), x.what());  // any other failure the library reports (a file it cannot read)
   }
 }
 

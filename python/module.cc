@@ -6,4 +6,6 @@
 PYBIND11_MODULE(bosfuse, m) {
   m.doc() = "bosfuse: BOS displacement fields, Newton's-law fits and run stores, NumPy in and NumPy out";
   bosfuse::python::bind_errors(m);
+  bosfuse::python::bind_field(m);
+  bosfuse::python::bind_evaluate(m);
 }
