@@ -10,5 +10,6 @@ namespace bosfuse::python {
 void bind_errors(pybind11::module_& m);
 void bind_field(pybind11::module_& m);
 void bind_evaluate(pybind11::module_& m);
+void bind_fit(pybind11::module_& m);
 
 }  // namespace bosfuse::python
