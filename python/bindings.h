@@ -11,5 +11,6 @@ void bind_errors(pybind11::module_& m);
 void bind_field(pybind11::module_& m);
 void bind_evaluate(pybind11::module_& m);
 void bind_fit(pybind11::module_& m);
+void bind_run(pybind11::module_& m);
 
 }  // namespace bosfuse::python

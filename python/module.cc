@@ -9,4 +9,5 @@ PYBIND11_MODULE(bosfuse, m) {
   bosfuse::python::bind_field(m);
   bosfuse::python::bind_evaluate(m);
   bosfuse::python::bind_fit(m);
+  bosfuse::python::bind_run(m);
 }
