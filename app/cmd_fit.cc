@@ -21,35 +21,9 @@
 namespace bosfuse::app {
 namespace {
 
-using fitting::AmbientModel;
 using fitting::NewtonFit;
 using fitting::NewtonFitOptions;
-using fitting::RobustLoss;
 using report::CsvSeries;
-using report::parse_number;
-
-AmbientModel parse_ambient(const std::string& text) {
-  if (text == "free") return AmbientModel::free();
-  if (text.rfind("fixed:", 0) == 0) {
-    if (auto v = parse_number(text.substr(6)); v && std::isfinite(*v)) return AmbientModel::fixed(*v);
-  }
-  if (text.rfind("prior:", 0) == 0) {
-    const auto comma = text.find(',');
-    const auto v = parse_number(text.substr(6, comma == std::string::npos ? std::string::npos : comma - 6));
-    const auto s = comma == std::string::npos ? std::nullopt : parse_number(text.substr(comma + 1));
-    if (v && s) return AmbientModel::prior(*v, *s);
-  }
-  throw std::runtime_error("--ambient '" + text + "': expected free, fixed:VALUE or prior:VALUE,SIGMA (°C)");
-}
-
-RobustLoss parse_loss(const std::string& text) {
-  if (text == "none") return RobustLoss::none();
-  const auto colon = text.find(':');
-  const auto scale = colon == std::string::npos ? std::nullopt : parse_number(text.substr(colon + 1));
-  if (scale && text.substr(0, colon) == "huber") return RobustLoss::huber(*scale);
-  if (scale && text.substr(0, colon) == "cauchy") return RobustLoss::cauchy(*scale);
-  throw std::runtime_error("--loss '" + text + "': expected none, huber:SCALE or cauchy:SCALE (°C)");
-}
 
 struct FitArgs {
   std::string file;
@@ -64,8 +38,8 @@ struct FitArgs {
 
 NewtonFitOptions fit_options(const FitArgs& args) {
   NewtonFitOptions options;
-  options.ambient = parse_ambient(args.ambient);
-  options.loss = parse_loss(args.loss);
+  options.ambient = report::parse_ambient(args.ambient, "--ambient");
+  options.loss = report::parse_loss(args.loss, "--loss");
   options.measurement_sigma_c = args.sigma_c;
   options.confidence = args.confidence;
   if (auto reason = options.Validate(); !reason.empty()) throw std::runtime_error(reason);

@@ -2,12 +2,12 @@
 
 #include <fmt/format.h>
 
-#include <map>
 #include <sstream>
 #include <vector>
 
 #include "fusion/optical_flow.h"
 #include "fusion/preprocess.h"
+#include "pipeline/evaluation_choices.h"
 
 namespace bosfuse::app {
 namespace {
@@ -145,18 +145,7 @@ pipeline::SettingsOverrides settings_overrides(const EvaluatorArguments& args) {
 }
 
 void apply_evaluation_choices(const EvaluatorArguments& args, fusion::EvaluatorOptions& options) {
-  options.xcorr.first_window_px = args.first_window_px;
-  // "auto": the 2-D fit where peaks lock (first pass), 3-point after deformation.
-  if (args.subpixel == "gauss3") {
-    options.xcorr.subpixel = options.xcorr.refinement_subpixel = fusion::SubpixelEstimator::kGaussian3Point;
-  } else if (args.subpixel == "gauss2d") {
-    options.xcorr.subpixel = options.xcorr.refinement_subpixel = fusion::SubpixelEstimator::kGaussian2dFit;
-  }
-  const std::map<std::string, fusion::Interpolator> interpolators{{"cubic", fusion::Interpolator::kCubic},
-                                                                  {"lanczos3", fusion::Interpolator::kLanczos3},
-                                                                  {"lanczos4", fusion::Interpolator::kLanczos4}};
-  options.xcorr.interpolator = interpolators.at(args.interpolator);
-  options.flow.dis_preset = fusion::parse_dis_preset(args.dis_preset).value();
+  pipeline::apply_evaluation_choices({args.first_window_px, args.dis_preset, args.subpixel, args.interpolator}, options);
 }
 
 cv::Point2d parse_probe(const std::string& text, cv::Size image_size) {

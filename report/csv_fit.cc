@@ -4,11 +4,37 @@
 #include <cmath>
 #include <iomanip>
 #include <ostream>
+#include <stdexcept>
 
 #include "acquisition/clock.h"
 #include "fitting/fit_json.h"
 
 namespace bosfuse::report {
+
+fitting::AmbientModel parse_ambient(const std::string& text, const std::string& option) {
+  using fitting::AmbientModel;
+  if (text == "free") return AmbientModel::free();
+  if (text.rfind("fixed:", 0) == 0) {
+    if (auto v = parse_number(text.substr(6)); v && std::isfinite(*v)) return AmbientModel::fixed(*v);
+  }
+  if (text.rfind("prior:", 0) == 0) {
+    const auto comma = text.find(',');
+    const auto v = parse_number(text.substr(6, comma == std::string::npos ? std::string::npos : comma - 6));
+    const auto s = comma == std::string::npos ? std::nullopt : parse_number(text.substr(comma + 1));
+    if (v && s) return AmbientModel::prior(*v, *s);
+  }
+  throw std::runtime_error(option + " '" + text + "': expected free, fixed:VALUE or prior:VALUE,SIGMA (°C)");
+}
+
+fitting::RobustLoss parse_loss(const std::string& text, const std::string& option) {
+  using fitting::RobustLoss;
+  if (text == "none") return RobustLoss::none();
+  const auto colon = text.find(':');
+  const auto scale = colon == std::string::npos ? std::nullopt : parse_number(text.substr(colon + 1));
+  if (scale && text.substr(0, colon) == "huber") return RobustLoss::huber(*scale);
+  if (scale && text.substr(0, colon) == "cauchy") return RobustLoss::cauchy(*scale);
+  throw std::runtime_error(option + " '" + text + "': expected none, huber:SCALE or cauchy:SCALE (°C)");
+}
 
 fitting::NewtonFitOptions with_csv_origin(fitting::NewtonFitOptions options, const CsvSeries& series) {
   constexpr double kYear_s = 365.25 * 86400;

@@ -14,6 +14,13 @@
 
 namespace bosfuse::report {
 
+// The ambient model and the robust loss by the names `bosfuse fit`
+// --ambient and --loss take (and the Python module's fit_newton): free,
+// fixed:VALUE or prior:VALUE,SIGMA; none, huber:SCALE or cauchy:SCALE (°C).
+// Throws std::runtime_error naming `option` and what it expects.
+fitting::AmbientModel parse_ambient(const std::string& text, const std::string& option);
+fitting::RobustLoss parse_loss(const std::string& text, const std::string& option);
+
 // t = 0 of the fit: the file's own t = 0 (an export's experiment seconds, so
 // T0 is the temperature at the experiment's origin; ISO-8601 times count
 // from the earliest), unless the times are epoch-scale seconds, which the

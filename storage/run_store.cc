@@ -163,6 +163,23 @@ RunStore RunStore::open(const fs::path& run_dir, bool writable) {
   return store;
 }
 
+RunStore RunStore::open_as_found(const fs::path& run_dir) {
+  if (!holds_run(run_dir)) throw StorageError("'" + run_dir.string() + "' holds no bosfuse run");
+  refuse_newer_schema(run_dir);
+  RunStore store(run_dir, Database::Mode::kReadOnly);
+  store.run_id_ = store.run().id;
+  return store;
+}
+
+bool RunStore::abandoned(const fs::path& run_dir) {
+  if (stored_status(run_dir) != RunStatus::kRunning) return false;
+  try {
+    return RunLock::try_acquire(run_dir).has_value();  // released again at once
+  } catch (const StorageError&) {
+    return false;  // cannot be checked (a read-only folder)
+  }
+}
+
 // A `running` run nobody holds the lock of has lost its logger. A reader
 // that may not write (a read-only copy of a run) only says so.
 void RunStore::close_if_abandoned(const fs::path& run_dir) {

@@ -61,6 +61,11 @@ class RunStore {
   // Opens an existing run; throws StorageError if the folder holds none.
   // Closes a run whose logger died first (see above).
   static RunStore open(const std::filesystem::path& run_dir, bool writable = false);
+  // Opens an existing run read-only exactly as it is: a run whose logger
+  // died stays marked `running` (nothing is written); abandoned() says so.
+  static RunStore open_as_found(const std::filesystem::path& run_dir);
+  // Marked `running` with nobody holding its RunLock: its logger died.
+  static bool abandoned(const std::filesystem::path& run_dir);
   static bool holds_run(const std::filesystem::path& run_dir);
 
   const std::filesystem::path& dir() const { return dir_; }

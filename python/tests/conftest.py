@@ -1,0 +1,23 @@
+"""Shared fixtures: where the build's executable and the sources are."""
+import os
+import pathlib
+import subprocess
+
+import pytest
+
+BINARY_DIR = pathlib.Path(os.environ.get("BOSFUSE_BINARY_DIR", pathlib.Path(__file__).parents[2] / "build"))
+SOURCE_DIR = pathlib.Path(os.environ.get("BOSFUSE_SOURCE_DIR", pathlib.Path(__file__).parents[2]))
+
+
+def run_cli(*args, timeout=120):
+    """Runs the built `bosfuse` executable; returns its standard output (text)."""
+    result = subprocess.run([str(BINARY_DIR / "bosfuse"), *map(str, args)], capture_output=True, text=True,
+                            timeout=timeout)
+    if result.returncode != 0:
+        raise AssertionError(f"bosfuse {' '.join(map(str, args))} failed ({result.returncode}): {result.stderr}")
+    return result.stdout
+
+
+@pytest.fixture
+def cli():
+    return run_cli
