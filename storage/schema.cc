@@ -216,6 +216,16 @@ std::string schema_v5() {
   return sql;
 }
 
+// Version 6: what a reading and a frame need to be shown faithfully. A
+// channel's resolution (its unit's smallest step, NULL where the device does
+// not say) sets the digits its values are printed with; a frame's arrival
+// time on the host is kept beside the time it is filed at, which for a
+// camera with its own clock is the camera's time mapped to the host clock.
+constexpr std::string_view kSchemaV6 = R"sql(
+ALTER TABLE channels ADD COLUMN resolution REAL CHECK (resolution IS NULL OR resolution > 0);
+ALTER TABLE frames ADD COLUMN arrival_ns INTEGER;
+)sql";
+
 static_assert(kSampleStatusCount == 7, "update the sample_status rows of the schema");
 
 bool has_version_table(Database& db) {
@@ -228,8 +238,12 @@ bool has_version_table(Database& db) {
 std::span<const Migration> schema_migrations() {
   // Built once: Migration holds views of these strings.
   static const std::array<std::string, 3> derived = {schema_v2(), schema_v4(), schema_v5()};
-  static const std::array<Migration, 5> migrations = {
-      {{1, kSchemaV1}, {2, derived[0]}, {3, kSchemaV3}, {4, derived[1]}, {5, derived[2]}}};
+  static const std::array<Migration, 6> migrations = {{{1, kSchemaV1},
+                                                       {2, derived[0]},
+                                                       {3, kSchemaV3},
+                                                       {4, derived[1]},
+                                                       {5, derived[2]},
+                                                       {6, kSchemaV6}}};
   static_assert(std::tuple_size_v<std::remove_reference_t<decltype(migrations)>> == kSchemaVersion);
   return migrations;
 }
