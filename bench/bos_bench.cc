@@ -826,7 +826,9 @@ void BM_Defaults(benchmark::State& state) {
                                 "low contrast 10-bit", "plume 16 MP"};
   for (auto _ : state) {
     FieldError error;
+    const double cpu_start_s = process_cpu_s();
     state.SetIterationTime(evaluate_scene(scene, e, error, state));
+    state.counters["cpu_all_threads_s"] = process_cpu_s() - cpu_start_s;
     if (scene != 2) {
       state.counters["rms_px"] = error.rms();
       state.counters["valid_pct"] = error.vectors ? 100.0 * double(error.valid) / double(error.vectors) : 0;
@@ -837,6 +839,63 @@ void BM_Defaults(benchmark::State& state) {
 BENCHMARK(BM_Defaults)
     ->ArgNames({"scene", "variant"})
     ->ArgsProduct({{0, 1, 2, 3, 4, 5}, {0, 1, 2, 3, 4, 5, 6}})
+    ->UseManualTime()
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
+
+// One-shot `evaluate` on the 16 MP plume with the defaults and with
+// adaptive refinement, in pairs (which goes first alternates; each a fresh
+// evaluator, the reference prepared in the timing), as BM_AdaptiveSpeedup
+// pairs frames after the first. Reported: adaptive's median one-shot;
+// counters: the default's median, the medians of the pairs' wall and CPU
+// (all threads) ratios default / adaptive.
+void BM_DefaultsAdaptiveOneShot(benchmark::State& state) {
+  const auto& pair = adaptive_scene(0);
+  const int pairs = int(state.range(0));
+  const auto full_options = defaults_variant(0), adaptive_options = defaults_variant(1);
+  struct Cost {
+    double wall_s, cpu_s;
+  };
+  auto one_shot = [&](const fusion::EvaluatorOptions& e) {
+    const double cpu_start_s = process_cpu_s();
+    const double wall_s =
+        timed_s([&] { benchmark::DoNotOptimize(fusion::evaluate_displacement(pair.reference, pair.measurement, e)); });
+    return Cost{wall_s, process_cpu_s() - cpu_start_s};
+  };
+  one_shot(full_options);  // the pages of the images and the first buffers
+  auto median = [](std::vector<double> values) {
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    return values[values.size() / 2];
+  };
+  for (auto _ : state) {
+    std::vector<double> full_s, adaptive_s, full_cpu_s, adaptive_cpu_s, wall_ratio, cpu_ratio;
+    for (int i = 0; i < pairs; ++i) {
+      Cost f{}, a{};
+      if (i % 2 == 0) {
+        f = one_shot(full_options);
+        a = one_shot(adaptive_options);
+      } else {
+        a = one_shot(adaptive_options);
+        f = one_shot(full_options);
+      }
+      full_s.push_back(f.wall_s);
+      adaptive_s.push_back(a.wall_s);
+      full_cpu_s.push_back(f.cpu_s);
+      adaptive_cpu_s.push_back(a.cpu_s);
+      wall_ratio.push_back(f.wall_s / a.wall_s);
+      cpu_ratio.push_back(f.cpu_s / a.cpu_s);
+    }
+    state.SetIterationTime(median(adaptive_s));
+    state.counters["default_ms"] = 1e3 * median(full_s);
+    state.counters["default_cpu_s"] = median(full_cpu_s);
+    state.counters["adaptive_cpu_s"] = median(adaptive_cpu_s);
+    state.counters["speedup"] = median(wall_ratio);
+    state.counters["speedup_cpu"] = median(cpu_ratio);
+  }
+}
+BENCHMARK(BM_DefaultsAdaptiveOneShot)
+    ->ArgName("pairs")
+    ->Arg(7)
     ->UseManualTime()
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
