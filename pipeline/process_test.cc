@@ -590,6 +590,8 @@ TEST(InheritSettings, ARunGetsAnotherRunsSettingsAndTheMaskTheyName) {
   EXPECT_EQ(settings.evaluator.xcorr.window_px, 32);
   EXPECT_EQ(settings.mask, "holder.png");
   EXPECT_NE(settings.source.find("inherited"), std::string::npos) << settings.source;
+  ASSERT_TRUE(current_settings(dir / "a").contains("found_search"));
+  EXPECT_FALSE(settings.evaluator.xcorr.known_search) << "another scene's search bound is not inherited";
 }
 
 }  // namespace

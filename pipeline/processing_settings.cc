@@ -400,7 +400,13 @@ bool inherit_settings(const fs::path& from_run, const fs::path& to_run) {
     fs::create_directories((to_run / settings.mask).parent_path());
     fs::copy_file(source, to_run / settings.mask, fs::copy_options::overwrite_existing);
   }
-  storage::ProcessingStore(to_run, true).add_inherited_settings(stored->settings_json, acquisition::utc_now_ns());
+  // The search bound the other run's scene set is not this run's: its first frame searches again.
+  std::string settings_json = stored->settings_json;
+  if (auto j = nlohmann::ordered_json::parse(settings_json); j.contains("found_search")) {
+    j.erase("found_search");
+    settings_json = j.dump();
+  }
+  storage::ProcessingStore(to_run, true).add_inherited_settings(settings_json, acquisition::utc_now_ns());
   return true;
 }
 
