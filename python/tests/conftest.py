@@ -21,3 +21,14 @@ def run_cli(*args, timeout=120):
 @pytest.fixture
 def cli():
     return run_cli
+
+
+@pytest.fixture(scope="session")
+def demo_run(tmp_path_factory):
+    """A short demo run, recorded and processed (full fields) by `bosfuse demo`."""
+    out = tmp_path_factory.mktemp("demo")
+    run_cli("demo", "-o", out, "--experiment-time", "20s", "--speed", "100", "--frame-interval", "10s", "--seed", "5",
+            timeout=120)
+    runs = [p for p in out.iterdir() if (p / "run.sqlite").exists()]
+    assert len(runs) == 1
+    return runs[0]

@@ -12,16 +12,6 @@ import bosfuse
 from conftest import run_cli
 
 
-@pytest.fixture(scope="module")
-def demo_run(tmp_path_factory):
-    out = tmp_path_factory.mktemp("demo")
-    run_cli("demo", "-o", out, "--experiment-time", "20s", "--speed", "100", "--frame-interval", "10s", "--seed", "5",
-            timeout=120)
-    runs = [p for p in out.iterdir() if (p / "run.sqlite").exists()]
-    assert len(runs) == 1
-    return runs[0]
-
-
 def test_samples_equal_the_export(demo_run):
     rows = list(csv.DictReader(io.StringIO(run_cli("export", demo_run, "--csv"))))
     run = bosfuse.Run(demo_run)
