@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 import bosfuse
-from conftest import run_cli
+from conftest import DEMO_SPEED, run_cli
 
 
 def test_samples_equal_the_export(demo_run):
     rows = list(csv.DictReader(io.StringIO(run_cli("export", demo_run, "--csv"))))
     run = bosfuse.Run(demo_run)
-    assert run.status == "complete" and run.time_scale == 100
+    assert run.status == "complete" and run.time_scale == DEMO_SPEED
     assert run.channels and run.devices and run.frames and run.events
     for channel in run.channels:
         column = f"{channel.name} [{channel.unit}]"
