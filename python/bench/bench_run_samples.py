@@ -5,7 +5,8 @@ The run: a short `bosfuse demo` run whose first thermocouple gets 10^6 more
 samples (ok, one every 10 ms after its last, status 0) written into its
 store with Python's sqlite3, in the store's own schema; the samples are
 then read back with bosfuse.Run(...).samples(channel). Median of --repeat
-reads, each in a fresh Run. Debian packages: python3-numpy.
+reads, each in a fresh Run, wall and CPU time (the process's: on a shared,
+loaded machine the wall time is mostly waiting for a core). Debian packages: python3-numpy.
 
   PYTHONPATH=build/python python3 python/bench/bench_run_samples.py --bosfuse build/bosfuse
 """
@@ -44,15 +45,16 @@ def main():
     args = p.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         run_dir, name = make_run(args.bosfuse, folder, args.samples)
-        times = []
+        times, cpu = [], []
         for _ in range(args.repeat):
             run = bosfuse.Run(run_dir)
-            start = time.perf_counter()
+            start, start_cpu = time.perf_counter(), time.process_time()
             t_s, value, status = run.samples(name)
             times.append(time.perf_counter() - start)
+            cpu.append(time.process_time() - start_cpu)
         assert len(t_s) == args.samples, len(t_s)
         print(f"{len(t_s)} samples of '{name}': median {statistics.median(times):.3f} s "
-              f"({min(times):.3f}-{max(times):.3f}) over {args.repeat} reads")
+              f"({min(times):.3f}-{max(times):.3f}) over {args.repeat} reads; CPU median {statistics.median(cpu):.3f} s")
 
 
 if __name__ == "__main__":

@@ -52,3 +52,44 @@ def test_evaluations_from_threads_at_once_equal_sequential_ones():
     result = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True, timeout=120, env=env)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "same"
+
+
+# Frames given as paths to an Evaluator per thread, as docs/PYTHON.md's
+# thread pool does, in an interpreter that has made no array before: the
+# first arrays are made by two threads at once. (This hung: NumPy's C API was
+# looked up on first use into a function-local static of pybind11's, the
+# lookup's import let go of the GIL, and the other thread then waited on the
+# static's guard holding it.)
+PATHS = textwrap.dedent("""
+    import sys, threading
+    from concurrent.futures import ThreadPoolExecutor
+    import bosfuse
+    reference, frames = sys.argv[1], sys.argv[2:]
+    local = threading.local()
+
+    def field_of(path):
+        if not hasattr(local, "evaluator"):
+            local.evaluator = bosfuse.Evaluator(reference, window=16, step=8)
+        return local.evaluator.process(path)
+
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        fields = [pool.submit(field_of, p) for p in frames] + [pool.submit(bosfuse.evaluate, reference, p, window=16, step=8) for p in frames]
+        us = [f.result(timeout=60).u.tolist() for f in fields]
+    n = len(frames)
+    assert us[:n] == us[n:], "an Evaluator's field differs from evaluate's"
+    print("same")
+""")
+
+
+def test_frames_from_paths_in_a_thread_pool(tmp_path):
+    from images import pair, write_pgm
+    paths = []
+    for k in range(4):
+        ref, meas = pair(rows=256, cols=320, shift=(0.1 * k, 0.2), seed=1)
+        write_pgm(tmp_path / f"frame{k}.pgm", meas)
+    write_pgm(tmp_path / "reference.pgm", ref)
+    paths = [str(tmp_path / f"frame{k}.pgm") for k in range(4)]
+    result = subprocess.run([sys.executable, "-c", PATHS, str(tmp_path / "reference.pgm"), *paths],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "same"
