@@ -13,12 +13,10 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <map>
 #include <opencv2/core/utility.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <random>
 #include <stdexcept>
@@ -27,8 +25,6 @@
 #include "fusion/displacement_evaluator.h"
 #include "fusion/cross_correlation.h"
 #include "pipeline/field_csv.h"
-#include "pipeline/pair_evaluation.h"
-#include "pipeline/processing_settings.h"
 #include "fusion/image_input.h"
 #include "fusion/search_range.h"
 #include "fusion/adaptive_refinement.h"
@@ -250,36 +246,6 @@ BENCHMARK(BM_FullFrame16MPEvaluator)
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond)
     ->Iterations(2);
-
-// The 16 MP pair evaluated as `bosfuse evaluate` and the Python module's
-// bosfuse.evaluate(reference, measurement, window=16, step=8, passes=3,
-// max_shift=2) evaluate it (pipeline::evaluate_image_pair with the CLI's
-// defaults and those options): the C++ side of the module's call overhead
-// (python/bench/bench_overhead.py, docs/BENCHMARKS.md). With
-// BOSFUSE_BENCH_PAIR_DIR set, the pair is also written there once
-// (reference.png, measurement.png) for the Python side to evaluate.
-void BM_FullFrame16MPPair(benchmark::State& state) {
-  const auto& pair = full_frame();
-  if (const char* dir = std::getenv("BOSFUSE_BENCH_PAIR_DIR")) {
-    cv::imwrite(std::string(dir) + "/reference.png", pair.reference);
-    cv::imwrite(std::string(dir) + "/measurement.png", pair.measurement);
-  }
-  pipeline::SettingsOverrides overrides;
-  overrides.window_px = 16;
-  overrides.step_px = 8;
-  overrides.passes = 3;
-  overrides.max_shift_px = 2;
-  const auto options = pipeline::default_evaluator_with(overrides);
-  pipeline::ImagePair images;
-  images.reference = pair.reference;
-  images.measurement = pair.measurement;
-  for (auto _ : state) {
-    const auto result = pipeline::evaluate_image_pair(images, options);
-    state.counters["vectors"] = double(result.field.size());
-    state.counters["valid_pct"] = 100.0 * result.summary.valid / result.field.size();
-  }
-}
-BENCHMARK(BM_FullFrame16MPPair)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(3);
 
 // A field on the 16 MP pair's grid (615×407 nodes, IW 16, step 8), every
 // node measured; `node(x_px, y_px)` gives its vector.
