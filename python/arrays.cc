@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cstring>
+
 #include "pipeline/image_io.h"
 
 namespace py = pybind11;
@@ -44,6 +46,38 @@ cv::Mat image_argument(const py::handle& image, const std::string& role) {
   return cv::Mat(static_cast<int>(array.shape(0)), static_cast<int>(array.shape(1)), type,
                  const_cast<void*>(array.data()), static_cast<std::size_t>(array.strides(0)));
 }
+
+namespace {
+
+py::dtype dtype_of_depth(int depth) {
+  switch (depth) {
+    case CV_8U: return py::dtype::of<std::uint8_t>();
+    case CV_16U: return py::dtype::of<std::uint16_t>();
+    case CV_32F: return py::dtype::of<float>();
+    case CV_64F: return py::dtype::of<double>();
+    default: throw py::value_error(fmt::format("an image of OpenCV depth {} has no NumPy form here", depth));
+  }
+}
+
+}  // namespace
+
+py::array mat_array(const cv::Mat& image) {
+  const py::dtype dtype = dtype_of_depth(image.depth());
+  std::vector<py::ssize_t> shape{image.rows, image.cols};
+  if (image.channels() > 1) shape.push_back(image.channels());
+  py::array out(dtype, shape);
+  const std::size_t row_bytes = image.cols * image.elemSize();
+  auto* to = static_cast<std::uint8_t*>(out.mutable_data());
+  for (int r = 0; r < image.rows; ++r) std::memcpy(to + r * row_bytes, image.ptr(r), row_bytes);
+  return out;
+}
+
+ImageInput::ImageInput(const py::handle& image, std::string role) : role_(std::move(role)), path_(path_argument(image)) {
+  name_ = path_ ? *path_ : role_;
+  if (!path_) wrapped_ = image_argument(image, role_);
+}
+
+cv::Mat ImageInput::read() const { return path_ ? pipeline::read_image(*path_, role_) : wrapped_; }
 
 std::vector<double> double_vector(const py::handle& values, const std::string& role) {
   py::array_t<double, py::array::c_style | py::array::forcecast> array;

@@ -9,6 +9,7 @@
 #include <pybind11/pybind11.h>
 
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,21 @@ namespace bosfuse::python {
 
 // `role` names the argument in messages ("reference", "mask").
 cv::Mat image_argument(const pybind11::handle& image, const std::string& role);
+// An image argument taken in two steps, so that a file is read with the
+// GIL released: the constructor (GIL held) wraps an array or notes a path,
+// read() (GIL released or held) gives the pixels, reading the file then.
+class ImageInput {
+ public:
+  ImageInput(const pybind11::handle& image, std::string role);
+  cv::Mat read() const;
+  const std::string& name() const { return name_; }  // the path, or the role for an array
+
+ private:
+  std::string role_, name_;
+  std::optional<std::string> path_;
+  cv::Mat wrapped_;
+};
+
 // A path (str or os.PathLike) as text; nothing when `value` is not one.
 std::optional<std::string> path_argument(const pybind11::handle& value);
 
@@ -36,6 +52,11 @@ pybind11::array_t<T> vector_array(const std::vector<T>& values) {
   std::copy(values.begin(), values.end(), out.mutable_data());
   return out;
 }
+
+// A copy of `image` (8 or 16 bit, float32 or float64; one channel or
+// several) as a new array shaped (rows, cols) or (rows, cols, channels):
+// the depth it has, not converted.
+pybind11::array mat_array(const cv::Mat& image);
 
 // A 1-D float64 array as a vector; ValueError naming `role` when it is not
 // 1-D or not numbers.

@@ -12,5 +12,9 @@ void bind_field(pybind11::module_& m);
 void bind_evaluate(pybind11::module_& m);
 void bind_fit(pybind11::module_& m);
 void bind_run(pybind11::module_& m);
+void bind_quality(pybind11::module_& m);
+void bind_background(pybind11::module_& m);
+void bind_temperature(pybind11::module_& m);
+void bind_image(pybind11::module_& m);
 
 }  // namespace bosfuse::python

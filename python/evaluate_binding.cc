@@ -6,6 +6,8 @@
 #include <pybind11/stl.h>
 
 #include <memory>
+#include <mutex>
+#include <optional>
 
 #include "pipeline/pair_evaluation.h"
 #include "python/arrays.h"
@@ -29,58 +31,69 @@ passes, max_shift, method ('xcorr' or 'flow'), flow, adaptive_refinement,
 adaptive_threshold, preprocess, roi=(x, y, w, h), mask (array or path),
 first_window, dis_preset, subpixel, interpolator.)";
 
+// The pair's sizes must agree: a ValueError saying both.
+void check_sizes(const cv::Mat& reference, const cv::Mat& measurement) {
+  if (reference.size() == measurement.size()) return;
+  throw py::value_error("reference and measurement differ in size: " + std::to_string(reference.rows) + "x" +
+                        std::to_string(reference.cols) + " against " + std::to_string(measurement.rows) + "x" +
+                        std::to_string(measurement.cols) + " (rows x columns)");
+}
+
+// Python objects are read while the GIL is held; files are read, and the
+// pair evaluated, with it released (pure C++ from there).
 Field evaluate(const py::object& reference, const py::object& measurement, const py::object& probes,
                const py::kwargs& kwargs) {
-  EvaluationRequest request = evaluation_request(kwargs);
-  pipeline::ImagePair pair;
-  pair.reference_path = py::isinstance<py::array>(reference) ? "reference" : py::str(reference).cast<std::string>();
-  pair.measurement_path =
-      py::isinstance<py::array>(measurement) ? "measurement" : py::str(measurement).cast<std::string>();
-  pair.reference = image_argument(reference, "reference");
-  pair.measurement = image_argument(measurement, "measurement");
-  pair.mask = request.mask;
-  if (pair.reference.size() != pair.measurement.size()) {
-    throw py::value_error("reference and measurement differ in size: " + std::to_string(pair.reference.rows) + "x" +
-                          std::to_string(pair.reference.cols) + " against " + std::to_string(pair.measurement.rows) +
-                          "x" + std::to_string(pair.measurement.cols) + " (rows x columns)");
-  }
-  std::vector<cv::Point2d> points;
-  if (!probes.is_none()) points = probe_points(probes, pair.reference.size());
+  const EvaluationRequest request = evaluation_request(kwargs);
+  const ImageInput ref(reference, "reference"), meas(measurement, "measurement");
+  const auto points = probes.is_none() ? std::nullopt : std::optional(probes.cast<std::vector<std::pair<double, double>>>());
   fusion::EvaluationResult result;
   {
     py::gil_scoped_release release;
-    result = pipeline::evaluate_image_pair(pair, request.options, points);
+    pipeline::ImagePair pair;
+    pair.reference_path = ref.name();
+    pair.measurement_path = meas.name();
+    pair.reference = ref.read();
+    pair.measurement = meas.read();
+    pair.mask = request.read_mask();
+    check_sizes(pair.reference, pair.measurement);  // a C++ exception: raised once the GIL is back
+    std::vector<cv::Point2d> at;
+    if (points) at = probe_points(*points, pair.reference.size());
+    result = pipeline::evaluate_image_pair(pair, request.options, at);
   }
-  return Field::from(result.field, result.summary.BriefReport());
+  return Field::from(result.field, result.summary.BriefReport(), result.summary.seconds);
 }
 
 // One reference, many measurements: the evaluator and the arrays it shares.
 class Evaluator {
  public:
-  Evaluator(const py::object& reference, const py::kwargs& kwargs) : request_(evaluation_request(kwargs)) {
-    reference_array_ = reference;
-    reference_ = image_argument(reference, "reference");
+  Evaluator(const py::object& reference, const py::kwargs& kwargs)
+      : request_(evaluation_request(kwargs)), reference_array_(reference) {
+    const ImageInput ref(reference, "reference");
     py::gil_scoped_release release;
-    evaluator_ = std::make_unique<fusion::DisplacementEvaluator>(reference_, request_.options, request_.mask);
+    reference_ = ref.read();
+    evaluator_ = std::make_unique<fusion::DisplacementEvaluator>(reference_, request_.options, request_.read_mask());
   }
 
   Field process(const py::object& measurement, const py::object& probes) {
-    const cv::Mat image = image_argument(measurement, "measurement");
-    if (image.size() != reference_.size()) throw py::value_error("measurement: its size differs from the reference's");
-    std::vector<cv::Point2d> points;
-    if (!probes.is_none()) points = probe_points(probes, image.size());
+    const ImageInput meas(measurement, "measurement");
+    const auto points =
+        probes.is_none() ? std::nullopt : std::optional(probes.cast<std::vector<std::pair<double, double>>>());
     fusion::EvaluationResult result;
     {
       py::gil_scoped_release release;
+      const cv::Mat image = meas.read();
+      if (image.size() != reference_.size()) throw py::value_error("measurement: its size differs from the reference's");
+      std::vector<cv::Point2d> at;
+      if (points) at = probe_points(*points, image.size());
       std::lock_guard lock(mutex_);  // one frame at a time: the evaluator's buffers are reused
-      result = points.empty() ? evaluator_->evaluate(image) : evaluator_->probe(image, points);
+      result = at.empty() ? evaluator_->evaluate(image) : evaluator_->probe(image, at);
     }
-    return Field::from(result.field, result.summary.BriefReport());
+    return Field::from(result.field, result.summary.BriefReport(), result.summary.seconds);
   }
 
  private:
   EvaluationRequest request_;
-  py::object reference_array_;  // the pixels reference_ shares, kept alive
+  py::object reference_array_;  // the pixels reference_ may share, kept alive
   cv::Mat reference_;
   std::unique_ptr<fusion::DisplacementEvaluator> evaluator_;
   std::mutex mutex_;

@@ -3,7 +3,8 @@
 #include <fmt/format.h>
 #include <pybind11/stl.h>
 
-#include <set>
+#include <algorithm>
+#include <string_view>
 
 #include "pipeline/evaluation_choices.h"
 #include "pipeline/image_io.h"
@@ -15,13 +16,16 @@ namespace py = pybind11;
 namespace bosfuse::python {
 namespace {
 
-const std::set<std::string>& option_names() {
-  static const std::set<std::string> names{"window",     "step",           "passes",    "max_shift",
-                                           "method",     "flow",           "adaptive_refinement",
-                                           "adaptive_threshold",           "preprocess", "roi",
-                                           "mask",       "first_window",   "dis_preset", "subpixel",
-                                           "interpolator"};
-  return names;
+// A constant table, not a function-local static: nothing here is
+// initialised on first use, where two threads could meet.
+constexpr std::string_view kOptionNames[] = {"window",       "step",       "passes",          "max_shift",
+                                             "method",       "flow",       "adaptive_refinement",
+                                             "adaptive_threshold",         "preprocess",      "roi",
+                                             "mask",         "first_window", "dis_preset",    "subpixel",
+                                             "interpolator"};
+
+bool known_option(std::string_view name) {
+  return std::find(std::begin(kOptionNames), std::end(kOptionNames), name) != std::end(kOptionNames);
 }
 
 template <typename T>
@@ -84,9 +88,9 @@ py::dict merged_options(const py::dict& kwargs, std::string& file) {
   }
   for (auto item : options) {
     const auto name = item.first.cast<std::string>();
-    if (!option_names().contains(name)) {
+    if (!known_option(name)) {
       std::string known;
-      for (const auto& n : option_names()) known += (known.empty() ? "" : ", ") + n;
+      for (const auto n : kOptionNames) known += (known.empty() ? "" : ", ") + std::string(n);
       throw py::type_error(fmt::format("unknown option '{}'; the options are {}, settings", name, known));
     }
   }
@@ -113,15 +117,19 @@ EvaluationRequest evaluation_request(const py::dict& kwargs) {
   if (o.contains("mask") && py::isinstance<py::array>(o["mask"])) {
     request.mask_array = o["mask"];
     request.mask = image_argument(request.mask_array, "mask");
-  } else if (!mask_path.empty()) {
-    request.mask = pipeline::read_image(mask_path, "mask");
+  } else {
+    request.mask_path = mask_path;
   }
   return request;
 }
 
-std::vector<cv::Point2d> probe_points(const py::handle& probes, cv::Size size) {
+cv::Mat EvaluationRequest::read_mask() const {
+  return mask_path.empty() ? mask : pipeline::read_image(mask_path, "mask");
+}
+
+std::vector<cv::Point2d> probe_points(const std::vector<std::pair<double, double>>& probes, cv::Size size) {
   std::vector<cv::Point2d> points;
-  for (const auto& p : probes.cast<std::vector<std::pair<double, double>>>()) {
+  for (const auto& p : probes) {
     if (!(p.first >= 0 && p.second >= 0 && p.first <= size.width - 1 && p.second <= size.height - 1)) {
       throw py::value_error(fmt::format("probe ({}, {}) lies outside the {}x{} image", p.first, p.second, size.width,
                                         size.height));

@@ -20,13 +20,18 @@ namespace bosfuse::python {
 
 struct EvaluationRequest {
   fusion::EvaluatorOptions options;
-  cv::Mat mask;              // empty: none
+  cv::Mat mask;                 // a mask given as an array (empty: none, or a file's)
+  std::string mask_path;        // a mask given as a file (empty: none)
   pybind11::object mask_array;  // the NumPy array `mask` shares pixels with, kept alive
+
+  // The mask's pixels (empty: none), the file read now: call it with the GIL released.
+  cv::Mat read_mask() const;
 };
 
 EvaluationRequest evaluation_request(const pybind11::dict& kwargs);
 
-// `probes` as points, each checked to lie on an image of `size`.
-std::vector<cv::Point2d> probe_points(const pybind11::handle& probes, cv::Size size);
+// `probes` as points, each checked to lie on an image of `size` (a
+// ValueError otherwise). Pure C++: call it with the GIL released.
+std::vector<cv::Point2d> probe_points(const std::vector<std::pair<double, double>>& probes, cv::Size size);
 
 }  // namespace bosfuse::python

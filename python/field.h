@@ -19,8 +19,12 @@ struct Field {
   pybind11::array_t<bool> valid;
   pybind11::array_t<std::uint8_t> flag;
   std::string summary;  // the evaluation's one-line report, empty for a stored field
+  double seconds = 0;   // the library's own time for the evaluation (0 for a stored field)
 
-  static Field from(const fusion::DisplacementField& field, std::string summary = {});
+  static Field from(const fusion::DisplacementField& field, std::string summary = {}, double seconds = 0);
+  // Back to the library's form (a temperature solve of it); ValueError when
+  // the arrays' shapes differ or a flag code is none of VectorFlag's.
+  fusion::DisplacementField to_displacement() const;
 };
 
 }  // namespace bosfuse::python

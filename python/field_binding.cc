@@ -9,7 +9,7 @@ namespace py = pybind11;
 
 namespace bosfuse::python {
 
-Field Field::from(const fusion::DisplacementField& f, std::string summary) {
+Field Field::from(const fusion::DisplacementField& f, std::string summary, double seconds) {
   const auto& v = f.vectors;
   Field out;
   out.x = grid_array<double>(f.rows, f.cols, [&](std::size_t i) { return v[i].x_px; });
@@ -22,7 +22,35 @@ Field Field::from(const fusion::DisplacementField& f, std::string summary) {
   out.sigma_u = grid_array<double>(f.rows, f.cols, [&](std::size_t i) { return v[i].sigma_u_px; });
   out.sigma_v = grid_array<double>(f.rows, f.cols, [&](std::size_t i) { return v[i].sigma_v_px; });
   out.summary = std::move(summary);
+  out.seconds = seconds;
   return out;
+}
+
+fusion::DisplacementField Field::to_displacement() const {
+  const int rows = static_cast<int>(u.shape(0)), cols = static_cast<int>(u.shape(1));
+  for (const py::array* a : std::initializer_list<const py::array*>{&x, &y, &v, &peak_ratio, &sigma_u, &sigma_v, &valid,
+                                                                     &flag}) {
+    if (a->ndim() != 2 || a->shape(0) != rows || a->shape(1) != cols) {
+      throw py::value_error("field: its arrays differ in shape");
+    }
+  }
+  fusion::DisplacementField f;
+  f.rows = rows;
+  f.cols = cols;
+  f.vectors.resize(static_cast<std::size_t>(rows) * cols);
+  const auto xs = x.unchecked<2>(), ys = y.unchecked<2>(), us = u.unchecked<2>(), vs = v.unchecked<2>();
+  const auto ps = peak_ratio.unchecked<2>(), su = sigma_u.unchecked<2>(), sv = sigma_v.unchecked<2>();
+  const auto fl = flag.unchecked<2>();
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      if (fl(r, c) > static_cast<int>(fusion::VectorFlag::kBeyondSearch)) {
+        throw py::value_error("field: flag code " + std::to_string(fl(r, c)) + " is none of bosfuse.FLAG_NAMES");
+      }
+      f.at(r, c) = {xs(r, c), ys(r, c), us(r, c), vs(r, c), ps(r, c), static_cast<fusion::VectorFlag>(fl(r, c)),
+                    false,    su(r, c), sv(r, c)};
+    }
+  }
+  return f;
 }
 
 namespace {
@@ -66,6 +94,7 @@ void bind_field(py::module_& m) {
       .def_readonly("sigma_u", &Field::sigma_u, "standard uncertainty of u, px (0: not estimated)")
       .def_readonly("sigma_v", &Field::sigma_v, "standard uncertainty of v, px (0: not estimated)")
       .def_readonly("summary", &Field::summary, "the evaluation's one-line report")
+      .def_readonly("seconds", &Field::seconds, "the library's own time for the evaluation, s (0: a stored field)")
       .def_property_readonly("shape", [](const Field& f) { return py::make_tuple(f.u.shape(0), f.u.shape(1)); })
       .def("to_xarray", &to_xarray, "The field as an xarray.Dataset on dims (y, x) (needs xarray)")
       .def("__repr__", [](const Field& f) {

@@ -111,10 +111,18 @@ TEST(ProcessingStore, AFailedProcessingIsAbandonedUnlessAFrameWasStagedAndKeepsI
   EXPECT_EQ(results.latest_processing()->id, later) << "inherited settings are no processing";
 }
 
+// Takes a store back to version 5 by removing what version 6 added.
+void drop_schema_v6(Database& db) {
+  db.execute("ALTER TABLE channels DROP COLUMN resolution");
+  db.execute("ALTER TABLE frames DROP COLUMN arrival_ns");
+  db.execute("DELETE FROM schema_version WHERE version >= 6");
+}
+
 TEST(ProcessingStore, AVersionOneStoreReadsAsEmptyAndIsMigratedWhenWritten) {
   ProcessingStoreFixture f;
   {
     Database db((f.run_dir / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
+    drop_schema_v6(db);
     for (const char* table :
          {"staged_probe_samples", "staged_probe_series", "staged_fields", "staged_frames", "processings",
           "probe_samples", "agreements", "fits", "probe_series", "calibrations", "fields"}) {
@@ -187,6 +195,7 @@ TEST(ProcessingStore, AVersionFourRunReadsWithoutSigmasAndMigratesWhenWritten) {
   }
   {
     Database db((f.run_dir / RunStore::kDatabaseFileName).string(), Database::Mode::kReadWrite);
+    drop_schema_v6(db);
     for (const char* table : {"probe_samples", "staged_probe_samples"}) {
       for (const char* column : kSigmaColumns) {
         db.execute(std::string("ALTER TABLE ") + table + " DROP COLUMN " + column);
