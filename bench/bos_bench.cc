@@ -25,11 +25,14 @@
 #include "fusion/displacement_evaluator.h"
 #include "fusion/cross_correlation.h"
 #include "pipeline/field_csv.h"
+#include "pipeline/processing_settings.h"
 #include "fusion/image_input.h"
+#include "fusion/scene_match.h"
 #include "fusion/search_range.h"
 #include "fusion/adaptive_refinement.h"
 #include "fusion/outlier_filter.h"
 #include "fusion/simd_kernels.h"
+#include "bench/bench_scenes.h"
 #include "sim/evaluation_study.h"
 
 namespace bosfuse {
@@ -315,13 +318,7 @@ BENCHMARK(BM_SearchRange16MP)->UseRealTime()->Unit(benchmark::kMillisecond);
 void BM_LargeShift(benchmark::State& state) {
   const bool fourteen = state.range(0) == 1;
   const double u = fourteen ? 14 : 5.3, v = fourteen ? 0 : -3.7;
-  sim::PairOptions options;
-  options.pattern.width_px = options.pattern.height_px = 768;
-  options.pattern.dot_diameter_px = 3;
-  options.pattern.coverage = 0.5;
-  options.pattern.seed = 11;
-  options.field = sim::DisplacementModel::uniform(u, v);
-  const auto pair = sim::render_pair(options);
+  const auto pair = bench::large_shift_pair(u, v);
   fusion::EvaluationResult result;
   for (auto _ : state) result = fusion::evaluate_xcorr(pair.reference, pair.measurement, fusion::XcorrOptions{});
   double sum = 0;
@@ -631,43 +628,23 @@ BENCHMARK(BM_AdaptiveSpeedup)
 
 // ---- Preprocessing (docs/BENCHMARKS.md, "Preprocessing") ----
 
-// The low-contrast camera: the dots' contrast scaled to 0.12 of
-// full around mid-grey, `noise` of full scale, quantised to 10 bits (stored
-// in 16, as such cameras' frames are).
-cv::Mat low_contrast_exposure(const cv::Mat& dots, double noise, std::uint64_t seed) {
-  cv::Mat image = 0.5 + 0.12 * (dots - 0.5);
-  cv::Mat grain(image.size(), CV_64F);
-  cv::RNG(seed).fill(grain, cv::RNG::NORMAL, 0.0, noise);
-  image += grain;
-  cv::Mat levels;
-  image.convertTo(levels, CV_16U, 1023.0);  // rounds and saturates to 0..1023 (the 10 bits)
-  cv::min(levels, 1023, levels);
-  return levels * 64;
-}
-
 // A 512×512 pair with each of three sub-pixel uniform shifts; RMS error of
 // the valid vectors a window from the border against the shift.
 // preprocess: 0 none, 1 normalize, 2 highpass, 3 minmax; noise in ‰.
 void BM_LowContrastTenBit(benchmark::State& state) {
   const auto method = static_cast<fusion::Preprocessing>(state.range(0));
   const double noise = state.range(1) * 1e-3;
-  constexpr int kSize = 512;
+  constexpr int kSize = bench::kLowContrastSize;
   fusion::EvaluatorOptions options;
   options.preprocess.method = method;
-  const std::vector<cv::Point2d> shifts{{0.3, -0.2}, {0.75, 0.45}, {-0.55, 0.9}};
   double seconds = 0, sum_sq = 0;
   std::size_t compared = 0, vectors = 0, valid = 0;
   for (auto _ : state) {
-    std::uint64_t seed = 3;
-    for (const auto& shift : shifts) {
-      sim::PatternOptions pattern;
-      pattern.width_px = pattern.height_px = kSize;
-      pattern.seed = seed;
-      const auto dots = sim::generate_pattern(pattern);
-      const auto truth = sim::DisplacementModel::uniform(shift.x, shift.y);
-      const cv::Mat reference = low_contrast_exposure(sim::render_dots(dots, nullptr), noise, seed * 2 + 1);
-      const cv::Mat measurement = low_contrast_exposure(sim::render_dots(dots, &truth), noise, seed * 2 + 2);
-      ++seed;
+    for (int i = 0; i < 3; ++i) {
+      const auto pair = bench::low_contrast_pair(i, noise);
+      const cv::Mat& reference = pair.reference;
+      const cv::Mat& measurement = pair.measurement;
+      const cv::Point2d shift = bench::low_contrast_shift(i);
       const auto start = std::chrono::steady_clock::now();
       const auto result = fusion::evaluate_displacement(reference, measurement, options);
       seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -709,6 +686,233 @@ BENCHMARK(BM_Preprocess16MP)
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond)
     ->Iterations(3);
+
+// ---- Frames that do not match the reference (fusion/scene_match.h) ----
+
+// What `process` adds to every frame to tell a foreign one: the matcher of
+// the 16 MP reference (its moments kept, as FrameContext keeps it) on one
+// measurement frame. match: 0 the frame of the same scene, 1 an unrelated
+// background of the same size.
+void BM_SceneMatch16MP(benchmark::State& state) {
+  const auto& pair = full_frame();
+  static const cv::Mat unrelated = [] {
+    sim::PairOptions options;
+    options.pattern.width_px = 4928;
+    options.pattern.height_px = 3264;
+    options.pattern.seed = 99;
+    return sim::render_pair(options).reference;
+  }();
+  const fusion::SceneMatcher matcher(pair.reference);
+  const cv::Mat& frame = state.range(0) ? unrelated : pair.measurement;
+  fusion::SceneMatch match;
+  for (auto _ : state) match = matcher.match(frame);
+  state.counters["same_scene"] = match.same_scene();
+  state.SetLabel(state.range(0) ? "unrelated background" : "same scene");
+}
+BENCHMARK(BM_SceneMatch16MP)->ArgName("unrelated")->Arg(0)->Arg(1)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+// ---- Defaults against the alternatives (docs/BENCHMARKS.md, "Defaults") ----
+
+// Each benchmark scene with `evaluate`'s default options (variant 0) and
+// one change each: 1 adaptive refinement, 2 two passes, 3 four passes, 4 a
+// 32 px first window (32→16), 5 --preprocess normalize, 6 --preprocess
+// highpass. Scenes: 0 uniform shifts 0…1 px on 256² at 1 % noise (the
+// accuracy table's study); 1 a sinusoid v = 1 px · sin(2πx/128) on 512²,
+// 1 % noise; 2 the paper's step (rise width and plateau error); 3 the
+// (5.3, −3.7) px shift on 768²; 4 the low-contrast 10-bit pairs at 0.4 %
+// noise; 5 the 16 MP plume (adaptive_scene 0). Wall time one-shot, as
+// `bosfuse evaluate` runs (reference prepared in the timing); RMS of the
+// error magnitude over the valid vectors against the true window mean.
+fusion::EvaluatorOptions defaults_variant(int variant) {
+  auto e = pipeline::default_evaluator_with({});
+  switch (variant) {
+    case 1: e.xcorr.adaptive_refinement = true; break;
+    case 2: e.xcorr.passes = 2; break;
+    case 3: e.xcorr.passes = 4; break;
+    case 4: e.xcorr.first_window_px = 32; break;
+    case 5: e.preprocess.method = fusion::Preprocessing::kNormalize; break;
+    case 6: e.preprocess.method = fusion::Preprocessing::kHighpass; break;
+    default: break;
+  }
+  return e;
+}
+
+const char* const kVariantNames[] = {"default", "adaptive", "passes 2", "passes 4", "first window 32",
+                                     "normalize", "highpass"};
+
+// RMS against the truth's window mean over the valid vectors, and the valid share.
+struct FieldError {
+  double sum_sq = 0;
+  std::size_t compared = 0, vectors = 0, valid = 0;
+  void add(const fusion::DisplacementField& field, const sim::DisplacementModel& truth, int window_px,
+           cv::Rect interior) {
+    for (const auto& v : field.vectors) {
+      ++vectors;
+      if (!v.valid()) continue;
+      ++valid;
+      if (!interior.contains(cv::Point(int(v.x_px), int(v.y_px)))) continue;
+      const cv::Point2d t = truth.window_mean(v.x_px, v.y_px, window_px);
+      sum_sq += std::pow(v.u_px - t.x, 2) + std::pow(v.v_px - t.y, 2);
+      ++compared;
+    }
+  }
+  double rms() const { return compared ? std::sqrt(sum_sq / double(compared)) : std::nan(""); }
+};
+
+template <typename F>
+double timed_s(F&& f) {
+  const auto start = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+const sim::SyntheticPair& sinusoid_scene() {
+  static const sim::SyntheticPair pair = [] {
+    sim::PairOptions options;
+    options.pattern.width_px = options.pattern.height_px = 512;
+    options.field = sim::DisplacementModel::sinusoid(1.0, 128);
+    return sim::render_pair(options);
+  }();
+  return pair;
+}
+
+// One scene's evaluation under `e`: seconds, and the errors into `error`;
+// `cpu_s` the evaluations' CPU (all threads), where the scene's pairs are
+// evaluated here (the uniform and step studies render inside their timing: 0).
+double evaluate_scene(int scene, const fusion::EvaluatorOptions& e, FieldError& error, double& cpu_s,
+                      benchmark::State& state) {
+  const int w = e.xcorr.window_px;
+  cpu_s = 0;
+  auto one = [&](const sim::SyntheticPair& pair) {
+    fusion::EvaluationResult result;
+    const double cpu_start_s = process_cpu_s();
+    const double s = timed_s([&] { result = fusion::evaluate_displacement(pair.reference, pair.measurement, e); });
+    cpu_s += process_cpu_s() - cpu_start_s;
+    const cv::Size size = pair.reference.size();
+    error.add(result.field, pair.truth, w, cv::Rect(w, w, size.width - 2 * w, size.height - 2 * w));
+    return s;
+  };
+  switch (scene) {
+    case 1: return one(sinusoid_scene());
+    case 3: {
+      static const sim::SyntheticPair pair = bench::large_shift_pair(5.3, -3.7);
+      return one(pair);
+    }
+    case 4: {
+      double s = 0;
+      for (int i = 0; i < 3; ++i) s += one(bench::low_contrast_pair(i, 0.004));
+      return s;
+    }
+    case 5: {
+      // One evaluation first, untimed: the first of the process page-faults the 16 MP images and buffers.
+      static const bool warm = [] {
+        const auto& pair = adaptive_scene(0);
+        benchmark::DoNotOptimize(fusion::evaluate_displacement(pair.reference, pair.measurement, defaults_variant(0)));
+        return true;
+      }();
+      benchmark::DoNotOptimize(warm);
+      return one(adaptive_scene(0));
+    }
+    default: break;
+  }
+  if (scene == 2) {
+    sim::StepResult step;
+    const double s = timed_s([&] { step = sim::run_step_study(e); });
+    state.counters["rise_width_px"] = step.rise_width_px;
+    state.counters["plateau_err_px"] = step.plateau_error_px;
+    return s;
+  }
+  sim::StudyCase study;
+  study.evaluator = e;
+  const auto r = sim::run_uniform_study(study);
+  state.counters["bias_px"] = r.max_abs_bias_px;
+  error.sum_sq = r.rms_px * r.rms_px * double(r.compared);
+  error.compared = r.compared;
+  error.vectors = r.vectors;
+  error.valid = r.valid;
+  return r.seconds;
+}
+
+void BM_Defaults(benchmark::State& state) {
+  const int scene = int(state.range(0)), variant = int(state.range(1));
+  const auto e = defaults_variant(variant);
+  const char* const scenes[] = {"uniform 0-1 px", "sinusoid 1 px/128", "step 1 px", "shift 6.5 px",
+                                "low contrast 10-bit", "plume 16 MP"};
+  for (auto _ : state) {
+    FieldError error;
+    double cpu_s = 0;
+    state.SetIterationTime(evaluate_scene(scene, e, error, cpu_s, state));
+    if (cpu_s > 0) state.counters["cpu_all_threads_s"] = cpu_s;
+    if (scene != 2) {
+      state.counters["rms_px"] = error.rms();
+      state.counters["valid_pct"] = error.vectors ? 100.0 * double(error.valid) / double(error.vectors) : 0;
+    }
+  }
+  state.SetLabel(fmt::format("{}, {}", scenes[scene], kVariantNames[variant]));
+}
+BENCHMARK(BM_Defaults)
+    ->ArgNames({"scene", "variant"})
+    ->ArgsProduct({{0, 1, 2, 3, 4, 5}, {0, 1, 2, 3, 4, 5, 6}})
+    ->UseManualTime()
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
+
+// One-shot `evaluate` on the 16 MP plume with the defaults and with
+// adaptive refinement, in pairs (which goes first alternates; each a fresh
+// evaluator, the reference prepared in the timing), as BM_AdaptiveSpeedup
+// pairs frames after the first. Reported: adaptive's median one-shot;
+// counters: the default's median, the medians of the pairs' wall and CPU
+// (all threads) ratios default / adaptive.
+void BM_DefaultsAdaptiveOneShot(benchmark::State& state) {
+  const auto& pair = adaptive_scene(0);
+  const int pairs = int(state.range(0));
+  const auto full_options = defaults_variant(0), adaptive_options = defaults_variant(1);
+  struct Cost {
+    double wall_s, cpu_s;
+  };
+  auto one_shot = [&](const fusion::EvaluatorOptions& e) {
+    const double cpu_start_s = process_cpu_s();
+    const double wall_s =
+        timed_s([&] { benchmark::DoNotOptimize(fusion::evaluate_displacement(pair.reference, pair.measurement, e)); });
+    return Cost{wall_s, process_cpu_s() - cpu_start_s};
+  };
+  one_shot(full_options);  // the pages of the images and the first buffers
+  auto median = [](std::vector<double> values) {
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    return values[values.size() / 2];
+  };
+  for (auto _ : state) {
+    std::vector<double> full_s, adaptive_s, full_cpu_s, adaptive_cpu_s, wall_ratio, cpu_ratio;
+    for (int i = 0; i < pairs; ++i) {
+      Cost f{}, a{};
+      if (i % 2 == 0) {
+        f = one_shot(full_options);
+        a = one_shot(adaptive_options);
+      } else {
+        a = one_shot(adaptive_options);
+        f = one_shot(full_options);
+      }
+      full_s.push_back(f.wall_s);
+      adaptive_s.push_back(a.wall_s);
+      full_cpu_s.push_back(f.cpu_s);
+      adaptive_cpu_s.push_back(a.cpu_s);
+      wall_ratio.push_back(f.wall_s / a.wall_s);
+      cpu_ratio.push_back(f.cpu_s / a.cpu_s);
+    }
+    state.SetIterationTime(median(adaptive_s));
+    state.counters["default_ms"] = 1e3 * median(full_s);
+    state.counters["default_cpu_s"] = median(full_cpu_s);
+    state.counters["adaptive_cpu_s"] = median(adaptive_cpu_s);
+    state.counters["speedup"] = median(wall_ratio);
+    state.counters["speedup_cpu"] = median(cpu_ratio);
+  }
+}
+BENCHMARK(BM_DefaultsAdaptiveOneShot)
+    ->ArgName("pairs")
+    ->Arg(7)
+    ->UseManualTime()
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace bosfuse

@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include "fusion/adaptive_refinement.h"
 #include "fusion/for_rows.h"
@@ -1172,19 +1173,26 @@ struct XcorrEvaluator::State {
   PassWorkspace workspace;
   bool colour_warned = false;
   bool bound_warned = false;  // a frame's search-bound warning is given once per evaluator
-  std::optional<SearchRange> search;  // what find_search_range found at the first frame
+  std::optional<SearchRange> search;  // what find_search_range found (or was given) at the first frame
+  bool search_known = false;          // search is options.known_search: the scene was not sampled
+  // What preparing before any frame (search_range) had to say, for the first frame's summary.
+  std::vector<std::string> pending_warnings, pending_notes;
 };
 
 namespace {
 
-// At the first frame: the search bound and first window from the scene,
-// into the evaluator's options (later frames reuse them), and the
-// measurement prepared again when its border must grow with the bound.
+// At the first frame: the search bound and first window from the scene
+// (or as an earlier evaluation found them), into the evaluator's options
+// (later frames reuse them), and the measurement prepared again when its
+// border must grow with the bound.
 void find_search_range_once(const cv::Mat& measurement, XcorrEvaluator::State& s) {
   XcorrOptions& o = s.options;
   SearchStart start{o.max_shift_px, o.window_px_per_pass().front(), o.window_px, o.min_texture_std,
                     o.max_masked_fraction};
-  s.search = find_search_range(s.pair.reference, s.pair.measurement, s.pair.roi, s.pair.excluded, start, o.search);
+  s.search_known = o.known_search.has_value();
+  s.search = s.search_known ? *o.known_search
+                            : find_search_range(s.pair.reference, s.pair.measurement, s.pair.roi, s.pair.excluded,
+                                                start, o.search);
   if (!s.search->widened) return;
   o.max_shift_px = s.search->max_shift_px;
   o.first_window_px = s.search->first_window_px;
@@ -1196,10 +1204,37 @@ void find_search_range_once(const cv::Mat& measurement, XcorrEvaluator::State& s
   prepare_measurement(measurement, cv::Rect({0, 0}, s.reference.size()), nullptr, o, s.pair);
 }
 
+// Once, before the first frame allocates: later frames reuse its buffers.
+void prepare_once(XcorrEvaluator::State& s) {
+  if (s.prepared) return;
+  if (std::string account = check_xcorr_memory(s.reference, s.mask, s.options); !account.empty()) {
+    s.pending_notes.push_back(std::move(account));
+  }
+  s.pair = prepare_reference(s.reference, s.mask, s.options, cv::Rect({0, 0}, s.reference.size()),
+                             &s.pending_warnings);
+  s.grid = evaluation_grid(s.pair.roi, s.options.window_px, s.options.step_px);
+  s.workspace.cache_reference_stats = true;
+  s.prepared = true;
+}
+
+// The measurement into the prepared pair and, at the first frame, the search.
+void prepare_frame(const cv::Mat& measurement, XcorrEvaluator::State& s) {
+  prepare_measurement(measurement, cv::Rect({0, 0}, s.reference.size()),
+                      s.colour_warned ? nullptr : &s.pending_warnings, s.options, s.pair);
+  s.colour_warned = s.colour_warned || measurement.channels() > 1;
+  if (s.options.find_search_range && !s.search) {
+    find_search_range_once(measurement, s);
+    if (s.search->widened) {
+      s.pending_notes.push_back(s.search->Describe() + (s.search_known ? " (as stored)" : ""));
+    }
+  }
+}
+
 void describe_search(const XcorrEvaluator::State& s, EvaluationSummary& summary) {
   summary.max_shift_px = s.options.max_shift_px;
   summary.first_window_px = s.options.window_px_per_pass().front();
   summary.search_from_scene = s.search.has_value();
+  summary.search_stored = s.search_known;
   summary.search_widened = s.search && s.search->widened;
   summary.search_beyond_reach = s.search && s.search->beyond_reach;
 }
@@ -1222,25 +1257,12 @@ EvaluationResult XcorrEvaluator::evaluate(const cv::Mat& measurement) {
   const auto start = std::chrono::steady_clock::now();
   State& s = *state_;
   check_inputs(s.reference, measurement, s.mask, s.options);
-  const cv::Rect whole({0, 0}, s.reference.size());
   EvaluationResult result;
   EvaluationSummary& summary = result.summary;
-  if (!s.prepared) {
-    // Once, before the first frame allocates: later frames reuse its buffers.
-    if (std::string account = check_xcorr_memory(s.reference, s.mask, s.options); !account.empty()) {
-      summary.notes.push_back(std::move(account));
-    }
-    s.pair = prepare_reference(s.reference, s.mask, s.options, whole, &summary.warnings);
-    s.grid = evaluation_grid(s.pair.roi, s.options.window_px, s.options.step_px);
-    s.workspace.cache_reference_stats = true;
-    s.prepared = true;
-  }
-  prepare_measurement(measurement, whole, s.colour_warned ? nullptr : &summary.warnings, s.options, s.pair);
-  s.colour_warned = s.colour_warned || measurement.channels() > 1;
-  if (s.options.find_search_range && !s.search) {
-    find_search_range_once(measurement, s);
-    if (s.search->widened) summary.notes.push_back(s.search->Describe());
-  }
+  prepare_once(s);
+  prepare_frame(measurement, s);
+  summary.warnings = std::exchange(s.pending_warnings, {});
+  summary.notes = std::exchange(s.pending_notes, {});
   result.field = field_on_grid(s.grid);
   run_passes(s.pair, s.grid, s.options, s.workspace, result.field, summary);
   describe_search(s, summary);
@@ -1251,6 +1273,17 @@ EvaluationResult XcorrEvaluator::evaluate(const cv::Mat& measurement) {
   result.summary.seconds = seconds_since(start);
   return result;
 }
+
+const std::optional<SearchRange>& XcorrEvaluator::search_range(const cv::Mat& measurement) {
+  State& s = *state_;
+  if (!s.options.find_search_range || s.search) return s.search;
+  check_inputs(s.reference, measurement, s.mask, s.options);
+  prepare_once(s);
+  prepare_frame(measurement, s);
+  return s.search;
+}
+
+const std::optional<SearchRange>& XcorrEvaluator::search_range() const { return state_->search; }
 
 EvaluationResult XcorrEvaluator::probe(const cv::Mat& measurement, const std::vector<cv::Point2d>& points) {
   const auto start = std::chrono::steady_clock::now();

@@ -22,6 +22,7 @@
 
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,10 @@ struct XcorrOptions {
   // an explicit bound, as given. Full fields only: probes search as given.
   bool find_search_range = true;
   SearchRangeOptions search;
+  // What an earlier evaluation's sample found for this reference and these
+  // settings (a processing stores it, pipeline/processing_settings.h): with
+  // find_search_range, used as found instead of sampling the scene again.
+  std::optional<SearchRange> known_search;
   double refine_shift_px = 1;  // largest residual searched after deformation
   bool deform = true;          // window deformation in passes after the first
   // Warp both images half-way instead of the measurement all the way. Costs
@@ -128,6 +133,15 @@ class XcorrEvaluator {
   XcorrEvaluator& operator=(XcorrEvaluator&&) noexcept;
 
   EvaluationResult evaluate(const cv::Mat& measurement);
+
+  // The first pass's search for this reference: with find_search_range,
+  // what the scene's sample found (or known_search) at the first frame, or
+  // here, from `measurement`, when no frame was evaluated yet (the frame's
+  // pixels are not kept). Empty with an explicit bound. A caller that
+  // shares the work out asks here once and hands the result on as
+  // known_search, so every evaluator searches as far.
+  const std::optional<SearchRange>& search_range(const cv::Mat& measurement);
+  const std::optional<SearchRange>& search_range() const;  // as found so far
 
   // As probe_xcorr below. Probes convert and warp only the few hundred
   // pixels around each point, so little is kept between frames.

@@ -72,6 +72,13 @@ EvaluationResult DisplacementEvaluator::evaluate(const cv::Mat& measurement) {
   return warned(std::move(warnings), evaluate_flow(reference_, image, options_.flow, mask_));
 }
 
+std::optional<SearchRange> DisplacementEvaluator::search_range(const cv::Mat& measurement) {
+  if (!xcorr_) return std::nullopt;
+  if (xcorr_->search_range()) return xcorr_->search_range();
+  std::vector<std::string> ignored;  // the frame's own evaluation warns of them
+  return xcorr_->search_range(prepared(measurement, ignored));
+}
+
 EvaluationResult DisplacementEvaluator::probe(const cv::Mat& measurement, const std::vector<cv::Point2d>& points) {
   std::vector<std::string> warnings;
   const cv::Mat image = prepared(measurement, warnings);

@@ -55,6 +55,10 @@ class DisplacementEvaluator {
   std::string check_memory() const;
 
   EvaluationResult evaluate(const cv::Mat& measurement);
+  // The cross-correlation's first-pass search (XcorrEvaluator::search_range),
+  // found from `measurement` when no frame has been evaluated yet; empty for
+  // optical flow and with an explicit bound.
+  std::optional<SearchRange> search_range(const cv::Mat& measurement);
   // The grid of the fields evaluate() gives, known before any frame.
   GridGeometry grid() const;
   // See probe_displacement below.

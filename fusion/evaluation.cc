@@ -18,8 +18,9 @@ std::string search_description(const EvaluationSummary& s) {
                     : s.search_widened    ? ", widened from the scene"
                     : s.search_from_scene ? ", the scene needs no more"
                                           : ", as given";
-  return fmt::format("; search ±{:g} px from {} px windows{}, {} of {} first-pass windows on the bound", s.max_shift_px,
-                     s.first_window_px, how, s.first_pass_on_bound, s.first_pass_windows);
+  return fmt::format("; search ±{:g} px from {} px windows{}{}, {} of {} first-pass windows on the bound",
+                     s.max_shift_px, s.first_window_px, how, s.search_stored ? " (stored)" : "", s.first_pass_on_bound,
+                     s.first_pass_windows);
 }
 
 }  // namespace

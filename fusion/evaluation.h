@@ -33,12 +33,13 @@ struct EvaluationSummary {
   std::size_t beyond_search = 0;
   // The first pass's search (cross-correlation; 0 for other methods): its
   // bound and window, whether the scene's sample set them (search_range.h)
-  // and widened them, or found displacements past the widest it allows;
+  // (or as a processing stored it) and widened them, or found displacements past the widest it allows;
   // and of the first pass's measured windows (textured, unmasked), how
   // many peaked on the bound.
   double max_shift_px = 0;
   int first_window_px = 0;
   bool search_from_scene = false;
+  bool search_stored = false;  // from the scene, as an earlier evaluation found it (the sample not run again)
   bool search_widened = false;
   bool search_beyond_reach = false;
   std::size_t first_pass_windows = 0;

@@ -328,6 +328,25 @@ FrameContext frame_context(const fs::path& run_dir, const storage::RunStore& sto
   return ctx;
 }
 
+// Before the frames are shared out: the scene's search bound (search_range.h)
+// found once, from the first frame to do, and stored with the processing's
+// settings. Every frame's evaluator (here and in the distributor's
+// processes, which get it with the plan), a resume and the next processing
+// then search as far without sampling the scene again.
+void settle_search_range(FrameContext& ctx, storage::ProcessingStore& results, const Processing& processing,
+                         const std::vector<FrameRecord>& todo) {
+  auto& x = ctx.settings.evaluator.xcorr;
+  if (ctx.settings.probes_only || todo.empty() || !x.find_search_range || x.known_search ||
+      ctx.settings.evaluator.method != fusion::Method::kCrossCorrelation) {
+    return;
+  }
+  x.known_search = ctx.evaluator->search_range(load_frame(ctx.run_dir, todo.front()));
+  if (!x.known_search) return;
+  ProcessingSettings stored = processing.settings;  // as stored: without the ambient resolved for this run
+  stored.evaluator.xcorr.known_search = x.known_search;
+  results.update_running_settings(processing.id, to_json(stored).dump());
+}
+
 // The frames of a processing, evaluated and staged in frame order, one
 // transaction each: here, one after the other, or by a distributor's
 // processes.
@@ -485,7 +504,8 @@ ProcessReport process_frames(const fs::path& run_dir, const ProcessOptions& opti
                                                             : nullptr;
   std::optional<FramePrefetch> ahead;
   if (!distributor) ahead.emplace(run_dir, todo, options.prefetch_frames);
-  const FrameContext ctx = frame_context(run_dir, store, results, processing, frames, clock);
+  FrameContext ctx = frame_context(run_dir, store, results, processing, frames, clock);
+  settle_search_range(ctx, results, processing, todo);
   run_solver = ctx.temperature_solver;
   // The Poisson system's analysis (~1 s at 16 MP) beside the first frames'
   // decoding and evaluation, rather than in the way of the first frame's

@@ -105,6 +105,7 @@ json evaluation_json(const fusion::EvaluationSummary& s) {
            {{"max_shift_px", s.max_shift_px},
             {"first_window_px", s.first_window_px},
             {"from_scene", s.search_from_scene},
+            {"stored", s.search_stored},
             {"widened", s.search_widened},
             {"beyond_reach", s.search_beyond_reach},
             {"first_pass_windows", s.first_pass_windows},

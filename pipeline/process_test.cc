@@ -237,6 +237,85 @@ TEST_F(Process, AdaptiveRefinementIsASettingAndEachFieldStoresTheFractionRefined
   EXPECT_THROW(process(run(), bad), std::runtime_error);
 }
 
+// The run's measurement frames shifted (5.3, -3.7) px from its reference:
+// |d| = 6.5 px, past the ±4 px the search starts from.
+void shift_frames_far(const fs::path& run, const testrun::Truth& truth) {
+  sim::PairOptions pair;
+  pair.pattern.width_px = truth.image.width;
+  pair.pattern.height_px = truth.image.height;
+  pair.pattern.dot_diameter_px = 3;
+  pair.pattern.seed = 5;  // the run's background
+  pair.field = sim::DisplacementModel::uniform(5.3, -3.7);
+  for (int f = 0; f < 2; ++f) {
+    pair.noise_seed = 300 + f;
+    const std::string name = "frames/frame" + std::to_string(f) + ".png";
+    ASSERT_TRUE(cv::imwrite((run / name).string(), sim::render_pair(pair).measurement));
+  }
+}
+
+// Each displacement field's record of its first pass's search.
+std::vector<sorted_json> field_searches(const fs::path& run) {
+  std::vector<sorted_json> out;
+  for (const auto& f : storage::ProcessingStore(run).fields()) {
+    if (f.kind == "displacement") out.push_back(sorted_json::parse(f.json).at("search"));
+  }
+  return out;
+}
+
+TEST_F(Process, TheSearchBoundFoundFromTheSceneIsStoredAndTheNextProcessingUsesItWithoutSampling) {
+  shift_frames_far(run(), truth_);
+  ProcessOptions options;
+  options.frames_at_once = 2;  // side by side: the other thread's evaluator gets the bound with the plan
+  ASSERT_TRUE(process_run(run(), options).complete);
+  const sorted_json found = current_settings(run()).at("found_search");
+  EXPECT_TRUE(found.at("widened").get<bool>()) << found;
+  const double bound_px = found.at("max_shift_px").get<double>();
+  EXPECT_GT(bound_px, 6) << found;
+  for (const auto& search : field_searches(run())) {
+    EXPECT_EQ(search.at("max_shift_px").get<double>(), bound_px) << "every frame searched as far: " << search;
+  }
+
+  // The next processing reads the stored bound back and uses it as found: a
+  // stored bound of 9.5 px, which no sample of this scene gives, is what
+  // every frame then searches.
+  sorted_json stored = current_settings(run());
+  stored["found_search"]["max_shift_px"] = 9.5;
+  storage::ProcessingStore(run(), true).add_inherited_settings(stored.dump(), truth_.start_ns);
+  options.frames_at_once = 1;
+  ASSERT_TRUE(process_run(run(), options).complete);
+  EXPECT_EQ(current_settings(run()).at("found_search").at("max_shift_px"), 9.5);
+  for (const auto& search : field_searches(run())) {
+    EXPECT_EQ(search.at("max_shift_px"), 9.5) << search;
+    EXPECT_TRUE(search.at("stored").get<bool>()) << "the scene was not sampled again: " << search;
+  }
+
+  // Options that change what the search sees sample the scene again.
+  options.overrides.step_px = 8;
+  ASSERT_TRUE(process_run(run(), options).complete);
+  EXPECT_EQ(current_settings(run()).at("found_search").at("max_shift_px"), bound_px);
+  for (const auto& search : field_searches(run())) EXPECT_FALSE(search.at("stored").get<bool>()) << search;
+
+  // An explicit bound is not a found one: nothing is stored.
+  options.overrides.max_shift_px = 8;
+  ASSERT_TRUE(process_run(run(), options).complete);
+  EXPECT_FALSE(current_settings(run()).contains("found_search"));
+}
+
+TEST_F(Process, AResumedProcessingSearchesAsFarAsItsFirstFramesDid) {
+  shift_frames_far(run(), truth_);
+  std::atomic<bool> stop{false};
+  ASSERT_FALSE(process(run(), {}, false, &stop, [&](const ProcessProgress& p) { stop = stop || p.done >= 1; }).complete);
+  const storage::ProcessingStore results(run());
+  const sorted_json interrupted = sorted_json::parse(results.unfinished_processing()->settings_json);
+  ASSERT_TRUE(interrupted.contains("found_search")) << "stored before the first frame: " << interrupted;
+  const double bound_px = interrupted.at("found_search").at("max_shift_px").get<double>();
+  ASSERT_TRUE(process(run(), {}, true).complete);
+  const auto searches = field_searches(run());
+  ASSERT_EQ(searches.size(), 2u);
+  EXPECT_EQ(searches.back().at("max_shift_px").get<double>(), bound_px);
+  EXPECT_TRUE(searches.back().at("stored").get<bool>()) << "the resumed frame did not sample: " << searches.back();
+}
+
 TEST_F(Process, AMaskOutsideTheRunIsCopiedIntoItAndARelativeOneMustBeInIt) {
   cv::imwrite((dir_ / "holder.png").string(), testrun::holder_mask(truth_));
   SettingsOverrides outside;
@@ -511,6 +590,8 @@ TEST(InheritSettings, ARunGetsAnotherRunsSettingsAndTheMaskTheyName) {
   EXPECT_EQ(settings.evaluator.xcorr.window_px, 32);
   EXPECT_EQ(settings.mask, "holder.png");
   EXPECT_NE(settings.source.find("inherited"), std::string::npos) << settings.source;
+  ASSERT_TRUE(current_settings(dir / "a").contains("found_search"));
+  EXPECT_FALSE(settings.evaluator.xcorr.known_search) << "another scene's search bound is not inherited";
 }
 
 }  // namespace

@@ -124,9 +124,39 @@ fusion::Preprocessing preprocessing_named(const std::string& name) {
   return *method;
 }
 
+// The first pass's search a processing found from the scene (search_range.h),
+// stored with its settings so that later frames, a resume and the next
+// processing reuse it instead of sampling the scene again.
+nlohmann::ordered_json search_json(const fusion::SearchRange& r) {
+  return {{"given_max_shift_px", r.given_max_shift_px}, {"max_shift_px", r.max_shift_px},
+          {"first_window_px", r.first_window_px},       {"widened", r.widened},
+          {"beyond_reach", r.beyond_reach},             {"sampled", r.sampled},
+          {"on_bound", r.on_bound},                     {"largest_px", r.largest_px}};
+}
+
+fusion::SearchRange search_from_json(const nlohmann::json& j) {
+  fusion::SearchRange r;
+  r.given_max_shift_px = j.at("given_max_shift_px").get<double>();
+  r.max_shift_px = j.at("max_shift_px").get<double>();
+  r.first_window_px = j.at("first_window_px").get<int>();
+  r.widened = j.at("widened").get<bool>();
+  r.beyond_reach = j.at("beyond_reach").get<bool>();
+  r.sampled = j.at("sampled").get<int>();
+  r.on_bound = j.at("on_bound").get<int>();
+  r.largest_px = j.at("largest_px").get<double>();
+  return r;
+}
+
+// Whether an override changes what the scene's search sees or starts from:
+// then a stored search no longer holds and the next frame samples again.
+bool changes_search(const SettingsOverrides& o) {
+  return o.method || o.window_px || o.step_px || o.roi_px || o.max_shift_px || o.preprocess || o.mask;
+}
+
 // Everything but the files (mask, geometry), whose places differ with and without a run.
 void apply_evaluator(const SettingsOverrides& o, ProcessingSettings& s) {
   if (o.probes_only) s.probes_only = *o.probes_only;
+  if (changes_search(o)) s.evaluator.xcorr.known_search.reset();
   if (o.method) {
     if (*o.method != "xcorr" && *o.method != "flow") throw std::runtime_error("method must be xcorr or flow");
     s.evaluator.method = *o.method == "flow" ? fusion::Method::kOpticalFlow : fusion::Method::kCrossCorrelation;
@@ -185,6 +215,7 @@ json to_json(const ProcessingSettings& s) {
             {"adaptive_refinement", x.adaptive_refinement},
             {"adaptive_threshold", x.adaptive_threshold},
             {"preprocess", std::string(fusion::to_string(s.evaluator.preprocess.method))}};
+  if (x.find_search_range && x.known_search) j["found_search"] = search_json(*x.known_search);
   if (!x.roi.empty()) j["roi_px"] = {x.roi.x, x.roi.y, x.roi.width, x.roi.height};
   if (!s.mask.empty()) j["mask"] = s.mask;
   j["geometry"] = geometry_json(s.geometry);
@@ -208,6 +239,7 @@ ProcessingSettings settings_from_json(const nlohmann::json& j) {
     s.evaluator.xcorr.max_shift_px = j.at("max_shift_px").get<double>();
     // Settings stored before the scene set the search: their bound was explicit.
     s.evaluator.xcorr.find_search_range = j.value("find_search_range", false);
+    if (j.contains("found_search")) s.evaluator.xcorr.known_search = search_from_json(j.at("found_search"));
     s.evaluator.xcorr.probe_context_nodes = j.at("probe_context_nodes").get<int>();
     // Settings stored before adaptive refinement existed: it was off.
     s.evaluator.xcorr.adaptive_refinement = j.value("adaptive_refinement", false);
@@ -368,7 +400,13 @@ bool inherit_settings(const fs::path& from_run, const fs::path& to_run) {
     fs::create_directories((to_run / settings.mask).parent_path());
     fs::copy_file(source, to_run / settings.mask, fs::copy_options::overwrite_existing);
   }
-  storage::ProcessingStore(to_run, true).add_inherited_settings(stored->settings_json, acquisition::utc_now_ns());
+  // The search bound the other run's scene set is not this run's: its first frame searches again.
+  std::string settings_json = stored->settings_json;
+  if (auto j = nlohmann::ordered_json::parse(settings_json); j.contains("found_search")) {
+    j.erase("found_search");
+    settings_json = j.dump();
+  }
+  storage::ProcessingStore(to_run, true).add_inherited_settings(settings_json, acquisition::utc_now_ns());
   return true;
 }
 

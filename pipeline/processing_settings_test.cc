@@ -109,6 +109,31 @@ TEST(PreprocessSetting, StoredReadBackAndAbsentFromOldSettingsReadsAsNone) {
   }
 }
 
+TEST(FoundSearch, StoredWithTheSettingsAndReadBackAsFound) {
+  auto s = resolve_runless_settings("", {});
+  EXPECT_FALSE(nlohmann::json(to_json(s)).contains("found_search")) << "nothing found yet";
+  fusion::SearchRange found;
+  found.given_max_shift_px = 4;
+  found.max_shift_px = 9;
+  found.first_window_px = 40;
+  found.widened = true;
+  found.sampled = 60;
+  found.on_bound = 51;
+  found.largest_px = 7;
+  s.evaluator.xcorr.known_search = found;
+  const auto j = nlohmann::json(to_json(s));
+  ASSERT_TRUE(j.contains("found_search"));
+  const auto back = settings_from_json(j).evaluator.xcorr.known_search;
+  ASSERT_TRUE(back.has_value());
+  EXPECT_EQ(back->max_shift_px, 9);
+  EXPECT_EQ(back->first_window_px, 40);
+  EXPECT_TRUE(back->widened);
+  EXPECT_EQ(back->on_bound, 51);
+  EXPECT_EQ(back->largest_px, 7);
+  s.evaluator.xcorr.find_search_range = false;  // an explicit bound: what a search found does not apply
+  EXPECT_FALSE(nlohmann::json(to_json(s)).contains("found_search"));
+}
+
 TEST(PreprocessSetting, TheTableKeyIsReadAndABadNameIsNamedWithTheValidOnes) {
   const auto o = parse_processing_table("[processing]\npreprocess = \"normalize\"\n", "s.toml");
   ASSERT_TRUE(o.has_value());

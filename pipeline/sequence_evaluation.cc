@@ -97,7 +97,7 @@ sorted_json summary_json(const fusion::EvaluationSummary& s) {
           s.refined_fraction, s.vectors,         s.valid,               s.outliers_replaced,  s.no_texture,
           s.masked,        s.out_of_roi,         s.no_peak,             s.beyond_search,      s.max_shift_px,
           s.first_window_px, s.search_from_scene, s.search_widened,     s.search_beyond_reach, s.first_pass_windows,
-          s.first_pass_on_bound, s.seconds};
+          s.first_pass_on_bound, s.seconds, s.search_stored};
 }
 
 fusion::EvaluationSummary summary_from_json(const sorted_json& j) {
@@ -108,7 +108,7 @@ fusion::EvaluationSummary summary_from_json(const sorted_json& j) {
   next(s.refined_fraction), next(s.vectors), next(s.valid), next(s.outliers_replaced), next(s.no_texture);
   next(s.masked), next(s.out_of_roi), next(s.no_peak), next(s.beyond_search), next(s.max_shift_px);
   next(s.first_window_px), next(s.search_from_scene), next(s.search_widened), next(s.search_beyond_reach);
-  next(s.first_pass_windows), next(s.first_pass_on_bound), next(s.seconds);
+  next(s.first_pass_windows), next(s.first_pass_on_bound), next(s.seconds), next(s.search_stored);
   return s;
 }
 

@@ -180,6 +180,12 @@ std::int64_t ProcessingStore::begin_processing(const std::string& settings_json,
   return db_.last_insert_rowid();
 }
 
+void ProcessingStore::update_running_settings(std::int64_t processing_id, const std::string& settings_json) {
+  db_.prepare("UPDATE processings SET settings_json = ? WHERE id = ? AND status = 'running'")
+      .bind_all(settings_json, processing_id)
+      .run();
+}
+
 std::int64_t ProcessingStore::add_inherited_settings(const std::string& settings_json, std::int64_t created_ns) {
   db_.prepare(
          "INSERT INTO processings (run_id, started_ns, finished_ns, status, settings_json) "

@@ -122,6 +122,9 @@ class ProcessingStore {
   // ones; a processing writes its own aside ("staged") and replaces them
   // only when it completes, in one transaction.
   std::int64_t begin_processing(const std::string& settings_json, std::int64_t started_ns);
+  // A running processing's settings, completed with what its first frame
+  // found (the scene's search bound); other processings are left alone.
+  void update_running_settings(std::int64_t processing_id, const std::string& settings_json);
   std::int64_t add_inherited_settings(const std::string& settings_json, std::int64_t created_ns);
   std::optional<ProcessingRecord> current_processing() const;  // the newest complete one
   std::optional<ProcessingRecord> latest_settings() const;     // the newest complete or inherited one
