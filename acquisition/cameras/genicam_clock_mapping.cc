@@ -5,6 +5,11 @@
 #include <fmt/format.h>
 
 namespace bosfuse::acquisition {
+namespace {
+
+constexpr std::int64_t kGenicamMinDriftSpanNs = 1'000'000'000;
+
+}  // namespace
 
 GenicamClockMapping::GenicamClockMapping(std::size_t max_pairs) : max_pairs_(std::max<std::size_t>(max_pairs, 4)) {}
 
@@ -46,7 +51,10 @@ void GenicamClockMapping::refit() const {
     sxx += dx * dx;
     sxy += dx * (static_cast<double>(p.host_ns - host_origin) - mean_y);
   }
-  const double slope = sxx > 0 ? sxy / sxx : 1.0;
+  // Drift is fitted once the pairs span a second: over less, latency
+  // jitter would dominate it (100 µs over 10 ms is 1 %). Before, an offset.
+  const bool spans = pairs_.back().camera_ns - f.camera_origin_ns >= kGenicamMinDriftSpanNs;
+  const double slope = spans && sxx > 0 ? sxy / sxx : 1.0;
   f.drift = slope - 1.0;
   const double intercept = mean_y - slope * mean_x;
   f.host_at_origin_ns = static_cast<double>(host_origin) + intercept;

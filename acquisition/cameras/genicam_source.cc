@@ -226,7 +226,10 @@ GenicamSource::GenicamSource(GenicamOptions options) : options_(std::move(option
   }
 }
 
-GenicamSource::~GenicamSource() { disconnect(); }
+GenicamSource::~GenicamSource() {
+  disconnect();
+  releases_.clear();  // waits for cameras still being released
+}
 
 void GenicamSource::apply_settings() {
   ArvCamera* camera = handles_->camera.get();
@@ -322,12 +325,23 @@ void GenicamSource::connect() {
 
 void GenicamSource::disconnect() {
   if (!handles_) return;
+  if (handles_->control_lost_handler != 0) {
+    g_signal_handler_disconnect(handles_->device(), handles_->control_lost_handler);
+    handles_->control_lost_handler = 0;
+  }
   if (!control_lost_ && !gone_) {
     GError* error = nullptr;
     arv_camera_stop_acquisition(handles_->camera.get(), &error);
-    genicam_take(error);  // a camera that is gone cannot be stopped
+    genicam_take(error);
+    handles_.reset();
+    return;
   }
-  handles_.reset();
+  std::erase_if(releases_, [](const std::future<void>& f) {
+    return f.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
+  });
+  releases_.push_back(std::async(std::launch::async, [gone = std::shared_ptr<Handles>(std::move(handles_))]() mutable {
+    gone.reset();
+  }));
 }
 
 GenicamSource::Streaming GenicamSource::check_settings(const GenicamOptions& options) {

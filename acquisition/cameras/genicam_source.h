@@ -23,6 +23,7 @@
 // DeviceError, so the recorder reconnects with backoff.
 
 #include <atomic>
+#include <future>
 #include <memory>
 
 #include "acquisition/cameras/frame_source.h"
@@ -83,6 +84,12 @@ class GenicamSource : public FrameSource {
   std::atomic<bool> control_lost_{false};
   // The camera stopped answering: disconnect() does not wait on it again.
   bool gone_ = false;
+  // Releasing a camera that is gone waits out its protocol's timeouts
+  // (about 6 s on GigE Vision: the stream's and the control channel's
+  // last writes), so it is done on a thread of its own: the disconnect is
+  // recorded at once and a restarted camera can be reached meanwhile. The
+  // destructor waits for them.
+  std::vector<std::future<void>> releases_;
   std::unique_ptr<Handles> handles_;
   Streaming streaming_;
   GenicamClockMapping clock_;
