@@ -38,9 +38,12 @@ std::vector<GenicamCameraInfo> list_genicam_cameras(const std::vector<std::strin
   if (discover) {
     arv_update_device_list();
     for (unsigned i = 0; i < arv_get_n_devices(); ++i) {
-      GenicamCameraInfo info{genicam_text(arv_get_device_id(i)),     genicam_text(arv_get_device_vendor(i)),
-                             genicam_text(arv_get_device_model(i)),  genicam_text(arv_get_device_serial_nbr(i)),
-                             genicam_text(arv_get_device_address(i)), genicam_text(arv_get_device_protocol(i)),
+      GenicamCameraInfo info{genicam_text(arv_get_device_id(i)),
+                             genicam_text(arv_get_device_vendor(i)),
+                             genicam_text(arv_get_device_model(i)),
+                             genicam_text(arv_get_device_serial_nbr(i)),
+                             genicam_text(arv_get_device_address(i)),
+                             genicam_text(arv_get_device_protocol(i)),
                              {},
                              {}};
       if (info.protocol == "Fake") continue;  // Aravis' own in-process test device, not a camera
@@ -49,7 +52,8 @@ std::vector<GenicamCameraInfo> list_genicam_cameras(const std::vector<std::strin
     }
   }
   for (const std::string& address : addresses) {
-    const bool known = std::any_of(out.begin(), out.end(), [&](const GenicamCameraInfo& c) { return c.address == address; });
+    const bool known =
+        std::any_of(out.begin(), out.end(), [&](const GenicamCameraInfo& c) { return c.address == address; });
     if (known) continue;
     GenicamCameraInfo info;
     info.address = address;

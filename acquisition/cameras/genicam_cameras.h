@@ -11,7 +11,7 @@
 namespace bosfuse::acquisition {
 
 struct GenicamCameraInfo {
-  std::string id;        // Aravis id, e.g. "Aravis-Fake-BOS01": what `device` takes
+  std::string id;  // Aravis id, e.g. "Aravis-Fake-BOS01": what `device` takes
   std::string vendor;
   std::string model;
   std::string serial;

@@ -1,8 +1,9 @@
 #include "acquisition/cameras/genicam_clock_mapping.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 
 namespace bosfuse::acquisition {
 namespace {
@@ -86,10 +87,11 @@ std::optional<std::int64_t> GenicamClockMapping::map(std::int64_t camera_ns) con
 
 std::string GenicamClockMapping::describe(const Fit& fit) {
   const double offset_s = (fit.host_at_origin_ns - static_cast<double>(fit.camera_origin_ns)) * 1e-9;
-  return fmt::format("offset {:+.6f} s at camera time {} ns, drift {:+.3f} ppm, residual {:.0f} µs RMS ({:.0f} µs max) "
-                     "over {} pairs in {:.1f} s",
-                     offset_s, fit.camera_origin_ns, fit.drift * 1e6, fit.residual_rms_ns * 1e-3,
-                     fit.residual_max_ns * 1e-3, fit.pairs, static_cast<double>(fit.span_ns) * 1e-9);
+  return fmt::format(
+      "offset {:+.6f} s at camera time {} ns, drift {:+.3f} ppm, residual {:.0f} µs RMS ({:.0f} µs max) "
+      "over {} pairs in {:.1f} s",
+      offset_s, fit.camera_origin_ns, fit.drift * 1e6, fit.residual_rms_ns * 1e-3, fit.residual_max_ns * 1e-3,
+      fit.pairs, static_cast<double>(fit.span_ns) * 1e-9);
 }
 
 }  // namespace bosfuse::acquisition

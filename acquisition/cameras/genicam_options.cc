@@ -12,7 +12,7 @@ struct GenicamFormatBits {
 };
 
 constexpr GenicamFormatBits kGenicamFormats[] = {
-    {"Mono16", 16}, {"Mono12", 12}, {"Mono12p", 12}, {"Mono12Packed", 12},
+    {"Mono16", 16}, {"Mono12", 12},  {"Mono12p", 12},      {"Mono12Packed", 12},
     {"Mono10", 10}, {"Mono10p", 10}, {"Mono10Packed", 10}, {"Mono8", 8},
 };
 

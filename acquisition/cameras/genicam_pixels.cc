@@ -40,8 +40,8 @@ std::size_t genicam_packed_bytes(std::size_t pixels, int bits, bool gvsp) {
 
 cv::Mat genicam_pixels_to_image(const std::string& pixel_format, const std::uint8_t* data, std::size_t size,
                                 int width_px, int height_px) {
-  if (width_px < 1 || height_px < 1) throw std::invalid_argument("frame of " + std::to_string(width_px) + "×" +
-                                                                 std::to_string(height_px) + " pixels");
+  if (width_px < 1 || height_px < 1)
+    throw std::invalid_argument("frame of " + std::to_string(width_px) + "×" + std::to_string(height_px) + " pixels");
   const std::size_t pixels = static_cast<std::size_t>(width_px) * static_cast<std::size_t>(height_px);
   auto need = [&](std::size_t bytes) {
     if (size < bytes) {

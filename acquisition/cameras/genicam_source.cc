@@ -3,9 +3,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <utility>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "acquisition/cameras/genicam_glib.h"
 #include "acquisition/cameras/genicam_pixels.h"
@@ -49,8 +49,8 @@ void genicam_require_integer_in(ArvDevice* device, const char* feature, std::int
 void genicam_require_entry(ArvDevice* device, const char* feature, const std::string& value, const std::string& key) {
   const std::vector<std::string> entries = genicam_enumeration(device, feature);
   if (std::find(entries.begin(), entries.end(), value) != entries.end()) return;
-  genicam_refuse(key, fmt::format("{} \"{}\" is not one the camera offers ({})", feature, value,
-                                  fmt::join(entries, ", ")));
+  genicam_refuse(key,
+                 fmt::format("{} \"{}\" is not one the camera offers ({})", feature, value, fmt::join(entries, ", ")));
 }
 
 void genicam_set_float(ArvDevice* device, const char* feature, double value) {
@@ -70,8 +70,8 @@ std::string genicam_choose_format(ArvDevice* device, const std::string& wanted) 
   for (const std::string& format : genicam_mono_formats()) {
     if (std::find(offered.begin(), offered.end(), format) != offered.end()) return format;
   }
-  genicam_refuse("pixel_format", fmt::format("the camera offers no mono format bosfuse records ({})",
-                                             fmt::join(offered, ", ")));
+  genicam_refuse("pixel_format",
+                 fmt::format("the camera offers no mono format bosfuse records ({})", fmt::join(offered, ", ")));
 }
 
 void genicam_apply_roi(ArvCamera* camera, const GenicamRoi& roi) {
@@ -110,9 +110,9 @@ void genicam_apply_exposure_gain(ArvDevice* device, const GenicamOptions& o) {
   if (o.gain_db) {
     if (!genicam_has_feature(device, "Gain")) {
       const bool raw = genicam_has_feature(device, "GainRaw");
-      genicam_refuse("gain_db", std::string("the camera has no Gain feature in dB") +
-                                    (raw ? "; it has GainRaw, in its own units: set it with features = { GainRaw = N }"
-                                         : ""));
+      genicam_refuse("gain_db",
+                     std::string("the camera has no Gain feature in dB") +
+                         (raw ? "; it has GainRaw, in its own units: set it with features = { GainRaw = N }" : ""));
     }
     genicam_require_float_in(device, "Gain", *o.gain_db, "gain_db", "dB");
     genicam_set_float(device, "Gain", *o.gain_db);
@@ -188,20 +188,26 @@ void genicam_apply_feature(ArvDevice* device, const GenicamFeature& f) {
 
 std::string genicam_buffer_status(ArvBufferStatus status) {
   switch (status) {
-    case ARV_BUFFER_STATUS_MISSING_PACKETS: return "missing packets";
-    case ARV_BUFFER_STATUS_TIMEOUT: return "timed out";
-    case ARV_BUFFER_STATUS_SIZE_MISMATCH: return "larger than its buffer";
-    case ARV_BUFFER_STATUS_WRONG_PACKET_ID: return "wrong packet id";
-    case ARV_BUFFER_STATUS_ABORTED: return "aborted";
-    case ARV_BUFFER_STATUS_CLEARED: return "cleared";
-    case ARV_BUFFER_STATUS_FILLING: return "still filling";
-    default: return "status " + std::to_string(static_cast<int>(status));
+    case ARV_BUFFER_STATUS_MISSING_PACKETS:
+      return "missing packets";
+    case ARV_BUFFER_STATUS_TIMEOUT:
+      return "timed out";
+    case ARV_BUFFER_STATUS_SIZE_MISMATCH:
+      return "larger than its buffer";
+    case ARV_BUFFER_STATUS_WRONG_PACKET_ID:
+      return "wrong packet id";
+    case ARV_BUFFER_STATUS_ABORTED:
+      return "aborted";
+    case ARV_BUFFER_STATUS_CLEARED:
+      return "cleared";
+    case ARV_BUFFER_STATUS_FILLING:
+      return "still filling";
+    default:
+      return "status " + std::to_string(static_cast<int>(status));
   }
 }
 
-void genicam_on_control_lost(ArvDevice*, gpointer flag) {
-  static_cast<std::atomic<bool>*>(flag)->store(true);
-}
+void genicam_on_control_lost(ArvDevice*, gpointer flag) { static_cast<std::atomic<bool>*>(flag)->store(true); }
 
 }  // namespace
 
@@ -255,9 +261,9 @@ void GenicamSource::apply_settings() {
   }
   // The rate the camera says it will deliver with every setting applied.
   if (options_.frame_rate_hz && streaming_.frame_rate_hz < *options_.frame_rate_hz * (1 - 1e-3)) {
-    genicam_refuse("frame_rate_hz", fmt::format("the camera delivers at most {} Hz with these settings, not {} Hz",
-                                                genicam_number(streaming_.frame_rate_hz),
-                                                genicam_number(*options_.frame_rate_hz)));
+    genicam_refuse("frame_rate_hz",
+                   fmt::format("the camera delivers at most {} Hz with these settings, not {} Hz",
+                               genicam_number(streaming_.frame_rate_hz), genicam_number(*options_.frame_rate_hz)));
   }
   if (options_.trigger == GenicamTrigger::kSoftware && streaming_.frame_rate_hz > 0 &&
       std::chrono::duration<double>(options_.software_trigger_period).count() < 1 / streaming_.frame_rate_hz) {
@@ -308,8 +314,8 @@ void GenicamSource::connect() {
   handles_ = std::move(handles);
   try {
     apply_settings();
-    streaming_.latched_clock = handles_->latch_command != nullptr && handles_->latch_value != nullptr &&
-                               handles_->latch_ns_per_tick > 0;
+    streaming_.latched_clock =
+        handles_->latch_command != nullptr && handles_->latch_value != nullptr && handles_->latch_ns_per_tick > 0;
     start_stream();
   } catch (...) {
     disconnect();
@@ -339,9 +345,8 @@ void GenicamSource::disconnect() {
   std::erase_if(releases_, [](const std::future<void>& f) {
     return f.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
   });
-  releases_.push_back(std::async(std::launch::async, [gone = std::shared_ptr<Handles>(std::move(handles_))]() mutable {
-    gone.reset();
-  }));
+  releases_.push_back(std::async(std::launch::async,
+                                 [gone = std::shared_ptr<Handles>(std::move(handles_))]() mutable { gone.reset(); }));
 }
 
 GenicamSource::Streaming GenicamSource::check_settings(const GenicamOptions& options) {
@@ -386,7 +391,8 @@ void GenicamSource::probe_if_silent() {
   if (options_.trigger == GenicamTrigger::kSoftware) {
     limit += std::chrono::duration_cast<GenicamClock::duration>(options_.software_trigger_period);
   } else if (streaming_.frame_rate_hz > 0) {
-    limit += std::chrono::duration_cast<GenicamClock::duration>(std::chrono::duration<double>(1 / streaming_.frame_rate_hz));
+    limit +=
+        std::chrono::duration_cast<GenicamClock::duration>(std::chrono::duration<double>(1 / streaming_.frame_rate_hz));
   }
   if (now - last_frame_at_ < limit) return;
   guint32 value = 0;
@@ -424,10 +430,10 @@ void GenicamSource::note_stream_statistics() {
   guint64 resent = 0, missing = 0;
   arv_gv_stream_get_statistics(ARV_GV_STREAM(handles_->stream.get()), &resent, &missing);
   if (resent == resent_packets_ && missing == missing_packets_) return;
-  notes_.push_back({"lost-packets", fmt::format("{}: {} packets resent, {} missing since the last count ({} and {} "
-                                                "since the stream started)",
-                                                describe(), resent - resent_packets_, missing - missing_packets_,
-                                                resent, missing)});
+  notes_.push_back(
+      {"lost-packets", fmt::format("{}: {} packets resent, {} missing since the last count ({} and {} "
+                                   "since the stream started)",
+                                   describe(), resent - resent_packets_, missing - missing_packets_, resent, missing)});
   resent_packets_ = resent;
   missing_packets_ = missing;
 }
@@ -508,8 +514,9 @@ std::optional<CapturedFrame> GenicamSource::next(std::chrono::milliseconds wait)
   if (!handles_) throw DeviceError(describe() + " is not open");
   if (control_lost_) {
     gone_ = true;
-    throw DeviceError(describe() + ": control lost (the camera stopped answering: unplugged, rebooted, or taken "
-                                   "by another host)");
+    throw DeviceError(describe() +
+                      ": control lost (the camera stopped answering: unplugged, rebooted, or taken "
+                      "by another host)");
   }
   software_trigger_if_due();
   latch_clock_if_due();

@@ -60,6 +60,8 @@ class GenicamSource : public FrameSource {
     bool latched_clock = false;  // the time mapping is fitted from a timestamp latch
   };
   Streaming streaming() const { return streaming_; }
+  // The camera-clock mapping as fitted so far (nullopt before a frame).
+  std::optional<GenicamClockMapping::Fit> clock_fit() const { return clock_.fit(); }
 
   // Opens the camera, applies and checks every setting, and closes it: the
   // start of logging refuses a camera whose settings cannot work. Throws

@@ -9,6 +9,7 @@
 
 #include "acquisition/cameras/genicam_source.h"
 
+#include <arv.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -283,6 +284,63 @@ TEST(GenicamFakeCamera, InjectedPacketLossIsCountedAsLostFrames) {
     return (e.kind == "error" && e.message.find("lost") != std::string::npos) || e.kind == "lost-frames";
   });
   EXPECT_GE(lost, 1);
+}
+
+// libaravis' fake GigE Vision camera in this process, its clock skewed: a
+// known offset and drift from the host's, stamped on each buffer by the
+// fill pattern.
+struct GenicamSkew {
+  double offset_s;  // camera = host0 + offset + (host − host0) · (1 + drift)
+  double drift;
+  std::int64_t host0_ns;
+};
+
+void genicam_skewed_fill(ArvBuffer* buffer, void* data, guint32, guint32, ArvPixelFormat) {
+  const auto* skew = static_cast<const GenicamSkew*>(data);
+  const double since_ns = static_cast<double>(utc_now_ns() - skew->host0_ns);
+  arv_buffer_set_timestamp(buffer, static_cast<guint64>(static_cast<double>(skew->host0_ns) + skew->offset_s * 1e9 +
+                                                        since_ns * (1 + skew->drift)));
+}
+
+TEST(GenicamFakeCamera, ASkewedCameraClockIsMappedToTheHostWithinItsResidual) {
+  const GenicamSkew skew{-1000.0, 0.02, utc_now_ns()};  // 1000 s behind, 2 % fast
+  ArvGvFakeCamera* fake = arv_gv_fake_camera_new("127.0.0.1", "SKEW01");
+  ASSERT_NE(fake, nullptr);
+  ASSERT_TRUE(arv_gv_fake_camera_is_running(fake));
+  arv_fake_camera_set_fill_pattern(arv_gv_fake_camera_get_fake_camera(fake), genicam_skewed_fill,
+                                   const_cast<GenicamSkew*>(&skew));
+  std::vector<CapturedFrame> frames;
+  std::vector<FrameSource::Note> notes;
+  std::optional<GenicamClockMapping::Fit> fit;
+  {
+    GenicamOptions o = genicam_fake_options();
+    o.pixel_format = "Mono8";
+    GenicamSource source(o);
+    source.connect();
+    const auto start = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - start < 2500ms) {
+      if (auto frame = source.next(100ms)) frames.push_back(std::move(*frame));
+      for (auto& note : source.take_notes()) notes.push_back(note);
+    }
+    fit = source.clock_fit();
+  }
+  g_object_unref(fake);
+  ASSERT_GE(frames.size(), 40u);
+  // The camera's own time is kept as it came: about 1000 s behind the host.
+  EXPECT_NEAR(static_cast<double>(*frames.back().device_t_ns - *frames.back().arrival_ns) * 1e-9, -1000, 10);
+  // The fit finds the skew: host ns per camera ns 1 / 1.02 − 1 ≈ −19608 ppm
+  // (within what arrival jitter over 2.5 s allows on a loaded machine), and
+  // maps every frame within its stated residual of the arrival.
+  ASSERT_TRUE(fit);
+  EXPECT_NEAR(fit->drift * 1e6, (1 / 1.02 - 1) * 1e6, 3000);
+  for (const CapturedFrame& f : frames) {
+    const double mapped =
+        fit->host_at_origin_ns + (1 + fit->drift) * static_cast<double>(*f.device_t_ns - fit->camera_origin_ns);
+    EXPECT_LE(std::abs(mapped - static_cast<double>(*f.arrival_ns)), fit->residual_max_ns + 1e3) << f.origin;
+  }
+  const auto clock = std::find_if(notes.rbegin(), notes.rend(), [](const auto& n) { return n.kind == "clock"; });
+  ASSERT_NE(clock, notes.rend());
+  EXPECT_NE(clock->message.find("residual"), std::string::npos) << clock->message;
 }
 
 }  // namespace
