@@ -220,6 +220,18 @@ TEST(GenicamFakeCamera, RefusesSettingsOutsideItsLimitsNamingFeatureAndRange) {
   EXPECT_EQ(refusal(genicam_fake_options()), "accepted");
 }
 
+TEST(GenicamFakeCamera, IsListedByAddressWithItsIdAndPixelFormats) {
+  GenicamFakeGvCamera fake;
+  const auto cameras = list_genicam_cameras({"127.0.0.1"}, false);
+  ASSERT_EQ(cameras.size(), 1u);
+  EXPECT_EQ(cameras[0].problem, "");
+  EXPECT_NE(cameras[0].id.find("BOS01"), std::string::npos) << cameras[0].id;
+  EXPECT_EQ(cameras[0].serial, "BOS01");
+  EXPECT_EQ(cameras[0].protocol, "GigEVision");
+  EXPECT_NE(std::find(cameras[0].pixel_formats.begin(), cameras[0].pixel_formats.end(), "Mono16"),
+            cameras[0].pixel_formats.end());
+}
+
 struct GenicamRecorderBed {
   testing::TempDir dir;
   storage::RunStore store =
