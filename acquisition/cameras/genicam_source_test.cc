@@ -282,6 +282,12 @@ TEST(GenicamFakeCamera, KilledAndRestartedCameraIsADisconnectThenAReconnect) {
   EXPECT_TRUE(bed.recorder->stop());
   bed.writer.flush();
   EXPECT_GE(bed.store.frames().size(), 10u);
+  // Every frame keeps the camera's time and the host's arrival beside the mapped t_ns.
+  const auto kept =
+      testing::run_command("sqlite3 " + (bed.store.dir() / storage::RunStore::kDatabaseFileName).string() +
+                           " 'SELECT COUNT(*) = SUM(device_t_ns IS NOT NULL AND arrival_ns IS NOT NULL) "
+                           "FROM frames'");
+  EXPECT_EQ(kept.output, "1\n");
 }
 
 TEST(GenicamFakeCamera, InjectedPacketLossIsCountedAsLostFrames) {
