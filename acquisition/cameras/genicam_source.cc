@@ -326,6 +326,8 @@ void GenicamSource::connect() {
   last_frame_id_.reset();
   last_frame_at_ = next_trigger_at_ = next_latch_at_ = GenicamClock::now();
   next_clock_note_at_ = last_frame_at_ + options_.clock_report_period;
+  rate_since_ = last_frame_at_;
+  rate_frames_ = frames_read_;
   resent_packets_ = missing_packets_ = 0;  // a new stream counts from 0
 }
 
@@ -438,11 +440,27 @@ void GenicamSource::note_stream_statistics() {
   missing_packets_ = missing;
 }
 
+// A camera that sends fewer frames than asked (its frame ids show no gap,
+// so none were lost on the way) says so once per report period.
+void GenicamSource::note_rate(GenicamClock::time_point now) {
+  const double span_s = std::chrono::duration<double>(now - rate_since_).count();
+  const double rate_hz = static_cast<double>(frames_read_ - rate_frames_) / span_s;
+  rate_since_ = now;
+  rate_frames_ = frames_read_;
+  if (!options_.frame_rate_hz || options_.trigger != GenicamTrigger::kFreeRun) return;
+  if (rate_hz >= 0.9 * *options_.frame_rate_hz) return;
+  notes_.push_back({"error", fmt::format("{}: {:.1f} frames/s over the last {:.1f} s, not the {} asked", describe(),
+                                         rate_hz, span_s, genicam_number(*options_.frame_rate_hz))});
+}
+
 void GenicamSource::note_clock_if_due(bool force) {
   const auto now = GenicamClock::now();
   const bool first = !clock_noted_ && clock_.size() >= 2;
   if (!force && !first && now < next_clock_note_at_) return;
-  if (now >= next_clock_note_at_) next_clock_note_at_ = now + options_.clock_report_period;
+  if (now >= next_clock_note_at_) {
+    next_clock_note_at_ = now + options_.clock_report_period;
+    note_rate(now);
+  }
   note_stream_statistics();
   const std::optional<GenicamClockMapping::Fit> fit = clock_.fit();
   if (!fit || fit->pairs < 2) return;

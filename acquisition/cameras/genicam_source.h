@@ -78,6 +78,7 @@ class GenicamSource : public FrameSource {
   void probe_if_silent();
   void note_frame_gap(std::uint64_t frame_id);
   void note_clock_if_due(bool force);
+  void note_rate(std::chrono::steady_clock::time_point now);
   void note_stream_statistics();
 
   GenicamOptions options_;
@@ -98,6 +99,8 @@ class GenicamSource : public FrameSource {
   std::vector<Note> notes_;
   std::optional<std::uint64_t> last_frame_id_;
   std::int64_t frames_read_ = 0;
+  std::chrono::steady_clock::time_point rate_since_;  // the delivered rate is measured from here
+  std::int64_t rate_frames_ = 0;
   std::chrono::steady_clock::time_point last_frame_at_;
   std::chrono::steady_clock::time_point next_trigger_at_;
   std::chrono::steady_clock::time_point next_latch_at_;
