@@ -37,7 +37,8 @@ void BM_GenicamRecord(benchmark::State& state) {
   const int side = static_cast<int>(state.range(0));
   const double rate_hz = static_cast<double>(state.range(1));
   const auto duration = std::chrono::seconds(state.range(2));
-  testing::BackgroundProcess fake({"arv-fake-gv-camera-0.8", "-i", "127.0.0.1", "-s", "BENCH01"});
+  testing::BackgroundProcess fake(
+      {"setpriv", "--pdeathsig", "KILL", "arv-fake-gv-camera-0.8", "-i", "127.0.0.1", "-s", "BENCH01"});
   for (int i = 0; i < 50 && !list_genicam_cameras({"127.0.0.1"}, false).front().problem.empty(); ++i) {
     std::this_thread::sleep_for(100ms);
   }

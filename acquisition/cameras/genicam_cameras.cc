@@ -17,13 +17,13 @@ void genicam_describe_opened(const std::string& name, GenicamCameraInfo& info) {
     GObjectPtr<ArvCamera> camera = genicam_open(name);
     GError* error = nullptr;
     if (info.id.empty()) info.id = genicam_text(arv_camera_get_device_id(camera.get(), &error));
-    genicam_take(std::exchange(error, nullptr));
+    genicam_take(error);
     if (info.vendor.empty()) info.vendor = genicam_text(arv_camera_get_vendor_name(camera.get(), &error));
-    genicam_take(std::exchange(error, nullptr));
+    genicam_take(error);
     if (info.model.empty()) info.model = genicam_text(arv_camera_get_model_name(camera.get(), &error));
-    genicam_take(std::exchange(error, nullptr));
+    genicam_take(error);
     if (info.serial.empty()) info.serial = genicam_text(arv_camera_get_device_serial_number(camera.get(), &error));
-    genicam_take(std::exchange(error, nullptr));
+    genicam_take(error);
     if (info.protocol.empty()) info.protocol = arv_camera_is_gv_device(camera.get()) ? "GigEVision" : "USB3Vision";
     info.pixel_formats = genicam_enumeration(arv_camera_get_device(camera.get()), "PixelFormat");
   } catch (const DeviceError& e) {

@@ -2,14 +2,14 @@
 
 namespace bosfuse::acquisition::genicam_detail {
 
-std::string genicam_take(GError* error) {
+std::string genicam_take(GError*& error) {
   if (error == nullptr) return {};
   std::string message = error->message != nullptr ? error->message : "unknown Aravis error";
-  g_error_free(error);
+  g_clear_error(&error);
   return message;
 }
 
-void genicam_check(GError* error, const std::string& what) {
+void genicam_check(GError*& error, const std::string& what) {
   if (error != nullptr) throw DeviceError(what + ": " + genicam_take(error));
 }
 

@@ -23,10 +23,11 @@ struct GObjectUnref {
 template <typename T>
 using GObjectPtr = std::unique_ptr<T, GObjectUnref>;
 
-// Throws DeviceError("<what>: <GError message>") when `error` is set, and frees it.
-void genicam_check(GError* error, const std::string& what);
+// Throws DeviceError("<what>: <GError message>") when `error` is set, and
+// frees it. Both leave `error` null, as the next Aravis call needs it.
+void genicam_check(GError*& error, const std::string& what);
 // The message of `error`, freed; empty when none.
-std::string genicam_take(GError* error);
+std::string genicam_take(GError*& error);
 // A GenICam feature the device has (an implemented node of that name).
 bool genicam_has_feature(ArvDevice* device, const char* name);
 // The first of `names` the device has; nullptr when none.

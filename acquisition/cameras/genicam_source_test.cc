@@ -111,7 +111,12 @@ class GenicamFakeGvCamera {
   explicit GenicamFakeGvCamera(int lost_packets_per_thousand = 0) { start(lost_packets_per_thousand); }
 
   void start(int lost_packets_per_thousand = 0) {
-    std::vector<std::string> argv = {"arv-fake-gv-camera-0.8", "-i", "127.0.0.1", "-s", "BOS01"};
+    // A camera left answering (a crashed test's) would be read instead of ours.
+    ASSERT_FALSE(list_genicam_cameras({"127.0.0.1"}, false).front().problem.empty())
+        << "a GenICam camera already answers on 127.0.0.1: a fake camera left running?";
+    // setpriv: the fake camera dies with this process, even when it crashes.
+    std::vector<std::string> argv = {"setpriv", "--pdeathsig", "KILL", "arv-fake-gv-camera-0.8",
+                                     "-i",      "127.0.0.1",   "-s",   "BOS01"};
     if (lost_packets_per_thousand > 0) {
       argv.insert(argv.end(), {"-r", std::to_string(lost_packets_per_thousand)});
     }
