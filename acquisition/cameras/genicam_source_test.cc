@@ -9,8 +9,12 @@
 
 #include "acquisition/cameras/genicam_source.h"
 
+#include <arpa/inet.h>
 #include <arv.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <functional>
@@ -104,6 +108,19 @@ TEST(GenicamOptions, RefusesWhatNeedsNoCamera) {
   EXPECT_NE(o.Validate().find("exposure_us"), std::string::npos);
 }
 
+// Whether nothing holds the GigE Vision control port on loopback: a bind,
+// at once, where asking a camera that is not there waits out its timeouts.
+bool genicam_gvcp_port_free() {
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(3956);
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  const bool free = bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0;
+  close(fd);
+  return free;
+}
+
 // arv-fake-gv-camera-0.8 on 127.0.0.1, started for one test and waited for
 // (bounded) until it answers.
 class GenicamFakeGvCamera {
@@ -112,8 +129,7 @@ class GenicamFakeGvCamera {
 
   void start(int lost_packets_per_thousand = 0) {
     // A camera left answering (a crashed test's) would be read instead of ours.
-    ASSERT_FALSE(list_genicam_cameras({"127.0.0.1"}, false).front().problem.empty())
-        << "a GenICam camera already answers on 127.0.0.1: a fake camera left running?";
+    ASSERT_TRUE(genicam_gvcp_port_free()) << "127.0.0.1:3956 (GVCP) is taken: a fake camera left running?";
     // setpriv: the fake camera dies with this process, even when it crashes.
     std::vector<std::string> argv = {"setpriv", "--pdeathsig", "KILL", "arv-fake-gv-camera-0.8",
                                      "-i",      "127.0.0.1",   "-s",   "BOS01"};
