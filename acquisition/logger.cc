@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "acquisition/clock.h"
+#include "acquisition/cameras/genicam_source.h"
 #include "acquisition/cameras/recorded_frame_source.h"
 #include "acquisition/cameras/video_capture_source.h"
 #include "acquisition/cameras/watched_folder_source.h"
@@ -149,6 +150,8 @@ void Logger::add_devices(const ExperimentConfig& config) {
     std::unique_ptr<FrameSource> source;
     if (c.source == "video") {
       source = std::make_unique<VideoCaptureSource>(c.target);
+    } else if (c.source == "genicam") {
+      source = std::make_unique<GenicamSource>(c.genicam);
     } else if (c.source == "replay") {
       source = std::make_unique<RecordedFrameSource>(load_recorded_frames(c.target, c.replay_camera, c.replay_speed));
     } else {

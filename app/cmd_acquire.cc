@@ -62,6 +62,7 @@ void acquire(const AcquireArgs& args) {
   // a refused start leaves no empty interrupted run behind.
   acquisition::check_hosts_resolve(config);
   acquisition::check_replayed_runs(config);
+  acquisition::check_genicam_cameras(config, [](const std::string& line) { spdlog::warn("{}", line); });
   acquisition::check_free_space(config, args.out);
   acquisition::LoggerOptions options;
   options.disk.min_free_bytes = static_cast<std::uint64_t>(config.min_free_mb) << 20;

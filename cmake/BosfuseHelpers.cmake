@@ -4,8 +4,10 @@
 #   when they have *_test.cc files, a test binary NAME_test registered with
 #   ctest. Tests sit next to the concept they test (foo.h, foo.cc,
 #   foo_test.cc); new files are picked up at the next configure.
+#   LOCKED_TESTS <gtest filter> <lock>: the tests matching the filter hold
+#   that ctest RESOURCE_LOCK, so they never run side by side (a fixed port).
 function(bosfuse_library name)
-  cmake_parse_arguments(ARG "" "" "ROOMS;DEPS;TEST_DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "ROOMS;DEPS;TEST_DEPS;LOCKED_TESTS" ${ARGN})
   set(sources)
   set(tests)
   foreach(dir . ${ARG_ROOMS})
@@ -25,14 +27,14 @@ function(bosfuse_library name)
   target_include_directories(bosfuse_${name} PUBLIC ${PROJECT_SOURCE_DIR})
   target_link_libraries(bosfuse_${name} PUBLIC ${ARG_DEPS})
   if(tests)
-    bosfuse_test(${name}_test SOURCES ${tests} DEPS bosfuse::${name} ${ARG_TEST_DEPS})
+    bosfuse_test(${name}_test SOURCES ${tests} DEPS bosfuse::${name} ${ARG_TEST_DEPS} LOCKED_TESTS ${ARG_LOCKED_TESTS})
   endif()
 endfunction()
 
 # bosfuse_test(NAME SOURCES ... DEPS ...): one gtest binary, its tests
 # discovered individually so ctest reports each.
 function(bosfuse_test name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LOCKED_TESTS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gmock GTest::gtest_main)
   target_compile_definitions(${name} PRIVATE
@@ -40,5 +42,14 @@ function(bosfuse_test name)
     BOSFUSE_BINARY_DIR="${PROJECT_BINARY_DIR}")
   include(GoogleTest)
   # Names carry the binary (fitting_test.NewtonFit.X) so `ctest -R fitting` selects a library.
-  gtest_discover_tests(${name} TEST_PREFIX "${name}." DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300)
+  if(ARG_LOCKED_TESTS)
+    list(GET ARG_LOCKED_TESTS 0 locked_filter)
+    list(GET ARG_LOCKED_TESTS 1 lock)
+    gtest_discover_tests(${name} TEST_PREFIX "${name}." DISCOVERY_TIMEOUT 60 TEST_FILTER "-${locked_filter}"
+      PROPERTIES TIMEOUT 300)
+    gtest_discover_tests(${name} TEST_PREFIX "${name}." DISCOVERY_TIMEOUT 60 TEST_FILTER "${locked_filter}"
+      PROPERTIES TIMEOUT 300 RESOURCE_LOCK ${lock})
+  else()
+    gtest_discover_tests(${name} TEST_PREFIX "${name}." DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300)
+  endif()
 endfunction()

@@ -5,6 +5,8 @@ find_package(SQLite3 REQUIRED)
 pkg_check_modules(MODBUS REQUIRED IMPORTED_TARGET libmodbus)
 pkg_check_modules(HIDAPI REQUIRED IMPORTED_TARGET hidapi-hidraw)
 pkg_check_modules(LIBUSB REQUIRED IMPORTED_TARGET libusb-1.0)
+# GenICam cameras (acquisition/cameras/genicam_*): Aravis 0.8 (LGPL)
+pkg_check_modules(ARAVIS REQUIRED IMPORTED_TARGET aravis-0.8)
 pkg_check_modules(UMOCKDEV REQUIRED IMPORTED_TARGET umockdev-1.0)
 # Report figures: PLplot's C library; its cairo driver (plplot-driver-cairo)
 # provides the pngcairo and svgcairo devices, loaded at run time.

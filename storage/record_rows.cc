@@ -40,7 +40,8 @@ FrameRecord read_frame(const Statement& stmt, int first) {
           static_cast<int>(stmt.column_int64(first + 5)),
           static_cast<int>(stmt.column_int64(first + 6)),
           static_cast<int>(stmt.column_int64(first + 7)),
-          stmt.column_int64(first + 8) != 0};
+          stmt.column_int64(first + 8) != 0,
+          std::nullopt};  // arrival_ns: frames.arrival_ns is read only where asked for
 }
 
 }  // namespace bosfuse::storage

@@ -87,6 +87,11 @@ struct FrameRecord {
   int height_px = 0;
   int bit_depth = 8;
   bool is_reference = false;
+  // Host arrival time, where t_ns is a camera clock mapped to the host
+  // (schema 6); unset where t_ns is itself the arrival. Written with the
+  // frame; reads leave it unset (a run of schema 5 opened as found has no
+  // such column): query frames.arrival_ns for it.
+  std::optional<std::int64_t> arrival_ns;
 };
 
 struct Event {

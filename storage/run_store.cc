@@ -279,12 +279,12 @@ void RunStore::write_events(std::span<const Event> events) {
 namespace {
 
 constexpr const char* kInsertFrame =
-    "INSERT INTO frames (device_id, t_ns, device_t_ns, path, width_px, height_px, bit_depth, is_reference) "
-    "VALUES (?, ?, ?, ?, ?, ?, ?, ?)";
+    "INSERT INTO frames (device_id, t_ns, device_t_ns, path, width_px, height_px, bit_depth, is_reference, "
+    "arrival_ns) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)";
 
 void insert_frame(Statement& stmt, const FrameRecord& frame) {
   stmt.bind_all(frame.device_id, frame.t_ns, frame.device_t_ns, frame.path, frame.width_px, frame.height_px,
-                frame.bit_depth, frame.is_reference ? 1 : 0);
+                frame.bit_depth, frame.is_reference ? 1 : 0, frame.arrival_ns);
   stmt.run();
 }
 

@@ -83,7 +83,7 @@ void FrameRecorder::store(const CapturedFrame& frame) {
     return;
   }
   push(storage::FrameRecord{0, device_id(), frame.t_ns, frame.device_t_ns, relative.generic_string(), frame.image.cols,
-                            frame.image.rows, bit_depth_of(frame.image), reference});
+                            frame.image.rows, bit_depth_of(frame.image), reference, frame.arrival_ns});
   std::lock_guard lock(stats_mutex_);
   ++stats_.frames;
   if (reference) ++stats_.reference_frames;
@@ -98,11 +98,13 @@ bool FrameRecorder::take_one(std::chrono::milliseconds wait) {
     record_event("stopped", e.what());
     return false;
   } catch (const FrameLost& e) {
+    record_notes();
     record_event("error", e.what());
     std::lock_guard lock(stats_mutex_);
     ++stats_.failures;
     return true;
   } catch (const DeviceError& e) {
+    record_notes();
     source_->disconnect();
     connection_.failed("disconnect", e.what(), utc_now_ns());
     std::lock_guard lock(stats_mutex_);
@@ -112,7 +114,18 @@ bool FrameRecorder::take_one(std::chrono::milliseconds wait) {
   }
   connection_.succeeded();
   if (frame) store(*frame);
+  record_notes();
   return true;
+}
+
+void FrameRecorder::record_notes() {
+  for (const FrameSource::Note& note : source_->take_notes()) {
+    record_event(note.kind, note.message);
+    if (note.lost_frames > 0) {
+      std::lock_guard lock(stats_mutex_);
+      stats_.failures += note.lost_frames;
+    }
+  }
 }
 
 void FrameRecorder::loop() {

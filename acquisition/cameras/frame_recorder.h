@@ -58,6 +58,7 @@ class FrameRecorder : public DeviceWorker {
   bool ensure_connected();
   bool take_one(std::chrono::milliseconds wait);  // false when the source has ended
   void store(const CapturedFrame& frame);
+  void record_notes();  // the source's notes as events
   bool is_reference_now() const;
 
   std::unique_ptr<FrameSource> source_;

@@ -36,7 +36,7 @@ class ScriptedCamera : public FrameSource {
       std::this_thread::sleep_for(wait);
       return std::nullopt;
     }
-    return CapturedFrame{frames[next_++], utc_now_ns(), std::nullopt, "scripted", std::nullopt};
+    return CapturedFrame{frames[next_++], utc_now_ns(), std::nullopt, "scripted", std::nullopt, std::nullopt};
   }
 
  private:

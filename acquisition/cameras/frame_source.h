@@ -12,6 +12,7 @@
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "acquisition/device_reading.h"
 
@@ -23,6 +24,9 @@ struct CapturedFrame {
   std::optional<std::int64_t> device_t_ns;  // the camera's clock, when known
   std::string origin;                       // e.g. the file it came from
   std::optional<bool> is_reference;         // set when the source knows (a replay)
+  // When the host received it, where t_ns is the camera's time mapped to
+  // the host clock (a GenICam camera); unset where t_ns is the arrival.
+  std::optional<std::int64_t> arrival_ns;
 };
 
 class FrameSource {
@@ -38,6 +42,16 @@ class FrameSource {
   // Throws DeviceError when the camera is gone, EndOfFrames when a finite
   // source (a video file) has no more, and FrameLost for a frame it lost.
   virtual std::optional<CapturedFrame> next(std::chrono::milliseconds wait) = 0;
+
+  // What the source noticed beside its frames since it was last asked: a
+  // camera-clock mapping, frames the camera dropped without a buffer to
+  // show for them. The recorder stores each as an event after next().
+  struct Note {
+    std::string kind;  // an event kind: "clock", "error", ...
+    std::string message;
+    std::int64_t lost_frames = 0;  // counted with the recorder's failures
+  };
+  virtual std::vector<Note> take_notes() { return {}; }
 };
 
 class EndOfFrames : public std::runtime_error {

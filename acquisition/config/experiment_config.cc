@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "acquisition/config/folder_name.h"
+#include "acquisition/cameras/genicam_source.h"
 #include "acquisition/cameras/recorded_frame_source.h"
 #include "storage/disk_space.h"
 
@@ -362,6 +363,81 @@ std::string read_device(const TomlReader& r, ExperimentConfig& config) {
   r.fail("kind", "unknown device kind \"" + kind + "\" (modbus, hid or usb)");
 }
 
+GenicamTrigger read_genicam_trigger(const TomlReader& r, GenicamOptions& g) {
+  const std::string trigger = r.optional_string("trigger").value_or("free-run");
+  if (trigger == "free-run") return GenicamTrigger::kFreeRun;
+  if (trigger == "software") {
+    g.software_trigger_period = r.seconds("trigger_period_s", 1.0, 1e-4);
+    if (!r.has("trigger_period_s")) r.fail("trigger", "a software trigger needs trigger_period_s");
+    return GenicamTrigger::kSoftware;
+  }
+  if (trigger == "hardware") {
+    g.trigger_line = r.optional_string("line").value_or("Line1");
+    const std::string edge = r.optional_string("edge").value_or("rising");
+    if (edge == "rising") {
+      g.trigger_edge = "RisingEdge";
+    } else if (edge == "falling") {
+      g.trigger_edge = "FallingEdge";
+    } else {
+      r.fail("edge", "expected \"rising\" or \"falling\", got \"" + edge + "\"");
+    }
+    return GenicamTrigger::kHardware;
+  }
+  r.fail("trigger", "expected \"free-run\", \"software\" or \"hardware\", got \"" + trigger + "\"");
+}
+
+// features = { Name = value }: any other GenICam feature, set by name.
+std::vector<GenicamFeature> read_genicam_features(const TomlReader& r) {
+  std::vector<GenicamFeature> out;
+  const std::optional<TomlReader> table = r.table("features");
+  if (!table) return out;
+  for (const auto& [key, value] : *r.node("features")->as_table()) {
+    GenicamFeature f{std::string(key.str()), std::int64_t{0}};
+    table->node(key.str());
+    if (const auto* i = value.as_integer()) {
+      f.value = i->get();
+    } else if (const auto* d = value.as_floating_point()) {
+      f.value = d->get();
+    } else if (const auto* b = value.as_boolean()) {
+      f.value = b->get();
+    } else if (const auto* s = value.as_string()) {
+      f.value = s->get();
+    } else {
+      table->fail(key.str(), "expected a number, a boolean or a string (an enumeration's entry)");
+    }
+    out.push_back(std::move(f));
+  }
+  return out;
+}
+
+void read_genicam(const TomlReader& r, CameraConfig& c) {
+  GenicamOptions& g = c.genicam;
+  g.device = r.string("device");
+  c.genicam_key = r.where("device");
+  g.pixel_format = r.optional_string("pixel_format").value_or("");
+  g.exposure_us = r.optional_number("exposure_us");
+  g.gain_db = r.optional_number("gain_db");
+  g.frame_rate_hz = r.optional_number("frame_rate_hz");
+  const std::vector<double> roi = r.numbers("roi_px");
+  if (!roi.empty()) {
+    if (roi.size() != 4) r.fail("roi_px", "expected [x, y, width, height] in pixels");
+    g.roi = GenicamRoi{std::llround(roi[0]), std::llround(roi[1]), std::llround(roi[2]), std::llround(roi[3])};
+  }
+  g.trigger = read_genicam_trigger(r, g);
+  g.features = read_genicam_features(r);
+  g.packet_resend = r.optional_bool("packet_resend").value_or(true);
+  g.buffer_count = r.integer_in("buffers", 16, 2, 1024);
+  g.frame_timeout = duration_cast<std::chrono::milliseconds>(r.seconds("frame_timeout_s", 2.0, 0.1));
+  g.clock_report_period = duration_cast<std::chrono::milliseconds>(r.seconds("clock_report_s", 10.0, 0.1));
+  // Each problem names the key it is about.
+  const std::string problem = g.Validate();
+  if (problem.empty()) return;
+  for (const char* key : {"pixel_format", "exposure_us", "gain_db", "frame_rate_hz", "roi_px", "trigger_period_s"}) {
+    if (problem.starts_with(key)) r.fail(key, problem);
+  }
+  r.fail("device", problem);
+}
+
 CameraConfig read_camera(const TomlReader& r) {
   CameraConfig c;
   c.name = r.string("name");
@@ -382,9 +458,12 @@ CameraConfig read_camera(const TomlReader& r) {
     c.run_key = r.where("run");
     c.replay_camera = r.string("camera");
     c.replay_speed = r.number_in("speed", 1.0, 1e-3, 1e4, "a speed-up");
+  } else if (c.source == "genicam") {
+    read_genicam(r, c);  // frames as the camera sends them
   } else {
     r.fail("source",
-           "expected \"video\" (a camera, video file or URL), \"folder\" (files a camera writes) or \"replay\"");
+           "expected \"video\" (a camera, video file or URL), \"folder\" (files a camera writes), \"genicam\" "
+           "(a GigE Vision or USB3 Vision camera) or \"replay\"");
   }
   c.recorder.reference_frames = r.integer_in("reference_frames", 1, 0, 1'000'000);
   c.reference_flag = r.optional_string("reference_flag").value_or("reference.flag");
@@ -563,6 +642,19 @@ void check_replayed_runs(const ExperimentConfig& config) {
       load_recorded_frames(c.target, c.replay_camera, c.replay_speed);
     } catch (const std::exception& e) {
       throw ConfigError(c.run_key + ": camera \"" + c.name + "\": " + e.what());
+    }
+  }
+}
+
+void check_genicam_cameras(const ExperimentConfig& config, const std::function<void(const std::string&)>& warn) {
+  for (const CameraConfig& c : config.cameras) {
+    if (c.source != "genicam") continue;
+    try {
+      GenicamSource::check_settings(c.genicam);
+    } catch (const GenicamSettingRefused& e) {
+      throw ConfigError(c.genicam_key + ": camera \"" + c.name + "\": " + e.what());
+    } catch (const DeviceError& e) {
+      warn("camera \"" + c.name + "\": " + e.what() + "; logging starts and keeps trying to reach it");
     }
   }
 }

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -16,6 +17,7 @@
 #include "acquisition/alarm_limits.h"
 #include "acquisition/emf_conversion.h"
 #include "acquisition/cameras/frame_recorder.h"
+#include "acquisition/cameras/genicam_options.h"
 #include "acquisition/drivers/hid_device.h"
 #include "acquisition/drivers/modbus_device.h"
 #include "acquisition/config/toml_reader.h"
@@ -77,12 +79,14 @@ struct UsbDeviceConfig {
 // a tethered camera writes into.
 struct CameraConfig {
   std::string name;
-  std::string source;         // "video", "folder" or "replay"
+  std::string source;         // "video", "folder", "replay" or "genicam"
   std::string target;         // video: camera index, file or URL; replay: the recorded run's folder
   std::string replay_camera;  // replay: the camera's name in the recorded run
   std::string run_key;        // replay: where `run` is in the file, for check_replayed_runs
   double replay_speed = 1;
   WatchedFolderOptions folder;
+  GenicamOptions genicam;
+  std::string genicam_key;  // genicam: where `device` is, for check_genicam_cameras
   FrameRecorderOptions recorder;
   std::filesystem::path reference_flag;  // relative paths are relative to the run folder
 };
@@ -157,6 +161,14 @@ void check_hosts_resolve(const ExperimentConfig& config);
 // check_hosts_resolve it is for the start of logging, so that such a
 // camera stops the start before a run is created, not an empty run after.
 void check_replayed_runs(const ExperimentConfig& config);
+
+// Throws ConfigError, naming the camera's key and line, for a GenICam
+// camera that refuses one of its settings (a value outside its feature's
+// range, named with the range; a feature it lacks; a frame rate it cannot
+// deliver). A camera that cannot be reached is not refused: it is logged
+// as a warning through `warn` and the recorder keeps trying to reach it,
+// so a camera switched on late does not stop the thermocouples.
+void check_genicam_cameras(const ExperimentConfig& config, const std::function<void(const std::string&)>& warn);
 
 // Throws ConfigError, naming `[run] min_free_mb` and its line, when the file
 // system that is to hold `run_dir` (or would, for a folder not made yet)

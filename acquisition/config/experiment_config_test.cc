@@ -148,6 +148,44 @@ TEST(ExperimentConfig, CamerasAndTheirMistakes) {
             "exp.toml:1: cameras[0]: missing required key 'folder'");
 }
 
+TEST(ExperimentConfig, GenicamCamerasTakeTheirSettingsAndFeatures) {
+  const auto config = parse_experiment(
+      "[[cameras]]\nname = \"mv\"\nsource = \"genicam\"\ndevice = \"Basler-21234567\"\npixel_format = \"Mono12p\"\n"
+      "exposure_us = 800\ngain_db = 2.5\nframe_rate_hz = 20\nroi_px = [16, 8, 1024, 1024]\ntrigger = \"hardware\"\n"
+      "line = \"Line2\"\nedge = \"falling\"\nfeatures = { BlackLevel = 4, ReverseX = true, GammaEnable = \"Off\", "
+      "Gamma = 1.0 }\npacket_resend = false\n",
+      "exp.toml");
+  ASSERT_EQ(config.cameras.size(), 1u);
+  const GenicamOptions& g = config.cameras[0].genicam;
+  EXPECT_EQ(g.device, "Basler-21234567");
+  EXPECT_EQ(g.pixel_format, "Mono12p");
+  EXPECT_EQ(g.exposure_us, 800.0);
+  EXPECT_EQ(g.gain_db, 2.5);
+  EXPECT_EQ(g.frame_rate_hz, 20.0);
+  ASSERT_TRUE(g.roi);
+  EXPECT_EQ(g.roi->width_px, 1024);
+  EXPECT_EQ(g.trigger, GenicamTrigger::kHardware);
+  EXPECT_EQ(g.trigger_line, "Line2");
+  EXPECT_EQ(g.trigger_edge, "FallingEdge");
+  ASSERT_EQ(g.features.size(), 4u);
+  EXPECT_FALSE(g.packet_resend);
+  EXPECT_EQ(config.cameras[0].recorder.interval, std::chrono::nanoseconds(0));  // as the camera sends them
+  const std::string camera = "[[cameras]]\nname = \"c\"\nsource = \"genicam\"\ndevice = \"127.0.0.1\"\n";
+  EXPECT_EQ(error_of(camera), "no error");
+  const std::pair<std::string, std::string> mistakes[] = {
+      {"pixel_format = \"RGB8\"\n", "exp.toml:5: cameras[0].pixel_format: "},
+      {"exposure_us = -3\n", "exp.toml:5: cameras[0].exposure_us: "},
+      {"roi_px = [1, 2, 3]\n", "exp.toml:5: cameras[0].roi_px: "},
+      {"trigger = \"software\"\n", "exp.toml:5: cameras[0].trigger: "},
+      {"trigger = \"hardware\"\nedge = \"both\"\n", "exp.toml:6: cameras[0].edge: "},
+      {"features = { Gain = [1] }\n", "exp.toml:5: cameras[0].features.Gain: "},
+      {"exposure = 3\n", "exp.toml:5: cameras[0].exposure: unknown key"},
+  };
+  for (const auto& [line, error] : mistakes) {
+    EXPECT_TRUE(error_of(camera + line).starts_with(error)) << line << " gave " << error_of(camera + line);
+  }
+}
+
 TEST(ExperimentConfig, HidMistakesNameTheKeyAndLine) {
   const std::string usb_tc = "[[devices]]\nname = \"u\"\nkind = \"hid\"\nprofile = \"mcc-usb-tc\"\n";
   EXPECT_EQ(error_of(usb_tc + "[[devices.channels]]\nname = \"t\"\ninput = 8\n"),
