@@ -47,6 +47,32 @@ TEST(Knee, FindsTheSwitchOffWithinItsUncertainty) {
   EXPECT_GE(inside_2_sigma, kSeeds * 3 / 4) << "σ is too small";
 }
 
+// docs/CONFIG.md's figure: a sensor with a first-order lag τ shows the knee
+// late, by less than τ (0.7–0.95 τ at τ = 1 s and 3 s, sampled each second).
+TEST(Knee, ALaggingSensorsKneeIsLateByLessThanItsTimeConstant) {
+  for (const double tau_s : {1.0, 3.0}) {
+    for (unsigned seed = 1; seed <= 5; ++seed) {
+      const double off_s = 100 + 3.3 * seed;
+      const HeatedCurve fine = heated_curve(off_s, 0.01, 0, seed, 0.1, 4000);
+      std::mt19937 random(seed);
+      std::normal_distribution<double> noise(0, 0.05);
+      std::vector<double> t, y;
+      double lagged = fine.y.front();
+      for (std::size_t i = 0; i < fine.t.size(); ++i) {
+        lagged += (fine.y[i] - lagged) * -std::expm1(-0.1 / tau_s);
+        if (i % 10 == 0) {
+          t.push_back(fine.t[i]);
+          y.push_back(lagged + noise(random));
+        }
+      }
+      const KneeResult r = find_knee(t, y);
+      ASSERT_TRUE(r.knee) << r.reason;
+      EXPECT_GT(r.knee->t_s - off_s, 0.5 * tau_s) << "τ " << tau_s << " seed " << seed;
+      EXPECT_LT(r.knee->t_s - off_s, tau_s) << "τ " << tau_s << " seed " << seed;
+    }
+  }
+}
+
 TEST(Knee, ACurveWithoutATurnHasNone) {
   const HeatedCurve cooling = heated_curve(0, 0.01, 0.05, 3);
   EXPECT_FALSE(find_knee(cooling.t, cooling.y).knee);
