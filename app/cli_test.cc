@@ -144,7 +144,24 @@ TEST_F(Cli, HostNamesAreResolvedAndAnUnresolvableOneStopsTheStart) {
 // stderr; a typo of a subcommand is named; --quiet silences the chatter;
 // a run that lacks a device's data says so and exits with its own status.
 TEST_F(Cli, DataGoesToStdoutAndMessagesToStderr) {
-  ASSERT_EQ(bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 300ms").exit_code, 0);
+  // acquire and replay make a run folder the user named: their summaries
+  // are for the person watching, on stderr (issue 31).
+  const auto acquired = streams("acquire " + experiment_ + " --out " + run_dir() + " --duration 300ms");
+  ASSERT_EQ(acquired.exit_code, 0) << acquired.err;
+  EXPECT_EQ(acquired.out, "");
+  EXPECT_NE(acquired.err.find("run store: " + run_dir() + "/run.sqlite"), std::string::npos) << acquired.err;
+  const auto replayed = streams("replay " + run_dir() + " --out " + (dir_ / "replayed").string() + " --speed 10");
+  ASSERT_EQ(replayed.exit_code, 0) << replayed.err;
+  EXPECT_EQ(replayed.out, "");
+  EXPECT_NE(replayed.err.find("replayed run: " + (dir_ / "replayed").string()), std::string::npos) << replayed.err;
+  // The module's register step is stored as the channels' resolution (a
+  // type-K adam-6018 input: 1370 °C over 65535 counts), and a replay keeps it.
+  for (const std::filesystem::path& run : {std::filesystem::path(run_dir()), dir_ / "replayed"}) {
+    for (const auto& channel : storage::RunStore::open(run).channels()) {
+      ASSERT_TRUE(channel.resolution) << run << " " << channel.name;
+      EXPECT_NEAR(*channel.resolution, 1370.0 / 65535, 1e-12) << run << " " << channel.name;
+    }
+  }
   // Standard output into a file, standard error into the captured output.
   const auto stdout_to = [&](const std::string& args, const std::string& file) {
     return testing::run_command("sh -c '" + kBosfuse + " " + args + " > " + (dir_ / file).string() + "'");
