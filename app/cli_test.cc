@@ -7,6 +7,7 @@
 
 #include "app/test_streams.h"
 #include "sim/modbus_server.h"
+#include "storage/processing_store.h"
 #include "storage/run_store.h"
 #include "tests/support/modbus_fixture.h"
 #include "tests/support/subprocess.h"
@@ -138,6 +139,33 @@ TEST_F(Cli, HostNamesAreResolvedAndAnUnresolvableOneStopsTheStart) {
   const auto samples = store.read_samples(store.channels()[0].id);
   ASSERT_GE(samples.size(), 5u) << acquired.output;
   for (const auto& s : samples) EXPECT_EQ(s.status, storage::SampleStatus::kOk);
+}
+
+// Issue 31: a logger user without a camera goes acquire → process →
+// report, through a simulated module cooling fast enough (k = 0.5 1/s) for
+// a fit within the 3 s of the record; the report has the fits and no BOS.
+TEST_F(Cli, AThermocoupleOnlyRunGoesFromAcquireThroughProcessToReport) {
+  sim::SimulatedModule module;
+  module.signal.k_per_s = 0.5;
+  module.signal.noise_c = 0.05;
+  acquisition::ModbusEndpoint endpoint;
+  endpoint.port = 0;
+  sim::ModbusSimServer fast(sim::module_server_options(module, endpoint));
+  fast.start();
+  write(experiment_, experiment_text(fast.port()));
+  const auto acquired = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 3s");
+  ASSERT_EQ(acquired.exit_code, 0) << acquired.output;
+  const auto processed = streams("process " + run_dir());
+  ASSERT_EQ(processed.exit_code, 0) << processed.err;
+  EXPECT_EQ(processed.out, "");
+  const auto reported = streams("report " + run_dir() + " -o " + (dir_ / "report").string());
+  ASSERT_EQ(reported.exit_code, 0) << reported.err;
+  std::ifstream html_file(dir_ / "report" / "report.html");
+  const std::string html((std::istreambuf_iterator<char>(html_file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(html.find("Thermocouples only: the run has no frames"), std::string::npos);
+  EXPECT_NE(html.find("Cooling curves"), std::string::npos);
+  const auto fits = storage::ProcessingStore(run_dir()).fits();
+  EXPECT_EQ(fits.size(), 2u) << "one fit per thermocouple";
 }
 
 // Command-line conventions (issue 11): data on stdout, every message on
