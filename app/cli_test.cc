@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <regex>
 
 #include "app/test_streams.h"
 #include "sim/modbus_server.h"
@@ -115,6 +116,14 @@ TEST_F(Cli, MalformedExperimentNamesTheKeyAndLine) {
   EXPECT_NE(result.exit_code, 0);
   EXPECT_NE(result.output.find("exp.toml:8: devices[0].port: expected an integer"), std::string::npos) << result.output;
   EXPECT_FALSE(storage::RunStore::holds_run(run_dir())) << "a bad configuration must not start a run";
+  std::string text = experiment_text(server_->port());
+  text.replace(text.find("input = 0\n"), 10, "input = 0\nresolution = 0\n");
+  write(experiment_, text);
+  const auto zero = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 1s");
+  EXPECT_NE(zero.exit_code, 0);
+  EXPECT_NE(zero.output.find("exp.toml:14: devices[0].channels[0].resolution: expected a step in the channel's unit"),
+            std::string::npos)
+      << zero.output;
 }
 
 // libmodbus's plain TCP context takes an IPv4 address only: a host name
@@ -152,9 +161,21 @@ TEST_F(Cli, AThermocoupleOnlyRunGoesFromAcquireThroughProcessToReport) {
   endpoint.port = 0;
   sim::ModbusSimServer fast(sim::module_server_options(module, endpoint));
   fast.start();
-  write(experiment_, experiment_text(fast.port()));
+  // tc0 states its resolution (the file's wins over the driver's step).
+  std::string text = experiment_text(fast.port());
+  text.replace(text.find("input = 0\n"), 10, "input = 0\nresolution = 0.1\n");
+  write(experiment_, text);
   const auto acquired = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 3s");
   ASSERT_EQ(acquired.exit_code, 0) << acquired.output;
+  const auto channels = storage::RunStore::open(run_dir()).channels();
+  ASSERT_EQ(channels.size(), 2u);
+  EXPECT_EQ(channels[0].resolution, 0.1);
+  EXPECT_NEAR(channels[1].resolution.value_or(0), 1370.0 / 65535, 1e-12) << "the adam-6018's register step";
+  const auto exported = streams("export " + run_dir() + " --csv");
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  const std::string row = exported.out.substr(exported.out.find('\n') + 1, 200);
+  EXPECT_TRUE(std::regex_search(row, std::regex("^[^,]+,[^,]+,[^,]+,[0-9]+\\.[0-9],[0-9]+\\.[0-9][0-9]\n")))
+      << "tc0 at 0.1 °C, tc1 at 0.02 °C: " << row;
   const auto processed = streams("process " + run_dir());
   ASSERT_EQ(processed.exit_code, 0) << processed.err;
   EXPECT_EQ(processed.out, "");

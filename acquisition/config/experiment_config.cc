@@ -111,7 +111,7 @@ std::optional<EmfInput> read_emf_input(const TomlReader& r) {
   const auto fixed_c = r.has("cold_junction_c")
                            ? std::optional(r.number_in("cold_junction_c", 0, -273.15, 2000, "a temperature in °C"))
                            : std::nullopt;
-  EmfInput input{*type, r.optional_string("cold_junction").value_or(""), fixed_c};
+  EmfInput input{*type, r.optional_string("cold_junction").value_or(""), fixed_c, std::nullopt};
   if (input.cold_junction_channel.empty() == !input.cold_junction_c) {
     r.fail("", "a millivolt channel needs exactly one of cold_junction (a channel name) and cold_junction_c");
   }
