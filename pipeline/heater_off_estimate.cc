@@ -74,7 +74,7 @@ std::string HeaterOffEstimate::brief_report() const {
     }
   }
   if (!offset_s) return text + "no heater-off time can be proposed: " + reason + "\n";
-  return text + fmt::format("heater off proposed at +{} ± {} s from the first sample ({} UTC); a lagging "
+  return text + fmt::format("heater off proposed at +{} ± {} s from the first sample ({}); a lagging "
                             "thermocouple's knee comes up to its time constant late\n",
                             at_sigma(*offset_s, sigma_s), at_sigma(sigma_s, sigma_s),
                             storage::format_iso8601_utc(t_ns, 3));
