@@ -15,12 +15,12 @@ constexpr double kWindowDropFraction = 0.2;     // the window ends where the cur
 constexpr int kFineStepsPerInterval = 8;        // the t_k scan's steps per sample interval
 constexpr std::size_t kMostCandidates = 200'000;  // a bound on the scan, far above any window
 
-struct Series {
+struct KneePoints {
   std::vector<double> t, y;
 };
 
-Series finite_points(std::span<const double> t_s, std::span<const double> temperature_c) {
-  Series s;
+KneePoints finite_points(std::span<const double> t_s, std::span<const double> temperature_c) {
+  KneePoints s;
   for (std::size_t i = 0; i < std::min(t_s.size(), temperature_c.size()); ++i) {
     if (std::isfinite(t_s[i]) && std::isfinite(temperature_c[i])) {
       s.t.push_back(t_s[i]);
@@ -48,7 +48,7 @@ struct HingeFit {
 };
 
 // The hinge (knee.h) at `t_k` fitted to points [first, last).
-HingeFit fit_hinge(const Series& s, std::size_t first, std::size_t last, double t_k) {
+HingeFit fit_hinge(const KneePoints& s, std::size_t first, std::size_t last, double t_k) {
   Eigen::Matrix<double, 5, 5> normal = Eigen::Matrix<double, 5, 5>::Zero();
   Eigen::Matrix<double, 5, 1> rhs = Eigen::Matrix<double, 5, 1>::Zero();
   double yy = 0;
@@ -87,11 +87,11 @@ std::optional<double> crossing(const std::vector<double>& grid, const std::vecto
   return std::nullopt;
 }
 
-struct Window {
+struct KneeWindow {
   std::size_t first = 0, last = 0;  // [first, last)
 };
 
-std::optional<Window> window_around_maximum(const Series& s, std::size_t peak, std::string& reason) {
+std::optional<KneeWindow> window_around_maximum(const KneePoints& s, std::size_t peak, std::string& reason) {
   const std::vector<double> smooth = running_mean(s.y);
   const double low_after = *std::min_element(smooth.begin() + static_cast<long>(peak), smooth.end());
   const double level = smooth[peak] - kWindowDropFraction * (smooth[peak] - low_after);
@@ -100,7 +100,7 @@ std::optional<Window> window_around_maximum(const Series& s, std::size_t peak, s
   const double half_width_s = s.t[end] - s.t[peak];
   std::size_t first = peak;
   while (first > 0 && s.t[first - 1] >= s.t[peak] - half_width_s) --first;
-  const Window w{first, end + 1};
+  const KneeWindow w{first, end + 1};
   if (peak - w.first < kEdgePoints || w.last - peak < kEdgePoints) {
     reason = "too few samples on one side of the curve's maximum to place a knee";
     return std::nullopt;
@@ -111,7 +111,7 @@ std::optional<Window> window_around_maximum(const Series& s, std::size_t peak, s
 }  // namespace
 
 KneeResult find_knee(std::span<const double> t_s, std::span<const double> temperature_c) {
-  const Series s = finite_points(t_s, temperature_c);
+  const KneePoints s = finite_points(t_s, temperature_c);
   if (s.t.size() < 4 * kEdgePoints) return {std::nullopt, "too few samples for a knee"};
   const std::vector<double> smooth = running_mean(s.y);
   const auto peak = static_cast<std::size_t>(std::max_element(smooth.begin(), smooth.end()) - smooth.begin());
