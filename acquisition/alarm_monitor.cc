@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "storage/value_digits.h"
+
 namespace bosfuse::acquisition {
 namespace {
 
@@ -26,6 +28,12 @@ std::string value_text(double value) {
   char text[64];
   std::snprintf(text, sizeof text, "%.*f", decimals, value);
   return text;
+}
+
+// A reading at its channel's digits where its resolution is known
+// (storage/value_digits.h), else as value_text() has it.
+std::string reading_text(double value, std::optional<double> resolution) {
+  return resolution ? storage::format_channel_value(value, resolution) : value_text(value);
 }
 
 // A limit as a user wrote it: 80, 0.5, 12.25.
@@ -143,12 +151,12 @@ void AlarmMonitor::change(Watched& w, AlarmKind kind, bool raise, std::int64_t t
 void AlarmMonitor::judge_limits(Watched& w, std::int64_t t_ns, double value, std::vector<AlarmTransition>& out) {
   const AlarmLimits& limits = w.channel.limits;
   const std::string& unit = w.channel.unit;
-  const std::string cleared = "cleared at " + in_unit(value_text(value), unit);
+  const std::string cleared = "cleared at " + in_unit(reading_text(value, w.channel.resolution), unit);
   if (limits.high) {
     const bool active = w.active[index(AlarmKind::kHigh)];
     if (!active && value > *limits.high) {
       change(w, AlarmKind::kHigh, true, t_ns,
-             in_unit(value_text(value), unit) + " above the limit " + in_unit(limit_text(*limits.high), unit), out);
+             in_unit(reading_text(value, w.channel.resolution), unit) + " above the limit " + in_unit(limit_text(*limits.high), unit), out);
     } else if (active && value <= *limits.high - hysteresis(*limits.high)) {
       change(w, AlarmKind::kHigh, false, t_ns, cleared, out);
     }
@@ -157,7 +165,7 @@ void AlarmMonitor::judge_limits(Watched& w, std::int64_t t_ns, double value, std
     const bool active = w.active[index(AlarmKind::kLow)];
     if (!active && value < *limits.low) {
       change(w, AlarmKind::kLow, true, t_ns,
-             in_unit(value_text(value), unit) + " below the limit " + in_unit(limit_text(*limits.low), unit), out);
+             in_unit(reading_text(value, w.channel.resolution), unit) + " below the limit " + in_unit(limit_text(*limits.low), unit), out);
     } else if (active && value >= *limits.low + hysteresis(*limits.low)) {
       change(w, AlarmKind::kLow, false, t_ns, cleared, out);
     }
@@ -187,7 +195,7 @@ std::vector<AlarmTransition> AlarmMonitor::add_sample(std::int64_t channel_id, s
   if (w->active[index(AlarmKind::kStale)]) {
     const std::int64_t gap_ns = t_ns - w->last_ok_ns.value_or(start_ns_);
     change(*w, AlarmKind::kStale, false, t_ns,
-           "cleared at " + in_unit(value_text(*value), w->channel.unit) + " (no value for " + gap_text(gap_ns) + ")",
+           "cleared at " + in_unit(reading_text(*value, w->channel.resolution), w->channel.unit) + " (no value for " + gap_text(gap_ns) + ")",
            out);
   }
   w->last_ok_ns = t_ns;

@@ -61,6 +61,7 @@ class AlarmMonitor {
     std::string name;
     std::string unit;  // for the messages
     AlarmLimits limits;
+    std::optional<double> resolution = std::nullopt;  // the digits a reading is given with (none: one decimal)
   };
 
   // Channels without limits are not watched. Throws std::invalid_argument

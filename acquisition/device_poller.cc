@@ -18,7 +18,7 @@ AlarmMonitor watch_alarms(const std::string& device, const std::vector<storage::
   }
   std::vector<AlarmMonitor::Channel> watched;
   for (std::size_t i = 0; i < channels.size(); ++i) {
-    watched.push_back({channel_ids[i], channels[i].name, channels[i].unit, limits[i]});
+    watched.push_back({channel_ids[i], channels[i].name, channels[i].unit, limits[i], channels[i].resolution});
   }
   try {
     return AlarmMonitor(watched, utc_now_ns());

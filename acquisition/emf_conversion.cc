@@ -52,6 +52,7 @@ std::vector<storage::ChannelInfo> EmfConvertingSource::channel_infos() const {
     infos[c.channel].kind = "thermocouple";
     infos[c.channel].unit = "degC";
     infos[c.channel].tc_type = std::string(to_string(c.input.type));
+    infos[c.channel].resolution = c.input.resolution_c;
   }
   return infos;
 }

@@ -22,6 +22,9 @@ struct EmfInput {
   ThermocoupleType type = ThermocoupleType::kK;
   std::string cold_junction_channel;      // a channel of the same device, in °C ...
   std::optional<double> cold_junction_c;  // ... or a fixed cold-junction temperature
+  // The converted channel's resolution in °C, from the experiment file; the
+  // millivolt register's step is no °C step (the EMF curve is not linear).
+  std::optional<double> resolution_c;
 };
 
 struct EmfConversion {

@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <regex>
 
 #include "app/test_streams.h"
 #include "sim/modbus_server.h"
+#include "storage/processing_store.h"
 #include "storage/run_store.h"
 #include "tests/support/modbus_fixture.h"
 #include "tests/support/subprocess.h"
@@ -114,6 +116,14 @@ TEST_F(Cli, MalformedExperimentNamesTheKeyAndLine) {
   EXPECT_NE(result.exit_code, 0);
   EXPECT_NE(result.output.find("exp.toml:8: devices[0].port: expected an integer"), std::string::npos) << result.output;
   EXPECT_FALSE(storage::RunStore::holds_run(run_dir())) << "a bad configuration must not start a run";
+  std::string text = experiment_text(server_->port());
+  text.replace(text.find("input = 0\n"), 10, "input = 0\nresolution = 0\n");
+  write(experiment_, text);
+  const auto zero = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 1s");
+  EXPECT_NE(zero.exit_code, 0);
+  EXPECT_NE(zero.output.find("exp.toml:14: devices[0].channels[0].resolution: expected a step in the channel's unit"),
+            std::string::npos)
+      << zero.output;
 }
 
 // libmodbus's plain TCP context takes an IPv4 address only: a host name
@@ -140,11 +150,67 @@ TEST_F(Cli, HostNamesAreResolvedAndAnUnresolvableOneStopsTheStart) {
   for (const auto& s : samples) EXPECT_EQ(s.status, storage::SampleStatus::kOk);
 }
 
+// Issue 31: a logger user without a camera goes acquire → process →
+// report, through a simulated module cooling fast enough (k = 0.5 1/s) for
+// a fit within the 3 s of the record; the report has the fits and no BOS.
+TEST_F(Cli, AThermocoupleOnlyRunGoesFromAcquireThroughProcessToReport) {
+  sim::SimulatedModule module;
+  module.signal.k_per_s = 0.5;
+  module.signal.noise_c = 0.05;
+  acquisition::ModbusEndpoint endpoint;
+  endpoint.port = 0;
+  sim::ModbusSimServer fast(sim::module_server_options(module, endpoint));
+  fast.start();
+  // tc0 states its resolution (the file's wins over the driver's step).
+  std::string text = experiment_text(fast.port());
+  text.replace(text.find("input = 0\n"), 10, "input = 0\nresolution = 0.1\n");
+  write(experiment_, text);
+  const auto acquired = bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 3s");
+  ASSERT_EQ(acquired.exit_code, 0) << acquired.output;
+  const auto channels = storage::RunStore::open(run_dir()).channels();
+  ASSERT_EQ(channels.size(), 2u);
+  EXPECT_EQ(channels[0].resolution, 0.1);
+  EXPECT_NEAR(channels[1].resolution.value_or(0), 1370.0 / 65535, 1e-12) << "the adam-6018's register step";
+  const auto exported = streams("export " + run_dir() + " --csv");
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  const std::string row = exported.out.substr(exported.out.find('\n') + 1, 200);
+  EXPECT_TRUE(std::regex_search(row, std::regex("^[^,]+,[^,]+,[^,]+,[0-9]+\\.[0-9],[0-9]+\\.[0-9][0-9]\n")))
+      << "tc0 at 0.1 °C, tc1 at 0.02 °C: " << row;
+  const auto processed = streams("process " + run_dir());
+  ASSERT_EQ(processed.exit_code, 0) << processed.err;
+  EXPECT_EQ(processed.out, "");
+  const auto reported = streams("report " + run_dir() + " -o " + (dir_ / "report").string());
+  ASSERT_EQ(reported.exit_code, 0) << reported.err;
+  std::ifstream html_file(dir_ / "report" / "report.html");
+  const std::string html((std::istreambuf_iterator<char>(html_file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(html.find("Thermocouples only: the run has no frames"), std::string::npos);
+  EXPECT_NE(html.find("Cooling curves"), std::string::npos);
+  const auto fits = storage::ProcessingStore(run_dir()).fits();
+  EXPECT_EQ(fits.size(), 2u) << "one fit per thermocouple";
+}
+
 // Command-line conventions (issue 11): data on stdout, every message on
 // stderr; a typo of a subcommand is named; --quiet silences the chatter;
 // a run that lacks a device's data says so and exits with its own status.
 TEST_F(Cli, DataGoesToStdoutAndMessagesToStderr) {
-  ASSERT_EQ(bosfuse("acquire " + experiment_ + " --out " + run_dir() + " --duration 300ms").exit_code, 0);
+  // acquire and replay make a run folder the user named: their summaries
+  // are for the person watching, on stderr (issue 31).
+  const auto acquired = streams("acquire " + experiment_ + " --out " + run_dir() + " --duration 300ms");
+  ASSERT_EQ(acquired.exit_code, 0) << acquired.err;
+  EXPECT_EQ(acquired.out, "");
+  EXPECT_NE(acquired.err.find("run store: " + run_dir() + "/run.sqlite"), std::string::npos) << acquired.err;
+  const auto replayed = streams("replay " + run_dir() + " --out " + (dir_ / "replayed").string() + " --speed 10");
+  ASSERT_EQ(replayed.exit_code, 0) << replayed.err;
+  EXPECT_EQ(replayed.out, "");
+  EXPECT_NE(replayed.err.find("replayed run: " + (dir_ / "replayed").string()), std::string::npos) << replayed.err;
+  // The module's register step is stored as the channels' resolution (a
+  // type-K adam-6018 input: 1370 °C over 65535 counts), and a replay keeps it.
+  for (const std::filesystem::path& run : {std::filesystem::path(run_dir()), dir_ / "replayed"}) {
+    for (const auto& channel : storage::RunStore::open(run).channels()) {
+      ASSERT_TRUE(channel.resolution) << run << " " << channel.name;
+      EXPECT_NEAR(*channel.resolution, 1370.0 / 65535, 1e-12) << run << " " << channel.name;
+    }
+  }
   // Standard output into a file, standard error into the captured output.
   const auto stdout_to = [&](const std::string& args, const std::string& file) {
     return testing::run_command("sh -c '" + kBosfuse + " " + args + " > " + (dir_ / file).string() + "'");

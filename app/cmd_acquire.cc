@@ -79,7 +79,9 @@ void acquire(const AcquireArgs& args) {
   spdlog::info("logging {} devices into {} ({})", config.device_count(), args.out,
                args.duration.empty() ? "until Ctrl-C" : "for " + args.duration);
   const auto summary = logger.run(stop_requested_by_signal());
-  std::cout << summary.BriefReport() << "\nrun store: " << (store.dir() / storage::RunStore::kDatabaseFileName).string()
+  // A summary for the person watching, on stderr: acquire's product is the
+  // run folder, and its standard output stays empty (data only).
+  std::cerr << summary.BriefReport() << "\nrun store: " << (store.dir() / storage::RunStore::kDatabaseFileName).string()
             << std::endl;
   if (!summary.complete()) throw CommandFailure(kExitIncompleteRun, what_was_lost(summary.writer));
   if (const std::string missing = what_is_missing(summary); !missing.empty()) {

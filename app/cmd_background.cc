@@ -26,7 +26,9 @@ void background(const BackgroundArgs& args) {
   const auto pattern = sim::generate_pattern(args.pattern);
   sim::write_pattern_image(args.out, sim::render_pattern(pattern), args.pattern.dpi);
   const double mm_per_px = 25.4 / args.pattern.dpi;
-  std::cout << fmt::format(
+  // What was written, for the person: on stderr, as every command that
+  // writes a file the user named says it (stdout is data only).
+  std::cerr << fmt::format(
       "{}: {}x{} px, {} dots of {:.2f} px, coverage {:.0f}%, seed {}; printed at {} dpi: {:.1f}x{:.1f} mm, dots "
       "{:.3f} mm\n",
       args.out, pattern.size.width, pattern.size.height, pattern.dots.size(), pattern.dot_diameter_px,

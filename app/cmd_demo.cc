@@ -90,7 +90,10 @@ void run_demo(const DemoArgs& args) {
                                         {.note = [&](const std::string& line) { display.note(line); },
                                          .run_created = [&] { live = start_live_view(run_dir, args.live); },
                                          .stop = &stop_requested_by_signal()});
-  std::cout << summary.BriefReport() << "\n";
+  // The logger's summary is progress (stderr); the demo's result, on
+  // stdout, is the table of fitted rates beside the truth and where the run
+  // and its report are (the folder is the demo's to choose).
+  std::cerr << summary.BriefReport() << "\n";
   sim::write_truth(run_dir, args.demo, setup);
   if (stop_requested_by_signal()) {
     throw CommandFailure(kExitStopped, "stopped: the run is recorded up to here in " + run_dir.string() +
@@ -100,7 +103,6 @@ void run_demo(const DemoArgs& args) {
     throw CommandFailure(kExitStopped,
                          "stopped while processing; `bosfuse process " + run_dir.string() + " --resume` continues");
   }
-  std::cout << "\n";
   sim::print_rates_beside_truth(std::cout, run_dir, sim::true_plume_cooling_rate(setup));
   std::cout << "\nrun:     " << run_dir.string() << "\n"
             << "report:  " << (run_dir / "report" / "report.html").string() << "\n";

@@ -3,7 +3,10 @@
 // "heater off") is the moment it happened. Every command then counts
 // experiment time from it (storage/experiment_clock.h). After the run the
 // moment is given with --at (app/time_argument.h): "now" would be after
-// everything recorded.
+// everything recorded. With --estimate it writes nothing and proposes the
+// moment from the knee of the thermocouple curves
+// (pipeline/heater_off_estimate.h): the --at value on stdout, the reasoning
+// on stderr.
 
 #include <fmt/format.h>
 
@@ -13,6 +16,8 @@
 #include "app/command.h"
 #include "app/run_argument.h"
 #include "app/time_argument.h"
+#include "fitting/uncertainty_digits.h"
+#include "pipeline/heater_off_estimate.h"
 #include "storage/experiment_clock.h"
 #include "storage/run_store.h"
 
@@ -23,6 +28,7 @@ struct MarkArgs {
   std::string run;
   std::string message;
   std::string at;
+  bool estimate = false;
 };
 
 // The host-clock time of --at in this run; a time from the first sample
@@ -72,8 +78,21 @@ void say_what_the_origin_is(const storage::RunStore& store, const MarkArgs& args
   }
 }
 
+// The proposal, for the user to accept: nothing is written.
+void propose(const MarkArgs& args) {
+  const auto store = storage::RunStore::open(args.run);
+  const pipeline::HeaterOffEstimate estimate = pipeline::estimate_heater_off(store);
+  std::cerr << estimate.brief_report();
+  if (!estimate.offset_s) throw std::runtime_error("no time to propose: " + estimate.reason);
+  const std::string at = "+" + fitting::format_at_uncertainty(*estimate.offset_s, estimate.sigma_s) + "s";
+  std::cerr << fmt::format("nothing written; accept it with: bosfuse mark {} \"{}\" --at {}\n", args.run, args.message,
+                           at);
+  std::cout << at << "\n";
+}
+
 void mark(const MarkArgs& args) {
   if (args.message.empty()) throw std::runtime_error("a marker needs a name, e.g. \"heater off\"");
+  if (args.estimate) return propose(args);
   auto store = storage::RunStore::open(args.run, true);
   if (args.at.empty()) refuse_now_after_the_run(store, args);
   const std::int64_t t_ns = args.at.empty() ? acquisition::utc_now_ns() : marker_time_ns(store, args.at);
@@ -104,6 +123,10 @@ void add_mark(CLI::App& root) {
           return std::string(e.what());
         }
       });
+  cmd->add_flag("--estimate", args->estimate,
+               "Write nothing: propose --at from the knee of the thermocouple curves, where heating turns into "
+               "cooling (printed on stdout, the reasoning on stderr)")
+      ->excludes("--at");
   cmd->callback([args] { mark(*args); });
 }
 

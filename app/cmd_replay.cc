@@ -30,7 +30,8 @@ void replay(const ReplayArgs& args) {
                  args.out);
   }
   const auto summary = session.run(stop_requested_by_signal());
-  std::cout << summary.BriefReport() << "\nreplayed run: " << session.dir().string() << "\n";
+  // The summary on stderr: the replay's product is the run folder.
+  std::cerr << summary.BriefReport() << "\nreplayed run: " << session.dir().string() << "\n";
 }
 
 void add_replay(CLI::App& root) {

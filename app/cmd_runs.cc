@@ -12,6 +12,7 @@
 #include "app/run_argument.h"
 #include "storage/experiment_clock.h"
 #include "storage/run_store.h"
+#include "storage/value_digits.h"
 
 namespace bosfuse::app {
 namespace {
@@ -20,7 +21,14 @@ std::string time_or_dash(const std::optional<std::int64_t>& t_ns) {
   return t_ns ? acquisition::format_iso8601_utc(*t_ns, 3) : "-";
 }
 
-std::string value_or_dash(const std::optional<double>& v) { return v ? fmt::format("{:.2f}", *v) : "-"; }
+// At the channel's digits (storage/value_digits.h).
+std::string value_or_dash(const std::optional<double>& v, std::optional<double> resolution) {
+  return v ? storage::format_channel_value(*v, resolution) : "-";
+}
+
+std::string resolution_or_dash(std::optional<double> resolution) {
+  return resolution ? fmt::format("{:g}", *resolution) : "-";
+}
 
 void print_run(const storage::RunStore& store) {
   const storage::RunInfo run = store.run();
@@ -39,13 +47,14 @@ void print_run(const storage::RunStore& store) {
 }
 
 void print_channels(const storage::RunStore& store) {
-  std::cout << fmt::format("\n{:<12} {:<16} {:<13} {:<5} {:>9} {:>9} {:>9} {:>9}  {:<24} {}\n", "device", "channel",
-                           "kind", "unit", "samples", "ok", "min", "max", "first", "last");
+  std::cout << fmt::format("\n{:<12} {:<16} {:<13} {:<5} {:>10} {:>9} {:>9} {:>9} {:>9}  {:<24} {}\n", "device",
+                           "channel", "kind", "unit", "resolution", "samples", "ok", "min", "max", "first", "last");
   for (const auto& s : store.channel_summaries()) {
-    std::cout << fmt::format("{:<12} {:<16} {:<13} {:<5} {:>9} {:>9} {:>9} {:>9}  {:<24} {}\n", s.device_name,
-                             s.channel.name, s.channel.kind, s.channel.unit, s.sample_count, s.ok_count,
-                             value_or_dash(s.min_value), value_or_dash(s.max_value), time_or_dash(s.first_ns),
-                             time_or_dash(s.last_ns));
+    const auto resolution = s.channel.resolution;
+    std::cout << fmt::format("{:<12} {:<16} {:<13} {:<5} {:>10} {:>9} {:>9} {:>9} {:>9}  {:<24} {}\n", s.device_name,
+                             s.channel.name, s.channel.kind, s.channel.unit, resolution_or_dash(resolution),
+                             s.sample_count, s.ok_count, value_or_dash(s.min_value, resolution),
+                             value_or_dash(s.max_value, resolution), time_or_dash(s.first_ns), time_or_dash(s.last_ns));
   }
 }
 

@@ -23,6 +23,7 @@ struct SimModbusArgs {
   int unit_id = 1;
   std::string update_period = "0";
   std::string duration;
+  std::string heated_for;
 };
 
 acquisition::ModbusEndpoint endpoint_of(const SimModbusArgs& args) {
@@ -57,6 +58,9 @@ std::chrono::nanoseconds update_period(const std::string& text) {
 
 void serve(SimModbusArgs args) {
   args.module.update_period = update_period(args.update_period);
+  if (!args.heated_for.empty()) {
+    args.module.signal.heated_s = std::chrono::duration<double>(parse_duration(args.heated_for)).count();
+  }
   sim::ModbusSimServer server(sim::module_server_options(args.module, endpoint_of(args)));
   server.start();
   const std::string where =
@@ -107,6 +111,9 @@ void add_sim(CLI::App& root) {
   cmd->add_option("--update-period", args->update_period, "Time between value updates (250ms, 1s; 0: every request)")
       ->capture_default_str();
   cmd->add_option("--duration", args->duration, "Stop after this long (30s, 10m, 2h); default: until Ctrl-C");
+  cmd->add_option("--heated-for", args->heated_for,
+                  "The heater is on for this long after the start (30s, 2min): the inputs rise to --initial, then "
+                  "cool; default: they cool from the start");
   cmd->callback([args] { serve(*args); });
 }
 

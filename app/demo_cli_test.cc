@@ -9,6 +9,8 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "app/test_streams.h"
+
 #include <signal.h>
 
 #include <cmath>
@@ -276,6 +278,23 @@ TEST(DemoCli, ADemoTooShortForBosFitsWarnsAndItsTableSaysWhy) {
     EXPECT_NE(text.find("k = — (no fit: "), std::string::npos) << text;
   }
   EXPECT_FALSE(std::regex_search(demo.output, std::regex("\\bnan\\b"))) << demo.output;
+}
+
+// Standard output is the demo's result only (issue 31): the table of rates
+// beside the truth and where the run and its report are; the recording's
+// summary and the progress are on stderr.
+TEST(DemoCli, StandardOutputHoldsTheResultTableOnly) {
+  testing::TempDir dir;
+  const auto demo = testing::run_with_streams(
+      kBosfuse + " demo --out " + quoted(dir / "demo") + " --experiment-time 30s --speed 16 --seed 2", dir.path(), 300);
+  ASSERT_EQ(demo.exit_code, 0) << demo.err;
+  EXPECT_TRUE(demo.out.starts_with("cooling rate of the plume at the thermocouples, true: k = ")) << demo.out;
+  EXPECT_NE(demo.out.find("\nreport:  "), std::string::npos) << demo.out;
+  for (const std::string& line : {std::string("samples"), std::string("run store")}) {
+    EXPECT_EQ(demo.out.find(line), std::string::npos) << line << " on stdout: " << demo.out;
+  }
+  EXPECT_EQ(demo.out.find("warning"), std::string::npos) << demo.out;
+  EXPECT_NE(demo.err.find("a BOS fit needs at least 4"), std::string::npos) << demo.err;
 }
 
 TEST(DemoCli, CtrlCStopsTheDemoPromptlyWithTheRunRecordedSoFar) {

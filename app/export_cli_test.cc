@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <regex>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -227,6 +228,75 @@ TEST_F(ExportCli, AnExportPipedIntoFitGivesTheChannelsCoolingRate) {
   EXPECT_NEAR(k.at("value").get<double>(), truth_.k_per_s[1], 4 * k.at("std_error").get<double>());
   EXPECT_NE(piped.err.find("standard input: 'tc1 [degC]' against 't_s'"), std::string::npos)
       << "the printed fit goes to stderr: " << piped.err;
+}
+
+// Issue 31: numbers at their precision. A channel of 0.1 °C resolution is
+// exported with one decimal (run.sqlite keeps the doubles); a run from
+// before schema 6, whose resolution is unknown, with 6 significant digits.
+class ExportPrecisionCli : public ::testing::Test {
+ protected:
+  fs::path run() const { return dir_ / "run"; }
+  testing::StreamsResult streams(const std::string& args) {
+    return testing::run_with_streams(kBosfuse + " " + args, dir_.path());
+  }
+  // The channel cells of an export (columns 4 and 5), empty ones left out.
+  std::vector<std::string> value_cells() {
+    const auto exported = streams("export " + sh_quoted(run()) + " --csv -o -");
+    EXPECT_EQ(exported.exit_code, 0) << exported.err;
+    std::vector<std::string> cells;
+    std::istringstream rows(exported.out);
+    std::string row;
+    std::getline(rows, row);  // the header
+    while (std::getline(rows, row)) {
+      std::istringstream fields(row);
+      std::string cell;
+      for (int column = 0; std::getline(fields, cell, ','); ++column) {
+        if (column >= 3 && !cell.empty()) cells.push_back(cell);
+      }
+    }
+    return cells;
+  }
+
+  testing::TempDir dir_;
+  testrun::Truth truth_;
+};
+
+TEST_F(ExportPrecisionCli, ATenthOfADegreeChannelIsExportedWithOneDecimal) {
+  truth_.resolution = 0.1;
+  testrun::create_run(run(), false, truth_);
+  const auto cells = value_cells();
+  ASSERT_GT(cells.size(), 100u);
+  for (const std::string& cell : cells) {
+    ASSERT_TRUE(std::regex_match(cell, std::regex("-?[0-9]+\\.[0-9]"))) << "'" << cell << "'";
+  }
+  const auto store = storage::RunStore::open(run());
+  EXPECT_EQ(store.channels().front().resolution, 0.1);
+  const auto runs = streams("runs " + sh_quoted(run()));
+  ASSERT_EQ(runs.exit_code, 0) << runs.err;
+  EXPECT_TRUE(std::regex_search(runs.out, std::regex("tc0 +thermocouple +degC +0\\.1 +[0-9]+ +[0-9]+ +[0-9]+\\.[0-9] +"
+                                                     "[0-9]+\\.[0-9] ")))
+      << runs.out;
+}
+
+TEST_F(ExportPrecisionCli, ARunFromBeforeSchema6PrintsSixSignificantDigits) {
+  testrun::create_run(run(), false, truth_);
+  {
+    // What a bosfuse before schema 6 left: no resolution column at all.
+    storage::Database db((run() / storage::RunStore::kDatabaseFileName).string(), storage::Database::Mode::kReadWrite);
+    db.execute(
+        "ALTER TABLE channels DROP COLUMN resolution; ALTER TABLE frames DROP COLUMN arrival_ns; "
+        "DELETE FROM schema_version WHERE version = 6;");
+  }
+  const auto cells = value_cells();
+  ASSERT_GT(cells.size(), 100u);
+  for (const std::string& cell : cells) {
+    const std::string digits = std::regex_replace(cell, std::regex("[-.]|e.*"), "");
+    EXPECT_LE(digits.size(), 6u) << "'" << cell << "'";
+    EXPECT_EQ(cell, fmt::format("{:.6g}", std::stod(cell))) << "not the round trip of a 6-digit value";
+  }
+  const auto runs = streams("runs " + sh_quoted(run()));
+  ASSERT_EQ(runs.exit_code, 0) << runs.err;
+  EXPECT_TRUE(std::regex_search(runs.out, std::regex("tc0 +thermocouple +degC +- +[0-9]+"))) << runs.out;
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include "app/test_streams.h"
 #include "report/test_readers.h"
+#include "sim/cooling_signal.h"
 #include "storage/experiment_clock.h"
 #include "storage/run_store.h"
 #include "tests/support/subprocess.h"
@@ -115,6 +116,71 @@ TEST_F(MarkCli, AnUnreadableTimeOrOneOutsideTheRecordIsSaid) {
   EXPECT_NE(early.err.find("warning: the marker lies 5.000 s (host clock) before the run's first sample"),
             std::string::npos)
       << early.err;
+}
+
+// Issue 31, item 2: --estimate proposes the heater-off time from the knee
+// of the simulator's curves (sim/cooling_signal.h, heated for 120 s, then
+// cooling), recorded at 2×, and writes nothing. The stated tolerance: one
+// sample interval (1 s of experiment time), and within 4σ of its own σ.
+TEST(MarkEstimateCli, ProposesTheSimulatedHeaterOffTimeWithoutWriting) {
+  testing::TempDir dir;
+  const fs::path run = dir / "heated";
+  constexpr double kHeaterOffS = 120;  // experiment seconds after the first sample
+  constexpr double kTimeScale = 2;
+  constexpr std::int64_t kStartNs = 1'795'000'000'000'000'000;
+  {
+    storage::RunInfo info{0, "heated", kStartNs, std::nullopt, "", storage::RunStatus::kRunning, kTimeScale,
+                          "heater off"};
+    auto store = storage::RunStore::create(run, info, storage::RunStore::CreateMode::kNew);
+    const auto device = store.add_device({0, "sim", "modbus-tcp", "adam-6018", "127.0.0.1:1502"});
+    for (int c = 0; c < 2; ++c) {
+      sim::CoolingSignal signal{22.0, 80.0 - 10 * c, 0.01 + 0.005 * c, 0.05, kHeaterOffS, 7};
+      const auto channel = store.add_channel({0, device, "tc" + std::to_string(c), "thermocouple", "degC", "K", {}, {}});
+      std::vector<storage::Sample> samples;
+      for (int i = 0; i < 400; ++i) {  // one per experiment second
+        storage::Sample s;
+        s.channel_id = channel;
+        s.t_ns = kStartNs + static_cast<std::int64_t>(i * 1e9 / kTimeScale);
+        s.value = signal.sample_c(i, c, static_cast<std::uint64_t>(i));
+        samples.push_back(s);
+      }
+      store.write_samples(samples);
+    }
+    store.finish(storage::RunStatus::kComplete, kStartNs + 200'000'000'000);
+  }
+  const auto proposed = testing::run_with_streams(kBosfuse + " mark " + sh_quoted(run) + " 'heater off' --estimate",
+                                                  dir.path(), 60);
+  ASSERT_EQ(proposed.exit_code, 0) << proposed.err;
+  ASSERT_EQ(proposed.out.front(), '+') << proposed.out;
+  const double at_s = std::stod(proposed.out.substr(1));
+  EXPECT_EQ(proposed.out, proposed.out.substr(0, proposed.out.find('s')) + "s\n") << "only the --at value on stdout";
+  EXPECT_NEAR(at_s, kHeaterOffS, 1.0) << proposed.err;
+  EXPECT_NE(proposed.err.find("heater off proposed at +"), std::string::npos) << proposed.err;
+  EXPECT_NE(proposed.err.find("nothing written; accept it with: bosfuse mark"), std::string::npos) << proposed.err;
+  EXPECT_NE(proposed.err.find("tc1: knee at +"), std::string::npos) << proposed.err;
+  const auto store = storage::RunStore::open(run);
+  EXPECT_TRUE(store.events().empty()) << "--estimate wrote an event";
+
+  // Accepted, the proposal is the origin.
+  const auto accepted = testing::run_with_streams(
+      kBosfuse + " mark " + sh_quoted(run) + " 'heater off' --at " + proposed.out.substr(0, proposed.out.size() - 1),
+      dir.path(), 60);
+  ASSERT_EQ(accepted.exit_code, 0) << accepted.err;
+  EXPECT_NEAR(static_cast<double>(storage::experiment_clock(storage::RunStore::open(run)).origin_ns - kStartNs) *
+                  1e-9 * kTimeScale,
+              kHeaterOffS, 1.0);
+}
+
+TEST_F(MarkCli, EstimateSaysWhyACurveThatOnlyCoolsHasNoKnee) {
+  const auto refused = bosfuse("mark " + sh_quoted(run()) + " 'heater off' --estimate");
+  EXPECT_EQ(refused.exit_code, 1) << refused.err;
+  EXPECT_NE(refused.err.find("tc0: no knee (the curve falls from its first sample: the heater was off before)"),
+            std::string::npos)
+      << refused.err;
+  EXPECT_EQ(refused.out, "");
+  EXPECT_EQ(markers(), 0u);
+  const auto both = bosfuse("mark " + sh_quoted(run()) + " 'heater off' --estimate --at +3s");
+  EXPECT_EQ(both.exit_code, 108) << both.err;  // CLI11's ExcludesError
 }
 
 }  // namespace

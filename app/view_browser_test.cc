@@ -253,12 +253,13 @@ TEST(ViewBrowser, ValuesAppearAndGrowWhileRecordingAndAStoppedModuleShowsDisconn
                          10),
             "live");
   // Each thermocouple's current value in large type, as a number with its
-  // unit and its age, near what the module serves.
+  // unit and its age, near what the module serves, at the channel's digits:
+  // a type-K adam-6018 input steps by 1370/65535 °C, two decimals.
   const auto readings = wait_in_page(
       devtools_port, url,
       "(() => { const r = [...document.querySelectorAll('#readings .reading')].map(e =>"
       " [e.dataset.channel, e.querySelector('.value').textContent, e.querySelector('.age').textContent]);"
-      " return r.length === 2 && r.every(([, v, a]) => /^-?\\d+\\.\\d °C$/.test(v) && /^\\d+ s ago$/.test(a)) ? r : null;"
+      " return r.length === 2 && r.every(([, v, a]) => /^-?\\d+\\.\\d\\d °C$/.test(v) && /^\\d+ s ago$/.test(a)) ? r : null;"
       " })()",
       20);
   ASSERT_TRUE(readings.is_array()) << readings;
@@ -275,8 +276,8 @@ TEST(ViewBrowser, ValuesAppearAndGrowWhileRecordingAndAStoppedModuleShowsDisconn
       high = std::max(high, *value.reading.value);
     }
     ASSERT_LE(low, high) << "the module served " << name << " nothing in the last 5 s";
-    EXPECT_GE(shown_c, low - 0.05) << name << " " << reading;  // shown to 0.1 °C
-    EXPECT_LE(shown_c, high + 0.05) << name << " " << reading;
+    EXPECT_GE(shown_c, low - 0.005) << name << " " << reading;  // shown to 0.01 °C
+    EXPECT_LE(shown_c, high + 0.005) << name << " " << reading;
     EXPECT_LE(std::stoi(reading[2].get<std::string>()), 3) << "a value of a run being recorded is fresh: " << reading;
   }
   // A marker made while recording is drawn on the chart with its label.

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "fitting/student_t.h"
+#include "fitting/uncertainty_digits.h"
 
 namespace bosfuse::fitting {
 namespace {
@@ -758,14 +759,17 @@ std::string NewtonFit::brief_report() const {
   // Names arrive padded: printf pads bytes, and τ takes two.
   const auto line = [](const char* name, const char* unit, const Estimate& e) {
     if (e.fixed) return format("  %s = %.6g %s (fixed)\n", name, e.value, unit);
-    return format("  %s = %.6g ± %.3g %s  [%.6g, %.6g]\n", name, e.value, e.std_error, unit, e.low, e.high);
+    // At the digits σ supports (fitting/uncertainty_digits.h).
+    const auto at_sigma = [&e](double v) { return format_at_uncertainty(v, e.std_error); };
+    return format("  %s = %s ± %s %s  [%s, %s]\n", name, at_sigma(e.value).c_str(), at_sigma(e.std_error).c_str(),
+                  unit, at_sigma(e.low).c_str(), at_sigma(e.high).c_str());
   };
   std::string text = "T(t) = T_amb + (T0 − T_amb)·exp(−k·t), t from the origin; intervals at " +
                      format("%.3g%%", 100.0 * summary.confidence) + "\n";
   if (!t0_at_origin()) {
     text = "T(t) = T_amb + (T0 − T_amb)·exp(−k·(t − t₀)), t from the origin; intervals at " +
            format(
-               "%.3g%%\n  T0 is at t₀ = %.15g s, the first sample: the origin lies %.3g time constants from the "
+               "%.3g%%\n  T0 is at t₀ = %.10g s, the first sample: the origin lies %.3g time constants from the "
                "data, too far for T0 there\n",
                100.0 * summary.confidence, t0_reference_s, std::abs(t0_reference_s) / tau_s.value);
   }

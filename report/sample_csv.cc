@@ -11,6 +11,7 @@
 #include "acquisition/clock.h"
 #include "report/csv_cell.h"
 #include "storage/experiment_clock.h"
+#include "storage/value_digits.h"
 
 namespace bosfuse::report {
 
@@ -163,10 +164,12 @@ TimeCell parse_time_cell(const std::string& text, std::size_t line_number) {
 void write_samples_csv(const storage::RunStore& store, std::ostream& out) {
   const auto channels = store.channels();
   std::map<std::int64_t, std::size_t> column;
+  std::vector<std::optional<double>> resolution;
   const storage::ExperimentClock clock = storage::experiment_clock(store);
   out << "time_utc,t_s,time_scale";
   for (const auto& c : channels) {
     column[c.id] = column.size();
+    resolution.push_back(c.resolution);
     out << "," << csv_text_cell(c.name + " [" + c.unit + "]");
   }
   out << "\n";
@@ -187,7 +190,10 @@ void write_samples_csv(const storage::RunStore& store, std::ostream& out) {
       flush_row();
       row_t = s.t_ns;
     }
-    if (s.value) cells[column.at(s.channel_id)] = fmt::format("{}", *s.value);
+    // At the channel's digits (storage/value_digits.h): a quantised reading
+    // is 23.4, not 23.400000000000002; run.sqlite keeps the stored double.
+    const std::size_t i = column.at(s.channel_id);
+    if (s.value) cells[i] = storage::format_channel_value(*s.value, resolution[i]);
   });
   flush_row();
 }

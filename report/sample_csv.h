@@ -9,6 +9,9 @@
 // recorded second: 16 for a demo recorded 16× fast, 1 for a real run; the
 // origin is at time_utc − t_s / time_scale) and one column per channel
 // named "NAME [UNIT]"; a cell is empty where a channel had no ok sample then.
+// Values are written at their channel's resolution (storage/value_digits.h:
+// one decimal for a 0.1 °C channel, 6 significant digits where it is
+// unknown); run.sqlite keeps each value as stored.
 // The basis is in columns, not in lines above the header, so the file stays
 // one table for `bosfuse fit -`, pandas and spreadsheets.
 //

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "fitting/uncertainty_digits.h"
 #include "report/html.h"
 
 namespace bosfuse::report {
@@ -254,11 +255,18 @@ std::string cell(const SummaryQuantity& q, std::string_view format, const std::s
   if (!q.value) return "<td>—" + notes.mark(q.reason) + "</td>";
   const bool other_unit = q.unit != column_unit;
   if (other_unit) format = "{:.3g}";  // a px value has its own scale
-  std::string text = display_number(*q.value, format);
+  // A fitted value with its σ is written at the digits σ supports
+  // (fitting/uncertainty_digits.h), its interval likewise; `format` serves
+  // what has no σ.
+  const bool at_sigma = !other_unit && !q.fixed && q.std_error && fitting::uncertainty_decimals(*q.std_error);
+  const auto number = [&](double v) {
+    return at_sigma && std::isfinite(v) ? fitting::format_at_uncertainty(v, *q.std_error) : display_number(v, format);
+  };
+  std::string text = number(*q.value);
   if (other_unit) text += " " + html_escape(q.unit);
   if (q.fixed) return "<td>" + text + " (fixed)</td>";
   if (with_interval && q.low && q.high) {
-    text += fmt::format("<br><small>[{}, {}]</small>", display_number(*q.low, format), display_number(*q.high, format));
+    text += fmt::format("<br><small>[{}, {}]</small>", number(*q.low), number(*q.high));
   }
   return "<td>" + text + "</td>";
 }

@@ -1,5 +1,6 @@
 #include "sim/cooling_signal.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -29,11 +30,18 @@ std::string CoolingSignal::Validate() const {
   if (!std::isfinite(ambient_c) || !std::isfinite(initial_c)) return "temperatures must be finite";
   if (!(k_per_s >= 0) || !std::isfinite(k_per_s)) return "cooling rate k must be finite and not negative";
   if (!(noise_c >= 0) || !std::isfinite(noise_c)) return "noise must be finite and not negative";
+  if (!(heated_s >= 0) || !std::isfinite(heated_s)) return "the heating time must be finite and not negative";
   return {};
 }
 
 double CoolingSignal::mean_c(double t_s) const {
-  return ambient_c + (initial_c - ambient_c) * std::exp(-k_per_s * t_s);
+  if (t_s < heated_s) {
+    // Heating towards initial_c, reached at the switch-off; linear when k = 0.
+    const double reached = k_per_s > 0 ? -std::expm1(-k_per_s * t_s) / -std::expm1(-k_per_s * heated_s)
+                                       : t_s / heated_s;
+    return ambient_c + (initial_c - ambient_c) * std::max(reached, 0.0);
+  }
+  return ambient_c + (initial_c - ambient_c) * std::exp(-k_per_s * (t_s - heated_s));
 }
 
 double CoolingSignal::sample_c(double t_s, int channel, std::uint64_t draw) const {

@@ -102,6 +102,9 @@ toml::table channel_table(const storage::ChannelInfo& channel, std::size_t index
   }
   if (const auto tau = time_constants.find(acquisition::channel_name_key(channel.name)); tau != time_constants.end())
     t.insert("time_constant_s", tau->second);
+  // The replay serves floats, which have no step of their own: the recorded
+  // channel's resolution is kept by stating it.
+  if (channel.resolution) t.insert("resolution", *channel.resolution);
   return t;
 }
 

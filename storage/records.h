@@ -66,6 +66,11 @@ struct ChannelInfo {
   std::optional<std::string> tc_type;
   std::optional<double> image_x_px;
   std::optional<double> image_y_px;
+  // The smallest step of its values, in `unit` (0.1 for a module reporting
+  // tenths of a degree): from the experiment file, else from the driver (a
+  // register's scale); none where neither says, as in runs before schema 6.
+  // It sets the digits a value is printed with (storage/value_digits.h).
+  std::optional<double> resolution = std::nullopt;
 };
 
 struct Sample {

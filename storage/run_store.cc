@@ -1,5 +1,6 @@
 #include "storage/run_store.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <cmath>
@@ -238,12 +239,12 @@ std::int64_t RunStore::add_device(const DeviceInfo& device) {
 
 std::int64_t RunStore::add_channel(const ChannelInfo& channel) {
   db_.prepare(
-         "INSERT INTO channels (device_id, name, kind, unit, tc_type, image_x_px, image_y_px) "
-         "VALUES (?, ?, ?, ?, ?, ?, ?) ON CONFLICT (device_id, name) DO UPDATE SET kind = excluded.kind, "
+         "INSERT INTO channels (device_id, name, kind, unit, tc_type, image_x_px, image_y_px, resolution) "
+         "VALUES (?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (device_id, name) DO UPDATE SET kind = excluded.kind, "
          "unit = excluded.unit, tc_type = excluded.tc_type, image_x_px = excluded.image_x_px, "
-         "image_y_px = excluded.image_y_px")
+         "image_y_px = excluded.image_y_px, resolution = excluded.resolution")
       .bind_all(channel.device_id, channel.name, channel.kind, channel.unit, channel.tc_type, channel.image_x_px,
-                channel.image_y_px)
+                channel.image_y_px, channel.resolution)
       .run();
   auto stmt = db_.prepare("SELECT id FROM channels WHERE device_id = ? AND name = ?");
   stmt.bind(1, channel.device_id).bind(2, channel.name).step();
@@ -350,15 +351,18 @@ std::vector<DeviceInfo> RunStore::devices() const {
 }
 
 std::vector<ChannelInfo> RunStore::channels() const {
-  auto stmt = db_.prepare(
-      "SELECT c.id, c.device_id, c.name, c.kind, c.unit, c.tc_type, c.image_x_px, c.image_y_px "
-      "FROM channels c JOIN devices d ON d.id = c.device_id WHERE d.run_id = ? ORDER BY c.id");
+  // A store of an older schema opened read-only has no resolution column:
+  // its channels' resolution is unknown.
+  auto stmt = db_.prepare(fmt::format(
+      "SELECT c.id, c.device_id, c.name, c.kind, c.unit, c.tc_type, c.image_x_px, c.image_y_px, {} "
+      "FROM channels c JOIN devices d ON d.id = c.device_id WHERE d.run_id = ? ORDER BY c.id",
+      schema_version(db_) >= 6 ? "c.resolution" : "NULL"));
   stmt.bind(1, run_id_);
   std::vector<ChannelInfo> out;
   while (stmt.step()) {
     out.push_back({stmt.column_int64(0), stmt.column_int64(1), stmt.column_text(2), stmt.column_text(3),
                    stmt.column_text(4), stmt.column_optional_text(5), stmt.column_optional_double(6),
-                   stmt.column_optional_double(7)});
+                   stmt.column_optional_double(7), stmt.column_optional_double(8)});
   }
   return out;
 }

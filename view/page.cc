@@ -141,17 +141,22 @@ function addReading(c, colour) {
   const value = element('div', 'value', '—'), age = element('div', 'age', 'no value yet');
   name.style.borderLeft = '4px solid ' + colour; name.style.paddingLeft = '.3em';
   box.dataset.channel = c.name; box.append(name, value, age); $('readings').append(box);
-  readings.set(c.id, {value, age, unit: unitText(c.unit), last: null, lastOk: null});
+  readings.set(c.id, {value, age, unit: unitText(c.unit), decimals: c.decimals, last: null, lastOk: null});
+}
+// A value at its channel's digits (storage/value_digits.h): its resolution's
+// decimals, or 6 significant digits where the resolution is unknown.
+function valueText(v, decimals) {
+  return decimals === null || decimals === undefined ? String(Number(v.toPrecision(6))) : v.toFixed(decimals);
 }
 function showReading(r) {
   if (!r.last) return;
   if (r.last.status === 'ok') {
-    r.value.textContent = r.last.value.toFixed(1) + ' ' + r.unit; r.age.textContent = ago(r.last.t); r.age.className = 'age';
+    r.value.textContent = valueText(r.last.value, r.decimals) + ' ' + r.unit; r.age.textContent = ago(r.last.t); r.age.className = 'age';
     return;
   }
   r.value.textContent = '—';
   r.age.textContent = r.last.status + ' ' + ago(r.last.t) +
-    (r.lastOk ? '; last value ' + r.lastOk.value.toFixed(1) + ' ' + r.unit + ' ' + ago(r.lastOk.t) : '');
+    (r.lastOk ? '; last value ' + valueText(r.lastOk.value, r.decimals) + ' ' + r.unit + ' ' + ago(r.lastOk.t) : '');
   r.age.className = 'age bad';
 }
 function deviceRow(id, name, kind) {

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "acquisition/config/experiment_config.h"
+#include "storage/value_digits.h"
 #include "view/thread_priority.h"
 
 namespace bosfuse::view {
@@ -147,11 +148,15 @@ std::string RunWatch::describe_json() const {
   nlohmann::json channels = nlohmann::json::array();
   for (const auto& channel : store_.channels()) {
     const auto alarms = alarm_limits_.find({names[channel.device_id], channel.name});
+    const std::optional<int> decimals = storage::resolution_decimals(channel.resolution);
     channels.push_back({{"id", channel.id},
                         {"name", channel.name},
                         {"kind", channel.kind},
                         {"unit", channel.unit},
                         {"tc_type", channel.tc_type ? nlohmann::json(*channel.tc_type) : nlohmann::json()},
+                        {"resolution", channel.resolution ? nlohmann::json(*channel.resolution) : nlohmann::json()},
+                        // The page prints values at these (null: 6 significant digits).
+                        {"decimals", decimals ? nlohmann::json(*decimals) : nlohmann::json()},
                         {"device_id", channel.device_id},
                         {"device", names[channel.device_id]},
                         {"alarms", alarms == alarm_limits_.end() ? nlohmann::json::object() : alarms->second}});

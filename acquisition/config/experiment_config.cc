@@ -67,6 +67,15 @@ void read_time_constant(const TomlReader& r, Channel& c) {
       r.number_in("time_constant_s", 0.0, 0.0, kLongestTimeConstantS, "the sensor's first-order response time in s");
 }
 
+// A channel's resolution, the smallest step of its values in its unit
+// (0.1 for a module that reports tenths of a degree): it sets the digits
+// its values are printed with. Above 0, and below any sensible range.
+template <typename Channel>
+void read_resolution(const TomlReader& r, Channel& c) {
+  if (!r.has("resolution")) return;
+  c.resolution = r.number_in("resolution", 0.0, 1e-12, 1e6, "a step in the channel's unit");
+}
+
 template <typename Channel>
 void read_alarms(const TomlReader& r, Channel& c) {
   c.alarms.low = r.optional_number("alarm_low");
@@ -85,6 +94,7 @@ void read_channel_identity(const TomlReader& r, Channel& c) {
   if (auto unit = r.optional_string("unit")) c.unit = *unit;
   read_position(r, c);
   read_time_constant(r, c);
+  read_resolution(r, c);
   read_alarms(r, c);
 }
 
@@ -102,7 +112,7 @@ std::optional<EmfInput> read_emf_input(const TomlReader& r) {
   const auto fixed_c = r.has("cold_junction_c")
                            ? std::optional(r.number_in("cold_junction_c", 0, -273.15, 2000, "a temperature in °C"))
                            : std::nullopt;
-  EmfInput input{*type, r.optional_string("cold_junction").value_or(""), fixed_c};
+  EmfInput input{*type, r.optional_string("cold_junction").value_or(""), fixed_c, std::nullopt};
   if (input.cold_junction_channel.empty() == !input.cold_junction_c) {
     r.fail("", "a millivolt channel needs exactly one of cold_junction (a channel name) and cold_junction_c");
   }
@@ -209,6 +219,7 @@ ModbusDeviceConfig read_modbus_device(const TomlReader& r) {
   for (const TomlReader& channel : r.tables("channels")) {
     d.emf_inputs.push_back(read_emf_input(channel));
     d.channels.push_back(read_channel(channel, *profile));
+    if (d.emf_inputs.back()) d.emf_inputs.back()->resolution_c = d.channels.back().resolution;
     names.insert(d.channels.back().name);
   }
   if (d.channels.empty()) r.fail("", "a device needs at least one [[devices.channels]] entry");
@@ -309,6 +320,7 @@ HidDeviceConfig read_hid_device(const TomlReader& r) {
   for (const TomlReader& channel : r.tables("channels")) {
     d.emf_inputs.push_back(read_emf_input(channel));
     d.protocol.channels.push_back(read_hid_channel(channel, d.profile, d.protocol));
+    if (d.emf_inputs.back()) d.emf_inputs.back()->resolution_c = d.protocol.channels.back().resolution;
     names.insert(d.protocol.channels.back().name);
   }
   if (d.protocol.channels.empty()) r.fail("", "a device needs at least one [[devices.channels]] entry");
@@ -328,6 +340,7 @@ UsbTc32Channel read_usb_tc32_channel(const TomlReader& r) {
   c.tc_type = type[0];
   read_position(r, c);
   read_time_constant(r, c);
+  read_resolution(r, c);
   read_alarms(r, c);
   r.reject_unknown_keys();
   return c;

@@ -64,7 +64,7 @@ storage::DeviceInfo HidDevice::device_info() const { return {0, name_, "hid", pr
 std::vector<storage::ChannelInfo> HidDevice::channel_infos() const {
   std::vector<storage::ChannelInfo> infos;
   for (const auto& c : protocol_.channels) {
-    infos.push_back({0, 0, c.name, c.kind, c.unit, c.tc_type, c.image_x_px, c.image_y_px});
+    infos.push_back({0, 0, c.name, c.kind, c.unit, c.tc_type, c.image_x_px, c.image_y_px, c.stored_resolution()});
   }
   return infos;
 }

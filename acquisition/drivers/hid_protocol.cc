@@ -73,6 +73,12 @@ std::string HidChannel::Validate() const {
 
 std::size_t HidChannel::reply_size() const { return static_cast<std::size_t>(value_offset + byte_count(type)); }
 
+std::optional<double> HidChannel::stored_resolution() const {
+  if (resolution) return resolution;
+  if (type == HidValueType::kFloat32 || !(scale != 0) || !std::isfinite(scale)) return std::nullopt;
+  return std::abs(scale);
+}
+
 ChannelReading HidChannel::decode(std::span<const std::uint8_t> reply) const {
   ChannelReading reading;
   const bool wrong_report = reply_report_id && (reply.empty() || reply[0] != *reply_report_id);

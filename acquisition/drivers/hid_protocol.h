@@ -41,6 +41,7 @@ struct HidChannel {
   std::optional<double> image_x_px;
   std::optional<double> image_y_px;
   std::optional<double> time_constant_s;  // the sensor's first-order response time (agreement removes its lag)
+  std::optional<double> resolution;       // the experiment file's `resolution`, in `unit`
 
   // How it is read.
   std::vector<std::uint8_t> request;            // report id first
@@ -59,6 +60,9 @@ struct HidChannel {
   std::string Validate() const;
   std::size_t reply_size() const;  // bytes the reply must have at least
   ChannelReading decode(std::span<const std::uint8_t> reply) const;
+  // The file's resolution, else the step of one count of an integer value
+  // (|scale|); none for a float value.
+  std::optional<double> stored_resolution() const;
 };
 
 // A device's whole conversation: the reports sent once after opening (type

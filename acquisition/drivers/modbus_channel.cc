@@ -34,6 +34,14 @@ double ModbusChannel::to_value(double raw) const {
   return raw * scale + offset;
 }
 
+std::optional<double> ModbusChannel::register_step() const {
+  if (type == DataType::kFloat32) return std::nullopt;
+  const double step = linear ? std::abs((linear->value_high - linear->value_low) / (linear->raw_high - linear->raw_low))
+                             : std::abs(scale);
+  if (!(step > 0) || !std::isfinite(step)) return std::nullopt;
+  return step;
+}
+
 double ModbusChannel::to_raw(double value) const {
   if (linear) {
     return linear->raw_low + (value - linear->value_low) * (linear->raw_high - linear->raw_low) /

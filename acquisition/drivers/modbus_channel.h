@@ -39,6 +39,7 @@ struct ModbusChannel {
   std::optional<double> image_x_px;
   std::optional<double> image_y_px;
   std::optional<double> time_constant_s;  // the sensor's first-order response time (agreement removes its lag)
+  std::optional<double> resolution;       // the experiment file's `resolution`, in `unit`
 
   // Where and how it is encoded.
   RegisterKind function = RegisterKind::kHolding;
@@ -60,6 +61,11 @@ struct ModbusChannel {
 
   ChannelReading decode(std::span<const std::uint16_t> registers) const;
   double to_value(double raw) const;
+  // The step of one register count in `unit` (|scale|, or the linear
+  // mapping's slope); none for a float register, which has no fixed step.
+  std::optional<double> register_step() const;
+  // What is stored as the channel's resolution: the file's, else the step.
+  std::optional<double> stored_resolution() const { return resolution ? resolution : register_step(); }
   double to_raw(double value) const;
   std::vector<std::uint16_t> encode(double value) const;
   std::vector<std::uint16_t> encode_raw(double raw) const;

@@ -134,7 +134,7 @@ storage::DeviceInfo ModbusDevice::device_info() const {
 std::vector<storage::ChannelInfo> ModbusDevice::channel_infos() const {
   std::vector<storage::ChannelInfo> infos;
   for (const auto& c : channels_) {
-    infos.push_back({0, 0, c.name, c.kind, c.unit, c.tc_type, c.image_x_px, c.image_y_px});
+    infos.push_back({0, 0, c.name, c.kind, c.unit, c.tc_type, c.image_x_px, c.image_y_px, c.stored_resolution()});
   }
   return infos;
 }

@@ -68,7 +68,8 @@ std::vector<storage::ChannelInfo> UsbTc32Device::channel_infos() const {
   for (const auto& c : channels_) {
     const std::optional<std::string> type = c.cold_junction ? std::nullopt : std::optional(std::string(1, c.tc_type));
     infos.push_back(
-        {0, 0, c.name, c.cold_junction ? "cold-junction" : "thermocouple", "degC", type, c.image_x_px, c.image_y_px});
+        {0,           0, c.name, c.cold_junction ? "cold-junction" : "thermocouple", "degC", type, c.image_x_px,
+         c.image_y_px, c.resolution});
   }
   return infos;
 }

@@ -37,6 +37,7 @@ struct UsbTc32Channel {
   std::optional<double> image_x_px;
   std::optional<double> image_y_px;
   std::optional<double> time_constant_s;  // the sensor's first-order response time (agreement removes its lag)
+  std::optional<double> resolution;       // the experiment file's `resolution` in °C (the device sends floats)
   AlarmLimits alarms{};
 };
 

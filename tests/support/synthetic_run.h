@@ -36,6 +36,9 @@ struct Truth {
   std::string config_toml;               // the run's stored experiment config
   double time_scale = 1;                 // experiment seconds per recorded second
   std::optional<std::string> origin_event;  // declared origin (a marker the test writes), else the first sample
+  // The channels' resolution: values are quantised to it, as a module's
+  // register is, and it is stored; none: full doubles, resolution unknown.
+  std::optional<double> resolution;
 };
 
 // The holder mask as an 8-bit PNG of the frames' size: 255 under the holder.
@@ -60,7 +63,8 @@ inline void create_run(const std::filesystem::path& dir, bool with_frames, const
   std::normal_distribution<double> noise(0, truth.noise_c);
   for (int c = 0; c < 2; ++c) {
     const auto channel = store.add_channel(
-        {0, device, "tc" + std::to_string(c), "thermocouple", "degC", "K", truth.tc_px[c].x, truth.tc_px[c].y});
+        {0, device, "tc" + std::to_string(c), "thermocouple", "degC", "K", truth.tc_px[c].x, truth.tc_px[c].y,
+         truth.resolution});
     std::vector<storage::Sample> samples;
     for (int i = 0; i < truth.samples; ++i) {
       storage::Sample s;
@@ -71,6 +75,7 @@ inline void create_run(const std::filesystem::path& dir, bool with_frames, const
       } else {
         const double t = (s.t_ns - truth.start_ns) * 1e-9;
         s.value = truth.ambient_c + (truth.t0_c[c] - truth.ambient_c) * std::exp(-truth.k_per_s[c] * t) + noise(random);
+        if (truth.resolution) s.value = std::round(*s.value / *truth.resolution) * *truth.resolution;
       }
       samples.push_back(s);
     }
