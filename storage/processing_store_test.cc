@@ -132,8 +132,6 @@ TEST(ProcessingStore, AVersionOneStoreReadsAsEmptyAndIsMigratedWhenWritten) {
     db.execute("ALTER TABLE runs DROP COLUMN origin_event");
     db.execute("ALTER TABLE runs DROP COLUMN alive_ns");
     db.execute("ALTER TABLE runs DROP COLUMN planned_end_ns");
-    db.execute("ALTER TABLE channels DROP COLUMN resolution");  // version 6's columns
-    db.execute("ALTER TABLE frames DROP COLUMN arrival_ns");
     db.execute("DELETE FROM schema_version WHERE version >= 2");
   }
   EXPECT_TRUE(ProcessingStore(f.run_dir).probes().empty());
@@ -203,8 +201,6 @@ TEST(ProcessingStore, AVersionFourRunReadsWithoutSigmasAndMigratesWhenWritten) {
         db.execute(std::string("ALTER TABLE ") + table + " DROP COLUMN " + column);
       }
     }
-    db.execute("ALTER TABLE channels DROP COLUMN resolution");  // version 6's columns
-    db.execute("ALTER TABLE frames DROP COLUMN arrival_ns");
     db.execute("DELETE FROM schema_version WHERE version >= 5");
     db.prepare(
           "INSERT INTO probe_samples (probe_id, frame_id, t_ns, u_px, v_px, shift_px, temperature_c, valid) "
