@@ -41,7 +41,8 @@ py::list Run::channels() const {
     out.append(record(py::dict(py::arg("id") = c.id, py::arg("device_id") = c.device_id, py::arg("name") = c.name,
                                py::arg("kind") = c.kind, py::arg("unit") = c.unit,
                                py::arg("tc_type") = optional(c.tc_type), py::arg("image_x_px") = optional(c.image_x_px),
-                               py::arg("image_y_px") = optional(c.image_y_px))));
+                               py::arg("image_y_px") = optional(c.image_y_px),
+                               py::arg("resolution") = optional(c.resolution))));
   }
   return out;
 }
