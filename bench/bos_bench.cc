@@ -13,6 +13,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <map>
@@ -36,8 +37,18 @@ namespace bosfuse {
 namespace {
 
 // method: 0 xcorr, 1 flow DIS, 2 flow Farneback, 3 flow TV-L1.
+// The evaluator's options, the deformation's interpolator from
+// BOSFUSE_BENCH_INTERPOLATOR when set (fusion::Interpolator's number: 1
+// Lanczos-3, the former default, against the default for comparison).
+fusion::XcorrOptions bench_xcorr() {
+  fusion::XcorrOptions x;
+  if (const char* i = std::getenv("BOSFUSE_BENCH_INTERPOLATOR")) x.interpolator = fusion::Interpolator(std::atoi(i));
+  return x;
+}
+
 fusion::EvaluatorOptions evaluator(int method, int window_px, int passes) {
   fusion::EvaluatorOptions e;
+  e.xcorr = bench_xcorr();
   if (method > 0) {
     e.method = fusion::Method::kOpticalFlow;
     e.flow.algorithm = method == 1   ? fusion::FlowAlgorithm::kDis
@@ -323,7 +334,7 @@ void BM_LargeShift(benchmark::State& state) {
   options.field = sim::DisplacementModel::uniform(u, v);
   const auto pair = sim::render_pair(options);
   fusion::EvaluationResult result;
-  for (auto _ : state) result = fusion::evaluate_xcorr(pair.reference, pair.measurement, fusion::XcorrOptions{});
+  for (auto _ : state) result = fusion::evaluate_xcorr(pair.reference, pair.measurement, bench_xcorr());
   double sum = 0;
   std::size_t valid = 0, interior = 0, interior_valid = 0;
   for (const auto& vec : result.field.vectors) {
