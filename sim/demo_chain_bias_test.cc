@@ -158,7 +158,7 @@ fusion::EvaluatorOptions switched_options() {
 // through the evaluator. Camera noise BOSFUSE_CHAIN_BIAS_NOISE (default 0),
 // patterns 1..BOSFUSE_CHAIN_BIAS_SEEDS (default 4). With the demo's noise
 // (0.01) over 16 patterns, k from the point's (tc-35mm / tc-45mm):
-//   quintic B-spline deformation (the default)  +0.21 ± 0.14 / +0.15 ± 0.18 %
+//   quintic B-spline deformation (the default)  +0.22 ± 0.14 / +0.16 ± 0.17 %
 //   Lanczos-3 (interpolator=1, the former)      +0.73 ± 0.14 / +0.70 ± 0.17 %
 //   Lanczos-4 (interpolator=2)                  −0.20 ± 0.15 / −0.21 ± 0.18 %
 //   Lanczos-3, symmetric=1                      −1.45 ± 0.14 / −1.46 ± 0.17 %
