@@ -173,6 +173,15 @@ void BM_FullFrame16MP(benchmark::State& state) {
 }
 BENCHMARK(BM_FullFrame16MP)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(2);
 
+// The quintic B-spline's prefilter of one 16 MP measurement (once per frame,
+// before the deformed passes): its share of BM_FullFrame16MPEvaluator.
+void BM_BSplineCoefficients16MP(benchmark::State& state) {
+  cv::Mat image(4096, 4096, CV_32F), coefficients;
+  cv::randu(image, 0.0, 1.0);
+  for (auto _ : state) fusion::bspline_coefficients(image, fusion::Interpolator::kBSpline5, coefficients);
+}
+BENCHMARK(BM_BSplineCoefficients16MP)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(5);
+
 // The true window-mean displacement at the nodes of the IW 16, step 8 grid
 // of the 16 MP pair, computed once (250 305 nodes × 256 samples).
 const std::vector<cv::Point2d>& full_frame_truth(const fusion::DisplacementField& field) {

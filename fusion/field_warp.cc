@@ -73,30 +73,40 @@ std::vector<double> prefilter_poles(Interpolator interpolator) {
 
 // `count` neighbouring lines of n samples each (sample i of line j at
 // s[i·count + j]) filtered in place by the prefilter's poles, with mirror
-// boundaries (Unser, Aldroubi & Eden 1993). The lines side by side, so a
-// block of image columns filters with contiguous reads.
-void prefilter_lines(double* s, int n, int count, const std::vector<double>& poles) {
+// boundaries (Unser, Aldroubi & Eden 1993). The lines side by side, so the
+// recursion, serial along a line, runs in SIMD lanes across lines. Float:
+// the poles' recursion is stable, its rounding far below a grey level.
+void prefilter_lines(float* s, int n, int count, const std::vector<double>& poles) {
   if (n < 2) return;
   double gain = 1;
   for (const double z : poles) gain *= (1 - z) * (1 - 1 / z);
   const auto at = [&](int i) { return s + static_cast<std::size_t>(i) * count; };
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < count; ++j) at(i)[j] *= gain;
-  std::vector<double> first(static_cast<std::size_t>(count));
-  for (const double z : poles) {
+  const auto g = static_cast<float>(gain);
+  for (std::size_t k = 0; k < static_cast<std::size_t>(n) * count; ++k) s[k] *= g;
+  std::vector<float> first(static_cast<std::size_t>(count));
+  for (const double pole : poles) {
+    const auto z = static_cast<float>(pole);
     // The causal filter's first value: the mirrored line's sum, as far as z^k matters in float.
-    const int horizon = std::min(n, static_cast<int>(std::ceil(std::log(1e-9) / std::log(std::abs(z)))));
-    std::fill(first.begin(), first.end(), 0.0);
-    double zk = 1;
-    for (int k = 0; k < horizon; ++k, zk *= z)
-      for (int j = 0; j < count; ++j) first[j] += zk * at(k)[j];
+    const int horizon = std::min(n, static_cast<int>(std::ceil(std::log(1e-9) / std::log(std::abs(pole)))));
+    std::fill(first.begin(), first.end(), 0.0f);
+    float zk = 1;
+    for (int k = 0; k < horizon; ++k, zk *= z) {
+      const float* line = at(k);
+      for (int j = 0; j < count; ++j) first[j] += zk * line[j];
+    }
     std::copy(first.begin(), first.end(), at(0));
-    for (int i = 1; i < n; ++i)
-      for (int j = 0; j < count; ++j) at(i)[j] += z * at(i - 1)[j];
-    const double end = z / (z * z - 1);
+    for (int i = 1; i < n; ++i) {
+      float* here = at(i);
+      const float* before = at(i - 1);
+      for (int j = 0; j < count; ++j) here[j] += z * before[j];
+    }
+    const auto end = static_cast<float>(pole / (pole * pole - 1));
     for (int j = 0; j < count; ++j) at(n - 1)[j] = end * (at(n - 1)[j] + z * at(n - 2)[j]);
-    for (int i = n - 2; i >= 0; --i)
-      for (int j = 0; j < count; ++j) at(i)[j] = z * (at(i + 1)[j] - at(i)[j]);
+    for (int i = n - 2; i >= 0; --i) {
+      float* here = at(i);
+      const float* after = at(i + 1);
+      for (int j = 0; j < count; ++j) here[j] = z * (after[j] - here[j]);
+    }
   }
 }
 
@@ -328,28 +338,32 @@ void bspline_coefficients(const cv::Mat& image, Interpolator interpolator, cv::M
   CV_Assert(out.data != image.data);
   cv::copyMakeBorder(image, out, b, b, b, b, cv::BORDER_REPLICATE);
   const std::vector<double> poles = prefilter_poles(interpolator);
-  // Rows one by one, then blocks of columns side by side; on all threads.
-  cv::parallel_for_(cv::Range(0, out.rows), [&](const cv::Range& rows) {
-    std::vector<double> line(static_cast<std::size_t>(out.cols));
-    for (int y = rows.start; y < rows.end; ++y) {
-      float* row = out.ptr<float>(y);
-      std::copy(row, row + out.cols, line.begin());
-      prefilter_lines(line.data(), out.cols, 1, poles);
-      std::transform(line.begin(), line.end(), row, [](double v) { return static_cast<float>(v); });
+  // Blocks of rows (gathered side by side), then blocks of columns; on all threads.
+  constexpr int kRowBlock = 16, kColumnBlock = 64;
+  cv::parallel_for_(cv::Range(0, (out.rows + kRowBlock - 1) / kRowBlock), [&](const cv::Range& blocks) {
+    std::vector<float> lines;
+    for (int b = blocks.start; b < blocks.end; ++b) {
+      const int y0 = b * kRowBlock, count = std::min(kRowBlock, out.rows - y0);
+      lines.resize(static_cast<std::size_t>(out.cols) * count);
+      for (int j = 0; j < count; ++j) {
+        const float* row = out.ptr<float>(y0 + j);
+        for (int x = 0; x < out.cols; ++x) lines[std::size_t(x) * count + j] = row[x];
+      }
+      prefilter_lines(lines.data(), out.cols, count, poles);
+      for (int j = 0; j < count; ++j) {
+        float* row = out.ptr<float>(y0 + j);
+        for (int x = 0; x < out.cols; ++x) row[x] = lines[std::size_t(x) * count + j];
+      }
     }
   });
-  constexpr int kBlock = 64;
-  cv::parallel_for_(cv::Range(0, (out.cols + kBlock - 1) / kBlock), [&](const cv::Range& blocks) {
-    std::vector<double> lines;
+  cv::parallel_for_(cv::Range(0, (out.cols + kColumnBlock - 1) / kColumnBlock), [&](const cv::Range& blocks) {
+    std::vector<float> lines;
     for (int b = blocks.start; b < blocks.end; ++b) {
-      const int x0 = b * kBlock, count = std::min(kBlock, out.cols - x0);
+      const int x0 = b * kColumnBlock, count = std::min(kColumnBlock, out.cols - x0);
       lines.resize(static_cast<std::size_t>(out.rows) * count);
       for (int y = 0; y < out.rows; ++y) std::copy_n(out.ptr<float>(y) + x0, count, lines.begin() + std::ptrdiff_t(y) * count);
       prefilter_lines(lines.data(), out.rows, count, poles);
-      for (int y = 0; y < out.rows; ++y) {
-        float* row = out.ptr<float>(y) + x0;
-        for (int j = 0; j < count; ++j) row[j] = static_cast<float>(lines[std::size_t(y) * count + j]);
-      }
+      for (int y = 0; y < out.rows; ++y) std::copy_n(lines.begin() + std::ptrdiff_t(y) * count, count, out.ptr<float>(y) + x0);
     }
   });
 }
