@@ -74,37 +74,38 @@ std::vector<double> prefilter_poles(Interpolator interpolator) {
 // `count` neighbouring lines of n samples each (sample i of line j at
 // s[i·count + j]) filtered in place by the prefilter's poles, with mirror
 // boundaries (Unser, Aldroubi & Eden 1993). The lines side by side, so the
-// recursion, serial along a line, runs in SIMD lanes across lines. Float:
-// the poles' recursion is stable, its rounding far below a grey level.
-void prefilter_lines(float* s, int n, int count, const std::vector<double>& poles) {
+// recursion, serial along a line, runs in SIMD lanes across lines. In
+// double: a flat image's coefficients are then exactly flat in float (a
+// float recursion leaves rounding ripples that correlate as texture).
+void prefilter_lines(double* s, int n, int count, const std::vector<double>& poles) {
   if (n < 2) return;
   double gain = 1;
   for (const double z : poles) gain *= (1 - z) * (1 - 1 / z);
   const auto at = [&](int i) { return s + static_cast<std::size_t>(i) * count; };
-  const auto g = static_cast<float>(gain);
+  const double g = gain;
   for (std::size_t k = 0; k < static_cast<std::size_t>(n) * count; ++k) s[k] *= g;
-  std::vector<float> first(static_cast<std::size_t>(count));
+  std::vector<double> first(static_cast<std::size_t>(count));
   for (const double pole : poles) {
-    const auto z = static_cast<float>(pole);
+    const double z = pole;
     // The causal filter's first value: the mirrored line's sum, as far as z^k matters in float.
     const int horizon = std::min(n, static_cast<int>(std::ceil(std::log(1e-9) / std::log(std::abs(pole)))));
-    std::fill(first.begin(), first.end(), 0.0f);
-    float zk = 1;
+    std::fill(first.begin(), first.end(), 0.0);
+    double zk = 1;
     for (int k = 0; k < horizon; ++k, zk *= z) {
-      const float* line = at(k);
+      const double* line = at(k);
       for (int j = 0; j < count; ++j) first[j] += zk * line[j];
     }
     std::copy(first.begin(), first.end(), at(0));
     for (int i = 1; i < n; ++i) {
-      float* here = at(i);
-      const float* before = at(i - 1);
+      double* here = at(i);
+      const double* before = at(i - 1);
       for (int j = 0; j < count; ++j) here[j] += z * before[j];
     }
-    const auto end = static_cast<float>(pole / (pole * pole - 1));
+    const double end = pole / (pole * pole - 1);
     for (int j = 0; j < count; ++j) at(n - 1)[j] = end * (at(n - 1)[j] + z * at(n - 2)[j]);
     for (int i = n - 2; i >= 0; --i) {
-      float* here = at(i);
-      const float* after = at(i + 1);
+      double* here = at(i);
+      const double* after = at(i + 1);
       for (int j = 0; j < count; ++j) here[j] = z * (after[j] - here[j]);
     }
   }
@@ -341,7 +342,7 @@ void bspline_coefficients(const cv::Mat& image, Interpolator interpolator, cv::M
   // Blocks of rows (gathered side by side), then blocks of columns; on all threads.
   constexpr int kRowBlock = 16, kColumnBlock = 64;
   cv::parallel_for_(cv::Range(0, (out.rows + kRowBlock - 1) / kRowBlock), [&](const cv::Range& blocks) {
-    std::vector<float> lines;
+    std::vector<double> lines;
     for (int b = blocks.start; b < blocks.end; ++b) {
       const int y0 = b * kRowBlock, count = std::min(kRowBlock, out.rows - y0);
       lines.resize(static_cast<std::size_t>(out.cols) * count);
@@ -352,18 +353,21 @@ void bspline_coefficients(const cv::Mat& image, Interpolator interpolator, cv::M
       prefilter_lines(lines.data(), out.cols, count, poles);
       for (int j = 0; j < count; ++j) {
         float* row = out.ptr<float>(y0 + j);
-        for (int x = 0; x < out.cols; ++x) row[x] = lines[std::size_t(x) * count + j];
+        for (int x = 0; x < out.cols; ++x) row[x] = static_cast<float>(lines[std::size_t(x) * count + j]);
       }
     }
   });
   cv::parallel_for_(cv::Range(0, (out.cols + kColumnBlock - 1) / kColumnBlock), [&](const cv::Range& blocks) {
-    std::vector<float> lines;
+    std::vector<double> lines;
     for (int b = blocks.start; b < blocks.end; ++b) {
       const int x0 = b * kColumnBlock, count = std::min(kColumnBlock, out.cols - x0);
       lines.resize(static_cast<std::size_t>(out.rows) * count);
       for (int y = 0; y < out.rows; ++y) std::copy_n(out.ptr<float>(y) + x0, count, lines.begin() + std::ptrdiff_t(y) * count);
       prefilter_lines(lines.data(), out.rows, count, poles);
-      for (int y = 0; y < out.rows; ++y) std::copy_n(lines.begin() + std::ptrdiff_t(y) * count, count, out.ptr<float>(y) + x0);
+      for (int y = 0; y < out.rows; ++y) {
+        float* row = out.ptr<float>(y) + x0;
+        for (int j = 0; j < count; ++j) row[j] = static_cast<float>(lines[std::size_t(y) * count + j]);
+      }
     }
   });
 }
