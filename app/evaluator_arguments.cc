@@ -123,8 +123,8 @@ void add_evaluation_choices(CLI::App& cmd, EvaluatorArguments& args) {
                  "Peak estimator: auto (2-D Gaussian fit, then 3-point after deformation), gauss2d or gauss3")
       ->check(CLI::IsMember({"auto", "gauss2d", "gauss3"}))
       ->capture_default_str();
-  cmd.add_option("--interpolator", args.interpolator, "Deformation interpolator: lanczos3, lanczos4 or cubic")
-      ->check(CLI::IsMember({"lanczos3", "lanczos4", "cubic"}))
+  cmd.add_option("--interpolator", args.interpolator, "Deformation interpolator: bspline5 (prefiltered quintic B-spline), bspline3, lanczos3, lanczos4 or cubic")
+      ->check(CLI::IsMember({"bspline5", "bspline3", "lanczos3", "lanczos4", "cubic"}))
       ->capture_default_str();
 }
 

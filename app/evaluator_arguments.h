@@ -31,7 +31,7 @@ struct EvaluatorArguments {
   // evaluate's own choices (add_evaluation_choices)
   std::optional<std::string> flow;
   int first_window_px = 0;
-  std::string dis_preset = "medium", subpixel = "auto", interpolator = "lanczos3";
+  std::string dis_preset = "medium", subpixel = "auto", interpolator = "bspline5";
 };
 
 // What the options are laid over, for their help.

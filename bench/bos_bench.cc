@@ -13,6 +13,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <map>
@@ -39,8 +40,18 @@ namespace bosfuse {
 namespace {
 
 // method: 0 xcorr, 1 flow DIS, 2 flow Farneback, 3 flow TV-L1.
+// The evaluator's options, the deformation's interpolator from
+// BOSFUSE_BENCH_INTERPOLATOR when set (fusion::Interpolator's number: 1
+// Lanczos-3, the former default, against the default for comparison).
+fusion::XcorrOptions bench_xcorr() {
+  fusion::XcorrOptions x;
+  if (const char* i = std::getenv("BOSFUSE_BENCH_INTERPOLATOR")) x.interpolator = fusion::Interpolator(std::atoi(i));
+  return x;
+}
+
 fusion::EvaluatorOptions evaluator(int method, int window_px, int passes) {
   fusion::EvaluatorOptions e;
+  e.xcorr = bench_xcorr();
   if (method > 0) {
     e.method = fusion::Method::kOpticalFlow;
     e.flow.algorithm = method == 1   ? fusion::FlowAlgorithm::kDis
@@ -164,6 +175,15 @@ void BM_FullFrame16MP(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_FullFrame16MP)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(2);
+
+// The quintic B-spline's prefilter of one 16 MP measurement (once per frame,
+// before the deformed passes): its share of BM_FullFrame16MPEvaluator.
+void BM_BSplineCoefficients16MP(benchmark::State& state) {
+  cv::Mat image(4096, 4096, CV_32F), coefficients;
+  cv::randu(image, 0.0, 1.0);
+  for (auto _ : state) fusion::bspline_coefficients(image, fusion::Interpolator::kBSpline5, coefficients);
+}
+BENCHMARK(BM_BSplineCoefficients16MP)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(5);
 
 // The true window-mean displacement at the nodes of the IW 16, step 8 grid
 // of the 16 MP pair, computed once (250 305 nodes × 256 samples).
@@ -320,7 +340,7 @@ void BM_LargeShift(benchmark::State& state) {
   const double u = fourteen ? 14 : 5.3, v = fourteen ? 0 : -3.7;
   const auto pair = bench::large_shift_pair(u, v);
   fusion::EvaluationResult result;
-  for (auto _ : state) result = fusion::evaluate_xcorr(pair.reference, pair.measurement, fusion::XcorrOptions{});
+  for (auto _ : state) result = fusion::evaluate_xcorr(pair.reference, pair.measurement, bench_xcorr());
   double sum = 0;
   std::size_t valid = 0, interior = 0, interior_valid = 0;
   for (const auto& vec : result.field.vectors) {

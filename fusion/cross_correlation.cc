@@ -30,6 +30,9 @@ struct PreparedPair {
   // in place instead of a copy of the whole image with its border.
   cv::Mat measurement_storage;
   int measurement_border_px = 0;
+  // With a B-spline interpolator, what the deformation samples: each
+  // image's spline coefficients (the reference's for symmetric deformation only).
+  cv::Mat measurement_coefficients, reference_coefficients;
   cv::Mat mask_integral;  // CV_32S integral of the 0/1 exclusion mask; empty without mask
   cv::Mat excluded;       // CV_8U, non-zero excluded; empty without mask
   cv::Rect roi;
@@ -54,6 +57,9 @@ PreparedPair prepare_reference(const cv::Mat& reference, const cv::Mat& mask, co
   const cv::Rect full_roi = effective_roi(options.roi, reference.size());
   pair.roi = (full_roi & crop) - crop.tl();
   pair.full_roi_origin = full_roi.tl() - crop.tl();
+  if (options.passes > 1 && options.deform && options.symmetric_deformation && needs_coefficients(options.interpolator)) {
+    bspline_coefficients(pair.reference, options.interpolator, pair.reference_coefficients);
+  }
   if (!mask.empty()) pair.excluded = to_exclusion_mask(mask(crop));
   if (!pair.excluded.empty()) {
     cv::Mat ones;
@@ -88,6 +94,9 @@ void prepare_measurement(const cv::Mat& measurement, cv::Rect crop, std::vector<
   pair.measurement = pair.measurement_storage(cv::Rect(b, b, crop.width, crop.height));
   to_grey_unit_float(measurement(crop), "measurement", warnings, pair.measurement);
   replicate_border(pair.measurement_storage, b);
+  if (options.passes > 1 && options.deform && needs_coefficients(options.interpolator)) {
+    bspline_coefficients(pair.measurement, options.interpolator, pair.measurement_coefficients);
+  }
 }
 
 // Both images, converted silently (a probe's caller warns of colour once).
@@ -897,6 +906,10 @@ void warp_for_pass(const PassLoop& loop, const cv::Mat* predicted, bool warp, bo
   const PreparedPair& pair = loop.pair;
   PassWorkspace& workspace = loop.workspace;
   const GridField& predictor = workspace.predictor;
+  // A B-spline samples the image's coefficients (fast early passes' cubic, the image).
+  const auto source = [&](const cv::Mat& image, const cv::Mat& coefficients) -> const cv::Mat& {
+    return needs_coefficients(interpolator) ? coefficients : image;
+  };
   auto warp_pass = [&](const cv::Mat& image, const GridField& by, cv::Mat& out) {
     if (in.refine) {
       warp_tiles(image, by, in.region, loop.area.tiles, interpolator, out);
@@ -912,10 +925,11 @@ void warp_for_pass(const PassLoop& loop, const cv::Mat* predicted, bool warp, bo
       // Each image moves half-way: both are interpolated at half the offset,
       // and the interpolation errors of the two largely cancel.
       in.warped_reference = reuse(workspace.warped_reference_storage, in.region.size());
-      warp_pass(pair.measurement, scaled(predictor, 0.5, predicted), in.warped);
-      warp_pass(pair.reference, scaled(predictor, -0.5, predicted), in.warped_reference);
+      warp_pass(source(pair.measurement, pair.measurement_coefficients), scaled(predictor, 0.5, predicted), in.warped);
+      warp_pass(source(pair.reference, pair.reference_coefficients), scaled(predictor, -0.5, predicted),
+                in.warped_reference);
     } else {
-      warp_pass(pair.measurement, predictor, in.warped);
+      warp_pass(source(pair.measurement, pair.measurement_coefficients), predictor, in.warped);
     }
   }
 }

@@ -33,16 +33,82 @@ void lanczos_weights(double t, int a, double* w) {
   for (int k = 0; k < 2 * a; ++k) w[k] /= total;  // exact reproduction of a constant
 }
 
+// The centred B-spline of degree n at x: (1/n!) Σ_k (−1)^k C(n+1, k) (x + (n+1)/2 − k)^n, the powers of positive parts.
+double bspline(int n, double x) {
+  double sum = 0, binomial = 1, factorial = 1;
+  for (int i = 2; i <= n; ++i) factorial *= i;
+  for (int k = 0; k <= n + 1; ++k) {
+    const double p = x + (n + 1) / 2.0 - k;
+    if (p > 0) sum += ((k % 2) ? -1 : 1) * binomial * std::pow(p, n);
+    binomial = binomial * (n + 1 - k) / (k + 1);
+  }
+  return sum / factorial;
+}
+
+// Degree-n B-spline taps at −(n−1)/2..(n+1)/2 around floor(x) (n odd).
+void bspline_weights(double t, int n, double* w) {
+  const int first = -(n - 1) / 2;
+  for (int k = 0; k <= n; ++k) w[k] = bspline(n, t - (first + k));
+}
+
 int taps_of(Interpolator interpolator) {
   switch (interpolator) {
     case Interpolator::kCubic:
+    case Interpolator::kBSpline3:
       return 4;
     case Interpolator::kLanczos3:
+    case Interpolator::kBSpline5:
       return 6;
     case Interpolator::kLanczos4:
       return 8;
   }
   return 4;
+}
+
+// The poles of the interpolating B-spline's prefilter (Unser 1999, table I).
+std::vector<double> prefilter_poles(Interpolator interpolator) {
+  if (interpolator == Interpolator::kBSpline3) return {std::sqrt(3.0) - 2};
+  return {-0.430575347099973791, -0.0430962882032647400};
+}
+
+// `count` neighbouring lines of n samples each (sample i of line j at
+// s[i·count + j]) filtered in place by the prefilter's poles, with mirror
+// boundaries (Unser, Aldroubi & Eden 1993). The lines side by side, so the
+// recursion, serial along a line, runs in SIMD lanes across lines. In
+// double: a flat image's coefficients are then exactly flat in float (a
+// float recursion leaves rounding ripples that correlate as texture).
+void prefilter_lines(double* s, int n, int count, const std::vector<double>& poles) {
+  if (n < 2) return;
+  double gain = 1;
+  for (const double z : poles) gain *= (1 - z) * (1 - 1 / z);
+  const auto at = [&](int i) { return s + static_cast<std::size_t>(i) * count; };
+  const double g = gain;
+  for (std::size_t k = 0; k < static_cast<std::size_t>(n) * count; ++k) s[k] *= g;
+  std::vector<double> first(static_cast<std::size_t>(count));
+  for (const double pole : poles) {
+    const double z = pole;
+    // The causal filter's first value: the mirrored line's sum, as far as z^k matters in float.
+    const int horizon = std::min(n, static_cast<int>(std::ceil(std::log(1e-9) / std::log(std::abs(pole)))));
+    std::fill(first.begin(), first.end(), 0.0);
+    double zk = 1;
+    for (int k = 0; k < horizon; ++k, zk *= z) {
+      const double* line = at(k);
+      for (int j = 0; j < count; ++j) first[j] += zk * line[j];
+    }
+    std::copy(first.begin(), first.end(), at(0));
+    for (int i = 1; i < n; ++i) {
+      double* here = at(i);
+      const double* before = at(i - 1);
+      for (int j = 0; j < count; ++j) here[j] += z * before[j];
+    }
+    const double end = pole / (pole * pole - 1);
+    for (int j = 0; j < count; ++j) at(n - 1)[j] = end * (at(n - 1)[j] + z * at(n - 2)[j]);
+    for (int i = n - 2; i >= 0; --i) {
+      double* here = at(i);
+      const double* after = at(i + 1);
+      for (int j = 0; j < count; ++j) here[j] = z * (after[j] - here[j]);
+    }
+  }
 }
 
 // Kernel weights tabulated over the sub-pixel position t ∈ [0, 1] and
@@ -60,6 +126,8 @@ class WeightTable {
       double w[8] = {};
       if (interpolator == Interpolator::kCubic) {
         keys_weights(double(i) / kSteps, w);
+      } else if (needs_coefficients(interpolator)) {
+        bspline_weights(double(i) / kSteps, taps_ - 1, w);
       } else {
         lanczos_weights(double(i) / kSteps, taps_ / 2, w);
       }
@@ -76,8 +144,20 @@ class WeightTable {
 
 const WeightTable& table_of(Interpolator interpolator) {
   static const WeightTable cubic(Interpolator::kCubic), lanczos3(Interpolator::kLanczos3),
-      lanczos4(Interpolator::kLanczos4);
-  return interpolator == Interpolator::kCubic ? cubic : interpolator == Interpolator::kLanczos3 ? lanczos3 : lanczos4;
+      lanczos4(Interpolator::kLanczos4), bspline3(Interpolator::kBSpline3), bspline5(Interpolator::kBSpline5);
+  switch (interpolator) {
+    case Interpolator::kCubic:
+      return cubic;
+    case Interpolator::kLanczos3:
+      return lanczos3;
+    case Interpolator::kLanczos4:
+      return lanczos4;
+    case Interpolator::kBSpline3:
+      return bspline3;
+    case Interpolator::kBSpline5:
+      return bspline5;
+  }
+  return lanczos3;
 }
 
 // The columns of a region between the same two node columns: along a row
@@ -222,6 +302,16 @@ void warp(const cv::Mat& image, const GridField& field, cv::Rect region, Interpo
     return;
   }
   const TabulatedKernel kernel = table_of(interpolator).kernel();
+  if (needs_coefficients(interpolator)) {
+    // The coefficients' pixel (x, y) is the image's (x − border, y − border).
+    constexpr int b = kCoefficientBorderPx;
+    GridField shifted = field;
+    shifted.grid.x0_px += b;
+    shifted.grid.y0_px += b;
+    const cv::Rect moved = region + cv::Point(b, b);
+    for_region_rows([&](const cv::Range& rows) { warp_rows(image, kernel, simd, shifted, moved, rows, out); });
+    return;
+  }
   for_region_rows([&](const cv::Range& rows) { warp_rows(image, kernel, simd, field, region, rows, out); });
 }
 
@@ -236,6 +326,50 @@ cv::Mat warp_region(const cv::Mat& image, const GridField& field, cv::Rect regio
 void warp_region(const cv::Mat& image, const GridField& field, cv::Rect region, Interpolator interpolator,
                  cv::Mat& out) {
   warp(image, field, region, interpolator, true, out);
+}
+
+bool needs_coefficients(Interpolator interpolator) {
+  return interpolator == Interpolator::kBSpline3 || interpolator == Interpolator::kBSpline5;
+}
+
+void bspline_coefficients(const cv::Mat& image, Interpolator interpolator, cv::Mat& out) {
+  CV_Assert(image.type() == CV_32FC1 && needs_coefficients(interpolator));
+  constexpr int b = kCoefficientBorderPx;
+  out.create(image.rows + 2 * b, image.cols + 2 * b, CV_32F);
+  CV_Assert(out.data != image.data);
+  cv::copyMakeBorder(image, out, b, b, b, b, cv::BORDER_REPLICATE);
+  const std::vector<double> poles = prefilter_poles(interpolator);
+  // Blocks of rows (gathered side by side), then blocks of columns; on all threads.
+  constexpr int kRowBlock = 16, kColumnBlock = 64;
+  cv::parallel_for_(cv::Range(0, (out.rows + kRowBlock - 1) / kRowBlock), [&](const cv::Range& blocks) {
+    std::vector<double> lines;
+    for (int b = blocks.start; b < blocks.end; ++b) {
+      const int y0 = b * kRowBlock, count = std::min(kRowBlock, out.rows - y0);
+      lines.resize(static_cast<std::size_t>(out.cols) * count);
+      for (int j = 0; j < count; ++j) {
+        const float* row = out.ptr<float>(y0 + j);
+        for (int x = 0; x < out.cols; ++x) lines[std::size_t(x) * count + j] = row[x];
+      }
+      prefilter_lines(lines.data(), out.cols, count, poles);
+      for (int j = 0; j < count; ++j) {
+        float* row = out.ptr<float>(y0 + j);
+        for (int x = 0; x < out.cols; ++x) row[x] = static_cast<float>(lines[std::size_t(x) * count + j]);
+      }
+    }
+  });
+  cv::parallel_for_(cv::Range(0, (out.cols + kColumnBlock - 1) / kColumnBlock), [&](const cv::Range& blocks) {
+    std::vector<double> lines;
+    for (int b = blocks.start; b < blocks.end; ++b) {
+      const int x0 = b * kColumnBlock, count = std::min(kColumnBlock, out.cols - x0);
+      lines.resize(static_cast<std::size_t>(out.rows) * count);
+      for (int y = 0; y < out.rows; ++y) std::copy_n(out.ptr<float>(y) + x0, count, lines.begin() + std::ptrdiff_t(y) * count);
+      prefilter_lines(lines.data(), out.rows, count, poles);
+      for (int y = 0; y < out.rows; ++y) {
+        float* row = out.ptr<float>(y) + x0;
+        for (int j = 0; j < count; ++j) row[j] = static_cast<float>(lines[std::size_t(y) * count + j]);
+      }
+    }
+  });
 }
 
 TabulatedKernel interpolation_kernel(Interpolator interpolator) { return table_of(interpolator).kernel(); }

@@ -23,6 +23,22 @@ GridField uniform_field(double u, double v) {
   return {{0, 0, 8, 4, 4}, cv::Mat(4, 4, CV_64F, cv::Scalar(u)), cv::Mat(4, 4, CV_64F, cv::Scalar(v))};
 }
 
+// A B-spline samples the image's coefficients: at whole-pixel shifts it
+// gives the image back, and between pixels the smooth image's values.
+TEST(FieldWarp, BSplinesInterpolateThroughTheirCoefficients) {
+  const cv::Mat image = smooth_image(64);
+  for (const auto interpolator : {Interpolator::kBSpline3, Interpolator::kBSpline5}) {
+    cv::Mat coefficients;
+    bspline_coefficients(image, interpolator, coefficients);
+    const cv::Mat same = warp_region(coefficients, uniform_field(0, 0), cv::Rect(0, 0, 64, 64), interpolator);
+    EXPECT_LT(cv::norm(same, image, cv::NORM_INF), 1e-5);
+    const cv::Mat warped = warp_region(coefficients, uniform_field(0.37, -1.21), cv::Rect(10, 12, 30, 20), interpolator);
+    for (int y = 0; y < 20; y += 3) {
+      for (int x = 0; x < 30; x += 3) EXPECT_NEAR(warped.at<float>(y, x), smooth(10 + x + 0.37, 12 + y - 1.21), 2e-3);
+    }
+  }
+}
+
 TEST(FieldWarp, ResamplesAtTheShiftedPositions) {
   const cv::Mat image = smooth_image(64);
   for (const auto interpolator : {Interpolator::kCubic, Interpolator::kLanczos3, Interpolator::kLanczos4}) {

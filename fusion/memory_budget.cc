@@ -155,13 +155,22 @@ PairShape PairShape::of(const cv::Mat& reference, const cv::Mat& mask) {
 //     regions (4 B/px of the ROI grown by the search reach, in one buffer
 //     all passes reuse; two with symmetric deformation) and 211 B per grid
 //     node (kXcorrBytesPerNode), 4 B more with adaptive refinement, and
-//     its smoothing's rows per thread.
+//     its smoothing's rows per thread;
+//   both: a B-spline deformation's coefficients of the measurement (4 B/px
+//     of the image grown by kCoefficientBorderPx on every side; of the
+//     reference too with symmetric deformation), alive from preparing to
+//     the last pass.
 std::uint64_t xcorr_bytes_needed(const PairShape& pair, const XcorrOptions& options) {
   const cv::Rect roi = effective_roi(options.roi, pair.size);
   const Bytes n = pixels(pair.size);
   const bool masked = pair.mask_type >= 0;
   const Bytes mask_integral = masked ? Bytes(pair.size.width + 1) * Bytes(pair.size.height + 1) * sizeof(int) : 0;
-  const Bytes float_copies = 2 * n * sizeof(float);
+  const bool spline = options.passes > 1 && options.deform && needs_coefficients(options.interpolator);
+  const Bytes coefficients = spline ? Bytes(options.symmetric_deformation ? 2 : 1) *
+                                          Bytes(pair.size.width + 2 * kCoefficientBorderPx) *
+                                          Bytes(pair.size.height + 2 * kCoefficientBorderPx) * sizeof(float)
+                                    : 0;
+  const Bytes float_copies = 2 * n * sizeof(float) + coefficients;
   const Bytes mask_bytes = masked ? n + mask_integral : 0;
   const Bytes preparing =
       float_copies + std::max(grey_copy_bytes(pair.size, pair.type),

@@ -160,9 +160,10 @@ TEST(MemoryBudget, EstimateFollowsTheSettings) {
   const PairShape pair{{4000, 3000}, CV_8UC1};
   const XcorrOptions defaults;
   const std::uint64_t base = xcorr_bytes_needed(pair, defaults);
-  // Float copies, the passes' one warped region (the ROI grown by the 5 px
-  // search reach), 186626 nodes of 211 B, and 8 MB.
-  EXPECT_EQ(base, 96 * kMB + 4ull * 4010 * 3010 + 186626ull * 211 + (8ull << 20));
+  // Float copies, the B-spline's coefficients (the image grown by 16 px),
+  // the passes' one warped region (the ROI grown by the 5 px search reach),
+  // 186626 nodes of 211 B, and 8 MB.
+  EXPECT_EQ(base, 96 * kMB + 4ull * 4032 * 3032 + 4ull * 4010 * 3010 + 186626ull * 211 + (8ull << 20));
   XcorrOptions adaptive = defaults;
   adaptive.adaptive_refinement = true;
   // 499 nodes a row (4000 px, IW 16, step 8); the smoothing's rows: σ = 2

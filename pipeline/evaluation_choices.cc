@@ -11,7 +11,9 @@ namespace {
 const std::map<std::string, fusion::Interpolator>& interpolators() {
   static const std::map<std::string, fusion::Interpolator> names{{"cubic", fusion::Interpolator::kCubic},
                                                                  {"lanczos3", fusion::Interpolator::kLanczos3},
-                                                                 {"lanczos4", fusion::Interpolator::kLanczos4}};
+                                                                 {"lanczos4", fusion::Interpolator::kLanczos4},
+                                                                 {"bspline3", fusion::Interpolator::kBSpline3},
+                                                                 {"bspline5", fusion::Interpolator::kBSpline5}};
   return names;
 }
 
@@ -23,7 +25,7 @@ std::string EvaluationChoices::Validate() const {
     return "subpixel '" + subpixel + "' must be one of auto, gauss2d, gauss3";
   }
   if (!interpolators().contains(interpolator)) {
-    return "interpolator '" + interpolator + "' must be one of lanczos3, lanczos4, cubic";
+    return "interpolator '" + interpolator + "' must be one of bspline5, bspline3, lanczos3, lanczos4, cubic";
   }
   if (!fusion::parse_dis_preset(dis_preset)) return "DIS preset '" + dis_preset + "' must be one of medium, fast, ultrafast";
   return {};

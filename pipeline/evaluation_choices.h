@@ -16,7 +16,7 @@ struct EvaluationChoices {
   int first_window_px = 0;            // 0: the evaluator's own choice
   std::string dis_preset = "medium";  // medium, fast or ultrafast
   std::string subpixel = "auto";      // auto (2-D fit, then 3-point after deformation), gauss2d or gauss3
-  std::string interpolator = "lanczos3";  // lanczos3, lanczos4 or cubic
+  std::string interpolator = "bspline5";  // bspline5, bspline3, lanczos3, lanczos4 or cubic
 
   std::string Validate() const;  // empty when usable, else which choice is unknown and what is allowed
 };

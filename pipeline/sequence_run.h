@@ -62,7 +62,7 @@ struct SequenceRunOptions {
   // The command line's names of the choices the stored settings have no key
   // for, recorded with the settings.
   std::string subpixel = "auto";
-  std::string interpolator = "lanczos3";
+  std::string interpolator = "bspline5";
   const std::atomic<bool>* stop = nullptr;  // when it becomes true: stop after the frames in flight
   // When set, the frames are evaluated by several processes (cluster/: MPI
   // ranks), this one included, and this one alone writes the sink.

@@ -92,7 +92,7 @@ TEST_F(SequenceRun, TheSettingsRecordHoldsTheStoredKeysAndTheCommandLinesChoices
   EXPECT_EQ(j.at("window_px"), 16);
   EXPECT_EQ(j.at("method"), "xcorr");
   EXPECT_EQ(j.at("subpixel"), "gauss3");
-  EXPECT_EQ(j.at("interpolator"), "lanczos3");
+  EXPECT_EQ(j.at("interpolator"), "bspline5");
   EXPECT_EQ(j.at("dis_preset"), "medium");
   EXPECT_EQ(j.at("source"), "defaults");
   EXPECT_FALSE(j.contains("mode"));
