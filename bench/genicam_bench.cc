@@ -89,3 +89,5 @@ BENCHMARK(BM_GenicamRecord)
 
 }  // namespace
 }  // namespace bosfuse::acquisition
+
+BENCHMARK_MAIN();
