@@ -214,7 +214,10 @@ TEST(DemoCli, EveryCommandStatesTheSameCoolingRateInExperimentTime) {
   ASSERT_EQ(fitted.exit_code, 0) << fitted.output;
   const auto exported_fit = fitting::fit_from_json(nlohmann::json::parse(read_text(dir / "fit.json")));
   const auto& stored_tc = by_demo.k.at("tc-35mm");
-  EXPECT_NEAR(exported_fit.k_per_s.value, stored_tc.value, 0.01 * stored_tc.std_error)
+  // The export prints each reading at its channel's resolution (the
+  // module's 0.021 °C step: two decimals), so the refit sees rounding
+  // below one step; it moves k by well under a tenth of its standard error.
+  EXPECT_NEAR(exported_fit.k_per_s.value, stored_tc.value, 0.1 * stored_tc.std_error)
       << "export + fit and the stored fit disagree on one series";
 
   // 4. A replay at 2x (so 20x in all) processed with no options: the same

@@ -134,7 +134,7 @@ TEST(MarkEstimateCli, ProposesTheSimulatedHeaterOffTimeWithoutWriting) {
     auto store = storage::RunStore::create(run, info, storage::RunStore::CreateMode::kNew);
     const auto device = store.add_device({0, "sim", "modbus-tcp", "adam-6018", "127.0.0.1:1502"});
     for (int c = 0; c < 2; ++c) {
-      sim::CoolingSignal signal{22.0, 80.0 - 10 * c, 0.01 + 0.005 * c, 0.05, kHeaterOffS, 7};
+      sim::CoolingSignal signal{22.0, 80.0 - 10 * c, 0.01 + 0.005 * c, 0.05, 7, kHeaterOffS};
       const auto channel = store.add_channel({0, device, "tc" + std::to_string(c), "thermocouple", "degC", "K", {}, {}});
       std::vector<storage::Sample> samples;
       for (int i = 0; i < 400; ++i) {  // one per experiment second

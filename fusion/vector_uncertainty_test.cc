@@ -253,6 +253,14 @@ TEST(VectorUncertaintyCoverage, SinusoidalField) {
   expect_honest(coverage(sim::DisplacementModel::sinusoid(0.5, 256), Camera{}, 2));
 }
 
+TEST(VectorUncertaintyCoverage, DISABLED_SteepSinusoids) {
+  for (const double wavelength_px : {256.0, 128.0}) {
+    const Coverage c = coverage(sim::DisplacementModel::sinusoid(1.0, wavelength_px), Camera{}, 2);
+    std::printf("sinusoid 1 px over %.0f px: coverage %.4f, median sigma / rms error %.4f over %zu components\n",
+                wavelength_px, c.within, c.sigma_over_rms, c.components);
+  }
+}
+
 TEST(VectorUncertaintyCoverage, CameraLikeImages) {
   Camera camera;
   camera.blur_sigma_px = 0.6;
@@ -270,8 +278,11 @@ TEST(VectorUncertaintyCoverage, LowContrastTenBitCamera) {
   expect_honest(coverage(sim::DisplacementModel::uniform(-0.4, 0.25), camera, 2));
 }
 
-// The measurement exposed at 0.8 × the reference. (The same shifts at equal
-// exposure still miss, 97.3 %: docs/BENCHMARKS.md.)
+TEST(VectorUncertaintyCoverage, UniformSubPixelShifts) {
+  expect_honest(coverage(sub_pixel_shifts(), Camera{}, 1));
+}
+
+// The measurement exposed at 0.8 × the reference.
 TEST(VectorUncertaintyCoverage, BrightnessChangeBetweenExposures) {
   Camera camera;
   camera.gain_measurement = 0.8;

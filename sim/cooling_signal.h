@@ -18,8 +18,10 @@ struct CoolingSignal {
   double initial_c = 80.0;
   double k_per_s = 0.01;
   double noise_c = 0.05;  // standard deviation
-  double heated_s = 0;    // H: the heater is switched off this long after the start
   std::uint64_t seed = 1;
+  // H: the heater is switched off this long after the start. Last, as
+  // brace initialisers elsewhere list the seed fifth.
+  double heated_s = 0;
 
   std::string Validate() const;  // empty when valid
   double mean_c(double t_s) const;
