@@ -102,7 +102,7 @@ void serve_camera(const SimCameraArgs& args) {
   pattern.dot_diameter_px = 3;
   pattern.seed = args.seed;
   sim::SimulatedGenicamCamera camera(setup.model, sim::generate_pattern(pattern), sim::CameraModel{}, args.camera);
-  spdlog::info("simulated GigE Vision camera Aravis-Fake-{} ({}x{} Mono8/Mono16, {:g} frames/s, scene at {:g}x) "
+  spdlog::info("simulated GigE Vision camera {} ({}x{} Mono8/Mono16, {:g} frames/s, scene at {:g}x) "
                "serving on {}; `bosfuse cameras --address {}` lists it; Ctrl-C to stop",
                args.camera.serial, setup.scene.width_px, setup.scene.height_px, args.camera.frame_rate_hz,
                args.camera.speed, args.camera.address, args.camera.address);
@@ -120,7 +120,7 @@ void add_sim_camera(CLI::App& sim) {
   CLI::App* cmd = sim.add_subcommand(
       "camera", "A simulated camera showing the demo's convection scene (--genicam: over GigE Vision, via Aravis)");
   cmd->add_flag("--genicam", args->genicam, "Serve it as a GigE Vision camera (libaravis' fake camera)");
-  cmd->add_option("--serial", args->camera.serial, "Serial number; its Aravis id is Aravis-Fake-SERIAL")
+  cmd->add_option("--serial", args->camera.serial, "Serial number (what `bosfuse cameras` lists it by)")
       ->capture_default_str();
   cmd->add_option("--address", args->camera.address, "IPv4 address to serve on")->capture_default_str();
   cmd->add_option("--frame-rate", args->camera.frame_rate_hz, "Frames per second, real time (1..100)")

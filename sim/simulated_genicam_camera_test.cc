@@ -58,6 +58,14 @@ TEST(SimulatedGenicamCamera, ServesTheSceneThroughTheGenicamSource) {
     ASSERT_TRUE(f.device_t_ns);
     ASSERT_TRUE(f.arrival_ns);
     EXPECT_GT(*f.arrival_ns, 0);
+    cv::Scalar mean, std_dev;
+    cv::meanStdDev(f.image, mean, std_dev);
+    EXPECT_GT(std_dev[0], 0.05 * 255) << "the background's dots, not a blank frame";
+  }
+  // The first frame filled is the background without flow, as the scene renders it.
+  if (camera.frames_rendered() > 0 && frames[0].image.size() == reference.size()) {
+    EXPECT_LT(cv::norm(frames[0].image, reference, cv::NORM_INF), 1.0 + 1e-9)
+        << "frame 0 is the scene's reference rendering";
   }
   EXPECT_LT(*frames[0].device_t_ns, *frames[1].device_t_ns);
   EXPECT_LT(*frames[1].device_t_ns, *frames[2].device_t_ns);
