@@ -80,7 +80,7 @@ struct SimCameraArgs {
   bool genicam = false;
   sim::SimulatedGenicamCameraOptions camera;
   std::uint64_t seed = 1;
-  int width_px = 0;   // 0: the demo scene's
+  int width_px = 0;  // 0: the demo scene's
   int height_px = 0;
   double experiment_s = 600;
   std::string duration;
@@ -102,10 +102,11 @@ void serve_camera(const SimCameraArgs& args) {
   pattern.dot_diameter_px = 3;
   pattern.seed = args.seed;
   sim::SimulatedGenicamCamera camera(setup.model, sim::generate_pattern(pattern), sim::CameraModel{}, args.camera);
-  spdlog::info("simulated GigE Vision camera {} ({}x{} Mono8/Mono16, {:g} frames/s, scene at {:g}x) "
-               "serving on {}; `bosfuse cameras --address {}` lists it; Ctrl-C to stop",
-               args.camera.serial, setup.scene.width_px, setup.scene.height_px, args.camera.frame_rate_hz,
-               args.camera.speed, args.camera.address, args.camera.address);
+  spdlog::info(
+      "simulated GigE Vision camera {} ({}x{} Mono8/Mono16, {:g} frames/s, scene at {:g}x) "
+      "serving on {}; `bosfuse cameras --address {}` lists it; Ctrl-C to stop",
+      args.camera.serial, setup.scene.width_px, setup.scene.height_px, args.camera.frame_rate_hz, args.camera.speed,
+      args.camera.address, args.camera.address);
   const auto& stop = stop_requested_by_signal();
   const auto end = args.duration.empty() ? std::chrono::steady_clock::time_point::max()
                                          : std::chrono::steady_clock::now() + parse_duration(args.duration);
@@ -130,7 +131,8 @@ void add_sim_camera(CLI::App& sim) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--seed", args->seed, "Seed of the random background")->capture_default_str();
-  cmd->add_option("--width", args->width_px, "Image width, px (default: the demo scene's)")->check(CLI::Range(16, 2048));
+  cmd->add_option("--width", args->width_px, "Image width, px (default: the demo scene's)")
+      ->check(CLI::Range(16, 2048));
   cmd->add_option("--height", args->height_px, "Image height, px (default: the demo scene's)")
       ->check(CLI::Range(16, 2048));
   cmd->add_option("--experiment-time", args->experiment_s, "Cooling simulated, scene seconds")

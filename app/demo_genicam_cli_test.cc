@@ -44,9 +44,9 @@ std::map<std::string, fitting::Estimate> genicam_demo_rates(const fs::path& run)
 }
 
 fs::path genicam_demo_run(const fs::path& out, const std::string& camera) {
-  const auto demo = testing::run_command(kBosfuse + " demo --out '" + out.string() +
-                                             "' --experiment-time 80s --speed 16 --seed 3 --camera " + camera,
-                                         180);
+  const auto demo = testing::run_command(
+      kBosfuse + " demo --out '" + out.string() + "' --experiment-time 80s --speed 16 --seed 3 --camera " + camera,
+      180);
   EXPECT_EQ(demo.exit_code, 0) << demo.output;
   if (!fs::is_directory(out) || fs::directory_iterator(out) == fs::directory_iterator()) return {};
   return fs::directory_iterator(out)->path();
@@ -68,8 +68,7 @@ TEST(DemoGenicamCli, RecordsThroughTheGenicamSourceWithTheDefaultDemosFits) {
     // The two fits' 95 % intervals, combined in quadrature.
     const double half_width = std::hypot((k.high - k.low) / 2, (g.high - g.low) / 2);
     EXPECT_LE(std::abs(g.value - k.value), half_width)
-        << name << ": k virtual " << k.value << ", genicam " << g.value << ", combined 95 % half-width "
-        << half_width;
+        << name << ": k virtual " << k.value << ", genicam " << g.value << ", combined 95 % half-width " << half_width;
     std::cout << name << ": k virtual " << k.value << " [" << k.low << ", " << k.high << "], genicam " << g.value
               << " [" << g.low << ", " << g.high << "] 1/s\n";
   }
@@ -78,9 +77,9 @@ TEST(DemoGenicamCli, RecordsThroughTheGenicamSourceWithTheDefaultDemosFits) {
                                          "' 'SELECT COUNT(*) > 4 AND COUNT(*) = SUM(device_t_ns IS NOT NULL AND "
                                          "arrival_ns IS NOT NULL) FROM frames'");
   EXPECT_EQ(kept.output, "1\n");
-  const auto profile = testing::run_command(
-      "sqlite3 '" + (genicam_run / storage::RunStore::kDatabaseFileName).string() +
-      "' \"SELECT COUNT(*) FROM devices WHERE profile = 'genicam'\"");
+  const auto profile =
+      testing::run_command("sqlite3 '" + (genicam_run / storage::RunStore::kDatabaseFileName).string() +
+                           "' \"SELECT COUNT(*) FROM devices WHERE profile = 'genicam'\"");
   EXPECT_EQ(profile.output, "1\n");
 }
 

@@ -52,7 +52,8 @@ std::unique_ptr<SimulatedGenicamCamera> add_genicam_camera(acquisition::Logger& 
   source.device = served.address;
   source.pixel_format = "Mono8";  // the scene renders 8-bit frames, as the virtual camera's
   source.frame_rate_hz = served.frame_rate_hz;
-  logger.add_camera(std::make_unique<acquisition::GenicamSource>(source), "camera", acquisition::FrameRecorderOptions{});
+  logger.add_camera(std::make_unique<acquisition::GenicamSource>(source), "camera",
+                    acquisition::FrameRecorderOptions{});
   return simulated;
 }
 

@@ -41,7 +41,8 @@ struct DemoOptions {
 
   std::string Validate() const;        // empty when valid
   int frames_after_reference() const;  // the frames the camera takes of the cooling
-  double frame_rate_hz() const { return speed / frame_interval_s; }  // real time
+  // The camera's frames per second of real time.
+  double frame_rate_hz() const { return speed / frame_interval_s; }
 };
 
 struct DemoSetup {

@@ -137,9 +137,7 @@ SimulatedGenicamCamera::SimulatedGenicamCamera(std::shared_ptr<const ConvectionS
   impl_->gv_camera = arv_gv_fake_camera_new(o.address.c_str(), o.serial.c_str());
   if (impl_->gv_camera == nullptr || !arv_gv_fake_camera_is_running(impl_->gv_camera)) {
     if (impl_->gv_camera != nullptr) g_object_unref(impl_->gv_camera);
-    throw std::runtime_error(fmt::format(
-        "simulated camera: Aravis could not serve GigE Vision on {}",
-        o.address));
+    throw std::runtime_error(fmt::format("simulated camera: Aravis could not serve GigE Vision on {}", o.address));
   }
   ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(impl_->gv_camera);
   impl_->fake = fake;

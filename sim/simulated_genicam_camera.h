@@ -25,7 +25,7 @@
 namespace bosfuse::sim {
 
 struct SimulatedGenicamCameraOptions {
-  std::string serial = "BOSSIM01";   // the camera's serial number (what `bosfuse cameras` lists it by)
+  std::string serial = "BOSSIM01";    // the camera's serial number (what `bosfuse cameras` lists it by)
   std::string address = "127.0.0.1";  // the IPv4 address it serves on
   double frame_rate_hz = 1;           // the camera's free-run rate (the fake camera offers 1..100)
   double speed = 1;                   // scene time per second of real time
