@@ -44,9 +44,10 @@ std::map<std::string, fitting::Estimate> genicam_demo_rates(const fs::path& run)
 }
 
 fs::path genicam_demo_run(const fs::path& out, const std::string& camera) {
-  const auto demo = testing::run_command(
-      kBosfuse + " demo --out '" + out.string() + "' --experiment-time 80s --speed 16 --seed 3 --camera " + camera,
-      180);
+  const auto demo =
+      testing::run_command(kBosfuse + " demo --out '" + out.string() +
+                               "' --experiment-time 80s --frame-interval 5s --speed 16 --seed 3 --camera " + camera,
+                           180);
   EXPECT_EQ(demo.exit_code, 0) << demo.output;
   if (!fs::is_directory(out) || fs::directory_iterator(out) == fs::directory_iterator()) return {};
   return fs::directory_iterator(out)->path();
