@@ -266,7 +266,8 @@ TEST_F(Cli, ATypoOfANestedSubcommandOrAnOptionIsNamedWithTheNearestName) {
   constexpr int kExtrasError = 109;
   const auto nested = bosfuse("sim modbsu --port 0");
   EXPECT_EQ(nested.exit_code, kExtrasError) << nested.output;
-  EXPECT_NE(nested.output.find("unknown subcommand 'modbsu' of 'bosfuse sim' (one of: modbus); did you mean 'modbus'?"),
+  EXPECT_NE(nested.output.find(
+                "unknown subcommand 'modbsu' of 'bosfuse sim' (one of: modbus, camera); did you mean 'modbus'?"),
             std::string::npos)
       << nested.output;
   const auto option = bosfuse("process " + run_dir() + " --windw 32");

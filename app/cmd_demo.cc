@@ -134,6 +134,11 @@ void add_demo(CLI::App& root) {
       ->capture_default_str();
   cmd->add_option("--frame-interval", *frame_interval, "Experiment time between frames (1s .. 10m)")
       ->capture_default_str();
+  cmd->add_option("--camera", args->demo.camera,
+                  "How frames are recorded: virtual (in process) or genicam (a simulated GigE Vision camera on "
+                  "127.0.0.1 read through Aravis, as a lab camera is)")
+      ->check(CLI::IsMember({"virtual", "genicam"}))
+      ->capture_default_str();
   cmd->add_option("--seed", args->demo.seed,
                   "Seed of the random background and the thermocouples' noise: the same seed simulates the same "
                   "signals (default: the start time, a new run each time)");

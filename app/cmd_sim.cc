@@ -1,6 +1,8 @@
-// bosfuse sim modbus: a simulated thermocouple module anyone can log from.
-// A server has no data to print: where it serves and what it answered are
-// messages, on standard error.
+// bosfuse sim modbus: a simulated thermocouple module anyone can log from;
+// bosfuse sim camera --genicam: the demo's convection scene served by a
+// simulated GigE Vision camera (sim/simulated_genicam_camera.h). A server
+// has no data to print: where it serves and what it answered are messages,
+// on standard error.
 
 #include <spdlog/spdlog.h>
 
@@ -8,7 +10,9 @@
 
 #include "app/command.h"
 #include "app/run_control.h"
+#include "sim/demo_setup.h"
 #include "sim/modbus_server.h"
+#include "sim/simulated_genicam_camera.h"
 
 namespace bosfuse::app {
 namespace {
@@ -76,6 +80,72 @@ void serve(SimModbusArgs args) {
   spdlog::info("answered {} requests", server.requests_answered());
 }
 
+struct SimCameraArgs {
+  bool genicam = false;
+  sim::SimulatedGenicamCameraOptions camera;
+  std::uint64_t seed = 1;
+  int width_px = 0;  // 0: the demo scene's
+  int height_px = 0;
+  double experiment_s = 600;
+  std::string duration;
+};
+
+// Serves until Ctrl-C or --duration; past the scene's experiment time the
+// plume holds still.
+void serve_camera(const SimCameraArgs& args) {
+  if (!args.genicam) throw std::invalid_argument("sim camera: only --genicam (a GigE Vision camera) is served");
+  sim::DemoSetup setup = sim::demo_setup(args.experiment_s);
+  if (args.width_px > 0 || args.height_px > 0) {
+    if (args.width_px > 0) setup.scene.width_px = args.width_px;
+    if (args.height_px > 0) setup.scene.height_px = args.height_px;
+    setup.model = std::make_shared<const sim::ConvectionScene>(setup.scene);
+  }
+  sim::PatternOptions pattern;
+  pattern.width_px = setup.scene.width_px;
+  pattern.height_px = setup.scene.height_px;
+  pattern.dot_diameter_px = 3;
+  pattern.seed = args.seed;
+  sim::SimulatedGenicamCamera camera(setup.model, sim::generate_pattern(pattern), sim::CameraModel{}, args.camera);
+  spdlog::info(
+      "simulated GigE Vision camera {} ({}x{} Mono8/Mono16, {:g} frames/s, scene at {:g}x) "
+      "serving on {}; `bosfuse cameras --address {}` lists it; Ctrl-C to stop",
+      args.camera.serial, setup.scene.width_px, setup.scene.height_px, args.camera.frame_rate_hz, args.camera.speed,
+      args.camera.address, args.camera.address);
+  const auto& stop = stop_requested_by_signal();
+  const auto end = args.duration.empty() ? std::chrono::steady_clock::time_point::max()
+                                         : std::chrono::steady_clock::now() + parse_duration(args.duration);
+  while (!stop.load() && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  spdlog::info("rendered {} frames", camera.frames_rendered());
+}
+
+void add_sim_camera(CLI::App& sim) {
+  auto args = std::make_shared<SimCameraArgs>();
+  CLI::App* cmd = sim.add_subcommand(
+      "camera", "A simulated camera showing the demo's convection scene (--genicam: over GigE Vision, via Aravis)");
+  cmd->add_flag("--genicam", args->genicam, "Serve it as a GigE Vision camera (libaravis' fake camera)");
+  cmd->add_option("--serial", args->camera.serial, "Serial number (what `bosfuse cameras` lists it by)")
+      ->capture_default_str();
+  cmd->add_option("--address", args->camera.address, "IPv4 address to serve on")->capture_default_str();
+  cmd->add_option("--frame-rate", args->camera.frame_rate_hz, "Frames per second, real time (1..100)")
+      ->check(CLI::Range(1.0, 100.0))
+      ->capture_default_str();
+  cmd->add_option("--speed", args->camera.speed, "Scene time per second of real time")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--seed", args->seed, "Seed of the random background")->capture_default_str();
+  cmd->add_option("--width", args->width_px, "Image width, px (default: the demo scene's)")
+      ->check(CLI::Range(16, 2048));
+  cmd->add_option("--height", args->height_px, "Image height, px (default: the demo scene's)")
+      ->check(CLI::Range(16, 2048));
+  cmd->add_option("--experiment-time", args->experiment_s, "Cooling simulated, scene seconds")
+      ->check(CLI::Range(1.0, 3600.0))
+      ->capture_default_str();
+  cmd->add_option("--duration", args->duration, "Stop after this long (30s, 10m, 2h); default: until Ctrl-C");
+  cmd->callback([args] { serve_camera(*args); });
+}
+
 void add_sim(CLI::App& root) {
   CLI::App* sim = root.add_subcommand("sim", "Simulated devices and experiments");
   sim->require_subcommand(1);
@@ -115,6 +185,7 @@ void add_sim(CLI::App& root) {
                   "The heater is on for this long after the start (30s, 2min): the inputs rise to --initial, then "
                   "cool; default: they cool from the start");
   cmd->callback([args] { serve(*args); });
+  add_sim_camera(*sim);
 }
 
 BOSFUSE_COMMAND(add_sim);

@@ -1,8 +1,10 @@
 #pragma once
 // The demo's recording: the demo's scene (sim/demo_setup.h) logged through
 // the real device paths into a new run, its thermocouples served by a
-// simulated ADAM-6018 on loopback and its frames by the virtual camera, a
-// few minutes of cooling in a few seconds. The run's declared origin, the
+// simulated ADAM-6018 on loopback and its frames by the virtual camera (or,
+// with DemoOptions::camera "genicam", by a simulated GigE Vision camera on
+// 127.0.0.1 read through the GenICam source), a few minutes of cooling in a
+// few seconds. The run's declared origin, the
 // "heater off" marker, is the scene's t = 0. What the command adds (its
 // progress display, its live page, Ctrl-C) comes in through the hooks.
 

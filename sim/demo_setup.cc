@@ -32,6 +32,13 @@ std::string DemoOptions::Validate() const {
   if (!positive(experiment_s)) return "the experiment time must be positive";
   if (!positive(speed)) return "the speed-up must be positive";
   if (!positive(frame_interval_s)) return "the frame interval must be positive";
+  if (camera != "virtual" && camera != "genicam") return "camera \"" + camera + "\": expected virtual or genicam";
+  if (camera == "genicam" && !(frame_rate_hz() >= 1 && frame_rate_hz() <= 100)) {
+    return fmt::format(
+        "camera genicam streams speed / frame interval = {:g} frames/s, outside the simulated camera's 1..100: "
+        "change --speed or --frame-interval",
+        frame_rate_hz());
+  }
   return "";
 }
 

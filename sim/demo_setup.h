@@ -33,9 +33,16 @@ struct DemoOptions {
   // The background pattern's and the thermocouples' noise seed; unset: the
   // start time, so that every demo is a new run.
   std::optional<std::uint64_t> seed;
+  // How the frames reach the recorder: "virtual" (the scene camera, in
+  // process) or "genicam" (a simulated GigE Vision camera on 127.0.0.1 read
+  // by the GenICam source, sim/simulated_genicam_camera.h), which streams at
+  // speed / frame_interval_s and so needs that within 1..100 frames/s.
+  std::string camera = "virtual";
 
   std::string Validate() const;        // empty when valid
   int frames_after_reference() const;  // the frames the camera takes of the cooling
+  // The camera's frames per second of real time.
+  double frame_rate_hz() const { return speed / frame_interval_s; }
 };
 
 struct DemoSetup {
