@@ -586,6 +586,45 @@ BENCHMARK(BM_AdaptiveRefinement)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 
+// One timed frame: wall time and the process's CPU time (all threads).
+struct FrameCost {
+  double wall_s, cpu_s;
+};
+
+double median_of(std::vector<double> values) {
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+// Medians over `pairs` pairs of runs of `first` and `second`, which goes
+// first alternating; the ratios are first / second, pair by pair.
+struct PairedMedians {
+  double first_wall_s, second_wall_s, first_cpu_s, second_cpu_s, wall_ratio, cpu_ratio;
+};
+
+template <class First, class Second>
+PairedMedians paired_medians(int pairs, First&& first, Second&& second) {
+  std::vector<double> first_wall, second_wall, first_cpu, second_cpu, wall_ratio, cpu_ratio;
+  for (int i = 0; i < pairs; ++i) {
+    FrameCost f{}, s{};
+    if (i % 2 == 0) {
+      f = first();
+      s = second();
+    } else {
+      s = second();
+      f = first();
+    }
+    first_wall.push_back(f.wall_s);
+    second_wall.push_back(s.wall_s);
+    first_cpu.push_back(f.cpu_s);
+    second_cpu.push_back(s.cpu_s);
+    wall_ratio.push_back(f.wall_s / s.wall_s);
+    cpu_ratio.push_back(f.cpu_s / s.cpu_s);
+  }
+  return {median_of(first_wall), median_of(second_wall), median_of(first_cpu),
+          median_of(second_cpu), median_of(wall_ratio),  median_of(cpu_ratio)};
+}
+
 // Adaptive refinement's speed-up on a scene, measured in pairs of frames:
 // one evaluator with full refinement and one with adaptive refinement take
 // a frame each in turn (which goes first alternates), after a first frame
@@ -601,42 +640,21 @@ void BM_AdaptiveSpeedup(benchmark::State& state) {
   auto full_options = full_frame_options(), adaptive_options = full_frame_options();
   adaptive_options.xcorr.adaptive_refinement = true;
   fusion::DisplacementEvaluator full(pair.reference, full_options), adaptive(pair.reference, adaptive_options);
-  struct Cost {
-    double wall_s, cpu_s;
-  };
   auto frame = [&](fusion::DisplacementEvaluator& evaluator) {
     const auto start = std::chrono::steady_clock::now();
     const double cpu_start_s = process_cpu_s();
     benchmark::DoNotOptimize(evaluator.evaluate(pair.measurement));
-    return Cost{std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
-                process_cpu_s() - cpu_start_s};
+    return FrameCost{std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                     process_cpu_s() - cpu_start_s};
   };
   frame(full);
   frame(adaptive);
-  auto median = [](std::vector<double> values) {
-    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-    return values[values.size() / 2];
-  };
   for (auto _ : state) {
-    std::vector<double> full_s, adaptive_s, wall_ratio, cpu_ratio;
-    for (int i = 0; i < pairs; ++i) {
-      Cost f{}, a{};
-      if (i % 2 == 0) {
-        f = frame(full);
-        a = frame(adaptive);
-      } else {
-        a = frame(adaptive);
-        f = frame(full);
-      }
-      full_s.push_back(f.wall_s);
-      adaptive_s.push_back(a.wall_s);
-      wall_ratio.push_back(f.wall_s / a.wall_s);
-      cpu_ratio.push_back(f.cpu_s / a.cpu_s);
-    }
-    state.SetIterationTime(median(adaptive_s));
-    state.counters["full_ms"] = 1e3 * median(full_s);
-    state.counters["speedup"] = median(wall_ratio);
-    state.counters["speedup_cpu"] = median(cpu_ratio);
+    const PairedMedians m = paired_medians(pairs, [&] { return frame(full); }, [&] { return frame(adaptive); });
+    state.SetIterationTime(m.second_wall_s);
+    state.counters["full_ms"] = 1e3 * m.first_wall_s;
+    state.counters["speedup"] = m.wall_ratio;
+    state.counters["speedup_cpu"] = m.cpu_ratio;
   }
 }
 BENCHMARK(BM_AdaptiveSpeedup)
@@ -887,44 +905,22 @@ void BM_DefaultsAdaptiveOneShot(benchmark::State& state) {
   const auto& pair = adaptive_scene(0);
   const int pairs = int(state.range(0));
   const auto full_options = defaults_variant(0), adaptive_options = defaults_variant(1);
-  struct Cost {
-    double wall_s, cpu_s;
-  };
   auto one_shot = [&](const fusion::EvaluatorOptions& e) {
     const double cpu_start_s = process_cpu_s();
     const double wall_s =
         timed_s([&] { benchmark::DoNotOptimize(fusion::evaluate_displacement(pair.reference, pair.measurement, e)); });
-    return Cost{wall_s, process_cpu_s() - cpu_start_s};
+    return FrameCost{wall_s, process_cpu_s() - cpu_start_s};
   };
   one_shot(full_options);  // the pages of the images and the first buffers
-  auto median = [](std::vector<double> values) {
-    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-    return values[values.size() / 2];
-  };
   for (auto _ : state) {
-    std::vector<double> full_s, adaptive_s, full_cpu_s, adaptive_cpu_s, wall_ratio, cpu_ratio;
-    for (int i = 0; i < pairs; ++i) {
-      Cost f{}, a{};
-      if (i % 2 == 0) {
-        f = one_shot(full_options);
-        a = one_shot(adaptive_options);
-      } else {
-        a = one_shot(adaptive_options);
-        f = one_shot(full_options);
-      }
-      full_s.push_back(f.wall_s);
-      adaptive_s.push_back(a.wall_s);
-      full_cpu_s.push_back(f.cpu_s);
-      adaptive_cpu_s.push_back(a.cpu_s);
-      wall_ratio.push_back(f.wall_s / a.wall_s);
-      cpu_ratio.push_back(f.cpu_s / a.cpu_s);
-    }
-    state.SetIterationTime(median(adaptive_s));
-    state.counters["default_ms"] = 1e3 * median(full_s);
-    state.counters["default_cpu_s"] = median(full_cpu_s);
-    state.counters["adaptive_cpu_s"] = median(adaptive_cpu_s);
-    state.counters["speedup"] = median(wall_ratio);
-    state.counters["speedup_cpu"] = median(cpu_ratio);
+    const PairedMedians m =
+        paired_medians(pairs, [&] { return one_shot(full_options); }, [&] { return one_shot(adaptive_options); });
+    state.SetIterationTime(m.second_wall_s);
+    state.counters["default_ms"] = 1e3 * m.first_wall_s;
+    state.counters["default_cpu_s"] = m.first_cpu_s;
+    state.counters["adaptive_cpu_s"] = m.second_cpu_s;
+    state.counters["speedup"] = m.wall_ratio;
+    state.counters["speedup_cpu"] = m.cpu_ratio;
   }
 }
 BENCHMARK(BM_DefaultsAdaptiveOneShot)
