@@ -148,6 +148,12 @@ std::map<std::int64_t, std::string> probe_names(const Run& run) {
 // what the row says of it.
 py::dict stored_json(const std::string& text) { return to_python(nlohmann::ordered_json::parse(text)); }
 
+// The name stored for `id`, or None where the row names nothing stored.
+py::object name_or_none(const std::map<std::int64_t, std::string>& names, std::int64_t id) {
+  const auto it = names.find(id);
+  return it == names.end() ? py::none() : py::cast(it->second);
+}
+
 py::list fits(const Run& run) {
   const auto channels = channel_names(run);
   const auto probes = probe_names(run);
@@ -158,7 +164,7 @@ py::list fits(const Run& run) {
     const auto& names = channel ? channels : probes;
     d["subject"] = channel ? "channel" : "probe";
     d["subject_id"] = f.subject_id;
-    d["name"] = names.count(f.subject_id) ? py::cast(names.at(f.subject_id)) : py::none();
+    d["name"] = name_or_none(names, f.subject_id);
     d["origin_t_s"] = run.clock().seconds(f.origin_t_ns);
     d["ok"] = f.ok;
     out.append(d);
@@ -174,8 +180,8 @@ py::list agreements(const Run& run) {
     py::dict d = stored_json(a.json);
     d["channel_id"] = a.channel_id;
     d["probe_id"] = a.probe_id;
-    d["channel"] = channels.count(a.channel_id) ? py::cast(channels.at(a.channel_id)) : py::none();
-    d["probe"] = probes.count(a.probe_id) ? py::cast(probes.at(a.probe_id)) : py::none();
+    d["channel"] = name_or_none(channels, a.channel_id);
+    d["probe"] = name_or_none(probes, a.probe_id);
     out.append(d);
   }
   return out;
