@@ -3,6 +3,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "python/arrays.h"
@@ -102,22 +103,21 @@ std::int64_t Run::channel_id(const py::object& channel) const {
 
 py::tuple Run::samples(const py::object& channel) const {
   const std::int64_t id = channel_id(channel);
-  std::vector<storage::Sample> samples;
+  storage::SampleColumns columns;
   {
     py::gil_scoped_release release;
-    samples = store_.read_samples(id);
+    columns = store_.read_sample_columns(id);
   }
-  const std::size_t n = samples.size();
+  const std::size_t n = columns.t_ns.size();
   py::array_t<double> t(static_cast<py::ssize_t>(n)), v(static_cast<py::ssize_t>(n));
   py::array_t<std::int8_t> s(static_cast<py::ssize_t>(n));
   double* tp = t.mutable_data();
-  double* vp = v.mutable_data();
   std::int8_t* sp = s.mutable_data();
   for (std::size_t i = 0; i < n; ++i) {
-    tp[i] = clock_.seconds(samples[i].t_ns);
-    vp[i] = samples[i].value.value_or(NAN);
-    sp[i] = static_cast<std::int8_t>(samples[i].status);
+    tp[i] = clock_.seconds(columns.t_ns[i]);
+    sp[i] = static_cast<std::int8_t>(columns.status[i]);
   }
+  std::copy(columns.value.begin(), columns.value.end(), v.mutable_data());
   return py::make_tuple(t, v, s);
 }
 

@@ -18,12 +18,15 @@ Sample read_sample(const Statement& stmt, int first) {
                 stmt.column_optional_double(first + 3),
                 stmt.column_optional_double(first + 4),
                 sample_status_from_code(stmt.column_int64(first + 5))};
-  if (sample.value.has_value() != (sample.status == SampleStatus::kOk)) {
-    throw StorageError("a sample of channel " + std::to_string(sample.channel_id) + " at " +
-                       std::to_string(sample.t_ns) + " ns has status " + std::string(to_string(sample.status)) +
-                       (sample.value ? " and a value" : " and no value") + ": the run store is damaged");
-  }
+  check_sample_value(sample.channel_id, sample.t_ns, sample.status, sample.value.has_value());
   return sample;
+}
+
+void check_sample_value(std::int64_t channel_id, std::int64_t t_ns, SampleStatus status, bool has_value) {
+  if (has_value == (status == SampleStatus::kOk)) return;
+  throw StorageError("a sample of channel " + std::to_string(channel_id) + " at " + std::to_string(t_ns) +
+                     " ns has status " + std::string(to_string(status)) + (has_value ? " and a value" : " and no value") +
+                     ": the run store is damaged");
 }
 
 Event read_event(const Statement& stmt, int first) {

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace bosfuse::storage {
 
@@ -80,6 +81,15 @@ struct Sample {
   std::optional<double> value;  // set only when status is kOk
   std::optional<double> raw;    // the undecoded reading, kept for diagnosis
   SampleStatus status = SampleStatus::kOk;
+};
+
+// One channel's samples as columns, for readers that want arrays (Python's
+// Run.samples): a million rows cost three flat vectors, not a Sample each.
+// value is NaN where status is not kOk.
+struct SampleColumns {
+  std::vector<std::int64_t> t_ns;
+  std::vector<double> value;
+  std::vector<SampleStatus> status;
 };
 
 struct FrameRecord {

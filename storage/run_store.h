@@ -93,6 +93,8 @@ class RunStore {
   std::vector<DeviceInfo> devices() const;
   std::vector<ChannelInfo> channels() const;
   std::vector<Sample> read_samples(std::int64_t channel_id, TimeRange range = {}) const;
+  // The same samples as read_samples, time, value and status only.
+  SampleColumns read_sample_columns(std::int64_t channel_id) const;
   // Every sample of the run in time order (ties by channel), streamed so
   // an export of a long run needs no memory for it.
   void for_each_sample(const std::function<void(const Sample&)>& visit, TimeRange range = {}) const;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <functional>
 
 #include "storage/processing_store.h"
@@ -74,6 +75,29 @@ TEST(RunStore, NonOkSamplesStoreNoValue) {
   EXPECT_EQ(read[1].status, SampleStatus::kTimeout);
   EXPECT_EQ(read[2].device_t_ns, 77);
   EXPECT_EQ(read[2].value, 25.0);
+}
+
+TEST(RunStore, SampleColumnsHoldTheSamplesInTimeOrderWithNaNForNoValue) {
+  RunStoreFixture f;
+  const std::vector<Sample> samples = {{f.channel, 9, std::nullopt, 21.0, std::nullopt, SampleStatus::kOk},
+                                       {f.channel, 3, std::nullopt, std::nullopt, 65535.0, SampleStatus::kOpenCircuit},
+                                       {f.channel, 5, 77, 25.0, 1200.0, SampleStatus::kOk}};
+  f.store.write_samples(samples);
+  const auto records = f.store.read_samples(f.channel);
+  const SampleColumns columns = f.store.read_sample_columns(f.channel);
+  ASSERT_EQ(columns.t_ns.size(), records.size());
+  ASSERT_EQ(columns.value.size(), records.size());
+  ASSERT_EQ(columns.status.size(), records.size());
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    EXPECT_EQ(columns.t_ns[i], records[i].t_ns) << i;
+    EXPECT_EQ(columns.status[i], records[i].status) << i;
+    if (records[i].value) {
+      EXPECT_EQ(columns.value[i], *records[i].value) << i;
+    } else {
+      EXPECT_TRUE(std::isnan(columns.value[i])) << "a sample without a value read as " << columns.value[i];
+    }
+  }
+  EXPECT_EQ(columns.t_ns, (std::vector<std::int64_t>{3, 5, 9}));
 }
 
 TEST(RunStore, FolderHoldingARunIsRefusedUnlessAppending) {
@@ -219,11 +243,17 @@ TEST(RunStore, ASampleWithAValueAndAFailedStatusIsRefusedAsDamage) {
     db.execute("INSERT INTO samples (channel_id, t_ns, value, status) VALUES (" + std::to_string(f.channel) +
                ", 5, 21.5, " + std::to_string(static_cast<int>(SampleStatus::kTimeout)) + ")");
   }
-  try {
-    f.store.read_samples(f.channel);
-    FAIL() << "a timed-out sample with a value was read";
-  } catch (const StorageError& e) {
-    EXPECT_NE(std::string(e.what()).find("has status timeout and a value"), std::string::npos) << e.what();
+  for (const bool as_columns : {false, true}) {
+    try {
+      if (as_columns) {
+        f.store.read_sample_columns(f.channel);
+      } else {
+        f.store.read_samples(f.channel);
+      }
+      FAIL() << "a timed-out sample with a value was read" << (as_columns ? " as columns" : "");
+    } catch (const StorageError& e) {
+      EXPECT_NE(std::string(e.what()).find("has status timeout and a value"), std::string::npos) << e.what();
+    }
   }
 }
 
