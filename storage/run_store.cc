@@ -379,20 +379,14 @@ std::vector<Sample> RunStore::read_samples(std::int64_t channel_id, TimeRange ra
 }
 
 SampleColumns RunStore::read_sample_columns(std::int64_t channel_id) const {
-  auto count = db_.prepare("SELECT COUNT(*) FROM samples WHERE channel_id = ?");
-  count.bind(1, channel_id);
-  count.step();
-  const auto n = static_cast<std::size_t>(count.column_int64(0));
   SampleColumns out;
-  out.t_ns.reserve(n);
-  out.value.reserve(n);
-  out.status.reserve(n);
   auto stmt = db_.prepare("SELECT t_ns, value, status FROM samples WHERE channel_id = ? ORDER BY t_ns, rowid");
   stmt.bind(1, channel_id);
   while (stmt.step()) {
+    const std::int64_t t_ns = stmt.column_int64(0);
     const SampleStatus status = sample_status_from_code(stmt.column_int64(2));
-    check_sample_value(channel_id, stmt.column_int64(0), status, !stmt.is_null(1));
-    out.t_ns.push_back(stmt.column_int64(0));
+    check_sample_value(channel_id, t_ns, status, !stmt.is_null(1));
+    out.t_ns.push_back(t_ns);
     out.value.push_back(status == SampleStatus::kOk ? stmt.column_double(1) : NAN);
     out.status.push_back(status);
   }
