@@ -281,11 +281,13 @@ TEST_F(ExportPrecisionCli, ATenthOfADegreeChannelIsExportedWithOneDecimal) {
 TEST_F(ExportPrecisionCli, ARunFromBeforeSchema6PrintsSixSignificantDigits) {
   testrun::create_run(run(), false, truth_);
   {
-    // What a bosfuse before schema 6 left: no resolution column at all.
+    // What a bosfuse before schema 6 left: no resolution column at all (and
+    // the samples' index before version 7).
     storage::Database db((run() / storage::RunStore::kDatabaseFileName).string(), storage::Database::Mode::kReadWrite);
     db.execute(
+        "DROP INDEX samples_by_channel_time_value; CREATE INDEX samples_by_channel_time ON samples (channel_id, t_ns); "
         "ALTER TABLE channels DROP COLUMN resolution; ALTER TABLE frames DROP COLUMN arrival_ns; "
-        "DELETE FROM schema_version WHERE version = 6;");
+        "DELETE FROM schema_version WHERE version >= 6;");
   }
   const auto cells = value_cells();
   ASSERT_GT(cells.size(), 100u);

@@ -290,7 +290,7 @@ void stamp_channel(storage::Database& db, std::int64_t channel_id, const std::st
                    const std::vector<storage::Sample>& recorded_samples, const RecordedRun& recorded,
                    std::int64_t started_ns, double speed, RecordingTimes& out) {
   std::vector<std::pair<std::int64_t, std::int64_t>> served;  // rowid, poll time
-  auto rows = db.prepare("SELECT rowid, t_ns, status FROM samples WHERE channel_id = ? ORDER BY t_ns, rowid");
+  auto rows = db.prepare("SELECT rowid, t_ns, status FROM samples WHERE channel_id = ? ORDER BY t_ns");
   rows.bind(1, channel_id);
   while (rows.step()) {
     if (!failed_poll(static_cast<int>(rows.column_int64(2)))) served.emplace_back(rows.column_int64(0), rows.column_int64(1));

@@ -111,8 +111,16 @@ TEST(ProcessingStore, AFailedProcessingIsAbandonedUnlessAFrameWasStagedAndKeepsI
   EXPECT_EQ(results.latest_processing()->id, later) << "inherited settings are no processing";
 }
 
-// Takes a store back to version 5 by removing what version 6 added.
+// Takes a store back to version 6 by restoring the index version 7 replaced.
+void drop_schema_v7(Database& db) {
+  db.execute("DROP INDEX samples_by_channel_time_value");
+  db.execute("CREATE INDEX samples_by_channel_time ON samples (channel_id, t_ns)");
+  db.execute("DELETE FROM schema_version WHERE version >= 7");
+}
+
+// Takes a store back to version 5 by removing what versions 6 and 7 added.
 void drop_schema_v6(Database& db) {
+  drop_schema_v7(db);
   db.execute("ALTER TABLE channels DROP COLUMN resolution");
   db.execute("ALTER TABLE frames DROP COLUMN arrival_ns");
   db.execute("DELETE FROM schema_version WHERE version >= 6");

@@ -370,7 +370,7 @@ std::vector<ChannelInfo> RunStore::channels() const {
 std::vector<Sample> RunStore::read_samples(std::int64_t channel_id, TimeRange range) const {
   auto stmt = db_.prepare(
       "SELECT channel_id, t_ns, device_t_ns, value, raw, status FROM samples "
-      "WHERE channel_id = ? AND t_ns BETWEEN ? AND ? ORDER BY t_ns, rowid");
+      "WHERE channel_id = ? AND t_ns BETWEEN ? AND ? ORDER BY t_ns");
   stmt.bind(1, channel_id);
   bind_range(stmt, 2, range);
   std::vector<Sample> out;
@@ -380,7 +380,7 @@ std::vector<Sample> RunStore::read_samples(std::int64_t channel_id, TimeRange ra
 
 SampleColumns RunStore::read_sample_columns(std::int64_t channel_id) const {
   SampleColumns out;
-  auto stmt = db_.prepare("SELECT t_ns, value, status FROM samples WHERE channel_id = ? ORDER BY t_ns, rowid");
+  auto stmt = db_.prepare("SELECT t_ns, value, status FROM samples WHERE channel_id = ? ORDER BY t_ns");
   stmt.bind(1, channel_id);
   while (stmt.step()) {
     const std::int64_t t_ns = stmt.column_int64(0);

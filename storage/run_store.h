@@ -92,8 +92,11 @@ class RunStore {
 
   std::vector<DeviceInfo> devices() const;
   std::vector<ChannelInfo> channels() const;
+  // One channel's samples in time order, in its index's order where two share
+  // an instant (schema.cc, version 7).
   std::vector<Sample> read_samples(std::int64_t channel_id, TimeRange range = {}) const;
-  // The same samples as read_samples, time, value and status only.
+  // The same samples as read_samples, time, value and status only: read from
+  // the index alone.
   SampleColumns read_sample_columns(std::int64_t channel_id) const;
   // Every sample of the run in time order (ties by channel), streamed so
   // an export of a long run needs no memory for it.

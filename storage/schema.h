@@ -21,7 +21,7 @@ struct Migration {
 // The migrations of this bosfuse build, oldest first.
 std::span<const Migration> schema_migrations();
 
-inline constexpr int kSchemaVersion = 6;
+inline constexpr int kSchemaVersion = 7;
 
 // The uncertainty columns of a probe sample (version 5), in probe_samples and
 // staged_probe_samples alike, in the order ProcessingStore writes them.

@@ -107,6 +107,37 @@ TEST(Schema, VersionOneStoreIsMigratedToTheNewestKeepingItsData) {
   EXPECT_NO_THROW(db.execute("SELECT probe_id, frame_id, shift_px, temperature_c FROM probe_samples"));
 }
 
+std::string query_plan(Database& db, const std::string& sql) {
+  auto stmt = db.prepare("EXPLAIN QUERY PLAN " + sql);
+  std::string plan;
+  while (stmt.step()) plan += stmt.column_text(3) + "\n";
+  return plan;
+}
+
+// Version 7: a channel's time, value and status come from the index alone,
+// in time order without a sort; a version 6 store's samples survive the
+// index's rebuild.
+TEST(Schema, AChannelsSeriesIsReadFromItsIndexAloneSinceVersionSeven) {
+  testing::TempDir dir;
+  Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
+  migrate(db, schema_migrations().first(6));
+  db.execute("INSERT INTO runs (name, started_ns, config_toml, status) VALUES ('old', 5, '', 'complete')");
+  db.execute("INSERT INTO devices (run_id, name, kind) VALUES (1, 'adam', 'modbus-tcp')");
+  db.execute("INSERT INTO channels (device_id, name, kind, unit) VALUES (1, 'tc0', 'thermocouple', 'degC')");
+  db.execute("INSERT INTO samples (channel_id, t_ns, value, status) VALUES (1, 20, 21.5, 0), (1, 10, NULL, 3)");
+  const std::string series = "SELECT t_ns, value, status FROM samples WHERE channel_id = 1 ORDER BY t_ns";
+  EXPECT_EQ(query_plan(db, series).find("COVERING INDEX"), std::string::npos) << "version 6 already covered it";
+
+  migrate(db);
+  const std::string plan = query_plan(db, series);
+  EXPECT_NE(plan.find("COVERING INDEX samples_by_channel_time_value"), std::string::npos) << plan;
+  EXPECT_EQ(plan.find("TEMP B-TREE"), std::string::npos) << "the series is sorted after reading: " << plan;
+  auto rows = db.prepare(series);
+  std::vector<std::int64_t> times;
+  while (rows.step()) times.push_back(rows.column_int64(0));
+  EXPECT_EQ(times, (std::vector<std::int64_t>{10, 20}));
+}
+
 TEST(Schema, ProcessingTablesRejectWhatTheyDoNotMean) {
   testing::TempDir dir;
   Database db((dir / "run.sqlite").string(), Database::Mode::kCreate);
