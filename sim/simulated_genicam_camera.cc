@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
@@ -25,6 +26,14 @@ std::string SimulatedGenicamCameraOptions::Validate() const {
   }
   if (!(speed > 0)) return "simulated camera: speed-up must be positive";
   if (reference_frames < 0) return "simulated camera: reference frames must not be negative";
+  // Within 11 days of the host (camera timestamps stay positive, and the
+  // stamp keeps its nanoseconds in a double) and 10 % of its rate.
+  if (!(std::abs(clock_offset_s) <= 1e6)) {
+    return fmt::format("simulated camera: clock offset {} s is outside ±1e6 s", clock_offset_s);
+  }
+  if (!(std::abs(clock_drift_ppm) < 1e5)) {
+    return fmt::format("simulated camera: clock drift {} ppm is outside ±1e5 ppm", clock_drift_ppm);
+  }
   return "";
 }
 
@@ -35,10 +44,19 @@ struct SimulatedGenicamCamera::Impl {
   SimulatedGenicamCameraOptions options;
   std::chrono::steady_clock::time_point scene_start;
   std::atomic<std::uint64_t> rendered{0};
+  std::int64_t clock_start_ns = 0;  // host UTC time the camera clock's drift counts from
+  // How long a frame takes to render, smoothed: the scene is rendered for
+  // the instant the frame will be stamped. Only the fill thread uses it.
+  std::chrono::nanoseconds render_estimate{0};
   ArvGvFakeCamera* gv_camera = nullptr;
   ArvFakeCamera* fake = nullptr;  // owned by gv_camera
 
   void fill(ArvBuffer* buffer, ArvPixelFormat pixel_format);
+  std::int64_t camera_ns_at(std::int64_t host_ns) const {
+    const double since_ns = static_cast<double>(host_ns - clock_start_ns);
+    return host_ns + static_cast<std::int64_t>(std::llround(options.clock_offset_s * 1e9 +
+                                                            since_ns * options.clock_drift_ppm * 1e-6));
+  }
 };
 
 namespace {
@@ -80,6 +98,18 @@ void simgc_fill_pattern(ArvBuffer* buffer, void* data, guint32 /*exposure_time_u
   static_cast<SimulatedGenicamCamera::Impl*>(data)->fill(buffer, pixel_format);
 }
 
+// The region the camera was set to, from the scene's top-left corner.
+void simgc_copy_region(const cv::Mat& image, guint32 width, guint32 height, std::uint8_t* bytes, std::size_t size) {
+  std::memset(bytes, 0, size);
+  if (image.empty()) return;
+  const int rows = std::min(static_cast<int>(height), image.rows);
+  const std::size_t row_bytes = std::min<std::size_t>(width, static_cast<std::size_t>(image.cols)) * image.elemSize();
+  const std::size_t stride = static_cast<std::size_t>(width) * image.elemSize();
+  for (int y = 0; y < rows && (static_cast<std::size_t>(y) + 1) * stride <= size; ++y) {
+    std::memcpy(bytes + y * stride, image.ptr(y), row_bytes);
+  }
+}
+
 }  // namespace
 
 void SimulatedGenicamCamera::Impl::fill(ArvBuffer* buffer, ArvPixelFormat pixel_format) {
@@ -88,8 +118,8 @@ void SimulatedGenicamCamera::Impl::fill(ArvBuffer* buffer, ArvPixelFormat pixel_
   // arv_buffer_get_data reports is what was filled so far: none).
   auto* bytes = static_cast<std::uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, nullptr)));
   const std::size_t size = arv_fake_camera_get_payload(fake);
-  const std::int64_t taken_ns = acquisition::utc_now_ns();
-  const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - scene_start).count();
+  const auto began = std::chrono::steady_clock::now();
+  const double elapsed_s = std::chrono::duration<double>(began + render_estimate - scene_start).count();
   // Past its tabulated end the scene holds still (the recording ends there).
   const double scene_s = std::clamp(elapsed_s * options.speed, 0.0, scene->options().duration_s);
   const std::uint64_t index = rendered.fetch_add(1);
@@ -100,18 +130,13 @@ void SimulatedGenicamCamera::Impl::fill(ArvBuffer* buffer, ArvPixelFormat pixel_
   guint32 width = 0, height = 0;
   arv_fake_camera_read_register(fake, ARV_FAKE_CAMERA_REGISTER_WIDTH, &width);
   arv_fake_camera_read_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT, &height);
-  if (bytes == nullptr) return;
-  std::memset(bytes, 0, size);
-  if (!image.empty()) {
-    // The region the camera was set to, from the scene's top-left corner.
-    const int rows = std::min(static_cast<int>(height), image.rows);
-    const std::size_t row_bytes = std::min<std::size_t>(width, static_cast<std::size_t>(image.cols)) * image.elemSize();
-    const std::size_t stride = static_cast<std::size_t>(width) * image.elemSize();
-    for (int y = 0; y < rows && (static_cast<std::size_t>(y) + 1) * stride <= size; ++y) {
-      std::memcpy(bytes + y * stride, image.ptr(y), row_bytes);
-    }
-  }
-  arv_buffer_set_timestamp(buffer, static_cast<guint64>(taken_ns));
+  if (bytes != nullptr) simgc_copy_region(image, width, height, bytes, size);
+  // Stamped last: the leader, which carries the stamp, goes out next, so
+  // the least latency a client sees is the loopback's, not the rendering's.
+  const std::int64_t stamped_ns = acquisition::utc_now_ns();
+  const auto took = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - began);
+  render_estimate = index == 0 ? took : (render_estimate * 7 + took) / 8;
+  arv_buffer_set_timestamp(buffer, static_cast<guint64>(camera_ns_at(stamped_ns)));
 }
 
 SimulatedGenicamCamera::SimulatedGenicamCamera(std::shared_ptr<const ConvectionScene> scene, BackgroundPattern pattern,
@@ -127,6 +152,7 @@ SimulatedGenicamCamera::SimulatedGenicamCamera(std::shared_ptr<const ConvectionS
   impl_->camera = camera;
   impl_->options = std::move(options);
   impl_->scene_start = scene_start.value_or(std::chrono::steady_clock::now());
+  impl_->clock_start_ns = acquisition::utc_now_ns();
   const auto& o = impl_->options;
   if (!simgc_gvcp_port_free(o.address)) {
     throw std::runtime_error(fmt::format(
@@ -157,5 +183,14 @@ SimulatedGenicamCamera::~SimulatedGenicamCamera() {
 const SimulatedGenicamCameraOptions& SimulatedGenicamCamera::options() const { return impl_->options; }
 
 std::uint64_t SimulatedGenicamCamera::frames_rendered() const { return impl_->rendered.load(); }
+
+std::int64_t SimulatedGenicamCamera::camera_ns_at(std::int64_t host_ns) const { return impl_->camera_ns_at(host_ns); }
+
+std::int64_t SimulatedGenicamCamera::host_ns_at(std::int64_t camera_ns) const {
+  // camera − offset − start = (host − start) · (1 + drift)
+  const auto& o = impl_->options;
+  const double since_ns = static_cast<double>(camera_ns - impl_->clock_start_ns) - o.clock_offset_s * 1e9;
+  return impl_->clock_start_ns + static_cast<std::int64_t>(std::llround(since_ns / (1 + o.clock_drift_ppm * 1e-6)));
+}
 
 }  // namespace bosfuse::sim

@@ -7,8 +7,14 @@
 // (acquisition/cameras/genicam_source.h). Scene time runs as for the
 // virtual camera (sim/virtual_devices.h): time since the scene's start ×
 // speed-up. The first `reference_frames` frames show the background without
-// flow; every frame is stamped with the host UTC time of its rendering as
-// its camera timestamp, so the camera's clock is the host's.
+// flow. Every frame is stamped, once it is rendered and just before it
+// goes out, from the camera's own clock: the host's UTC clock with a known
+// offset and drift (clock_offset_s, clock_drift_ppm; 0 and 0 make it the
+// host's), so a test knows each timestamp's true host time
+// (host_ns_at). The scene is rendered for that instant as predicted from
+// the last renderings' duration, so the stamp and the scene agree to the
+// rendering time's jitter. The fake camera has no timestamp latch: a
+// client maps this clock from frame arrivals.
 //
 // GigE Vision's control port is fixed (GVCP, 3956): one simulated camera
 // per address at a time.
@@ -30,7 +36,11 @@ struct SimulatedGenicamCameraOptions {
   double frame_rate_hz = 1;           // the camera's free-run rate (the fake camera offers 1..100)
   double speed = 1;                   // scene time per second of real time
   int reference_frames = 1;           // the first frames show no flow
-  std::string Validate() const;       // empty when valid
+  // The camera clock: camera = host + clock_offset_s + (host − start) · clock_drift_ppm · 1e-6,
+  // the start being the camera's construction.
+  double clock_offset_s = 0;
+  double clock_drift_ppm = 0;
+  std::string Validate() const;  // empty when valid
 };
 
 class SimulatedGenicamCamera {
@@ -48,6 +58,10 @@ class SimulatedGenicamCamera {
 
   const SimulatedGenicamCameraOptions& options() const;
   std::uint64_t frames_rendered() const;  // frames the camera has filled so far
+  // The camera's clock at host UTC time `host_ns`, and its inverse: the
+  // true host time of a camera timestamp.
+  std::int64_t camera_ns_at(std::int64_t host_ns) const;
+  std::int64_t host_ns_at(std::int64_t camera_ns) const;
 
   struct Impl;  // public so the fill callback (a C function) can reach it
 

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "acquisition/cameras/genicam_glib.h"
+#include "acquisition/cameras/genicam_link_budget.h"
 #include "acquisition/cameras/genicam_pixels.h"
 #include "acquisition/clock.h"
 
@@ -137,6 +138,51 @@ void genicam_apply_frame_rate(ArvCamera* camera, const GenicamOptions& o) {
   GError* error = nullptr;
   arv_camera_set_frame_rate(camera, *o.frame_rate_hz, &error);  // also sets the enable flag where there is one
   genicam_check(error, "setting the frame rate");
+}
+
+// The least throughput the camera reports for its link, into `budget`.
+// A feature that cannot be read is no figure to refuse by.
+void genicam_read_link(ArvDevice* device, GenicamLinkBudget& budget) {
+  bool limit_on = true;  // a camera with a limit and no mode switch enforces it
+  if (genicam_has_feature(device, "DeviceLinkThroughputLimitMode")) {
+    GError* error = nullptr;
+    const char* mode = arv_device_get_string_feature_value(device, "DeviceLinkThroughputLimitMode", &error);
+    limit_on = error == nullptr && mode != nullptr && std::string(mode) == "On";
+    genicam_take(error);
+  }
+  for (const std::string feature : {"DeviceLinkThroughputLimit", "DeviceLinkSpeed", "GevLinkSpeed"}) {
+    if (!genicam_has_feature(device, feature.c_str()) || (feature == "DeviceLinkThroughputLimit" && !limit_on)) continue;
+    GError* error = nullptr;
+    const double value = ARV_IS_GC_FLOAT(arv_device_get_feature(device, feature.c_str()))
+                             ? arv_device_get_float_feature_value(device, feature.c_str(), &error)
+                             : static_cast<double>(arv_device_get_integer_feature_value(device, feature.c_str(), &error));
+    if (!genicam_take(error).empty()) continue;
+    const double bytes_per_s = genicam_link_bytes_per_s(feature, value);
+    if (bytes_per_s > 0 && (budget.link_bytes_per_s == 0 || bytes_per_s < budget.link_bytes_per_s)) {
+      budget.link_bytes_per_s = bytes_per_s;
+      budget.link_feature = feature;
+    }
+  }
+}
+
+// A requested rate (free-run, or a software trigger's) whose frames the
+// camera's link cannot carry is refused at start, naming the figures.
+void genicam_check_link(ArvCamera* camera, const GenicamOptions& o) {
+  GenicamLinkBudget budget;
+  if (o.trigger == GenicamTrigger::kSoftware) {
+    budget.frame_rate_hz = 1 / std::chrono::duration<double>(o.software_trigger_period).count();
+  } else if (o.trigger == GenicamTrigger::kFreeRun && o.frame_rate_hz) {
+    budget.frame_rate_hz = *o.frame_rate_hz;
+  }
+  if (!(budget.frame_rate_hz > 0)) return;
+  genicam_read_link(arv_camera_get_device(camera), budget);
+  if (budget.link_bytes_per_s <= 0) return;
+  GError* error = nullptr;
+  budget.payload_bytes = arv_camera_get_payload(camera, &error);
+  genicam_check(error, "reading the payload size");
+  if (const std::string problem = budget.problem(); !problem.empty()) {
+    genicam_refuse(o.trigger == GenicamTrigger::kSoftware ? "trigger_period_s" : "frame_rate_hz", problem);
+  }
 }
 
 void genicam_apply_trigger(ArvCamera* camera, const GenicamOptions& o) {
@@ -269,7 +315,7 @@ void GenicamSource::apply_settings() {
       std::chrono::duration<double>(options_.software_trigger_period).count() < 1 / streaming_.frame_rate_hz) {
     genicam_refuse("trigger_period_s", fmt::format("shorter than the camera's frame period ({} Hz)",
                                                    genicam_number(streaming_.frame_rate_hz)));
-  }
+  }  genicam_check_link(camera, options_);
 }
 
 void GenicamSource::start_stream() {
@@ -321,7 +367,10 @@ void GenicamSource::connect() {
     disconnect();
     throw;
   }
-  clock_.clear();  // a reconnected camera may have restarted its clock
+  // A reconnected camera may have restarted its clock: a new mapping, fitted
+  // as its pairs' errors require (genicam_clock_mapping.h).
+  clock_ = GenicamClockMapping(streaming_.latched_clock ? GenicamClockMapping::Pairs::kLatched
+                                                        : GenicamClockMapping::Pairs::kArrivals);
   clock_noted_ = false;
   last_frame_id_.reset();
   last_frame_at_ = next_trigger_at_ = next_latch_at_ = GenicamClock::now();

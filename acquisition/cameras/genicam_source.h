@@ -5,15 +5,17 @@
 // rate, trigger, then `features`), each checked against the camera's own
 // feature limits first: a value outside them is refused with the feature's
 // name and range (GenicamSettingRefused), as is a setting the camera lacks
-// (gain_db on a camera with only GainRaw) and a frame rate it cannot
-// deliver with those settings. Then it streams: frames come as the camera
+// (gain_db on a camera with only GainRaw), a frame rate it cannot
+// deliver with those settings, and one whose frames its link cannot carry
+// (genicam_link_budget.h). Then it streams: frames come as the camera
 // sends them (free-run or a hardware trigger) or as next() triggers them
 // (a software trigger at its period).
 //
 // Each frame keeps the camera's timestamp as device_t_ns and its host
 // arrival as arrival_ns; t_ns is the camera time mapped to the host clock
 // (genicam_clock_mapping.h), fitted from latched camera timestamps where
-// the camera has a latch, else from frame timestamps against arrivals. The
+// the camera has a latch, else from frame timestamps against arrivals
+// (their lower envelope, as arrivals are only ever late). The
 // fit is noted as a "clock" event with its residual when it starts and at
 // every clock_report_period. A frame the stream could not complete (missing
 // packets, a timeout) is a FrameLost; frames that never reached a buffer
