@@ -139,6 +139,7 @@ TEST(SimulatedGenicamCamera, ASkewedClockIsMappedFromArrivalsToTrueHostTime) {
       << acquisition::GenicamClockMapping::describe(*fit);
   double lowest_error_ns = 1e18, highest_error_ns = -1e18;
   std::vector<double> true_latency_ns;
+  double least_latency_so_far_ns = 1e18;
   for (std::size_t i = 0; i < stamps.size(); ++i) {
     const SimgcStamp& s = stamps[i];
     const std::int64_t truth_ns = camera.host_ns_at(s.camera_ns);
@@ -148,16 +149,19 @@ TEST(SimulatedGenicamCamera, ASkewedClockIsMappedFromArrivalsToTrueHostTime) {
     // An arrival is never before its stamp (Aravis' arrival is in µs).
     EXPECT_GE(s.arrival_ns, truth_ns - 1000) << i;
     true_latency_ns.push_back(static_cast<double>(s.arrival_ns - truth_ns));
+    least_latency_so_far_ns = std::min(least_latency_so_far_ns, true_latency_ns.back());
     const double error_ns =
         fit->host_at_origin_ns + (1 + fit->drift) * static_cast<double>(s.camera_ns - fit->camera_origin_ns) -
         static_cast<double>(truth_ns);
     lowest_error_ns = std::min(lowest_error_ns, error_ns);
     highest_error_ns = std::max(highest_error_ns, error_ns);
-    // Online, as stored: once the fit spans 5 s, within 1 ms plus the stated
-    // residual (on a loaded machine the drift fitted over a few seconds is
-    // still settling, and the residual says so).
+    // Online, as stored: once the fit spans 5 s, within 1 ms of the least
+    // latency seen so far plus the stated residual (on a loaded machine the
+    // drift fitted over a few seconds is still settling, and the residual
+    // says so).
     if (s.camera_ns - stamps.front().camera_ns > 5'000'000'000) {
-      EXPECT_LE(std::abs(static_cast<double>(s.t_ns - truth_ns)), 1e6 + fit->residual_max_ns) << i;
+      EXPECT_LE(std::abs(static_cast<double>(s.t_ns - truth_ns)), 1e6 + least_latency_so_far_ns + fit->residual_max_ns)
+          << i;
     }
   }
   const std::string described = acquisition::GenicamClockMapping::describe(*fit);
@@ -166,11 +170,12 @@ TEST(SimulatedGenicamCamera, ASkewedClockIsMappedFromArrivalsToTrueHostTime) {
               stamps.size(), lowest_error_ns * 1e-3, highest_error_ns * 1e-3, true_latency_ns.front() * 1e-3,
               true_latency_ns[true_latency_ns.size() / 16] * 1e-3, true_latency_ns[true_latency_ns.size() / 2] * 1e-3,
               described.c_str());
-  // The fitted mapping puts every frame within 1 ms of its true host time.
-  // It lies under every arrival, through the least-delayed one: late by
-  // the least latency it cannot see, and never early by more than its
-  // stated residual (the drift's error over the span).
-  EXPECT_LE(highest_error_ns, 1e6) << described;
+  // The fitted mapping lies under every arrival, through the least-delayed
+  // one: late by the least latency it cannot see (0.1 ms on an idle
+  // loopback, over 10 minutes: docs/BENCHMARKS.md; on a loaded machine no
+  // frame of 8 s may arrive that fast), plus and minus the drift's error
+  // over the span, which its stated residual bounds.
+  EXPECT_LE(highest_error_ns, true_latency_ns.front() + fit->residual_max_ns + 50e3) << described;
   EXPECT_GE(lowest_error_ns, -fit->residual_max_ns - 50e3) << described;
   EXPECT_LE(lowest_error_ns, true_latency_ns.front() + 1e3) << described;
 }
