@@ -292,6 +292,39 @@ TEST(VectorUncertaintyCoverage, DISABLED_UniformShiftsWithAndWithoutNoise) {
   }
 }
 
+// At zero shift, the final vector's error against its σ with the
+// predictor smoothed between passes (the default) and not: the predictor,
+// measured on the same images, brings its own noise into the vector
+// through the bilinear deformation, which the matched windows do not show
+// (docs/UNCERTAINTY.md): build/fusion/fusion_test
+// --gtest_also_run_disabled_tests --gtest_filter='*DISABLED_PredictorNoiseAtZeroShift'
+TEST(VectorUncertaintyCoverage, DISABLED_PredictorNoiseAtZeroShift) {
+  for (const bool smooth : {true, false}) {
+    XcorrOptions options;
+    options.smooth_predictor = smooth;
+    double error_sq = 0, sigma_sq = 0, within = 0;
+    int n = 0;
+    for (int seed = 0; seed < 2; ++seed) {
+      sim::PatternOptions pattern;
+      pattern.width_px = pattern.height_px = 256;
+      pattern.dot_diameter_px = 3;
+      pattern.seed = 11 + seed;
+      const auto dots = sim::generate_pattern(pattern);
+      const cv::Mat reference = expose(sim::render_dots(dots, nullptr), Camera{}, 1.0, 100 + 2 * seed);
+      const cv::Mat measurement = expose(sim::render_dots(dots, nullptr), Camera{}, 1.0, 101 + 2 * seed);
+      for (const auto& vec : evaluate_xcorr(reference, measurement, options).field.vectors) {
+        if (!vec.valid()) continue;
+        for (const auto& [e, s] : {std::pair{vec.u_px, vec.sigma_u_px}, std::pair{vec.v_px, vec.sigma_v_px}}) {
+          error_sq += e * e, sigma_sq += s * s, within += std::abs(e) <= 1.96 * s, ++n;
+        }
+      }
+    }
+    std::printf("predictor %s: rms error %.5f, rms sigma %.5f px, ratio %.3f, coverage %.4f\n",
+                smooth ? "smoothed" : "not smoothed", std::sqrt(error_sq / n), std::sqrt(sigma_sq / n),
+                std::sqrt(error_sq / sigma_sq), within / n);
+  }
+}
+
 // Per accumulated figures of one grid column of the steep sinusoid.
 struct ColumnFigures {
   double v_error_sq = 0, v_sigma_sq = 0, v_within = 0, u_error_sq = 0, u_sigma_sq = 0, u_within = 0;
