@@ -13,7 +13,7 @@ namespace {
 
 // Sums over the lines along one axis of the contributions d_i and their
 // lag products, from which their variance is formed (variance_from).
-constexpr int kMaxLags = 4;
+constexpr int kMaxLags = 2;
 struct LagSums {
   double sum = 0;                   // Σ d_i
   double products[kMaxLags + 1] = {};  // Σ d_i·d_(i+l), l = 0…lags
@@ -36,77 +36,30 @@ double variance_from(const LagSums& s, int lags) {
   return std::max(total, 0.0);
 }
 
-// Σ p[i]·q[i] over i < count in float, the products summed in eight lanes
-// which the compiler vectorises (a single float sum it may not reorder).
-inline float lane_dot(const float* __restrict p, const float* __restrict q, int count) {
-  constexpr int kLanes = 8;
-  float lanes[kLanes] = {};
-  int i = 0;
-  for (; i + kLanes <= count; i += kLanes) {
-    for (int k = 0; k < kLanes; ++k) lanes[k] += p[i + k] * q[i + k];
-  }
-  for (; i < count; ++i) lanes[0] += p[i] * q[i];
-  float total = 0;
-  for (int k = 0; k < kLanes; ++k) total += lanes[k];
-  return total;
-}
-
-// The lag products and ends along x and along y (their sums Σ d are the
-// kernel's) in one sweep over the rows: each row of
-// a' and b' once, the x contributions of row y (n − 1, contiguous) and the
-// y contributions of rows y − 1 and y (n, a row of the ring of lags + 1
-// kept for the products between rows l apart). `buffer` is reused.
-void lag_sums(const cv::Mat& a, float ma, const cv::Mat& b, float mb, int lags, std::vector<float>& buffer,
-              LagSums& along_x, LagSums& along_y) {
-  const int n = a.rows, length = n - 1, kept = lags + 1;
-  buffer.resize(static_cast<std::size_t>(5 + kept) * n + 1);
-  float* __restrict rows = buffer.data();  // a'(y − 1), b'(y − 1), a'(y), b'(y), dx, then the ring
-  float* __restrict ring = rows + 5 * n;
-  along_x.lines = n, along_x.length = length, along_x.count = n * length;
-  along_y.lines = n, along_y.length = length, along_y.count = n * length;
+// The first and last l contributions ΔCx of every row, l = 1 and 2, for
+// variance_from's centring (the kernel sums the rows' ends along y).
+void x_ends(const cv::Mat& a, const cv::Mat& b, double mean_a, double mean_b, double* ends) {
+  const int n = a.rows;
+  const float ma = static_cast<float>(mean_a), mb = static_cast<float>(mean_b);
+  float one = 0, two = 0;
   for (int y = 0; y < n; ++y) {
-    float *ap = rows + ((y + 1) % 2) * 2 * n, *bp = ap + n, *ac = rows + (y % 2) * 2 * n, *bc = ac + n;
-    float* dx = rows + 4 * n;
     const float *ar = a.ptr<float>(y), *br = b.ptr<float>(y);
-    for (int x = 0; x < n; ++x) ac[x] = ar[x] - ma, bc[x] = br[x] - mb;
-    for (int x = 0; x < length; ++x) dx[x] = ac[x] * bc[x + 1] - ac[x + 1] * bc[x];
-    for (int l = 0; l <= lags && l < length; ++l) {
-      along_x.products[l] += lane_dot(dx, dx + l, length - l);
-      for (int k = 0; k < l; ++k) along_x.ends[l] += dx[k] + dx[length - 1 - k];
-    }
-    if (y == 0) continue;
-    const int row_y = y - 1;  // the y contribution between rows y − 1 and y
-    float* dy = ring + static_cast<std::size_t>(row_y % kept) * n;
-    for (int x = 0; x < n; ++x) dy[x] = ap[x] * bc[x] - ac[x] * bp[x];
-    for (int l = 0; l <= lags && l <= row_y; ++l) {
-      along_y.products[l] += lane_dot(dy, ring + static_cast<std::size_t>((row_y - l) % kept) * n, n);
-    }
-    // Only the rows among the l first or last of each column need their sum.
-    if (row_y >= lags && row_y < length - lags) continue;
-    float row_sum = 0;
-    for (int x = 0; x < n; ++x) row_sum += dy[x];
-    for (int l = 1; l <= lags && l < length; ++l) {
-      if (row_y < l) along_y.ends[l] += row_sum;
-      if (row_y >= length - l) along_y.ends[l] += row_sum;
-    }
+    const auto delta = [&](int x) { return (ar[x] - ma) * (br[x + 1] - mb) - (ar[x + 1] - ma) * (br[x] - mb); };
+    const float outer = delta(0) + delta(n - 2);
+    one += outer;
+    two += outer + delta(1) + delta(n - 3);
   }
+  ends[0] = one, ends[1] = two;
 }
 
-// The window's mean, in float lanes added in double.
-double lane_mean(const cv::Mat& window) {
-  constexpr int kLanes = 8;
-  double sum = 0;
-  for (int y = 0; y < window.rows; ++y) {
-    const float* row = window.ptr<float>(y);
-    float lanes[kLanes] = {};
-    int x = 0;
-    for (; x + kLanes <= window.cols; x += kLanes) {
-      for (int k = 0; k < kLanes; ++k) lanes[k] += row[x + k];
-    }
-    for (; x < window.cols; ++x) lanes[0] += row[x];
-    for (int k = 0; k < kLanes; ++k) sum += lanes[k];
-  }
-  return sum / (static_cast<double>(window.rows) * window.cols);
+// The sums along one axis from the kernels' (simd_kernels.h).
+LagSums axis_sums(int n, double sum, double squares, double lag1, double lag2, double ends1, double ends2) {
+  LagSums s;
+  s.lines = n, s.length = n - 1, s.count = n * (n - 1);
+  s.sum = sum;
+  s.products[0] = squares, s.products[1] = lag1, s.products[2] = lag2;
+  s.ends[1] = ends1, s.ends[2] = ends2;
+  return s;
 }
 
 void check_window(const cv::Mat& window) {
@@ -138,12 +91,16 @@ VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const 
   correlation_statistics_sums(reference_window.ptr<float>(), reference_window.step1(), measurement_window.ptr<float>(),
                               measurement_window.step1(), n, sums);
   const int lags = correlated_contributions ? kContributionLags : 0;
-  thread_local std::vector<float> buffer;
-  LagSums along_x, along_y;
-  along_x.sum = sums[kDeltaX], along_y.sum = sums[kDeltaY];  // Σ ΔC, the kernel's
-  lag_sums(reference_window, static_cast<float>(lane_mean(reference_window)), measurement_window,
-           static_cast<float>(lane_mean(measurement_window)), lags, buffer, along_x, along_y);
-  const double variance_x = variance_from(along_x, lags), variance_y = variance_from(along_y, lags);
+  double lag[kCorrelationLagSumCount] = {}, ends[2] = {};
+  if (lags > 0) {
+    correlation_lag_sums(reference_window.ptr<float>(), reference_window.step1(), measurement_window.ptr<float>(),
+                         measurement_window.step1(), n, lag);
+    x_ends(reference_window, measurement_window, lag[kMeanA], lag[kMeanB], ends);
+  }
+  const double variance_x = variance_from(
+      axis_sums(n, sums[kDeltaX], sums[kDeltaX2], lag[kLagX1], lag[kLagX2], ends[0], ends[1]), lags);
+  const double variance_y = variance_from(
+      axis_sums(n, sums[kDeltaY], sums[kDeltaY2], lag[kLagY1], lag[kLagY2], lag[kEndsY1], lag[kEndsY2]), lags);
   // C± sum over n − 1 of the n columns (rows): C0 on as many pixels.
   const double c0_part = sums[kC0] * (n - 1) / n;
   return {gaussian_peak_uncertainty(c0_part, (sums[kPlusX] + sums[kMinusX]) / 2, std::sqrt(variance_x)),

@@ -18,9 +18,9 @@
 //
 // with C± = (C+ + C−)/2 and C0 = Σ a'·b' (C± sum over n − 1 of the n
 // columns, C0 is scaled to as many), and σ_ΔC² the variance of Σ ΔC_i.
-// Likewise along y. C0 and C± are simd_kernels.h's
-// correlation_statistics_sums (float lanes per column, added in double);
-// σ_ΔC² is summed here, in float per line.
+// Likewise along y. The sums are simd_kernels.h's
+// correlation_statistics_sums and correlation_lag_sums (float lanes per
+// column, added in double).
 //
 // The paper takes σ_ΔC² = Σ (ΔC_i − mean ΔC)², as if the contributions were
 // independent. They are not: noise in pixel k of b enters ΔC_(k−1) with
@@ -91,7 +91,8 @@ inline constexpr double kUnresolvedPx = 1.0;
 // DisplacementVector keeps for "not estimated".
 inline constexpr double kFloorPx = 1e-4;
 
-// The lags along each axis whose products enter σ_ΔC² (see above; at most 4).
+// The lags along each axis whose products enter σ_ΔC² (see above; the
+// kernel sums lags 1 and 2).
 inline constexpr int kContributionLags = 2;
 
 // `reference_window` and `measurement_window` are n×n CV_32FC1 (views into

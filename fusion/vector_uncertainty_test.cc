@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <utility>
@@ -138,6 +139,24 @@ TEST(VectorUncertainty, MatchesTheScatterOfNoisyWindows) {
     EXPECT_NEAR(sigma_sum / kDraws / scatter, 1.0, 0.04) << "noise " << noise;
     EXPECT_GE(covered / kDraws, 0.93) << "noise " << noise;
     EXPECT_LE(covered / kDraws, 0.97) << "noise " << noise;
+  }
+}
+
+// The time of one 16 px window's σ, for docs/UNCERTAINTY.md's cost:
+// build/fusion/fusion_test --gtest_also_run_disabled_tests
+// --gtest_filter='*DISABLED_TimeOfOneWindowsSigma'
+TEST(VectorUncertainty, DISABLED_TimeOfOneWindowsSigma) {
+  const cv::Mat a = random_window(16, 2);
+  cv::Mat noise(a.size(), CV_32F);
+  cv::RNG(3).fill(noise, cv::RNG::NORMAL, 0.0, 0.01);
+  const cv::Mat b = a + noise;
+  constexpr int kCalls = 200000;
+  for (int repeat = 0; repeat < 5; ++repeat) {
+    const auto start = std::chrono::steady_clock::now();
+    double sum = 0;
+    for (int i = 0; i < kCalls; ++i) sum += correlation_statistics(a, b).sigma_u_px;
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::printf("%.1f ns per window (sum %g)\n", 1e9 * seconds / kCalls, sum);
   }
 }
 
