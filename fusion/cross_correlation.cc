@@ -149,10 +149,6 @@ struct PassInput {
   const WindowStats* reference_stats = nullptr;
   int stats_row0 = 0, stats_col0 = 0, stats_stride = 1, stats_cols = 0;
 
-  // Each reference window's neighbour-noise factors for its σ, when cached
-  // (the final pass's, indexed as the statistics are).
-  const NeighbourNoiseFactors* noise_factors = nullptr;
-
   std::size_t stats_index(int row, int col) const {
     return static_cast<std::size_t>(stats_row0 + stats_stride * row) * stats_cols + stats_col0 + stats_stride * col;
   }
@@ -168,6 +164,8 @@ struct PassInput {
   // it is measured, while its windows are in cache (a sweep afterwards
   // reads 128 MB of a 16 MP frame's images again).
   bool uncertainty_now = false;
+  // σ's factor for the predictor's noise the vector carries (vector_uncertainty.h).
+  double predictor_noise_gain = 1;
 };
 
 // Where a node's windows lie: the reference window, the search patch in the
@@ -205,10 +203,10 @@ cv::Mat reference_window_of(const PreparedPair& pair, const PassInput& in, cv::R
 // σu, σv of a node from its reference window and the measurement window at
 // its integer peak (dx, dy). A window whose deformed samples reach past the
 // image read replicated border pixels there: a mismatch that is no
-// independent pixel noise, so its statistics are not corrected for noise
-// shared by neighbouring contributions (vector_uncertainty.h).
-VectorUncertainty node_uncertainty(const PreparedPair& pair, const PassInput& in, const NodeWindows& w, int row,
-                                   int col, int dx, int dy) {
+// independent pixel noise nor the warp's, so its statistics keep the
+// per-pixel sum. σ then carries the predictor's noise (vector_uncertainty.h).
+VectorUncertainty node_uncertainty(const PreparedPair& pair, const PassInput& in, const NodeWindows& w, int dx,
+                                   int dy) {
   const int n = in.window_px, r = in.radius_px;
   const cv::Rect at_peak(w.search.x + r + dx, w.search.y + r + dy, n, n);
   // The interpolator's half-width (Lanczos4: 4 px) and the deformation's reach.
@@ -217,10 +215,8 @@ VectorUncertainty node_uncertainty(const PreparedPair& pair, const PassInput& in
   const cv::Rect read(w.window.x - reach, w.window.y - reach, n + 2 * reach, n + 2 * reach);
   const bool inside_image = (read & image) == read;
   const cv::Mat reference_window = reference_window_of(pair, in, w.window);
-  if (!in.noise_factors) return correlation_statistics(reference_window, view(in.warped, at_peak), inside_image);
-  const NeighbourNoiseFactors factors =
-      inside_image ? in.noise_factors[in.stats_index(row, col)] : NeighbourNoiseFactors{};
-  return correlation_statistics(reference_window, view(in.warped, at_peak), factors);
+  return with_predictor_noise(correlation_statistics(reference_window, view(in.warped, at_peak), inside_image),
+                              in.predictor_noise_gain);
 }
 
 // Whether a fitted peak is a measurement: kBeyondSearch when it lies
@@ -296,7 +292,7 @@ void evaluate_node(const PreparedPair& pair, const PassInput& in, const XcorrOpt
     in.peak_dy[node] = static_cast<std::int8_t>(peak.dy);
   }
   if (in.uncertainty_now) {
-    const VectorUncertainty sigma = node_uncertainty(pair, in, w, row, col, peak.dx, peak.dy);
+    const VectorUncertainty sigma = node_uncertainty(pair, in, w, peak.dx, peak.dy);
     vec.sigma_u_px = sigma.sigma_u_px;
     vec.sigma_v_px = sigma.sigma_v_px;
   }
@@ -442,8 +438,7 @@ void estimate_uncertainty(const PreparedPair& pair, const PassInput& in, Displac
       auto& vec = field.vectors[static_cast<std::size_t>(i)];
       if (vec.flag != VectorFlag::kOk) continue;
       const NodeWindows w = node_windows(pair, in, i / field.cols, i % field.cols, vec);
-      const VectorUncertainty sigma =
-          node_uncertainty(pair, in, w, i / field.cols, i % field.cols, in.peak_dx[i], in.peak_dy[i]);
+      const VectorUncertainty sigma = node_uncertainty(pair, in, w, in.peak_dx[i], in.peak_dy[i]);
       vec.sigma_u_px = sigma.sigma_u_px;
       vec.sigma_v_px = sigma.sigma_v_px;
     }
@@ -477,7 +472,6 @@ struct PassWorkspace {
   cv::Mat warped_storage, warped_reference_storage;
   bool cache_reference_stats = false;
   std::map<int, std::vector<WindowStats>> reference_stats;          // by window size
-  std::map<int, std::vector<NeighbourNoiseFactors>> noise_factors;  // likewise, for the σ of the final pass
   std::vector<std::int8_t> peak_dx, peak_dy;  // the last pass's integer peaks, for its uncertainty
   DisplacementField previous_field;           // the field before a pass, for its change
   GridField predictor;                        // a refinement pass's, and its smoothing's scratch
@@ -535,14 +529,6 @@ const std::vector<WindowStats>& reference_stats_for(const PreparedPair& pair, co
                                                     int window_px, PassWorkspace& workspace) {
   return per_reference_window(pair, field, window_px, workspace.reference_stats,
                               [](const cv::Mat& window) { return window_stats(window); });
-}
-
-// The neighbour-noise factors (vector_uncertainty.h), which depend on the
-// reference window alone.
-const std::vector<NeighbourNoiseFactors>& noise_factors_for(const PreparedPair& pair, const DisplacementField& field,
-                                                            int window_px, PassWorkspace& workspace) {
-  return per_reference_window(pair, field, window_px, workspace.noise_factors,
-                              [](const cv::Mat& window) { return neighbour_noise_factors(window); });
 }
 
 // A pass's measured vectors on their own grid.
@@ -1003,8 +989,8 @@ bool run_one_pass(PassLoop& loop, int pass) {
   const bool last = pass + 1 == static_cast<int>(loop.windows.size()) || loop.finish_now;
   const Interpolator interpolator = options.fast_early_passes && !last ? Interpolator::kCubic : options.interpolator;
   in.uncertainty_now = options.estimate_uncertainty && last && warp;
-  if (options.estimate_uncertainty && last && in.reference_stats) {
-    in.noise_factors = noise_factors_for(loop.pair, loop.field, in.window_px, workspace).data();
+  if (options.estimate_uncertainty) {
+    in.predictor_noise_gain = predictor_noise_gain(in.window_px, options.step_px, options.smooth_predictor);
   }
   warp_for_pass(loop, predicted, warp, warp_reference, interpolator, in);
   measure_pass(loop, pass, in);

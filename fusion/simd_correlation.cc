@@ -646,6 +646,71 @@ void CorrelationStatisticsSums(const float* a, std::size_t a_stride, const float
   sums[kDeltaY2] = AddLanes(d, dy2, 0.0);
 }
 
+
+// The lag products (simd_kernels.h): along y each column chunk keeps the two
+// previous rows' ΔCy in registers; along x each lag l has its own chunk
+// start, moved back so that the partner at c + l stays in the window, the
+// lanes of columns already counted masked off.
+void CorrelationLagSums(const float* a, std::size_t a_stride, const float* b, std::size_t b_stride, int n,
+                        double* lags) {
+  const hn::CappedTag<float, 8> d;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  if (n - 3 - lanes < 0) {
+    scalar_correlation_lag_sums(a, a_stride, b, b_stride, n, lags);
+    return;
+  }
+  const double pixels = double(n) * n;
+  lags[kMeanA] = WindowSum<false>(a, a_stride, n, 0.0) / pixels;
+  lags[kMeanB] = WindowSum<false>(b, b_stride, n, 0.0) / pixels;
+  const auto ma = hn::Set(d, static_cast<float>(lags[kMeanA]));
+  const auto mb = hn::Set(d, static_cast<float>(lags[kMeanB]));
+  const auto iota = hn::Iota(d, 0.f);
+  // ΔC at columns c…c + lanes of rows y (a0, b0 there) and the next (row or column).
+  const auto delta_x = [&](const float* ra, const float* rb, int c) {
+    return hn::Sub(hn::Mul(hn::Sub(hn::LoadU(d, ra + c), ma), hn::Sub(hn::LoadU(d, rb + c + 1), mb)),
+                   hn::Mul(hn::Sub(hn::LoadU(d, ra + c + 1), ma), hn::Sub(hn::LoadU(d, rb + c), mb)));
+  };
+  auto x1 = hn::Zero(d), x2 = x1, y1 = x1, y2 = x1, ends1 = x1, ends2 = x1;
+  for (int x = 0; x < n; x += lanes) {
+    const int s0 = std::min(x, n - lanes);
+    const auto new0 = hn::Ge(iota, hn::Set(d, static_cast<float>(x - s0)));
+    auto previous1 = hn::Zero(d), previous2 = previous1;
+    for (int y = 0; y + 1 < n; ++y) {
+      const float* ra = a + y * a_stride;
+      const float* rb = b + y * b_stride;
+      const auto a0 = hn::IfThenElseZero(new0, hn::Sub(hn::LoadU(d, ra + s0), ma));
+      const auto b0 = hn::IfThenElseZero(new0, hn::Sub(hn::LoadU(d, rb + s0), mb));
+      const auto delta = hn::Sub(hn::Mul(a0, hn::Sub(hn::LoadU(d, rb + b_stride + s0), mb)),
+                                 hn::Mul(hn::Sub(hn::LoadU(d, ra + a_stride + s0), ma), b0));
+      y1 = hn::MulAdd(delta, previous1, y1);
+      y2 = hn::MulAdd(delta, previous2, y2);
+      previous2 = previous1;
+      previous1 = delta;
+      if (y < 1 || y >= n - 2) ends1 = hn::Add(ends1, delta);
+      if (y < 2 || y >= n - 3) ends2 = hn::Add(ends2, delta);
+    }
+  }
+  for (int x = 0; x < n - 1; x += lanes) {
+    for (int l = 1; l <= 2; ++l) {
+      const int s = std::min(x, n - 1 - lanes - l);
+      if (s < x && x > n - 2 - l) continue;  // no column from x on has a partner l further
+      const auto fresh = hn::Ge(iota, hn::Set(d, static_cast<float>(x - s)));
+      auto& sum = l == 1 ? x1 : x2;
+      for (int y = 0; y < n; ++y) {
+        const float* ra = a + y * a_stride;
+        const float* rb = b + y * b_stride;
+        sum = hn::MulAdd(hn::IfThenElseZero(fresh, delta_x(ra, rb, s)), delta_x(ra, rb, s + l), sum);
+      }
+    }
+  }
+  lags[kLagX1] = AddLanes(d, x1, 0.0);
+  lags[kLagX2] = AddLanes(d, x2, 0.0);
+  lags[kLagY1] = AddLanes(d, y1, 0.0);
+  lags[kLagY2] = AddLanes(d, y2, 0.0);
+  lags[kEndsY1] = AddLanes(d, ends1, 0.0);
+  lags[kEndsY2] = AddLanes(d, ends2, 0.0);
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace bosfuse::fusion
 HWY_AFTER_NAMESPACE();
@@ -666,6 +731,7 @@ HWY_EXPORT(EqualWindowProducts);
 HWY_EXPORT(PatchBoxSums);
 HWY_EXPORT(NormaliseByEnergies);
 HWY_EXPORT(CorrelationStatisticsSums);
+HWY_EXPORT(CorrelationLagSums);
 
 void accumulate_products(const float* reference, const float* patch, std::size_t patch_stride, int n, int side,
                          double* products) {
@@ -825,6 +891,41 @@ void scalar_correlation_statistics_sums(const float* a, std::size_t a_stride, co
         sums[kDeltaY] += plus - minus;
         sums[kDeltaY2] += (plus - minus) * (plus - minus);
       }
+    }
+  }
+}
+
+
+void correlation_lag_sums(const float* a, std::size_t a_stride, const float* b, std::size_t b_stride, int n,
+                          double* lags) {
+  HWY_DYNAMIC_DISPATCH(CorrelationLagSums)(a, a_stride, b, b_stride, n, lags);
+}
+
+void scalar_correlation_lag_sums(const float* a, std::size_t a_stride, const float* b, std::size_t b_stride, int n,
+                                 double* lags) {
+  double mean_a = 0, mean_b = 0;
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) mean_a += a[y * a_stride + x], mean_b += b[y * b_stride + x];
+  }
+  mean_a /= double(n) * n, mean_b /= double(n) * n;
+  const auto ca = [&](int y, int x) { return a[y * a_stride + x] - mean_a; };
+  const auto cb = [&](int y, int x) { return b[y * b_stride + x] - mean_b; };
+  const auto dx = [&](int y, int x) { return ca(y, x) * cb(y, x + 1) - ca(y, x + 1) * cb(y, x); };
+  const auto dy = [&](int y, int x) { return ca(y, x) * cb(y + 1, x) - ca(y + 1, x) * cb(y, x); };
+  for (int k = 0; k < kCorrelationLagSumCount; ++k) lags[k] = 0;
+  lags[kMeanA] = mean_a, lags[kMeanB] = mean_b;
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x + 1 < n; ++x) {
+      if (x + 2 < n) lags[kLagX1] += dx(y, x) * dx(y, x + 1);
+      if (x + 3 < n) lags[kLagX2] += dx(y, x) * dx(y, x + 2);
+    }
+  }
+  for (int y = 0; y + 1 < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      if (y + 2 < n) lags[kLagY1] += dy(y, x) * dy(y + 1, x);
+      if (y + 3 < n) lags[kLagY2] += dy(y, x) * dy(y + 2, x);
+      if (y < 1 || y >= n - 2) lags[kEndsY1] += dy(y, x);
+      if (y < 2 || y >= n - 3) lags[kEndsY2] += dy(y, x);
     }
   }
 }

@@ -217,6 +217,25 @@ void correlation_statistics_sums(const float* a, std::size_t a_stride, const flo
 void scalar_correlation_statistics_sums(const float* a, std::size_t a_stride, const float* b, std::size_t b_stride,
                                         int n, double* sums);
 
+// The lag products of the same contributions ΔC (the plus − minus above),
+// for the variance of their sum (vector_uncertainty.h), at lags 1 and 2
+// along the axis:
+//   lags[kLagX1] = Σ ΔCx(y, x)·ΔCx(y, x + 1), lags[kLagX2] the same at x + 2
+//                  (over the pairs within a row), likewise kLagY1, kLagY2
+//                  along a column;
+//   lags[kEndsY1] = Σ ΔCy over the first and the last row of ΔCy (y = 0
+//                  and n − 2), lags[kEndsY2] over the first two and the
+//                  last two;
+//   lags[kMeanA], lags[kMeanB] the windows' means (for the ends along x,
+//                  which the caller sums).
+// Float products in lanes added in double, as above; no pixel read outside
+// either window. Any n ≥ 4.
+enum CorrelationLagSum { kLagX1, kLagX2, kLagY1, kLagY2, kEndsY1, kEndsY2, kMeanA, kMeanB, kCorrelationLagSumCount };
+void correlation_lag_sums(const float* a, std::size_t a_stride, const float* b, std::size_t b_stride, int n,
+                          double* lags);
+void scalar_correlation_lag_sums(const float* a, std::size_t a_stride, const float* b, std::size_t b_stride, int n,
+                                 double* lags);
+
 // The most capable target the kernels may use (see choosing the target above).
 enum class SimdLimit { kAuto, kAvx2, kSse4, kPortable };
 

@@ -556,9 +556,65 @@ void expect_correlation_sums_match(int n, unsigned seed) {
   }
 }
 
+// The lag products of the contributions: the kernel against the scalar
+// reference, to 1e-5 of the sum of |plus| + |minus| products (the scale of
+// the contributions' float rounding).
+void expect_correlation_lag_sums_match(int n, unsigned seed) {
+  SCOPED_TRACE(testing::Message() << "n=" << n << " target=" << simd_target_name());
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> grey(0.f, 1.f);
+  const std::size_t stride = static_cast<std::size_t>(n) + 3;
+  // Each window at the end of its buffer, NaN around it: a read outside shows.
+  const auto window_in = [&](std::vector<float>& buffer, float offset) {
+    buffer.assign(stride * (n + 2), std::nanf(""));
+    float* window = buffer.data() + buffer.size() - (static_cast<std::size_t>(n - 1) * stride + n);
+    for (int y = 0; y < n; ++y) {
+      for (int x = 0; x < n; ++x) window[y * stride + x] = offset + grey(rng);
+    }
+    return window;
+  };
+  std::vector<float> buffer_a, buffer_b;
+  const float* a = window_in(buffer_a, 0.4f);
+  const float* b = window_in(buffer_b, 0.6f);
+  double simd[kCorrelationLagSumCount], reference[kCorrelationLagSumCount];
+  correlation_lag_sums(a, stride, b, stride, n, simd);
+  scalar_correlation_lag_sums(a, stride, b, stride, n, reference);
+  // |plus| + |minus| of each contribution, centred on the windows' means.
+  double mean_a = 0, mean_b = 0;
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) mean_a += a[y * stride + x], mean_b += b[y * stride + x];
+  }
+  mean_a /= double(n) * n, mean_b /= double(n) * n;
+  const auto size = [&](int y0, int x0, int y1, int x1) {
+    return std::abs((a[y0 * stride + x0] - mean_a) * (b[y1 * stride + x1] - mean_b)) +
+           std::abs((a[y1 * stride + x1] - mean_a) * (b[y0 * stride + x0] - mean_b));
+  };
+  double magnitude[kCorrelationLagSumCount] = {};
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x + 1 < n; ++x) {
+      if (x + 2 < n) magnitude[kLagX1] += size(y, x, y, x + 1) * size(y, x + 1, y, x + 2);
+      if (x + 3 < n) magnitude[kLagX2] += size(y, x, y, x + 1) * size(y, x + 2, y, x + 3);
+    }
+  }
+  for (int y = 0; y + 1 < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      if (y + 2 < n) magnitude[kLagY1] += size(y, x, y + 1, x) * size(y + 1, x, y + 2, x);
+      if (y + 3 < n) magnitude[kLagY2] += size(y, x, y + 1, x) * size(y + 2, x, y + 3, x);
+      magnitude[kEndsY1] += size(y, x, y + 1, x);  // every row: a bound of the ends' magnitude
+    }
+  }
+  magnitude[kEndsY2] = magnitude[kEndsY1];
+  magnitude[kMeanA] = 1 + std::abs(mean_a), magnitude[kMeanB] = 1 + std::abs(mean_b);
+  for (int k = 0; k < kCorrelationLagSumCount; ++k) {
+    ASSERT_TRUE(std::isfinite(simd[k])) << "sum " << k;
+    ASSERT_NEAR(simd[k], reference[k], 1e-5 * magnitude[k]) << "sum " << k;
+  }
+}
+
 void expect_all_correlation_sums_match() {
   unsigned seed = 300;
   for (const int n : {2, 3, 4, 5, 8, 9, 12, 13, 16, 17, 24, 31, 32, 48, 64}) expect_correlation_sums_match(n, seed++);
+  for (const int n : {4, 5, 8, 10, 11, 12, 13, 16, 17, 24, 31, 32, 48, 64}) expect_correlation_lag_sums_match(n, seed++);
 }
 
 // Every test leaves the dispatch as it found it: no cap, no mock.

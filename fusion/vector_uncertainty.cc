@@ -4,75 +4,62 @@
 #include <cstdint>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include "fusion/simd_kernels.h"
 
 namespace bosfuse::fusion {
 namespace {
 
-double mean_of(const cv::Mat& window) {
-  double sum = 0;
-  for (int y = 0; y < window.rows; ++y) {
-    const float* row = window.ptr<float>(y);
-    for (int x = 0; x < window.cols; ++x) sum += row[x];
+// Sums over the lines along one axis of the contributions d_i and their
+// lag products, from which their variance is formed (variance_from).
+constexpr int kMaxLags = 2;
+struct LagSums {
+  double sum = 0;                   // Σ d_i
+  double products[kMaxLags + 1] = {};  // Σ d_i·d_(i+l), l = 0…lags
+  double ends[kMaxLags + 1] = {};      // Σ over lines of the l first and l last d_i (l ≥ 1)
+  int count = 0;                    // contributions
+  int lines = 0;
+  int length = 0;                   // contributions per line
+};
+
+// The variance of Σ d_i from the sums: Σ over lags −L…L of the products of
+// the centred contributions, (d_i − m)(d_(i+l) − m) summed as
+// Σ d_i·d_(i+l) − m·(2·Σ_line d − the l first and last) + m²·(length − l).
+double variance_from(const LagSums& s, int lags) {
+  const double m = s.count > 0 ? s.sum / s.count : 0;
+  double total = s.products[0] - m * s.sum;
+  for (int l = 1; l <= lags && l < s.length; ++l) {
+    const double pairs = static_cast<double>(s.lines) * (s.length - l);
+    total += 2 * (s.products[l] - m * (2 * s.sum - s.ends[l]) + m * m * pairs);
   }
-  return sum / (static_cast<double>(window.rows) * window.cols);
+  return std::max(total, 0.0);
 }
 
-// The factors by which the per-pixel sum Σ ΔC_i² over-states the variance
-// of Σ ΔC_i along x and y, from the reference window's texture a.
-// Noise in pixel k of b enters two neighbouring contributions, ΔC_(k−1)
-// with a'(k−1) and ΔC_k with −a'(k+1) (noise in a likewise, signs swapped):
-// per unit noise variance Σ ΔC has variance Σ_k (a(k−1) − a(k+1))², while
-// the per-pixel sum counts Σ_i a'(i)² + a'(i+1)² = 2·Σ a'² less the first
-// and last column's (row's). Their ratio is 1 − ρ(2 px) of the pattern's
-// autocorrelation; 1 for white texture.
-NeighbourNoiseFactors noise_factors_about(const cv::Mat& a, double mean_a) {
-  // Sums of squares only, no differences of large sums: float lanes (eight,
-  // which the compiler vectorises) hold them to 1e-6, each row's total then
-  // added in double.
-  constexpr int kLanes = 8;
+// The first and last l contributions ΔCx of every row, l = 1 and 2, for
+// variance_from's centring (the kernel sums the rows' ends along y).
+void x_ends(const cv::Mat& a, const cv::Mat& b, double mean_a, double mean_b, double* ends) {
   const int n = a.rows;
-  const float mean = static_cast<float>(mean_a);
-  double energy = 0, shared_x = 0, shared_y = 0, edge_columns = 0, edge_rows = 0;
-  const auto total = [](const float* lanes) {
-    double sum = 0;
-    for (int k = 0; k < kLanes; ++k) sum += lanes[k];
-    return sum;
-  };
+  const float ma = static_cast<float>(mean_a), mb = static_cast<float>(mean_b);
+  float one = 0, two = 0;
   for (int y = 0; y < n; ++y) {
-    const float* row = a.ptr<float>(y);
-    float e[kLanes] = {}, sx[kLanes] = {}, sy[kLanes] = {};
-    int x = 0;
-    for (; x + kLanes + 2 <= n; x += kLanes) {
-      for (int k = 0; k < kLanes; ++k) {
-        const float centred = row[x + k] - mean, across = row[x + k] - row[x + k + 2];
-        e[k] += centred * centred;
-        sx[k] += across * across;
-      }
-    }
-    for (; x < n; ++x) {
-      e[0] += (row[x] - mean) * (row[x] - mean);
-      if (x + 2 < n) sx[0] += (row[x] - row[x + 2]) * (row[x] - row[x + 2]);
-    }
-    if (y + 2 < n) {
-      const float* two_below = a.ptr<float>(y + 2);
-      for (x = 0; x + kLanes <= n; x += kLanes) {
-        for (int k = 0; k < kLanes; ++k) sy[k] += (row[x + k] - two_below[x + k]) * (row[x + k] - two_below[x + k]);
-      }
-      for (; x < n; ++x) sy[0] += (row[x] - two_below[x]) * (row[x] - two_below[x]);
-    }
-    const double row_energy = total(e);
-    energy += row_energy;
-    shared_x += total(sx);
-    shared_y += total(sy);
-    edge_columns += (row[0] - mean_a) * (row[0] - mean_a) + (row[n - 1] - mean_a) * (row[n - 1] - mean_a);
-    if (y == 0 || y == n - 1) edge_rows += row_energy;
+    const float *ar = a.ptr<float>(y), *br = b.ptr<float>(y);
+    const auto delta = [&](int x) { return (ar[x] - ma) * (br[x + 1] - mb) - (ar[x + 1] - ma) * (br[x] - mb); };
+    const float outer = delta(0) + delta(n - 2);
+    one += outer;
+    two += outer + delta(1) + delta(n - 3);
   }
-  const auto ratio = [](double shared, double counted) {
-    return counted > 0 ? std::clamp(shared / counted, 0.0, 2.0) : 1.0;
-  };
-  return {ratio(shared_x, 2 * energy - edge_columns), ratio(shared_y, 2 * energy - edge_rows)};
+  ends[0] = one, ends[1] = two;
+}
+
+// The sums along one axis from the kernels' (simd_kernels.h).
+LagSums axis_sums(int n, double sum, double squares, double lag1, double lag2, double ends1, double ends2) {
+  LagSums s;
+  s.lines = n, s.length = n - 1, s.count = n * (n - 1);
+  s.sum = sum;
+  s.products[0] = squares, s.products[1] = lag1, s.products[2] = lag2;
+  s.ends[1] = ends1, s.ends[2] = ends2;
+  return s;
 }
 
 void check_window(const cv::Mat& window) {
@@ -82,11 +69,6 @@ void check_window(const cv::Mat& window) {
 }
 
 }  // namespace
-
-NeighbourNoiseFactors neighbour_noise_factors(const cv::Mat& reference_window) {
-  check_window(reference_window);
-  return noise_factors_about(reference_window, mean_of(reference_window));
-}
 
 double gaussian_peak_uncertainty(double c0, double c_pm, double sigma_delta) {
   const double high = c_pm + sigma_delta / 2, low = c_pm - sigma_delta / 2;
@@ -98,14 +80,7 @@ double gaussian_peak_uncertainty(double c0, double c_pm, double sigma_delta) {
 }
 
 VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window,
-                                          bool independent_noise) {
-  check_window(reference_window);
-  return correlation_statistics(reference_window, measurement_window,
-                                independent_noise ? neighbour_noise_factors(reference_window) : NeighbourNoiseFactors{});
-}
-
-VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window,
-                                          const NeighbourNoiseFactors& shared) {
+                                          bool correlated_contributions) {
   const int n = reference_window.rows;
   check_window(reference_window);
   check_window(measurement_window);
@@ -115,17 +90,56 @@ VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const 
   double sums[kCorrelationSumCount];
   correlation_statistics_sums(reference_window.ptr<float>(), reference_window.step1(), measurement_window.ptr<float>(),
                               measurement_window.step1(), n, sums);
-  // ΔC has n(n − 1) terms along each axis; its variance as their spread.
-  const double terms = static_cast<double>(n) * (n - 1);
-  const auto spread = [&](CorrelationSum sum, CorrelationSum sum_sq, double factor) {
-    return std::sqrt(std::max(sums[sum_sq] - sums[sum] * sums[sum] / terms, 0.0) * factor);
-  };
+  const int lags = correlated_contributions ? kContributionLags : 0;
+  double lag[kCorrelationLagSumCount] = {}, ends[2] = {};
+  if (lags > 0) {
+    correlation_lag_sums(reference_window.ptr<float>(), reference_window.step1(), measurement_window.ptr<float>(),
+                         measurement_window.step1(), n, lag);
+    x_ends(reference_window, measurement_window, lag[kMeanA], lag[kMeanB], ends);
+  }
+  const double variance_x = variance_from(
+      axis_sums(n, sums[kDeltaX], sums[kDeltaX2], lag[kLagX1], lag[kLagX2], ends[0], ends[1]), lags);
+  const double variance_y = variance_from(
+      axis_sums(n, sums[kDeltaY], sums[kDeltaY2], lag[kLagY1], lag[kLagY2], lag[kEndsY1], lag[kEndsY2]), lags);
   // C± sum over n − 1 of the n columns (rows): C0 on as many pixels.
   const double c0_part = sums[kC0] * (n - 1) / n;
-  return {gaussian_peak_uncertainty(c0_part, (sums[kPlusX] + sums[kMinusX]) / 2,
-                                    spread(kDeltaX, kDeltaX2, shared.along_x)),
-          gaussian_peak_uncertainty(c0_part, (sums[kPlusY] + sums[kMinusY]) / 2,
-                                    spread(kDeltaY, kDeltaY2, shared.along_y))};
+  return {gaussian_peak_uncertainty(c0_part, (sums[kPlusX] + sums[kMinusX]) / 2, std::sqrt(variance_x)),
+          gaussian_peak_uncertainty(c0_part, (sums[kPlusY] + sums[kMinusY]) / 2, std::sqrt(variance_y))};
+}
+
+double predictor_noise_gain(int window_px, int step_px, bool smoothed_predictor) {
+  if (window_px < 1 || step_px < 1) throw std::invalid_argument("the predictor's noise gain needs a window and a step");
+  // K along one axis: the window's mean of each node's bilinear hat, nodes
+  // at −r…r steps (a window reaches at most window/(2·step) + 1 of them).
+  const int r = window_px / (2 * step_px) + 1;
+  std::vector<double> k(static_cast<std::size_t>(2 * r + 1), 0.0);
+  for (int px = 0; px < window_px; ++px) {
+    const double x = px - (window_px - 1) / 2.0;
+    for (int j = -r; j <= r; ++j) {
+      k[static_cast<std::size_t>(j + r)] += std::max(0.0, 1 - std::abs(x - j * step_px) / step_px) / window_px;
+    }
+  }
+  const std::vector<double> smoothing = smoothed_predictor ? std::vector<double>{0.25, 0.5, 0.25} : std::vector<double>{1};
+  // (δ − K)·S along one axis, then F = δ + that in two dimensions.
+  const int m = static_cast<int>(smoothing.size()) / 2, width = 2 * (r + m) + 1;
+  std::vector<double> ks(static_cast<std::size_t>(width), 0.0), s1(static_cast<std::size_t>(width), 0.0);
+  for (int i = -r; i <= r; ++i) {
+    for (int j = -m; j <= m; ++j) ks[static_cast<std::size_t>(i + j + r + m)] += k[i + r] * smoothing[j + m];
+  }
+  for (int j = -m; j <= m; ++j) s1[static_cast<std::size_t>(j + r + m)] = smoothing[j + m];
+  double sum_sq = 0;
+  for (int y = 0; y < width; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const double f = (x == r + m && y == r + m ? 1.0 : 0.0) + s1[y] * s1[x] - ks[y] * ks[x];
+      sum_sq += f * f;
+    }
+  }
+  return std::sqrt(sum_sq);
+}
+
+VectorUncertainty with_predictor_noise(const VectorUncertainty& sigma, double gain) {
+  const auto scaled = [&](double s) { return s >= kUnresolvedPx ? s : std::clamp(s * gain, kFloorPx, kUnresolvedPx); };
+  return {scaled(sigma.sigma_u_px), scaled(sigma.sigma_v_px)};
 }
 
 void add_held_deformation_uncertainty(const GridField& predictor, DisplacementField& field, const cv::Mat* only) {

@@ -19,20 +19,40 @@
 // with C± = (C+ + C−)/2 and C0 = Σ a'·b' (C± sum over n − 1 of the n
 // columns, C0 is scaled to as many), and σ_ΔC² the variance of Σ ΔC_i.
 // Likewise along y. The sums are simd_kernels.h's
-// correlation_statistics_sums: float lanes per column, added in double.
+// correlation_statistics_sums and correlation_lag_sums (float lanes per
+// column, added in double).
 //
 // The paper takes σ_ΔC² = Σ (ΔC_i − mean ΔC)², as if the contributions were
 // independent. They are not: noise in pixel k of b enters ΔC_(k−1) with
-// a'(k−1) and ΔC_k with −a'(k+1), so per unit of noise variance Σ ΔC varies
-// by Σ_k (a(k−1) − a(k+1))² where the per-pixel sum counts Σ a'(i)² +
-// a'(i+1)²: it over-states the variance by 1/(1 − ρ(2 px)) of the pattern's
-// autocorrelation ρ (on 3 px dots σ came out 6–7 % too large on two windows
-// with independent noise). σ_ΔC² here is the per-pixel sum times
-// that ratio, read from the reference window; exact for independent pixel
-// noise (MatchesTheScatterOfNoisyWindows: σ within 1 % of the fit's scatter).
-// A mismatch that is no such noise — a window whose deformed samples reach
-// past the image, where the warp replicates its border pixels — keeps the
-// per-pixel sum (`independent_noise` false), which is the larger.
+// a'(k−1) and ΔC_k with −a'(k+1), and the warp's mismatch of the signal
+// (the deformed b is the B-spline's interpolation of the measurement, not
+// the shifted scene) is a function of the texture spread over the
+// interpolator's taps, whose contributions largely cancel in the sum: on
+// noiseless pairs at fractional shifts the per-pixel sum gave σ 1.6 × the
+// error. σ_ΔC² here is the variance of the sum estimated from the
+// contributions themselves, Σ d_i² + 2 Σ_(l=1…L) Σ d_i·d_(i+l) along the
+// axis (d the contributions less their mean; a truncated-kernel estimate
+// of the variance of a sum of correlated terms), L = kContributionLags = 2:
+// the coverage of every synthetic case is the same within 1 point for L =
+// 2, 3, 4 (the correlation has ended), and L = 1 leaves the mismatch's
+// lag-2 correlation out (uniform shifts 82 %). For independent pixel noise
+// it is what the former factor 1 − ρ(2 px) of the reference window gave
+// (MatchesTheScatterOfNoisyWindows). A mismatch that is no such noise — a
+// window whose deformed samples reach past the image, where the warp
+// replicates its border pixels — keeps the per-pixel sum
+// (`correlated_contributions` false), which is the larger.
+//
+// Nor in the windows: the predictor. The final pass measures
+// p + W[field − P(p)], P the bilinear deformation of the predictor p and W
+// the window's average; W∘P is a fixed filter K of the node values (the
+// binomial [¼ ½ ¼]² for windows of two node steps), and p is the earlier
+// pass's vectors, smoothed (S), measured on the same images at the same
+// nodes: the same error n the final windows show. The vector therefore
+// carries F = δ + (δ − K)·S times n, and σ is scaled by √ΣF²
+// (predictor_noise_gain: 1.113 for the defaults, 1.772 unsmoothed; the
+// neighbours taken as independent). Measured at zero shift: 1.13 and 1.82
+// (DISABLED_PredictorNoiseAtZeroShift). It assumes the earlier pass had
+// the final pass's windows (first_window_px = window_px, the default).
 //
 // What it covers: what the final windows show. Not in them: what the
 // deformation did not follow. At the grid's outermost nodes the predictor
@@ -42,7 +62,8 @@
 // 0.01 px inside): add_held_deformation_uncertainty adds, in quadrature, the
 // size of the correction the final pass made to that node's predictor. The
 // evaluator's spatial response to strong curvature inside the field is not
-// modelled (docs/UNCERTAINTY.md, the misses).
+// modelled as such; on the steep sinusoids of docs/UNCERTAINTY.md σ covers
+// it with the two corrections above.
 //
 // The moment-of-correlation method (Bhattacharya et al. 2018) is the other
 // established estimator; it reads the correlation plane's peak shape and
@@ -70,29 +91,25 @@ inline constexpr double kUnresolvedPx = 1.0;
 // DisplacementVector keeps for "not estimated".
 inline constexpr double kFloorPx = 1e-4;
 
-// The ratios 1 − ρ(2 px) along x and y by which the per-pixel sum is
-// scaled for independent pixel noise (see above); {1, 1} keeps the sum as
-// it is. They depend on the reference window alone, so an evaluator that
-// correlates the same reference windows frame after frame computes them
-// once.
-struct NeighbourNoiseFactors {
-  double along_x = 1, along_y = 1;
-};
-
-// The factors of an n×n CV_32FC1 reference window, n ≥ 4.
-NeighbourNoiseFactors neighbour_noise_factors(const cv::Mat& reference_window);
+// The lags along each axis whose products enter σ_ΔC² (see above; the
+// kernel sums lags 1 and 2).
+inline constexpr int kContributionLags = 2;
 
 // `reference_window` and `measurement_window` are n×n CV_32FC1 (views into
 // larger images are fine), n ≥ 4; the measurement window is the one at the
-// correlation's integer peak. `independent_noise` false: the per-pixel sum
-// as it is (a mismatch that is not independent pixel noise, see above).
+// correlation's integer peak. `correlated_contributions` false: the
+// per-pixel sum as it is (a mismatch that is not independent pixel noise
+// nor the warp's, see above).
 VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window,
-                                          bool independent_noise = true);
+                                          bool correlated_contributions = true);
 
-// The same with the reference window's factors given (computed before, by
-// neighbour_noise_factors of the same window, or {1, 1}).
-VectorUncertainty correlation_statistics(const cv::Mat& reference_window, const cv::Mat& measurement_window,
-                                          const NeighbourNoiseFactors& factors);
+// √ΣF² of the predictor's noise carried into the final pass's vector (see
+// above), for windows of `window_px`, nodes `step_px` apart and the
+// predictor smoothed by the 3×3 binomial or not.
+double predictor_noise_gain(int window_px, int step_px, bool smoothed_predictor);
+
+// `sigma` × `gain`, within [kFloorPx, kUnresolvedPx]; kUnresolvedPx stays.
+VectorUncertainty with_predictor_noise(const VectorUncertainty& sigma, double gain);
 
 // The 3-point Gaussian fit's standard uncertainty along one axis, from the
 // correlation at the peak (c0), the mean of its two neighbours (c_pm) and
