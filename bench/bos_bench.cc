@@ -42,10 +42,13 @@ namespace {
 // method: 0 xcorr, 1 flow DIS, 2 flow Farneback, 3 flow TV-L1.
 // The evaluator's options, the deformation's interpolator from
 // BOSFUSE_BENCH_INTERPOLATOR when set (fusion::Interpolator's number: 1
-// Lanczos-3, the former default, against the default for comparison).
+// Lanczos-3, the former default, against the default for comparison), and
+// adaptive refinement from BOSFUSE_BENCH_ADAPTIVE when set (0 full
+// refinement, 1 adaptive: the accuracy tables either way).
 fusion::XcorrOptions bench_xcorr() {
   fusion::XcorrOptions x;
   if (const char* i = std::getenv("BOSFUSE_BENCH_INTERPOLATOR")) x.interpolator = fusion::Interpolator(std::atoi(i));
+  if (const char* a = std::getenv("BOSFUSE_BENCH_ADAPTIVE")) x.adaptive_refinement = std::atoi(a) != 0;
   return x;
 }
 
@@ -70,6 +73,8 @@ void report(benchmark::State& state, const sim::StudyResult& r) {
   state.counters["rms_px"] = r.rms_px;
   state.counters["p95_px"] = r.p95_px;
   state.counters["valid_pct"] = r.vectors ? 100.0 * r.valid / r.vectors : 0;
+  state.counters["wrong_pct"] = r.compared ? 100.0 * r.wrong / r.compared : 0;
+  state.counters["beyond_3sigma_pct"] = r.compared ? 100.0 * r.beyond_3_sigma / r.compared : 0;
 }
 
 // Method × IW × passes × noise (‰ of full scale), uniform shifts 0..1 px.

@@ -223,14 +223,15 @@ VectorUncertainty node_uncertainty(const PreparedPair& pair, const PassInput& in
 // within half a pixel of the pass's search bound in either axis, before or
 // after the sub-pixel fit (`on_bound_px` is that bound less 0.5 px: the true
 // shift may lie past it, and a peak there is as often a neighbour's tail as
-// the shift); kNoPeak when its ratio to the second peak is too low to tell
-// it from the noise of the plane.
+// the shift); kNoPeak when its ratio to the second peak (the highest local
+// maximum outside its 3×3, not its own flank: a 6 px dot's peak is broader
+// than 3×3) is too low to tell it from the noise of the plane.
 VectorFlag peak_verdict(const CorrelationPeak& peak, const SubpixelOffset& offset, double on_bound_px,
                         double min_peak_ratio) {
   const double integer_px = std::max(std::abs(peak.dx), std::abs(peak.dy));
   const double fitted_px = std::max(std::abs(peak.dx + offset.dx_px), std::abs(peak.dy + offset.dy_px));
   if (integer_px > on_bound_px || !(fitted_px <= on_bound_px)) return VectorFlag::kBeyondSearch;
-  if (!(peak.ratio >= min_peak_ratio)) return VectorFlag::kNoPeak;
+  if (!(peak.separate_ratio >= min_peak_ratio)) return VectorFlag::kNoPeak;
   return VectorFlag::kOk;
 }
 

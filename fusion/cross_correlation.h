@@ -76,8 +76,9 @@ struct XcorrOptions {
   OutlierOptions outliers;
   bool replace_outliers = true;
   double min_texture_std = 0.002;    // of full scale; the 8-bit equivalent is 0.5 grey level
-  // A first-pass peak whose ratio to the second-highest (outside its 3×3) is
-  // below this is not told from the plane's noise: kNoPeak. On 3 px dots
+  // A first-pass peak whose ratio to the second peak (the highest local
+  // maximum outside its 3×3; CorrelationPeak::separate_ratio) is below this
+  // is not told from the plane's noise: kNoPeak. On 3 px dots
   // with 1 % noise, 16 px windows' true peaks are at 1.6 or more, while
   // those of a shift past the search are at 1.2 (median) to 3. A refinement
   // pass's vector is valid only where most first-pass windows around it

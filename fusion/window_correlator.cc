@@ -26,6 +26,36 @@ double highest(const double* values, int count, double floor) {
   return std::max(std::max(m[0], m[1]), std::max(m[2], m[3]));
 }
 
+// The highest local maximum of the plane (a value no in-plane neighbour
+// exceeds) outside the 3×3 around (px, py), below the floor when there is
+// none; `ceiling` is the highest value there, where the scan may stop. A
+// broad peak's flank is no local maximum: with 6 px dots the highest value
+// outside the 3×3 lies on it at 0.6 of the peak, and a true peak read as
+// noise (docs/BENCHMARKS.md, "Background: dot size and coverage").
+double highest_separate_peak(const CorrelationPlane& plane, int px, int py, double ceiling) {
+  constexpr double kNone = -2.0;
+  const int side = plane.side();
+  const double* value = plane.value.data();
+  double best = kNone;
+  for (int y = 0; y < side && best < ceiling; ++y) {
+    for (int x = 0; x < side; ++x) {
+      const double v = value[static_cast<std::ptrdiff_t>(y) * side + x];
+      if (!(v > best) || (std::abs(x - px) <= 1 && std::abs(y - py) <= 1)) continue;
+      bool local_maximum = true;
+      for (int ny = std::max(y - 1, 0); ny <= std::min(y + 1, side - 1) && local_maximum; ++ny) {
+        for (int nx = std::max(x - 1, 0); nx <= std::min(x + 1, side - 1); ++nx) {
+          if (value[static_cast<std::ptrdiff_t>(ny) * side + nx] > v) {
+            local_maximum = false;
+            break;
+          }
+        }
+      }
+      if (local_maximum) best = v;
+    }
+  }
+  return best;
+}
+
 }  // namespace
 
 // The highest value (its first in row-major order, as a scan taking only a
@@ -55,6 +85,7 @@ CorrelationPeak find_peak(const CorrelationPlane& plane) {
   // A floor keeps the ratio finite when the rest of the plane is near 0 or
   // negative; ratios above 100 mean "unambiguous" anyway.
   peak.ratio = peak.value / std::max(second, 0.01);
+  peak.separate_ratio = peak.value / std::max(highest_separate_peak(plane, px, py, second), 0.01);
   return peak;
 }
 

@@ -51,12 +51,17 @@ struct WindowStats {
 
 // The highest value of a plane (its first in row-major order) and how it
 // stands out: the ratio to the highest value outside its 3×3 neighbourhood
-// (floored at 0.01, so a plane near 0 elsewhere gives a finite ratio).
+// (floored at 0.01, so a plane near 0 elsewhere gives a finite ratio), and
+// the ratio to the second peak, the highest local maximum outside it
+// (Keane & Adrian's primary-to-secondary peak ratio, the same floor): the
+// two differ where the peak is broader than its 3×3 (large dots), whose
+// flank is no second peak; the no-peak tests take separate_ratio.
 struct CorrelationPeak {
   int dx = 0;
   int dy = 0;
   double value = 0;
   double ratio = 0;
+  double separate_ratio = 0;
 };
 CorrelationPeak find_peak(const CorrelationPlane& plane);
 

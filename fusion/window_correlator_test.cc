@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace bosfuse::fusion {
 namespace {
 
@@ -46,6 +48,42 @@ TEST(WindowCorrelator, FindsTheShiftWithCorrelationOne) {
       }
     }
   }
+}
+
+// A plane of radius 5 holding a Gaussian peak of σ `sigma_px` at the
+// centre, plus `extra` added at (dx, dy) when given.
+CorrelationPlane gaussian_plane(double sigma_px, int dx = 0, int dy = 0, double extra = 0) {
+  CorrelationPlane plane;
+  plane.radius = 5;
+  plane.value.resize(static_cast<std::size_t>(plane.side() * plane.side()));
+  for (int y = -5; y <= 5; ++y) {
+    for (int x = -5; x <= 5; ++x) {
+      double v = std::exp(-(x * x + y * y) / (2 * sigma_px * sigma_px));
+      if (x == dx && y == dy) v += extra;
+      plane.value[static_cast<std::size_t>((y + 5) * plane.side() + x + 5)] = v;
+    }
+  }
+  return plane;
+}
+
+// A 6 px dot's correlation peak (σ ≈ 2.1 px) still stands at 0.64 of its
+// height 2 px out, outside the 3×3: the highest value there is its own
+// flank, not a second peak. separate_ratio looks for a second peak.
+TEST(WindowCorrelator, ABroadPeaksFlankIsNoSecondPeak) {
+  const CorrelationPeak broad = find_peak(gaussian_plane(2.1));
+  EXPECT_EQ(broad.dx, 0);
+  EXPECT_EQ(broad.dy, 0);
+  EXPECT_LT(broad.ratio, 1.6);                     // the flank read as a second peak
+  EXPECT_NEAR(broad.separate_ratio, 100.0, 1e-9);  // none: 1 over the 0.01 floor
+  // A separate peak of 0.5 on the flank at (4, −4): the ratio is to it.
+  const CorrelationPlane two = gaussian_plane(2.1, 4, -4, 0.5);
+  const CorrelationPeak peak = find_peak(two);
+  EXPECT_NEAR(peak.separate_ratio, 1.0 / two.at(4, -4), 1e-12);
+  EXPECT_GT(peak.separate_ratio, 1.5);
+  // Two peaks of about the same height are ambiguous either way.
+  const CorrelationPeak even = find_peak(gaussian_plane(0.8, -4, 3, 0.95));
+  EXPECT_LT(even.separate_ratio, 1.1);
+  EXPECT_NEAR(even.separate_ratio, even.ratio, 1e-12);
 }
 
 TEST(WindowCorrelator, IdenticalEqualWindowsGiveASymmetricPeak) {

@@ -66,6 +66,11 @@ StudyResult run_uniform_study(const StudyCase& study) {
       sum_v += dv;
       sum_sq += du * du + dv * dv;
       magnitudes.push_back(std::hypot(du, dv));
+      if (magnitudes.back() > 0.5) ++result.wrong;
+      if ((v.sigma_u_px > 0 && std::abs(du) > 3 * v.sigma_u_px) ||
+          (v.sigma_v_px > 0 && std::abs(dv) > 3 * v.sigma_v_px)) {
+        ++result.beyond_3_sigma;
+      }
       ++counted;
     }
     result.compared += counted;

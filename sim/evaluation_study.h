@@ -36,6 +36,10 @@ struct StudyResult {
   double max_abs_bias_px = 0;  // the worst |mean error| of u or v over the shifts
   double rms_px = 0;           // of the error magnitude, all valid vectors
   double p95_px = 0;           // 95th percentile of the error magnitude
+  // Of the compared vectors: more than 0.5 px from the truth (a wrong
+  // peak), and a component off by more than 3 of its σ (where σ is given).
+  std::size_t wrong = 0;
+  std::size_t beyond_3_sigma = 0;
 };
 
 // Errors are taken against the truth averaged over each window, on valid
