@@ -137,9 +137,11 @@ def main():
     variants = [("bosfuse", []), ("bosfuse --preprocess normalize", ["--preprocess", "normalize"]),
                 ("bosfuse --preprocess highpass", ["--preprocess", "highpass"]),
                 ("bosfuse --preprocess minmax", ["--preprocess", "minmax"]),
+                ("bosfuse --preprocess denoise", ["--preprocess", "denoise"]),
                 # One pass at the final window, as OpenPIV's 64 → 32 → 16 has.
                 ("bosfuse --first-window 32 --passes 2", ["--first-window", "32", "--passes", "2"]),
-                ("bosfuse --first-window 64", ["--first-window", "64"])]
+                ("bosfuse --first-window 64", ["--first-window", "64"]),
+                ("bosfuse --preprocess denoise --first-window 64", ["--preprocess", "denoise", "--first-window", "64"])]
     print(f"OpenPIV {getattr(openpiv, '__version__', '?')} from {args.openpiv}, numpy {np.__version__}; "
           f"pairs in {folder}")
     print("| pair | program | RMS error (px) | vectors compared | s (median) |")
