@@ -1,6 +1,6 @@
 #pragma once
 // Sub-pixel location of a correlation peak from the 3×3 values around its
-// integer maximum. Two estimators:
+// integer maximum. Three estimators:
 //  - kGaussian3Point fits a Gaussian through three points along x and along
 //    y separately: the PIV standard, exact for a Gaussian peak aligned with
 //    the axes, but with peak locking (a bias towards integer shifts) when the
