@@ -70,10 +70,10 @@ void add_refinement_options(CLI::App& cmd, EvaluatorArguments& args, SettingsBas
        "4"},
       base);
   add(cmd, "--preprocess", args.preprocess,
-      {"Filter both images first: none, normalize (local contrast), highpass (background subtraction) or minmax "
-       "(local min-max); docs/CONFIG.md says when each helps",
-       "Filter reference and frames first: none, normalize, highpass or minmax (docs/CONFIG.md) (default: stored, "
-       "else none)",
+      {"Filter both images first: none, normalize (local contrast), highpass (background subtraction), minmax "
+       "(local min-max) or denoise (adaptive Wiener); docs/CONFIG.md says when each helps",
+       "Filter reference and frames first: none, normalize, highpass, minmax or denoise (docs/CONFIG.md) (default: "
+       "stored, else none)",
        "none"},
       base)
       ->check(preprocessing_name());

@@ -14,9 +14,11 @@ pairs bos_bench evaluates: bench/bench_scenes.h), evaluates each with
 `bosfuse evaluate` (its defaults, and each --preprocess) and with OpenPIV's
 windef multipass at its defaults (PIVSettings(): windows 64, 32, 16 with
 50 % overlap, FFT correlation, Gaussian peak fit, symmetric deformation,
-validation and replacement), and prints the RMS error of the vector
-magnitude error over the vectors each calls valid, more than one final
-window (16 px) from the border, with the time each took (median of --repeat).
+validation and replacement; --openpiv-settings runs it again with some
+changed), and prints the RMS error of the vector magnitude error over the
+vectors each calls valid, more than one final window (16 px) from the
+border, its bias and random parts, with the time each took (median of
+--repeat).
 """
 
 import argparse
@@ -35,14 +37,19 @@ import numpy as np
 
 
 def rms_error(xs, ys, us, vs, size, shift, border_px=16):
-    """RMS of |(u, v) - truth| over the vectors more than a window from the border."""
-    sum_sq, n = 0.0, 0
+    """RMS of |(u, v) - truth| over the vectors more than a window from the
+    border, their count, and the bias: |mean (u, v) - truth|."""
+    sum_sq, n, sum_u, sum_v = 0.0, 0, 0.0, 0.0
     for x, y, u, v in zip(xs, ys, us, vs):
         if x < border_px or y < border_px or x >= size[1] - border_px or y >= size[0] - border_px:
             continue
         sum_sq += (u - shift[0]) ** 2 + (v - shift[1]) ** 2
+        sum_u += u - shift[0]
+        sum_v += v - shift[1]
         n += 1
-    return (math.sqrt(sum_sq / n) if n else float("nan")), n
+    if not n:
+        return float("nan"), 0, float("nan")
+    return math.sqrt(sum_sq / n), n, math.hypot(sum_u / n, sum_v / n)
 
 
 def run_bosfuse(binary, a, b, size, shift, extra):
@@ -57,17 +64,20 @@ def run_bosfuse(binary, a, b, size, shift, extra):
     ys = [float(r["y"]) for r in rows]
     us = [float(r["u"]) for r in rows]
     vs = [float(r["v"]) for r in rows]
-    rms, n = rms_error(xs, ys, us, vs, size, shift)
-    return rms, n, seconds
+    rms, n, bias = rms_error(xs, ys, us, vs, size, shift)
+    return rms, n, seconds, bias
 
 
-def run_openpiv(a, b, size, shift):
+def run_openpiv(a, b, size, shift, overrides=None):
     from openpiv import windef
     from openpiv.settings import PIVSettings
 
     frame_a = imageio.imread(a).astype(np.float64)
     frame_b = imageio.imread(b).astype(np.float64)
     settings = PIVSettings()  # its defaults: windows (64, 32, 16), overlap (32, 16, 8), 3 iterations
+    for key, value in (overrides or {}).items():
+        setattr(settings, key, tuple(value) if isinstance(value, list) else value)
+    settings.num_iterations = len(settings.windowsizes)
     # windef.simple_multipass's steps, at PIVSettings()'s three passes (simple_multipass
     # itself changes the defaults to two passes when given no settings).
     start = time.monotonic()
@@ -84,8 +94,8 @@ def run_openpiv(a, b, size, shift):
     u = np.ma.filled(u, np.nan)
     v = np.ma.filled(v, np.nan)
     keep = np.isfinite(u) & np.isfinite(v) & ~np.asarray(flags, dtype=bool)
-    rms, n = rms_error(x[keep], y[keep], u[keep], v[keep], size, shift)
-    return rms, n, seconds
+    rms, n, bias = rms_error(x[keep], y[keep], u[keep], v[keep], size, shift)
+    return rms, n, seconds, bias
 
 
 def use_openpiv_source(folder):
@@ -125,6 +135,9 @@ def main():
     parser.add_argument("--openpiv", required=True, help="openpiv-python's source folder (holds openpiv/)")
     parser.add_argument("--repeat", type=int, default=1, help="times each evaluation is timed (median)")
     parser.add_argument("--pairs", default=None, help="folder for the pairs (default: a temporary one)")
+    parser.add_argument("--openpiv-settings", action="append", default=[], metavar="JSON",
+                        help='also run OpenPIV with these PIVSettings changed, e.g. \'{"deformation_method": '
+                             '"second image"}\' or \'{"windowsizes": [32, 16], "overlap": [16, 8]}\' (repeatable)')
     args = parser.parse_args()
     use_openpiv_source(args.openpiv)
     import openpiv
@@ -137,13 +150,17 @@ def main():
     variants = [("bosfuse", []), ("bosfuse --preprocess normalize", ["--preprocess", "normalize"]),
                 ("bosfuse --preprocess highpass", ["--preprocess", "highpass"]),
                 ("bosfuse --preprocess minmax", ["--preprocess", "minmax"]),
+                ("bosfuse --preprocess denoise", ["--preprocess", "denoise"]),
                 # One pass at the final window, as OpenPIV's 64 → 32 → 16 has.
                 ("bosfuse --first-window 32 --passes 2", ["--first-window", "32", "--passes", "2"]),
-                ("bosfuse --first-window 64", ["--first-window", "64"])]
+                ("bosfuse --first-window 64", ["--first-window", "64"]),
+                ("bosfuse --preprocess denoise --first-window 64", ["--preprocess", "denoise", "--first-window", "64"])]
     print(f"OpenPIV {getattr(openpiv, '__version__', '?')} from {args.openpiv}, numpy {np.__version__}; "
           f"pairs in {folder}")
-    print("| pair | program | RMS error (px) | vectors compared | s (median) |")
-    print("|---|---|---|---|---|")
+    # The bias is each pair's |mean error| (RMS over a group's pairs); the
+    # random part the rest of the RMS error: sqrt(RMS² − bias²).
+    print("| pair | program | RMS error (px) | bias (px) | random (px) | vectors compared | s (median) |")
+    print("|---|---|---|---|---|---|---|")
     # The low-contrast pairs by noise: the three shifts pooled, as bos_bench's BM_LowContrastTenBit.
     groups = {}
     for p in pairs:
@@ -151,20 +168,26 @@ def main():
     for group, members in groups.items():
         programs = variants if group.startswith("lowcontrast") else variants[:1]
         programs = programs + [("OpenPIV windef, defaults", None)]
+        if group.startswith("lowcontrast"):
+            programs = programs + [(f"OpenPIV windef, {o}", json.loads(o)) for o in args.openpiv_settings]
         for label, extra in programs:
-            sum_sq, n_all, times = 0.0, 0, []
+            sum_sq, sum_bias_sq, n_all, times = 0.0, 0.0, 0, []
             for p in members:
                 a, b = os.path.join(folder, p["a"]), os.path.join(folder, p["b"])
                 size = imageio.imread(a).shape
                 shift = (p["u_px"], p["v_px"])
-                runs = [run_bosfuse(binary, a, b, size, shift, extra) if extra is not None
-                        else run_openpiv(a, b, size, shift) for _ in range(args.repeat)]
-                rms, n, _ = runs[0]
+                runs = [run_bosfuse(binary, a, b, size, shift, extra) if isinstance(extra, list)
+                        else run_openpiv(a, b, size, shift, extra) for _ in range(args.repeat)]
+                rms, n, _, bias = runs[0]
                 sum_sq += rms * rms * n
+                sum_bias_sq += bias * bias * n
                 n_all += n
                 times.append(statistics.median(r[2] for r in runs))
             rms_all = math.sqrt(sum_sq / n_all) if n_all else float("nan")
-            print(f"| {group} | {label} | {rms_all:.4f} | {n_all} | {sum(times):.2f} |")
+            bias_all = math.sqrt(sum_bias_sq / n_all) if n_all else float("nan")
+            random_all = math.sqrt(max(rms_all ** 2 - bias_all ** 2, 0.0))
+            print(f"| {group} | {label} | {rms_all:.4f} | {bias_all:.4f} | {random_all:.4f} | {n_all} | "
+                  f"{sum(times):.2f} |")
 
 
 if __name__ == "__main__":

@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <utility>
@@ -12,10 +14,11 @@
 namespace bosfuse::fusion {
 namespace {
 
-constexpr std::array<std::pair<Preprocessing, std::string_view>, 4> kNames{{{Preprocessing::kNone, "none"},
+constexpr std::array<std::pair<Preprocessing, std::string_view>, 5> kNames{{{Preprocessing::kNone, "none"},
                                                                              {Preprocessing::kNormalize, "normalize"},
                                                                              {Preprocessing::kHighpass, "highpass"},
-                                                                             {Preprocessing::kMinmax, "minmax"}}};
+                                                                             {Preprocessing::kMinmax, "minmax"},
+                                                                             {Preprocessing::kDenoise, "denoise"}}};
 
 // Local z-scores are mapped to 0.5 + z/8, so ±4 σ span full scale (an
 // 8-bit conversion, as optical flow makes, clips only beyond that).
@@ -121,7 +124,51 @@ cv::Mat normalize_min_max(const Weighted& in, const PreprocessOptions& options) 
   return neutral_under_mask(out, in.weight);
 }
 
+// MATLAB's wiener2 on the unmasked pixels: the local mean where the local
+// variance is no more than the noise's, the pixel itself where it is far more.
+cv::Mat denoise_wiener(const Weighted& in, const PreprocessOptions& options) {
+  const cv::Size box(options.denoise_window_px, options.denoise_window_px);
+  const auto smooth = [&](const cv::Mat& src, cv::Mat& dst) { cv::boxFilter(src, dst, CV_32F, box); };
+  const double noise_std =
+      options.denoise_noise_std > 0 ? options.denoise_noise_std : estimate_noise_std(in.image, in.weight);
+  // A noiseless image (ν = 0) passes unchanged; the floor keeps 0/0 out of a flat patch.
+  const double noise_variance = std::max(noise_std * noise_std, 1e-12);
+  // Centred first, as normalize_contrast, so E[I²] − E[I]² keeps its digits in float.
+  const double centre = cv::mean(in.image, in.weight.empty() ? cv::noArray() : cv::Mat(in.weight != 0))[0];
+  cv::Mat centred = in.image - centre;
+  if (!in.weight.empty()) centred = centred.mul(in.weight);
+  const cv::Mat mean = local_mean(centred, in.weight, smooth);
+  cv::Mat variance = local_mean(centred.mul(centred), in.weight, smooth) - mean.mul(mean);
+  cv::max(variance, 0, variance);
+  cv::Mat signal_variance = variance - noise_variance;
+  cv::max(signal_variance, 0, signal_variance);
+  cv::max(variance, noise_variance, variance);
+  cv::Mat out = mean + signal_variance.mul(centred - mean) / variance + centre;
+  return neutral_under_mask(out, in.weight);
+}
+
 }  // namespace
+
+double estimate_noise_std(const cv::Mat& image, const cv::Mat& weight) {
+  // Two Laplacians 2 px apart: a plane and a quadratic-free patch give 0,
+  // white noise of σ gives a zero-mean normal of σ·6 (the kernel's L2 norm).
+  const cv::Mat kernel = (cv::Mat_<float>(3, 3) << 1, -2, 1, -2, 4, -2, 1, -2, 1);
+  cv::Mat response;
+  cv::filter2D(image, response, CV_32F, kernel, cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
+  response = cv::abs(response);
+  // The border rows and columns see a reflected neighbour: left out, as are
+  // pixels with a masked neighbour.
+  cv::Mat counted = cv::Mat::zeros(image.size(), CV_8U);
+  if (image.rows > 2 && image.cols > 2) counted(cv::Rect(1, 1, image.cols - 2, image.rows - 2)).setTo(1);
+  if (!weight.empty()) {
+    cv::Mat unmasked;
+    cv::erode(weight, unmasked, cv::Mat::ones(3, 3, CV_8U), cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
+    counted.setTo(0, unmasked == 0);
+  }
+  if (cv::countNonZero(counted) == 0) return 0;
+  constexpr double kPi = 3.14159265358979323846;
+  return std::sqrt(kPi / 2) / 6 * cv::mean(response, counted)[0];
+}
 
 std::string_view to_string(Preprocessing preprocessing) {
   for (const auto& [value, name] : kNames) {
@@ -154,6 +201,13 @@ std::string PreprocessOptions::Validate() const {
   if (!(highpass_sigma_px >= 0.5 && highpass_sigma_px <= 64)) {
     return fmt::format("preprocessing: high-pass sigma {} px must lie in 0.5..64", highpass_sigma_px);
   }
+  if (!odd_window(denoise_window_px)) {
+    return fmt::format("preprocessing: denoise window {} px must be odd, 3..255", denoise_window_px);
+  }
+  if (!(denoise_noise_std >= 0 && denoise_noise_std < 1)) {
+    return fmt::format("preprocessing: denoise noise std {} must lie in [0, 1) of full scale (0: estimated)",
+                       denoise_noise_std);
+  }
   if (!(min_contrast > 0 && min_contrast < 1)) {
     return fmt::format("preprocessing: min_contrast {} must lie in (0, 1) of full scale", min_contrast);
   }
@@ -172,6 +226,8 @@ cv::Mat preprocess(const cv::Mat& image, const PreprocessOptions& options, const
       return subtract_background(in, options);
     case Preprocessing::kMinmax:
       return normalize_min_max(in, options);
+    case Preprocessing::kDenoise:
+      return denoise_wiener(in, options);
     case Preprocessing::kNone:
       break;
   }

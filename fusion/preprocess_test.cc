@@ -24,6 +24,7 @@ struct Lighting {
   cv::Mat background;             // CV_64F, added; empty: 0
   double noise_std = 0.01;        // of full scale
   int bits = 10;                  // stored in 16 bits, as a 10-bit camera's frames are
+  double coverage = 0.5;          // of the pattern by dots
 };
 
 cv::Mat expose(cv::Mat image, const Lighting& lighting, std::uint64_t noise_seed) {
@@ -44,7 +45,7 @@ Pair render(const sim::DisplacementModel& truth, const Lighting& lighting, std::
   sim::PatternOptions pattern;
   pattern.width_px = pattern.height_px = kSizePx;
   pattern.dot_diameter_px = 3;
-  pattern.coverage = 0.5;
+  pattern.coverage = lighting.coverage;
   pattern.seed = seed;
   const sim::BackgroundPattern dots = sim::generate_pattern(pattern);
   return {expose(sim::render_dots(dots, nullptr), lighting, seed * 2 + 1),
@@ -71,6 +72,17 @@ Lighting low_contrast() {
   Lighting l;
   l.contrast = 0.12;
   l.noise_std = 0.004;
+  return l;
+}
+
+// A sparse pattern (a tenth covered) at the low contrast, under
+// the noise of a camera at high gain (1 %): between the dots the windows
+// hold little but noise, which the Wiener filter smooths away.
+Lighting sparse_noisy_low_contrast() {
+  Lighting l;
+  l.contrast = 0.12;
+  l.noise_std = 0.01;
+  l.coverage = 0.1;
   return l;
 }
 
@@ -142,13 +154,13 @@ double rms_with(Preprocessing method, const Lighting& lighting) { return accurac
 // ---- names and options ----
 
 TEST(PreprocessNames, EveryNameReadsBackAsItself) {
-  for (const auto method :
-       {Preprocessing::kNone, Preprocessing::kNormalize, Preprocessing::kHighpass, Preprocessing::kMinmax}) {
+  for (const auto method : {Preprocessing::kNone, Preprocessing::kNormalize, Preprocessing::kHighpass,
+                            Preprocessing::kMinmax, Preprocessing::kDenoise}) {
     EXPECT_EQ(parse_preprocessing(to_string(method)), method);
   }
   EXPECT_EQ(parse_preprocessing("clahe"), std::nullopt);
   EXPECT_EQ(parse_preprocessing(""), std::nullopt);
-  EXPECT_EQ(preprocessing_names(), "none, normalize, highpass, minmax");
+  EXPECT_EQ(preprocessing_names(), "none, normalize, highpass, minmax, denoise");
 }
 
 TEST(PreprocessOptions, DefaultsAreValidAndBadValuesAreNamed) {
@@ -162,6 +174,12 @@ TEST(PreprocessOptions, DefaultsAreValidAndBadValuesAreNamed) {
   PreprocessOptions sigma;
   sigma.highpass_sigma_px = std::nan("");
   EXPECT_NE(sigma.Validate().find("high-pass sigma"), std::string::npos);
+  PreprocessOptions wiener;
+  wiener.denoise_window_px = 4;
+  EXPECT_NE(wiener.Validate().find("denoise window 4"), std::string::npos) << wiener.Validate();
+  wiener.denoise_window_px = 3;
+  wiener.denoise_noise_std = -0.01;
+  EXPECT_NE(wiener.Validate().find("denoise noise std"), std::string::npos) << wiener.Validate();
   PreprocessOptions floor;
   floor.min_contrast = 0;
   EXPECT_NE(floor.Validate().find("min_contrast"), std::string::npos);
@@ -228,7 +246,8 @@ TEST(Preprocess, MaskedPixelsDoNotLeakIntoTheirNeighbours) {
   mask(cv::Rect(24, 24, 16, 16)).setTo(255);
   cv::Mat dimmed = texture.clone();
   dimmed(cv::Rect(24, 24, 16, 16)).setTo(0.0);
-  for (const auto method : {Preprocessing::kNormalize, Preprocessing::kHighpass, Preprocessing::kMinmax}) {
+  for (const auto method :
+       {Preprocessing::kNormalize, Preprocessing::kHighpass, Preprocessing::kMinmax, Preprocessing::kDenoise}) {
     PreprocessOptions options;
     options.method = method;
     const cv::Mat a = preprocess(with_block, options, mask), b = preprocess(dimmed, options, mask);
@@ -238,7 +257,7 @@ TEST(Preprocess, MaskedPixelsDoNotLeakIntoTheirNeighbours) {
     EXPECT_FLOAT_EQ(a.at<float>(30, 30), 0.5f) << to_string(method);  // masked: mid-grey
     // And the block would have leaked without the mask.
     cv::absdiff(preprocess(with_block, options), preprocess(dimmed, options), difference);
-    EXPECT_GT(difference.at<float>(22, 22), 1e-3) << to_string(method);
+    EXPECT_GT(difference.at<float>(23, 23), 1e-3) << to_string(method);
   }
 }
 
@@ -252,6 +271,45 @@ TEST(Preprocess, AFeaturelessImageStaysFlatRatherThanNoiseBlownUp) {
     cv::meanStdDev(preprocess(image, options), mean, deviation);
     EXPECT_LT(deviation[0], method == Preprocessing::kNormalize ? 0.125 * 0.2 : 0.2) << to_string(method);
   }
+}
+
+// The Wiener filter's noise estimate reads the noise, not the dots: on a
+// dense pattern of the low contrast its std is within a factor 2 of
+// the true one (the mean local variance, MATLAB's, is 5× the std there).
+TEST(Preprocess, TheNoiseEstimateReadsTheSensorNoiseBesideTheDots) {
+  for (const double noise : {0.004, 0.01, 0.02}) {
+    Lighting lighting = low_contrast();
+    lighting.noise_std = noise;
+    const Pair pair = render(sim::DisplacementModel::uniform(0, 0), lighting);
+    cv::Mat image;
+    pair.reference.convertTo(image, CV_32F, 1.0 / 65535);
+    const double estimated = estimate_noise_std(image);
+    EXPECT_GT(estimated, 0.9 * noise) << noise;
+    EXPECT_LT(estimated, 2.0 * noise) << noise;
+  }
+  // Noise alone: the estimate is the noise.
+  cv::Mat flat(128, 128, CV_32F);
+  cv::RNG(4).fill(flat, cv::RNG::NORMAL, 0.5, 0.01);
+  EXPECT_NEAR(estimate_noise_std(flat), 0.01, 0.0005);
+}
+
+TEST(Preprocess, DenoiseSmoothsNoiseAndKeepsTheDots) {
+  // A flat patch of noise beside a dark dot: the noise's std falls, the
+  // dot keeps most of its depth.
+  cv::Mat image(64, 64, CV_32F);
+  cv::RNG(6).fill(image, cv::RNG::NORMAL, 0.5, 0.01);
+  cv::circle(image, {48, 32}, 2, 0.3, cv::FILLED);
+  PreprocessOptions options;
+  options.method = Preprocessing::kDenoise;
+  const cv::Mat out = preprocess(image, options);
+  ASSERT_EQ(out.type(), CV_32FC1);
+  cv::Scalar mean_before, std_before, mean_after, std_after;
+  const cv::Rect flat(4, 4, 24, 56);
+  cv::meanStdDev(image(flat), mean_before, std_before);
+  cv::meanStdDev(out(flat), mean_after, std_after);
+  EXPECT_LT(std_after[0], 0.6 * std_before[0]);
+  EXPECT_NEAR(mean_after[0], mean_before[0], 0.002);  // the levels are kept
+  EXPECT_LT(out.at<float>(32, 48), 0.36f);
 }
 
 TEST(Preprocess, ABadMaskIsNamed) {
@@ -273,11 +331,25 @@ TEST(Preprocess, ABadMaskIsNamed) {
 // and highpass +1–3 %, minmax, whose 9 px window is tight for the noise, +6 %).
 TEST(PreprocessHelps, NoFilterHarmsTheLowContrastTenBitPair) {
   const double none = rms_with(Preprocessing::kNone, low_contrast());
-  for (const auto method : {Preprocessing::kNormalize, Preprocessing::kHighpass, Preprocessing::kMinmax}) {
+  for (const auto method :
+       {Preprocessing::kNormalize, Preprocessing::kHighpass, Preprocessing::kMinmax, Preprocessing::kDenoise}) {
     const double filtered = rms_with(method, low_contrast());
     const double bound = method == Preprocessing::kMinmax ? 1.10 : 1.05;
     EXPECT_LT(filtered, bound * none) << "none " << none << " px, " << to_string(method) << " " << filtered << " px";
   }
+}
+
+// The Wiener filter where sensor noise fills the windows between sparse
+// dots: it lowers the error against the image as it is (measured 0.149
+// against 0.168 px, and 2281 against 2202 vectors measured). The brief's dense low-contrast pair is in
+// docs/BENCHMARKS.md: there it changes little.
+TEST(PreprocessHelps, DenoiseBeatsNoneOnASparseNoisyLowContrastPair) {
+  const Accuracy none = accuracy_with(Preprocessing::kNone, sparse_noisy_low_contrast());
+  const Accuracy denoised = accuracy_with(Preprocessing::kDenoise, sparse_noisy_low_contrast());
+  const std::string measured = fmt::format("none {:.4f} px on {} vectors, denoise {:.4f} px on {}", none.rms_px,
+                                           none.valid, denoised.rms_px, denoised.valid);
+  EXPECT_LT(denoised.rms_px, 0.95 * none.rms_px) << measured;
+  EXPECT_GE(denoised.valid, none.valid) << measured;
 }
 
 // Light falling off fivefold across the frame and a glow behind the

@@ -21,7 +21,16 @@ double gaussian_3point(double left, double centre, double right) {
   return bounded((l - r) / (2 * curvature));
 }
 
+double parabola_3point(double left, double centre, double right) {
+  const double curvature = left - 2 * centre + right;
+  if (!(curvature < 0)) return 0.0;
+  return bounded((left - right) / (2 * curvature));
+}
+
 SubpixelOffset subpixel_offset(const std::array<double, 9>& c, SubpixelEstimator estimator) {
+  if (estimator == SubpixelEstimator::kParabola3Point) {
+    return {parabola_3point(c[3], c[4], c[5]), parabola_3point(c[1], c[4], c[7])};
+  }
   const SubpixelOffset three_point{gaussian_3point(c[3], c[4], c[5]), gaussian_3point(c[1], c[4], c[7])};
   if (estimator == SubpixelEstimator::kGaussian3Point) return three_point;
   std::array<double, 9> L;

@@ -48,7 +48,7 @@ struct SettingsOverrides {
   std::optional<double> max_shift_px;
   std::optional<bool> adaptive_refinement;
   std::optional<double> adaptive_threshold;
-  std::optional<std::string> preprocess;  // a name of fusion/preprocess.h: none, normalize, highpass, minmax
+  std::optional<std::string> preprocess;  // a name of fusion/preprocess.h: none, normalize, highpass, minmax, denoise
   std::optional<cv::Rect> roi_px;
   std::optional<std::string> mask;           // relative to the run folder, or absolute (then copied into it)
   std::optional<std::string> geometry_file;  // a TOML file with [geometry] / [alignment]

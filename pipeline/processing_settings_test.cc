@@ -139,7 +139,7 @@ TEST(PreprocessSetting, TheTableKeyIsReadAndABadNameIsNamedWithTheValidOnes) {
   ASSERT_TRUE(o.has_value());
   EXPECT_EQ(o->preprocess, "normalize");
   EXPECT_EQ(error_of("[processing]\n\npreprocess = \"clahe\"\n"),
-            "s.toml:3: processing.preprocess: expected one of none, normalize, highpass, minmax, not \"clahe\"");
+            "s.toml:3: processing.preprocess: expected one of none, normalize, highpass, minmax, denoise, not \"clahe\"");
 }
 
 }  // namespace
