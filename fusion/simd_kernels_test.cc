@@ -498,6 +498,18 @@ void expect_warp_matches_reference() {
   }
 }
 
+// An n×n window of grey levels offset + U(0, 1) at the end of `buffer`
+// (rows `stride` apart), NaN around it: a read outside the window shows.
+float* nan_fenced_window(std::vector<float>& buffer, std::size_t stride, int n, float offset, std::mt19937& rng) {
+  std::uniform_real_distribution<float> grey(0.f, 1.f);
+  buffer.assign(stride * (n + 2), std::nanf(""));
+  float* window = buffer.data() + buffer.size() - (static_cast<std::size_t>(n - 1) * stride + n);
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) window[y * stride + x] = offset + grey(rng);
+  }
+  return window;
+}
+
 // Two n×n windows inside wider buffers, ending at a buffer's last float
 // and surrounded by NaN, so a read past either window shows (as NaN here,
 // under ASan as an overflow); the sums against the reference, each within
@@ -506,19 +518,10 @@ void expect_warp_matches_reference() {
 void expect_correlation_sums_match(int n, unsigned seed) {
   SCOPED_TRACE(testing::Message() << "n=" << n << " target=" << simd_target_name());
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> grey(0.f, 1.f);
   const std::size_t stride = static_cast<std::size_t>(n) + 5;
-  const auto window_in = [&](std::vector<float>& buffer, float offset) {
-    buffer.assign(stride * (n + 2), std::nanf(""));
-    float* window = buffer.data() + buffer.size() - (static_cast<std::size_t>(n - 1) * stride + n);
-    for (int y = 0; y < n; ++y) {
-      for (int x = 0; x < n; ++x) window[y * stride + x] = offset + grey(rng);
-    }
-    return window;
-  };
   std::vector<float> buffer_a, buffer_b;
-  const float* a = window_in(buffer_a, 0.4f);
-  const float* b = window_in(buffer_b, 0.6f);
+  const float* a = nan_fenced_window(buffer_a, stride, n, 0.4f, rng);
+  const float* b = nan_fenced_window(buffer_b, stride, n, 0.6f, rng);
   double simd[kCorrelationSumCount], reference[kCorrelationSumCount];
   correlation_statistics_sums(a, stride, b, stride, n, simd);
   scalar_correlation_statistics_sums(a, stride, b, stride, n, reference);
@@ -562,20 +565,10 @@ void expect_correlation_sums_match(int n, unsigned seed) {
 void expect_correlation_lag_sums_match(int n, unsigned seed) {
   SCOPED_TRACE(testing::Message() << "n=" << n << " target=" << simd_target_name());
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> grey(0.f, 1.f);
   const std::size_t stride = static_cast<std::size_t>(n) + 3;
-  // Each window at the end of its buffer, NaN around it: a read outside shows.
-  const auto window_in = [&](std::vector<float>& buffer, float offset) {
-    buffer.assign(stride * (n + 2), std::nanf(""));
-    float* window = buffer.data() + buffer.size() - (static_cast<std::size_t>(n - 1) * stride + n);
-    for (int y = 0; y < n; ++y) {
-      for (int x = 0; x < n; ++x) window[y * stride + x] = offset + grey(rng);
-    }
-    return window;
-  };
   std::vector<float> buffer_a, buffer_b;
-  const float* a = window_in(buffer_a, 0.4f);
-  const float* b = window_in(buffer_b, 0.6f);
+  const float* a = nan_fenced_window(buffer_a, stride, n, 0.4f, rng);
+  const float* b = nan_fenced_window(buffer_b, stride, n, 0.6f, rng);
   double simd[kCorrelationLagSumCount], reference[kCorrelationLagSumCount];
   correlation_lag_sums(a, stride, b, stride, n, simd);
   scalar_correlation_lag_sums(a, stride, b, stride, n, reference);

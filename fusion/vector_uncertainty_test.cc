@@ -203,6 +203,23 @@ struct Coverage {
   double rms_error_px = 0;
 };
 
+// Pattern `seed` (3 px dots) seen by `camera` as reference and, moved by
+// `field` (none: still), as measurement; a blurring camera sees the scene
+// around the frame too (see expose).
+std::pair<cv::Mat, cv::Mat> exposed_pair(const sim::DisplacementModel* field, const Camera& camera, int seed,
+                                         int size_px = 256) {
+  const int margin_px = camera.blur_sigma_px > 0 ? 8 : 0;
+  sim::PatternOptions pattern;
+  pattern.width_px = pattern.height_px = size_px + 2 * margin_px;
+  pattern.dot_diameter_px = 3;
+  pattern.seed = static_cast<std::uint64_t>(11 + seed);
+  const sim::BackgroundPattern dots = sim::generate_pattern(pattern);
+  const auto in_frame = [&](double x_px, double y_px) { return field->at(x_px - margin_px, y_px - margin_px); };
+  const cv::Mat moved = field ? sim::render_dots(dots, in_frame) : sim::render_dots(dots, nullptr);
+  return {expose(sim::render_dots(dots, nullptr), camera, 1.0, 100 + 2 * seed, margin_px),
+          expose(moved, camera, camera.gain_measurement, 101 + 2 * seed, margin_px)};
+}
+
 // Errors against the window-mean truth of every valid vector of `seeds`
 // renderings of each of `fields` through `camera`.
 Coverage coverage(const std::vector<sim::DisplacementModel>& fields, const Camera& camera, int seeds,
@@ -212,17 +229,7 @@ Coverage coverage(const std::vector<sim::DisplacementModel>& fields, const Camer
   for (int run = 0; run < seeds * static_cast<int>(fields.size()); ++run) {
     const int seed = run % seeds;
     const sim::DisplacementModel& field = fields[static_cast<std::size_t>(run / seeds)];
-    // A blurring camera sees the scene around the frame too (see expose).
-    const int margin_px = camera.blur_sigma_px > 0 ? 8 : 0;
-    sim::PatternOptions pattern;
-    pattern.width_px = pattern.height_px = size_px + 2 * margin_px;
-    pattern.dot_diameter_px = 3;
-    pattern.seed = 11 + seed;
-    const sim::BackgroundPattern dots = sim::generate_pattern(pattern);
-    const auto in_frame = [&](double x_px, double y_px) { return field.at(x_px - margin_px, y_px - margin_px); };
-    const cv::Mat reference = expose(sim::render_dots(dots, nullptr), camera, 1.0, 100 + 2 * seed, margin_px);
-    const cv::Mat measurement =
-        expose(sim::render_dots(dots, in_frame), camera, camera.gain_measurement, 101 + 2 * seed, margin_px);
+    const auto [reference, measurement] = exposed_pair(&field, camera, seed, size_px);
     const EvaluationResult result = evaluate_xcorr(reference, measurement, options);
     for (const auto& vec : result.field.vectors) {
       if (!vec.valid()) continue;
@@ -325,13 +332,7 @@ TEST(VectorUncertaintyCoverage, DISABLED_PredictorNoiseAtZeroShift) {
     double error_sq = 0, sigma_sq = 0, within = 0;
     int n = 0;
     for (int seed = 0; seed < 2; ++seed) {
-      sim::PatternOptions pattern;
-      pattern.width_px = pattern.height_px = 256;
-      pattern.dot_diameter_px = 3;
-      pattern.seed = 11 + seed;
-      const auto dots = sim::generate_pattern(pattern);
-      const cv::Mat reference = expose(sim::render_dots(dots, nullptr), Camera{}, 1.0, 100 + 2 * seed);
-      const cv::Mat measurement = expose(sim::render_dots(dots, nullptr), Camera{}, 1.0, 101 + 2 * seed);
+      const auto [reference, measurement] = exposed_pair(nullptr, Camera{}, seed);
       for (const auto& vec : evaluate_xcorr(reference, measurement, options).field.vectors) {
         if (!vec.valid()) continue;
         for (const auto& [e, s] : {std::pair{vec.u_px, vec.sigma_u_px}, std::pair{vec.v_px, vec.sigma_v_px}}) {
@@ -362,14 +363,7 @@ TEST(VectorUncertaintyCoverage, DISABLED_SteepSinusoidByColumn) {
   std::vector<ColumnFigures> columns;
   double error_by_curvature = 0, curvature_sq = 0;
   for (int seed = 0; seed < 2; ++seed) {
-    sim::PatternOptions pattern;
-    pattern.width_px = pattern.height_px = 256;
-    pattern.dot_diameter_px = 3;
-    pattern.seed = 11 + seed;
-    const auto dots = sim::generate_pattern(pattern);
-    const cv::Mat reference = expose(sim::render_dots(dots, nullptr), Camera{}, 1.0, 100 + 2 * seed);
-    const cv::Mat measurement = expose(sim::render_dots(dots, [&](double x, double y) { return field.at(x, y); }),
-                                       Camera{}, 1.0, 101 + 2 * seed);
+    const auto [reference, measurement] = exposed_pair(&field, Camera{}, seed);
     const DisplacementField f = evaluate_xcorr(reference, measurement, XcorrOptions{}).field;
     columns.resize(static_cast<std::size_t>(f.cols));
     for (int row = 0; row < f.rows; ++row) {

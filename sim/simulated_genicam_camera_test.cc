@@ -32,6 +32,16 @@ BackgroundPattern simgc_test_pattern(const DemoSetup& setup) {
   return generate_pattern(pattern);
 }
 
+// The GenICam source's options for the simulated camera `options` serves:
+// its address, Mono8, its rate.
+acquisition::GenicamOptions mono8_source_options(const SimulatedGenicamCameraOptions& options) {
+  acquisition::GenicamOptions source_options;
+  source_options.device = options.address;
+  source_options.pixel_format = "Mono8";
+  source_options.frame_rate_hz = options.frame_rate_hz;
+  return source_options;
+}
+
 TEST(SimulatedGenicamCamera, ServesTheSceneThroughTheGenicamSource) {
   const DemoSetup setup = demo_setup(60);
   SimulatedGenicamCameraOptions options;
@@ -40,11 +50,7 @@ TEST(SimulatedGenicamCamera, ServesTheSceneThroughTheGenicamSource) {
   const BackgroundPattern pattern = simgc_test_pattern(setup);
   SimulatedGenicamCamera camera(setup.model, pattern, CameraModel{}, options);
 
-  acquisition::GenicamOptions source_options;
-  source_options.device = options.address;
-  source_options.pixel_format = "Mono8";
-  source_options.frame_rate_hz = options.frame_rate_hz;
-  acquisition::GenicamSource source(source_options);
+  acquisition::GenicamSource source(mono8_source_options(options));
   source.connect();
   EXPECT_EQ(source.streaming().width_px, setup.scene.width_px);
   EXPECT_EQ(source.streaming().height_px, setup.scene.height_px);
@@ -90,11 +96,7 @@ struct SimgcStamp {
 // and the source's fit at the end.
 std::vector<SimgcStamp> simgc_stream(const SimulatedGenicamCameraOptions& options,
                                      std::optional<acquisition::GenicamClockMapping::Fit>& fit) {
-  acquisition::GenicamOptions source_options;
-  source_options.device = options.address;
-  source_options.pixel_format = "Mono8";
-  source_options.frame_rate_hz = options.frame_rate_hz;
-  acquisition::GenicamSource source(source_options);
+  acquisition::GenicamSource source(mono8_source_options(options));
   source.connect();
   EXPECT_FALSE(source.streaming().latched_clock);
   std::vector<SimgcStamp> stamps;
