@@ -510,6 +510,15 @@ float* nan_fenced_window(std::vector<float>& buffer, std::size_t stride, int n, 
   return window;
 }
 
+// The mean of such a window, in double.
+double nan_fenced_window_mean(const float* window, std::size_t stride, int n) {
+  double sum = 0;
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) sum += window[y * stride + x];
+  }
+  return sum / (double(n) * n);
+}
+
 // Two n×n windows inside wider buffers, ending at a buffer's last float
 // and surrounded by NaN, so a read past either window shows (as NaN here,
 // under ASan as an overflow); the sums against the reference, each within
@@ -527,13 +536,7 @@ void expect_correlation_sums_match(int n, unsigned seed) {
   scalar_correlation_statistics_sums(a, stride, b, stride, n, reference);
   double magnitude[kCorrelationSumCount] = {};
   const auto centred = [&](const float* w, int y, int x, double mean) { return w[y * stride + x] - mean; };
-  double mean_a = 0, mean_b = 0;
-  for (int y = 0; y < n; ++y) {
-    for (int x = 0; x < n; ++x) {
-      mean_a += a[y * stride + x] / (double(n) * n);
-      mean_b += b[y * stride + x] / (double(n) * n);
-    }
-  }
+  const double mean_a = nan_fenced_window_mean(a, stride, n), mean_b = nan_fenced_window_mean(b, stride, n);
   const auto add = [&](CorrelationSum plus_i, CorrelationSum minus_i, CorrelationSum delta_i, CorrelationSum square_i,
                        double plus, double minus) {
     magnitude[plus_i] += std::abs(plus);
@@ -573,11 +576,7 @@ void expect_correlation_lag_sums_match(int n, unsigned seed) {
   correlation_lag_sums(a, stride, b, stride, n, simd);
   scalar_correlation_lag_sums(a, stride, b, stride, n, reference);
   // |plus| + |minus| of each contribution, centred on the windows' means.
-  double mean_a = 0, mean_b = 0;
-  for (int y = 0; y < n; ++y) {
-    for (int x = 0; x < n; ++x) mean_a += a[y * stride + x], mean_b += b[y * stride + x];
-  }
-  mean_a /= double(n) * n, mean_b /= double(n) * n;
+  const double mean_a = nan_fenced_window_mean(a, stride, n), mean_b = nan_fenced_window_mean(b, stride, n);
   const auto size = [&](int y0, int x0, int y1, int x1) {
     return std::abs((a[y0 * stride + x0] - mean_a) * (b[y1 * stride + x1] - mean_b)) +
            std::abs((a[y1 * stride + x1] - mean_a) * (b[y0 * stride + x0] - mean_b));

@@ -14,53 +14,36 @@ constexpr std::int64_t kGenicamMinDriftSpanNs = 1'000'000'000;
 constexpr std::size_t kGenicamSegments = 16;
 constexpr std::size_t kGenicamPairsPerSegment = 8;
 
-// host − host_origin = intercept + slope · (camera − camera_origin), in ns.
+// The lag of the host clock behind the camera's, l = (host − host_origin)
+// − (camera − camera_origin) = intercept + drift · (camera − camera_origin),
+// in ns: small numbers, so the drift keeps its digits.
 struct GenicamLine {
   double intercept = 0;
-  double slope = 1;
-  double at(double x) const { return intercept + slope * x; }
+  double drift = 0;
+  double at(double x) const { return intercept + drift * x; }
 };
 
-// Least squares over the pairs `use` indexes; slope 1 (an offset alone)
-// unless `fit_slope`.
-GenicamLine genicam_least_squares(const std::vector<double>& x, const std::vector<double>& y,
-                                  const std::vector<std::size_t>& use, bool fit_slope) {
-  double mean_x = 0, mean_y = 0;
-  for (const std::size_t i : use) {
-    mean_x += x[i];
-    mean_y += y[i];
-  }
-  const double n = static_cast<double>(use.size());
-  mean_x /= n;
-  mean_y /= n;
-  double sxx = 0, sxy = 0;
-  for (const std::size_t i : use) {
-    sxx += (x[i] - mean_x) * (x[i] - mean_x);
-    sxy += (x[i] - mean_x) * (y[i] - mean_y);
-  }
-  GenicamLine line;
-  line.slope = fit_slope && sxx > 0 ? sxy / sxx : 1.0;
-  line.intercept = mean_y - line.slope * mean_x;
-  return line;
-}
-
-// Least squares of `l` on `x` over `use`: (intercept, slope).
-std::pair<double, double> genicam_fit_minima(const std::vector<double>& x, const std::vector<double>& l,
-                                             const std::vector<std::size_t>& use) {
+// Least squares of `l` on `x` over the pairs `use` indexes; drift 0 (an
+// offset alone) unless `fit_drift` and the pairs spread in x.
+GenicamLine genicam_least_squares(const std::vector<double>& x, const std::vector<double>& l,
+                                  const std::vector<std::size_t>& use, bool fit_drift) {
   double mean_x = 0, mean_l = 0;
   for (const std::size_t i : use) {
     mean_x += x[i];
     mean_l += l[i];
   }
-  mean_x /= static_cast<double>(use.size());
-  mean_l /= static_cast<double>(use.size());
+  const double n = static_cast<double>(use.size());
+  mean_x /= n;
+  mean_l /= n;
   double sxx = 0, sxl = 0;
   for (const std::size_t i : use) {
     sxx += (x[i] - mean_x) * (x[i] - mean_x);
     sxl += (x[i] - mean_x) * (l[i] - mean_l);
   }
-  const double slope = sxx > 0 ? sxl / sxx : 0;
-  return {mean_l - slope * mean_x, slope};
+  GenicamLine line;
+  line.drift = fit_drift && sxx > 0 ? sxl / sxx : 0.0;
+  line.intercept = mean_l - line.drift * mean_x;
+  return line;
 }
 
 // The least-delayed pair of each of `segments` equal stretches of camera
@@ -84,11 +67,8 @@ std::vector<std::size_t> genicam_segment_minima(const std::vector<double>& x, co
 // line moved down until it lies under every arrival, so it passes through
 // the least-delayed one and no mapped time is after its frame arrived.
 // `minima` ends as the stretches' least-delayed pairs it was fitted to.
-GenicamLine genicam_lower_envelope(const std::vector<double>& x, const std::vector<double>& y, bool fit_slope,
+GenicamLine genicam_lower_envelope(const std::vector<double>& x, const std::vector<double>& l, bool fit_slope,
                                    std::vector<std::size_t>& minima) {
-  // In l = y − x, the offset and drift: magnitudes of the latency.
-  std::vector<double> l(x.size());
-  for (std::size_t i = 0; i < x.size(); ++i) l[i] = y[i] - x[i];
   double slope = 0;
   minima.assign(1, static_cast<std::size_t>(std::min_element(l.begin(), l.end()) - l.begin()));
   const std::size_t segments = std::clamp<std::size_t>(x.size() / kGenicamPairsPerSegment, 2, kGenicamSegments);
@@ -96,9 +76,10 @@ GenicamLine genicam_lower_envelope(const std::vector<double>& x, const std::vect
     for (int round = 0; round < 3; ++round) {  // the minima move as the slope settles
       minima = genicam_segment_minima(x, l, segments, slope);
       if (minima.size() < 2) break;
-      auto [intercept, fitted] = genicam_fit_minima(x, l, minima);
+      const GenicamLine through_minima = genicam_least_squares(x, l, minima, true);
+      double fitted = through_minima.drift;
       std::vector<double> above;
-      for (const std::size_t i : minima) above.push_back(l[i] - intercept - fitted * x[i]);
+      for (const std::size_t i : minima) above.push_back(l[i] - through_minima.at(x[i]));
       std::vector<double> sorted = above;
       std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
       const double median = sorted[sorted.size() / 2];
@@ -111,13 +92,13 @@ GenicamLine genicam_lower_envelope(const std::vector<double>& x, const std::vect
       }
       if (kept.size() >= 2 && kept.size() < minima.size()) {
         minima = kept;
-        fitted = genicam_fit_minima(x, l, minima).second;
+        fitted = genicam_least_squares(x, l, minima, true).drift;
       }
       slope = fitted;
     }
   }
   GenicamLine line;
-  line.slope = 1 + slope;
+  line.drift = slope;
   line.intercept = l[0] - slope * x[0];
   for (std::size_t i = 1; i < x.size(); ++i) line.intercept = std::min(line.intercept, l[i] - slope * x[i]);
   return line;
@@ -172,23 +153,23 @@ void GenicamClockMapping::refit() const {
   const std::int64_t host_origin = pairs_.front().host_ns;
   // Relative to the first pair, in double: 10 minutes is 6e11 ns, well
   // inside double's 53 bits.
-  std::vector<double> x, y;
+  std::vector<double> x, l;
   std::vector<std::size_t> use(pairs_.size());
   for (std::size_t i = 0; i < pairs_.size(); ++i) {
     x.push_back(static_cast<double>(pairs_[i].camera_ns - f.camera_origin_ns));
-    y.push_back(static_cast<double>(pairs_[i].host_ns - host_origin));
+    l.push_back(static_cast<double>(pairs_[i].host_ns - host_origin) - x.back());
     use[i] = i;
   }
   // Drift is fitted once the pairs span a second: over less, latency
   // jitter would dominate it (100 µs over 10 ms is 1 %). Before, an offset.
   const bool spans = pairs_.back().camera_ns - f.camera_origin_ns >= kGenicamMinDriftSpanNs;
   const GenicamLine line =
-      kind_ == Pairs::kArrivals ? genicam_lower_envelope(x, y, spans, use) : genicam_least_squares(x, y, use, spans);
-  f.drift = line.slope - 1.0;
+      kind_ == Pairs::kArrivals ? genicam_lower_envelope(x, l, spans, use) : genicam_least_squares(x, l, use, spans);
+  f.drift = line.drift;
   f.host_at_origin_ns = static_cast<double>(host_origin) + line.intercept;
   double sum_sq = 0;
   for (const std::size_t i : use) {
-    const double r = y[i] - line.at(x[i]);
+    const double r = l[i] - line.at(x[i]);
     sum_sq += r * r;
     f.residual_max_ns = std::max(f.residual_max_ns, std::abs(r));
   }
@@ -198,7 +179,7 @@ void GenicamClockMapping::refit() const {
   if (kind_ == Pairs::kArrivals) {
     f.envelope_pairs = use.size();
     std::vector<double> latency;
-    for (std::size_t i = unthinned_from_; i < pairs_.size(); ++i) latency.push_back(y[i] - line.at(x[i]));
+    for (std::size_t i = unthinned_from_; i < pairs_.size(); ++i) latency.push_back(l[i] - line.at(x[i]));
     f.latency_pairs = latency.size();
     f.latency_max_ns = *std::max_element(latency.begin(), latency.end());
     std::nth_element(latency.begin(), latency.begin() + latency.size() / 2, latency.end());
