@@ -506,30 +506,23 @@ cv::Mat undeformed_measurement(const PreparedPair& pair, cv::Rect region, Interp
   return out;
 }
 
-// `of_window` of the reference's window of `window_px` at every node of
-// `field`, kept in `cache` (by window size): the node positions never change
-// for an evaluator, so this runs at its first frame only.
-template <typename T, typename OfWindow>
-const std::vector<T>& per_reference_window(const PreparedPair& pair, const DisplacementField& field, int window_px,
-                                           std::map<int, std::vector<T>>& cache, OfWindow of_window) {
-  std::vector<T>& values = cache[window_px];
-  if (values.size() == field.vectors.size()) return values;
-  values.assign(field.vectors.size(), T{});
-  cv::parallel_for_(cv::Range(0, static_cast<int>(values.size())), [&](const cv::Range& range) {
+// The statistics of the reference's window of `window_px` at every node of
+// `field`, kept in the workspace (by window size): the node positions never
+// change for an evaluator, so this runs at its first frame only.
+const std::vector<WindowStats>& reference_stats_for(const PreparedPair& pair, const DisplacementField& field,
+                                                    int window_px, PassWorkspace& workspace) {
+  std::vector<WindowStats>& stats = workspace.reference_stats[window_px];
+  if (stats.size() == field.vectors.size()) return stats;
+  stats.assign(field.vectors.size(), WindowStats{});
+  cv::parallel_for_(cv::Range(0, static_cast<int>(stats.size())), [&](const cv::Range& range) {
     for (int i = range.start; i < range.end; ++i) {
       const auto& vec = field.vectors[static_cast<std::size_t>(i)];
       const cv::Point origin = window_origin(vec.x_px, vec.y_px, window_px, pair.roi);
-      values[static_cast<std::size_t>(i)] =
-          of_window(view(pair.reference, cv::Rect(origin, cv::Size(window_px, window_px))));
+      stats[static_cast<std::size_t>(i)] =
+          window_stats(view(pair.reference, cv::Rect(origin, cv::Size(window_px, window_px))));
     }
   });
-  return values;
-}
-
-const std::vector<WindowStats>& reference_stats_for(const PreparedPair& pair, const DisplacementField& field,
-                                                    int window_px, PassWorkspace& workspace) {
-  return per_reference_window(pair, field, window_px, workspace.reference_stats,
-                              [](const cv::Mat& window) { return window_stats(window); });
+  return stats;
 }
 
 // A pass's measured vectors on their own grid.
